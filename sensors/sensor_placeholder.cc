@@ -1,0 +1,1 @@
+namespace vlab::sensors {}

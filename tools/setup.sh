@@ -1,0 +1,56 @@
+# Shared set-up for run.sh and test.sh (sourced, not executed).
+# Installs the Debian packages vlab needs that are missing (and only those),
+# then configures and builds into build/ incrementally.
+
+VLAB_APT_PACKAGES=(
+  build-essential cmake pkg-config
+  libmujoco-dev libqhull-dev libosmesa6-dev
+  libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libboost-dev
+  libgtest-dev
+)
+
+vlab_missing_packages() {
+  local pkg missing=()
+  for pkg in "${VLAB_APT_PACKAGES[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$pkg")
+    fi
+  done
+  echo "${missing[@]:-}"
+}
+
+vlab_install_packages() {
+  local missing
+  missing="$(vlab_missing_packages)"
+  [ -z "$missing" ] && return 0
+  echo "vlab: installing missing Debian packages: $missing"
+  local sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then sudo="sudo"; else
+      echo "vlab: need root or sudo to install: $missing" >&2; return 1
+    fi
+  fi
+  $sudo apt-get update -qq
+  # shellcheck disable=SC2086
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends $missing
+}
+
+vlab_build() {
+  local jobs log
+  jobs="$(nproc 2>/dev/null || echo 2)"
+  if [ ! -f build/CMakeCache.txt ]; then
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  fi
+  log="build/build.log"
+  echo "vlab: building (log: $log)"
+  if ! cmake --build build -j "$jobs" >"$log" 2>&1; then
+    grep -E -B2 -A8 "error|Error" "$log" | head -80 >&2
+    echo "vlab: build failed, see $log" >&2
+    return 1
+  fi
+}
+
+vlab_setup() {
+  vlab_install_packages
+  vlab_build
+}
