@@ -1,1 +1,49 @@
-int main() { return 0; }
+// vlab: a virtual robotics lab. See README.md and `vlab --help`.
+#include <cstdio>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "cli/cli_commands.h"
+
+#ifndef VLAB_VERSION
+#define VLAB_VERSION "0.0.0"
+#endif
+
+int main(int argc, char** argv) {
+  CLI::App app{"vlab " VLAB_VERSION ": a virtual robotics lab on MuJoCo.\n"
+               "Exit codes: 0 success, 1 a check failed or the run diverged, 2 bad input."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("vlab ") + VLAB_VERSION);
+
+  vlab::cli::RunArgs run;
+  CLI::App* run_cmd = app.add_subcommand("run", "Run a scenario headless; write out/NAME/log.csv and summary.json");
+  run_cmd->add_option("scenario", run.scenario, "Scenario file (YAML); the .yaml extension may be left out")
+      ->required();
+  run_cmd->add_option("--out", run.out_dir, "Output folder (default: out/<scenario name>)");
+  run_cmd->add_flag("-q,--quiet", run.quiet, "No progress bar and no per-check lines");
+  run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s")
+      ->check(CLI::PositiveNumber);
+  run_cmd->add_option("--seed", run.seed, "Override the scenario's seed")->check(CLI::NonNegativeNumber);
+  run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
+
+  vlab::cli::BenchArgs bench;
+  CLI::App* bench_cmd = app.add_subcommand("bench", "Measure performance against a baseline in the same run");
+  bench_cmd->add_option("what", bench.what, "Benchmark: physics")
+      ->required()
+      ->check(CLI::IsMember({"physics"}));
+  bench_cmd->add_option("--scenario", bench.scenario, "Scenario to measure (default: scenes/pa10_reach)");
+  bench_cmd->add_option("--duration", bench.duration_s, "Simulated seconds per measurement")
+      ->check(CLI::PositiveNumber);
+  bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant (best kept)")->check(CLI::Range(1, 100));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  if (run_cmd->parsed()) return vlab::cli::RunCommand(run);
+  if (bench_cmd->parsed()) return vlab::cli::BenchCommand(bench);
+  return 2;
+}

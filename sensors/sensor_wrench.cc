@@ -1,0 +1,157 @@
+// JR3 sensor model: Reset and the 8 kHz sample loop (ADC, quantisation, filter cascade).
+#include "sensors/sensor_wrench.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace vlab::sensors {
+namespace {
+
+constexpr double kTwoPi = 6.28318530717958647692;
+// a phase this close to a whole sample counts as on the sample instant, so that dt values
+// that are not exact binary fractions (1 ms = 8 samples) neither drop nor double a sample
+constexpr double kPhaseSnapSamples = 1e-6;
+// Update refuses longer steps (a unit error, not a control period)
+constexpr double kMaxUpdateDtSeconds = 60.0;
+
+// uniform in [0, 1) with 53 random bits
+double Uniform53(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+// six independent standard normal draws (three Box–Muller pairs)
+Wrench DrawStandardNormal(std::mt19937_64& rng) {
+  Wrench out;
+  for (int i = 0; i < 6; i += 2) {
+    const double u1 = 1.0 - Uniform53(rng);  // (0, 1]: log is finite
+    const double u2 = Uniform53(rng);
+    const double radius = std::sqrt(-2.0 * std::log(u1));
+    out[i] = radius * std::cos(kTwoPi * u2);
+    out[i + 1] = radius * std::sin(kTwoPi * u2);
+  }
+  return out;
+}
+
+// counts clipped to the int16 range and (optionally) rounded; flags what was hit
+Wrench ToCounts(const WrenchSensorModel& model, const Wrench& value, bool* saturated,
+                bool* near_saturated) {
+  Wrench counts = value.cwiseQuotient(model.lsb());
+  for (int i = 0; i < 6; ++i) {
+    const double magnitude = std::abs(counts[i]);
+    if (magnitude >= kWrenchNearSaturationCounts && near_saturated) *near_saturated = true;
+    if (magnitude > kWrenchClipCounts) {
+      if (saturated) *saturated = true;
+      counts[i] = std::copysign(kWrenchClipCounts, counts[i]);
+    }
+    if (model.quantization_enabled()) counts[i] = std::round(counts[i]);
+  }
+  return counts;
+}
+
+// what the host reads: every data set as clipped (and rounded) counts times lsb
+void FillReading(const WrenchSensorModel& model, const WrenchSensorState& state,
+                 WrenchReading& reading) {
+  // filter0 is already ADC data
+  reading.all_filters[0] = state.output[0];
+  for (int k = 1; k < kWrenchFilterCount; ++k) {
+    reading.all_filters[k] =
+        ToCounts(model, state.output[k], nullptr, nullptr).cwiseProduct(model.lsb());
+  }
+  reading.filter = model.filter();
+  reading.wrench = reading.all_filters[model.filter()];
+}
+
+// one sensor sample: noise, ADC, then every stage whose update instant this is
+void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state,
+                   const Wrench& true_wrench, WrenchReading& reading) {
+  ++state.sample_count;
+
+  // sensor signal plus bias and white noise
+  Wrench signal = true_wrench + state.bias;
+  if (model.noise_enabled()) {
+    signal += model.noise_sigma().cwiseProduct(DrawStandardNormal(state.rng));
+  }
+
+  // ADC clip and quantisation give filter0
+  bool saturated = false;
+  state.output[0] =
+      ToCounts(model, signal, &saturated, &reading.near_saturated).cwiseProduct(model.lsb());
+  if (saturated) {
+    reading.saturated = true;
+    state.saturated_latched = true;
+    ++state.saturated_samples;
+  }
+
+  // cascade: stage k runs every 4^(k-1) samples on the latest output of stage k-1
+  for (int k = 1; k < kWrenchFilterCount; ++k) {
+    const WrenchFilterStage& stage = model.stage(k);
+    if (state.sample_count % stage.decimation != 0) break;  // later stages are slower still
+    const Wrench& in = state.output[k - 1];
+    Wrench& z1 = state.z1[k - 1];
+    Wrench& z2 = state.z2[k - 1];
+    const Wrench out = stage.b0 * in + z1;
+    z1 = stage.b1 * in - stage.a1 * out + z2;
+    z2 = stage.b2 * in - stage.a2 * out;
+    state.output[k] = out;
+  }
+}
+
+}  // namespace
+
+void Reset(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& initial_load) {
+  if (!initial_load.allFinite()) {
+    throw std::invalid_argument("wrench sensor: Reset initial_load must be finite");
+  }
+  state.rng.seed(model.seed());
+  // always draw, so the noise stream does not depend on enable_bias
+  const Wrench unit_bias = DrawStandardNormal(state.rng);
+  state.bias = model.bias_sigma().cwiseProduct(unit_bias);
+
+  // filter0 holds the noise-free ADC value of the initial load; every stage is in steady state
+  state.output[0] =
+      ToCounts(model, initial_load + state.bias, nullptr, nullptr).cwiseProduct(model.lsb());
+  for (int k = 1; k < kWrenchFilterCount; ++k) {
+    const WrenchFilterStage& stage = model.stage(k);
+    const Wrench& u = state.output[k - 1];
+    state.output[k] = u;
+    state.z1[k - 1] = (1.0 - stage.b0) * u;
+    state.z2[k - 1] = (stage.b2 - stage.a2) * u;
+  }
+
+  state.sample_count = 0;
+  state.phase_samples = 0.0;
+  state.saturated_latched = false;
+  state.saturated_samples = 0;
+  state.rejected_updates = 0;
+  state.ready = true;
+}
+
+WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state,
+                     const Wrench& true_wrench, double dt) {
+  WrenchReading reading;
+  reading.filter = model.filter();
+  if (!state.ready) {
+    ++state.rejected_updates;
+    reading.status = WrenchStatus::kNotReset;
+    return reading;
+  }
+  if (!std::isfinite(dt) || dt < 0.0 || dt > kMaxUpdateDtSeconds || !true_wrench.allFinite()) {
+    ++state.rejected_updates;
+    reading.status = WrenchStatus::kRejectedInput;
+    FillReading(model, state, reading);
+    return reading;
+  }
+
+  // sample instants in (t, t + dt]; the fractional phase carries to the next call
+  double phase = state.phase_samples + dt * model.sample_rate_hz();
+  const double nearest = std::round(phase);
+  if (std::abs(phase - nearest) < kPhaseSnapSamples) phase = nearest;
+  const double whole = std::floor(phase);
+  state.phase_samples = phase - whole;
+  const auto samples = static_cast<std::uint64_t>(whole);
+
+  for (std::uint64_t i = 0; i < samples; ++i) ProcessSample(model, state, true_wrench, reading);
+  reading.samples = static_cast<int>(samples);
+  FillReading(model, state, reading);
+  return reading;
+}
+
+}  // namespace vlab::sensors

@@ -1,0 +1,42 @@
+// The vlab command line: one function per subcommand, called by main().
+// Each returns the process exit code: 0 success, 1 a check failed or the run
+// diverged, 2 bad input.
+#pragma once
+
+#include <string>
+
+namespace vlab::cli {
+
+struct RunArgs {
+  std::string scenario;
+  std::string out_dir;    ///< "" = out/<scenario name>
+  bool quiet = false;
+  bool list_signals = false;
+  double duration_s = 0;  ///< > 0 overrides the scenario's duration
+  long long seed = -1;    ///< >= 0 overrides the scenario's seed
+};
+int RunCommand(const RunArgs& args);
+
+struct BenchArgs {
+  std::string what;       ///< "physics"
+  std::string scenario;   ///< scenario whose scene and devices are measured
+  double duration_s = 0;  ///< simulated seconds per measurement (0: scenario's)
+  int repeat = 3;         ///< measurements per variant; the best is reported
+};
+int BenchCommand(const BenchArgs& args);
+
+/// Progress bar on stderr, drawn only on a terminal and only once a run has
+/// lasted about a second.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled);
+  void Update(double fraction);
+  void Finish();
+
+ private:
+  bool enabled_;
+  bool drawn_ = false;
+  double start_s_;
+};
+
+}  // namespace vlab::cli

@@ -1,0 +1,97 @@
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include <unistd.h>
+
+#include "cli/cli_commands.h"
+#include "lab/lab_errors.h"
+#include "lab/lab_log.h"
+#include "lab/lab_runner.h"
+#include "lab/lab_scenario.h"
+
+namespace vlab::cli {
+
+namespace {
+
+volatile bool g_interrupted = false;
+void OnSignal(int) { g_interrupted = true; }
+
+double Now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::string Bound(const lab::CheckConfig& c) {
+  std::string text;
+  if (std::isfinite(c.min)) text += ">= " + lab::FormatDouble(c.min);
+  if (std::isfinite(c.max)) text += std::string(text.empty() ? "" : ", ") + "<= " + lab::FormatDouble(c.max);
+  return text;
+}
+
+}  // namespace
+
+ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && ::isatty(2)), start_s_(Now()) {}
+
+void ProgressBar::Update(double fraction) {
+  if (!enabled_ || Now() - start_s_ < 1.0) return;
+  constexpr int kWidth = 40;
+  const int filled = static_cast<int>(fraction * kWidth);
+  std::string bar(filled, '#');
+  bar.append(kWidth - filled, '.');
+  std::fprintf(stderr, "\r[%s] %3d%%", bar.c_str(), static_cast<int>(fraction * 100));
+  std::fflush(stderr);
+  drawn_ = true;
+}
+
+void ProgressBar::Finish() {
+  if (drawn_) std::fprintf(stderr, "\r%*s\r", 48, "");
+  drawn_ = false;
+}
+
+int RunCommand(const RunArgs& args) {
+  try {
+    lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario));
+    if (args.duration_s > 0) scenario.duration_s = args.duration_s;
+    if (args.seed >= 0) scenario.seed = static_cast<std::uint64_t>(args.seed);
+    std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
+    if (args.list_signals) {
+      for (const auto& c : lab->Columns()) std::cout << c << "\n";
+      return 0;
+    }
+    const std::string out_dir = args.out_dir.empty() ? "out/" + scenario.name : args.out_dir;
+
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+    ProgressBar bar(!args.quiet);
+    lab::RunOptions options;
+    options.out_dir = out_dir;
+    options.interrupt = &g_interrupted;
+    options.progress = [&bar](double f) { bar.Update(f); };
+    const lab::RunResult r = lab->Run(options);
+    bar.Finish();
+
+    if (!args.quiet) {
+      for (const auto& c : r.checks) {
+        std::printf("  %s  %-28s %s(%s) = %s  (%s)\n", c.pass ? "pass" : "FAIL", c.config.name.c_str(),
+                    c.config.reduce.c_str(), c.config.signal.c_str(), lab::FormatDouble(c.value).c_str(),
+                    Bound(c.config).c_str());
+      }
+    }
+    const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
+    std::printf("%s: %s, %.2f s simulated in %.2f s (%.0fx real time); output in %s/\n", scenario.name.c_str(),
+                r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, rtf, out_dir.c_str());
+    if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
+    return r.exit_code;
+  } catch (const lab::InputError& e) {
+    std::fprintf(stderr, "vlab: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vlab: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace vlab::cli

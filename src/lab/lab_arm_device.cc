@@ -1,0 +1,202 @@
+#include "lab/lab_arm_device.h"
+
+#include <cmath>
+#include <limits>
+
+#include "lab/lab_errors.h"
+
+namespace vlab::lab {
+
+namespace {
+
+[[noreturn]] void Fail(const DeviceConfig& c, const std::string& what) {
+  throw InputError(c.where + ": device '" + c.name + "': " + what);
+}
+
+}  // namespace
+
+std::unique_ptr<SimArm> SimArm::Create(const mjModel* m, const DeviceConfig& c) {
+  std::unique_ptr<SimArm> arm(new SimArm());
+  arm->model_ = m;
+  arm->name_ = c.name;
+  arm->joint_names_ = c.arm.joints;
+  const int n = static_cast<int>(c.arm.joints.size());
+  const double inf = std::numeric_limits<double>::infinity();
+  arm->lower_.resize(n);
+  arm->upper_.resize(n);
+  arm->tau_min_.resize(n);
+  arm->tau_max_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const std::string& joint = c.arm.joints[i];
+    const int j = mj_name2id(m, mjOBJ_JOINT, joint.c_str());
+    if (j < 0) Fail(c, "no joint '" + joint + "' in the scene");
+    if (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE) {
+      Fail(c, "joint '" + joint + "' is not a hinge or slide");
+    }
+    arm->qpos_adr_.push_back(m->jnt_qposadr[j]);
+    arm->dof_adr_.push_back(m->jnt_dofadr[j]);
+    arm->lower_[i] = m->jnt_limited[j] ? m->jnt_range[2 * j] : -inf;
+    arm->upper_[i] = m->jnt_limited[j] ? m->jnt_range[2 * j + 1] : inf;
+
+    const std::string& actuator = c.arm.actuators[i];
+    const int a = mj_name2id(m, mjOBJ_ACTUATOR, actuator.c_str());
+    if (a < 0) Fail(c, "no actuator '" + actuator + "' in the scene");
+    // a torque motor on this very joint: direct transmission, unit-free gain, no bias
+    const bool direct = m->actuator_trntype[a] == mjTRN_JOINT && m->actuator_trnid[2 * a] == j;
+    const bool motor = m->actuator_dyntype[a] == mjDYN_NONE && m->actuator_gaintype[a] == mjGAIN_FIXED &&
+                       m->actuator_biastype[a] == mjBIAS_NONE;
+    if (!direct || !motor) Fail(c, "actuator '" + actuator + "' is not a motor on joint '" + joint + "'");
+    if (m->actuator_gear[6 * a] != 1.0 || m->actuator_gainprm[mjNGAIN * a] != 1.0) {
+      Fail(c, "actuator '" + actuator + "' must have gear 1 and gain 1 (torque in N·m)");
+    }
+    arm->actuator_ids_.push_back(a);
+    arm->tau_min_[i] = m->actuator_ctrllimited[a] ? m->actuator_ctrlrange[2 * a] : -inf;
+    arm->tau_max_[i] = m->actuator_ctrllimited[a] ? m->actuator_ctrlrange[2 * a + 1] : inf;
+    if (m->actuator_forcelimited[a]) {
+      arm->tau_min_[i] = std::max(arm->tau_min_[i], m->actuator_forcerange[2 * a]);
+      arm->tau_max_[i] = std::min(arm->tau_max_[i], m->actuator_forcerange[2 * a + 1]);
+    }
+  }
+  if (!c.arm.initial.empty()) {
+    arm->has_initial_ = true;
+    arm->initial_ = Eigen::Map<const Eigen::VectorXd>(c.arm.initial.data(), n);
+    for (int i = 0; i < n; ++i) {
+      if (arm->initial_[i] < arm->lower_[i] || arm->initial_[i] > arm->upper_[i]) {
+        Fail(c, "initial position of joint '" + c.arm.joints[i] + "' is outside its range");
+      }
+    }
+  }
+  arm->bandwidth_hz_ = c.arm.servo.bandwidth_hz;
+  arm->damping_ratio_ = c.arm.servo.damping_ratio;
+  arm->value_ = Eigen::VectorXd::Zero(n);
+  arm->q_ref_ = Eigen::VectorXd::Zero(n);
+  arm->qd_ref_ = Eigen::VectorXd::Zero(n);
+  arm->last_position_command_ = Eigen::VectorXd::Zero(n);
+  arm->tau_ = Eigen::VectorXd::Zero(n);
+  return arm;
+}
+
+void SimArm::SetInitialPositions(mjData& d) const {
+  if (!has_initial_) return;
+  for (int i = 0; i < dof(); ++i) d.qpos[qpos_adr_[i]] = initial_[i];
+}
+
+void SimArm::Start(const mjData& d, double control_period_s) {
+  const mjModel* m = model_;
+  command_period_s_ = control_period_s;
+  // joint inertia H_ii from the factored-free sparse mass matrix: qM diagonal
+  const double w = 2.0 * M_PI * bandwidth_hz_;
+  kp_.resize(dof());
+  kd_.resize(dof());
+  for (int i = 0; i < dof(); ++i) {
+    const double inertia = d.qM[m->dof_Madr[dof_adr_[i]]];
+    kp_[i] = inertia * w * w;
+    kd_[i] = 2.0 * damping_ratio_ * inertia * w;
+    q_ref_[i] = d.qpos[qpos_adr_[i]];
+  }
+  qd_ref_.setZero();
+  mode_ = bridge::ArmMode::kHold;
+  have_position_command_ = false;
+}
+
+bool SimArm::Command(const bridge::ArmCommand& cmd) {
+  bool ok = cmd.value.size() == dof() || cmd.mode == bridge::ArmMode::kHold;
+  for (int i = 0; ok && i < cmd.value.size(); ++i) {
+    const double v = cmd.value[i];
+    ok = std::isfinite(v);
+    if (ok && cmd.mode == bridge::ArmMode::kPosition) ok = v >= lower_[i] && v <= upper_[i];
+    if (ok && cmd.mode == bridge::ArmMode::kTorque) ok = v >= tau_min_[i] && v <= tau_max_[i];
+  }
+  last_refused_ = !ok;
+  if (!ok) {
+    ++refused_;
+    return false;
+  }
+  switch (cmd.mode) {
+    case bridge::ArmMode::kHold:
+      if (mode_ != bridge::ArmMode::kHold) qd_ref_.setZero();
+      break;
+    case bridge::ArmMode::kPosition:
+      qd_ref_ = have_position_command_ ? ((cmd.value - last_position_command_) / command_period_s_).eval()
+                                       : Eigen::VectorXd::Zero(dof());
+      q_ref_ = cmd.value;
+      last_position_command_ = cmd.value;
+      have_position_command_ = true;
+      break;
+    case bridge::ArmMode::kVelocity:
+      qd_ref_ = cmd.value;
+      break;
+    case bridge::ArmMode::kTorque:
+      value_ = cmd.value;
+      break;
+  }
+  if (cmd.mode != bridge::ArmMode::kPosition) have_position_command_ = false;
+  mode_ = cmd.mode;
+  return true;
+}
+
+void SimArm::Actuate(mjData& d, double dt) {
+  saturated_ = false;
+  for (int i = 0; i < dof(); ++i) {
+    const double q = d.qpos[qpos_adr_[i]];
+    const double qd = d.qvel[dof_adr_[i]];
+    double tau;
+    if (mode_ == bridge::ArmMode::kTorque) {
+      tau = value_[i];
+      q_ref_[i] = q;  // so a later switch to a servo mode starts from here
+    } else {
+      if (mode_ == bridge::ArmMode::kVelocity) q_ref_[i] += qd_ref_[i] * dt;
+      tau = kp_[i] * (q_ref_[i] - q) + kd_[i] * (qd_ref_[i] - qd) + d.qfrc_bias[dof_adr_[i]];
+    }
+    if (tau > tau_max_[i] || tau < tau_min_[i]) {
+      saturated_ = true;
+      tau = std::min(std::max(tau, tau_min_[i]), tau_max_[i]);
+    }
+    tau_[i] = tau;
+    d.ctrl[actuator_ids_[i]] = tau;
+  }
+}
+
+void SimArm::Sample(const mjData& d, double time_s, bridge::ArmState* s) const {
+  s->time_s = time_s;
+  s->q.resize(dof());
+  s->qd.resize(dof());
+  s->tau.resize(dof());
+  bool at_limit = false;
+  for (int i = 0; i < dof(); ++i) {
+    s->q[i] = d.qpos[qpos_adr_[i]];
+    s->qd[i] = d.qvel[dof_adr_[i]];
+    s->tau[i] = tau_[i];
+    at_limit = at_limit || s->q[i] <= lower_[i] || s->q[i] >= upper_[i];
+  }
+  std::uint32_t status = 0;
+  if (mode_ == bridge::ArmMode::kHold) status |= bridge::kArmHolding;
+  if (last_refused_) status |= bridge::kArmCommandRefused;
+  if (saturated_) status |= bridge::kArmTorqueSaturated;
+  if (at_limit) status |= bridge::kArmAtJointLimit;
+  s->status = status;
+}
+
+std::vector<std::string> SimArm::Columns() const {
+  std::vector<std::string> columns;
+  for (const char* quantity : {"q", "qd", "tau"}) {
+    for (const auto& joint : joint_names_) columns.push_back(name_ + "." + quantity + "." + joint);
+  }
+  columns.push_back(name_ + ".limit_violation");
+  return columns;
+}
+
+void SimArm::Row(const mjData& d, double* out) const {
+  const int n = dof();
+  double violation = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double q = d.qpos[qpos_adr_[i]];
+    out[i] = q;
+    out[n + i] = d.qvel[dof_adr_[i]];
+    out[2 * n + i] = tau_[i];
+    violation = std::max({violation, lower_[i] - q, q - upper_[i]});
+  }
+  out[3 * n] = violation;
+}
+
+}  // namespace vlab::lab

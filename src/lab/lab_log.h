@@ -1,0 +1,65 @@
+// The run log: one CSV row of named signals per control period.
+//
+// The step loop copies each row into a preallocated block; full blocks go to a
+// writer thread that formats them (shortest round-trip decimal, std::to_chars)
+// and writes the file, so formatting costs the step loop nothing but a copy.
+// The same values always give the same bytes: logs of identical runs are
+// identical files.
+#pragma once
+
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace vlab::lab {
+
+class CsvLog {
+ public:
+  /// Creates the file and writes the header line. Throws std::runtime_error
+  /// naming the path when it cannot be written.
+  static std::unique_ptr<CsvLog> Open(const std::string& path, std::vector<std::string> columns);
+  ~CsvLog();
+  CsvLog(const CsvLog&) = delete;
+  CsvLog& operator=(const CsvLog&) = delete;
+
+  const std::vector<std::string>& columns() const { return columns_; }
+  /// Appends one row of columns().size() values. Never allocates after Open.
+  void Append(const double* row);
+  /// Writes what is pending and closes the file. Throws std::runtime_error on
+  /// a write error. Called by the destructor if not called before.
+  void Close();
+
+ private:
+  static constexpr int kRowsPerBlock = 256;
+  static constexpr int kBlocks = 8;
+
+  CsvLog(std::FILE* file, std::string path, std::vector<std::string> columns);
+  void WriterLoop();
+  void Submit();
+
+  std::FILE* file_;
+  std::string path_;
+  std::vector<std::string> columns_;
+  std::vector<std::vector<double>> blocks_;
+  std::vector<double>* current_ = nullptr;
+  int rows_in_current_ = 0;
+  // shared with the writer thread
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::pair<std::vector<double>*, int>> full_;
+  std::vector<std::vector<double>*> free_;
+  bool closing_ = false;
+  bool write_error_ = false;
+  std::thread writer_;
+  bool closed_ = false;
+};
+
+/// Formats a double as the shortest decimal that reads back to the same value.
+std::string FormatDouble(double value);
+
+}  // namespace vlab::lab

@@ -1,0 +1,88 @@
+// The lab: one scenario's model, devices, controller and clock, and the step
+// loop that advances them.
+//
+// Each control period k (length T, a whole number of model timesteps):
+//   1. the clock lets period k begin;
+//   2. the controller reads the newest device outputs and sends its commands;
+//   3. T / timestep physics steps: mj_step1, arm servo, mj_step2, wrench
+//      sensors sample the new contact/constraint forces;
+//   4. the devices are sampled and one log row is written.
+// Sensors and logging read the state and never change it.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "lab/lab_checks.h"
+#include "lab/lab_mujoco.h"
+#include "lab/lab_scenario.h"
+
+namespace vlab::lab {
+
+struct RunOptions {
+  std::string out_dir;  ///< where to write log.csv and summary.json ("" = nothing written)
+  /// Called about every 0.1 s of wall time with the fraction of the run done.
+  std::function<void(double fraction)> progress;
+  /// Set from a signal handler to stop the run early (counted as an error).
+  const volatile bool* interrupt = nullptr;
+  /// Keep every physics step's ctrl vector (for the physics benchmark replay).
+  bool record_controls = false;
+};
+
+struct WarningReport {
+  std::string name;
+  int count = 0;
+  double first_time_s = 0.0;
+  std::string message;
+  bool allowed = false;
+};
+
+struct RunResult {
+  int exit_code = 0;     ///< 0 all checks pass, 1 a check failed or the run diverged
+  std::string failure;   ///< one line when exit_code != 0
+  std::vector<CheckResult> checks;
+  std::vector<WarningReport> warnings;
+  long steps = 0;        ///< physics steps taken
+  long periods = 0;      ///< control periods taken
+  double sim_time_s = 0.0;
+  double loop_wall_s = 0.0;   ///< wall time of the step loop
+  double total_wall_s = 0.0;  ///< wall time including writing outputs
+  std::vector<double> controls;  ///< nu values per step, if record_controls
+};
+
+class Lab {
+ public:
+  /// Loads the scene and binds devices and controller. Throws InputError.
+  static std::unique_ptr<Lab> Create(const Scenario& scenario);
+  ~Lab();
+
+  /// Runs the scenario once from its initial state. Throws std::runtime_error
+  /// on an output error (nothing is left half-written).
+  RunResult Run(const RunOptions& options);
+
+  /// Puts `data` (made for model()) into the scenario's initial state: reset,
+  /// initial joint positions, mj_forward. The same state Run() starts from.
+  void InitialState(mjData* data) const;
+
+  /// qpos at the end of the last Run().
+  std::vector<double> FinalQpos() const;
+
+  /// Log column names, in order.
+  std::vector<std::string> Columns() const;
+  const mjModel* model() const;
+  const Scenario& scenario() const;
+
+ private:
+  struct Impl;
+  explicit Lab(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Writes summary.json's content for a run.
+nlohmann::json SummaryJson(const Scenario& scenario, const mjModel* model, const RunResult& result);
+
+}  // namespace vlab::lab

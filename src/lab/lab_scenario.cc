@@ -1,0 +1,232 @@
+#include "lab/lab_scenario.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include "lab/lab_errors.h"
+#include "lab/lab_mujoco.h"
+#include "lab/lab_yaml.h"
+
+namespace vlab::lab {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Where(const std::string& file, const YAML::Node& node) {
+  return file + ":" + std::to_string(node.Mark().line + 1);
+}
+
+Eigen::Quaterniond OrientationOf(MapReader& r) {
+  const bool has_rpy = r.Has("rpy_deg");
+  const bool has_quat = r.Has("quat");
+  if (has_rpy && has_quat) r.Fail("quat", "give either rpy_deg or quat, not both");
+  if (has_quat) {
+    const std::vector<double> q = r.Numbers("quat", {});
+    if (q.size() != 4) r.Fail("quat", "expected 4 numbers (w, x, y, z)");
+    Eigen::Quaterniond quat(q[0], q[1], q[2], q[3]);
+    if (quat.norm() < 1e-9) r.Fail("quat", "zero quaternion");
+    return quat.normalized();
+  }
+  const std::vector<double> rpy = r.Numbers("rpy_deg", {0, 0, 0});
+  if (rpy.size() != 3) r.Fail("rpy_deg", "expected 3 numbers (roll, pitch, yaw about fixed x, y, z), deg");
+  const double k = M_PI / 180.0;
+  // fixed-axis x, then y, then z: R = Rz(yaw) Ry(pitch) Rx(roll)
+  return Eigen::Quaterniond(Eigen::AngleAxisd(rpy[2] * k, Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(rpy[1] * k, Eigen::Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(rpy[0] * k, Eigen::Vector3d::UnitX()));
+}
+
+double PositiveDuration(MapReader& r) {
+  const double duration = r.Number("duration");
+  if (!(duration > 0)) r.Fail("duration", "must be > 0 s");
+  return duration;
+}
+
+DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const std::string& path) {
+  MapReader r(file, node, path);
+  DeviceConfig device;
+  device.where = Where(file, node);
+  device.name = r.String("name");
+  device.kind = r.String("kind");
+  if (device.kind == "arm") {
+    ArmDeviceConfig& arm = device.arm;
+    arm.joints = r.Strings("joints", {});
+    if (arm.joints.empty()) r.Fail("joints", "an arm needs at least one joint");
+    arm.actuators = r.Strings("actuators", arm.joints);
+    if (arm.actuators.size() != arm.joints.size()) r.Fail("actuators", "needs one actuator per joint");
+    arm.initial = r.Numbers("initial", {});
+    if (!arm.initial.empty() && arm.initial.size() != arm.joints.size()) {
+      r.Fail("initial", "needs one value per joint (" + std::to_string(arm.joints.size()) + ")");
+    }
+    MapReader servo = r.Map("servo");
+    arm.servo.bandwidth_hz = servo.Number("bandwidth_hz", arm.servo.bandwidth_hz);
+    arm.servo.damping_ratio = servo.Number("damping_ratio", arm.servo.damping_ratio);
+    if (!(arm.servo.bandwidth_hz > 0)) servo.Fail("bandwidth_hz", "must be > 0 Hz");
+    if (!(arm.servo.damping_ratio > 0)) servo.Fail("damping_ratio", "must be > 0");
+    servo.Finish();
+  } else if (device.kind == "wrench") {
+    WrenchDeviceConfig& w = device.wrench;
+    w.site = r.String("site", "");
+    w.force_sensor = r.String("force_sensor");
+    w.torque_sensor = r.String("torque_sensor");
+    w.model = r.String("model", w.model);
+    w.full_scale = r.Numbers("full_scale", {});
+    if (!w.full_scale.empty() && w.full_scale.size() != 6) r.Fail("full_scale", "expected 6 numbers (N, N, N, N·m, N·m, N·m)");
+    w.filter = r.Integer("filter", w.filter);
+    if (w.filter < 0 || w.filter > 6) r.Fail("filter", "must be 0 (unfiltered) to 6");
+    w.noise = r.Bool("noise", w.noise);
+    w.bias = r.Bool("bias", w.bias);
+    w.quantization = r.Bool("quantization", w.quantization);
+  } else {
+    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench)");
+  }
+  r.Finish();
+  return device;
+}
+
+ControllerConfig ReadController(MapReader r) {
+  ControllerConfig c;
+  c.where = Where(r.file(), r.node());
+  c.type = r.String("type", c.type);
+  if (c.type == "none") {
+    r.Finish();
+    return c;
+  }
+  c.arm = r.String("arm");
+  c.timing = r.String("timing", c.timing);
+  if (c.timing != "quintic" && c.timing != "trapezoidal") r.Fail("timing", "must be quintic or trapezoidal");
+  c.start_s = r.Number("start", c.start_s);
+  if (c.start_s < 0) r.Fail("start", "must be >= 0 s");
+  c.base_body = r.String("base_body", c.base_body);
+  c.tip_site = r.String("tip_site");
+  const YAML::Node waypoints = r.Sequence("waypoints");
+  if (waypoints.size() == 0) r.Fail("waypoints", "needs at least one waypoint");
+  if (c.type == "task_space") {
+    MapReader gains = r.Map("gains");
+    c.k_position = gains.Number("position", c.k_position);
+    c.k_orientation = gains.Number("orientation", c.k_orientation);
+    c.k_null = gains.Number("null_space", c.k_null);
+    c.damping = gains.Number("damping", c.damping);
+    if (c.k_position < 0 || c.k_orientation < 0 || c.k_null < 0 || c.damping < 0) {
+      gains.Fail("position", "gains must be >= 0");
+    }
+    gains.Finish();
+    for (std::size_t i = 0; i < waypoints.size(); ++i) {
+      MapReader w(r.file(), waypoints[i], r.Child("waypoints") + "[" + std::to_string(i) + "]");
+      CartesianWaypoint wp;
+      const std::vector<double> p = w.Numbers("position", {});
+      if (p.size() != 3) w.Fail("position", "expected 3 numbers (x, y, z), m, world frame");
+      wp.position_W = Eigen::Vector3d(p[0], p[1], p[2]);
+      wp.orientation_W = OrientationOf(w);
+      wp.duration_s = PositiveDuration(w);
+      w.Finish();
+      c.cartesian.push_back(wp);
+    }
+  } else if (c.type == "joint_pd") {
+    MapReader gains = r.Map("gains");
+    c.kp = gains.Numbers("kp", {});
+    c.kd = gains.Numbers("kd", {});
+    c.pd_bandwidth_hz = gains.Number("bandwidth_hz", c.pd_bandwidth_hz);
+    if (!(c.pd_bandwidth_hz > 0)) gains.Fail("bandwidth_hz", "must be > 0 Hz");
+    gains.Finish();
+    for (std::size_t i = 0; i < waypoints.size(); ++i) {
+      MapReader w(r.file(), waypoints[i], r.Child("waypoints") + "[" + std::to_string(i) + "]");
+      JointWaypoint wp;
+      wp.q = w.Numbers("q", {});
+      if (wp.q.empty()) w.Fail("q", "missing required key");
+      wp.duration_s = PositiveDuration(w);
+      w.Finish();
+      c.joint.push_back(wp);
+    }
+  } else {
+    r.Fail("type", "unknown controller type '" + c.type + "' (known: none, joint_pd, task_space)");
+  }
+  r.Finish();
+  return c;
+}
+
+CheckConfig ReadCheck(const std::string& file, const YAML::Node& node, const std::string& path) {
+  MapReader r(file, node, path);
+  CheckConfig c;
+  c.where = Where(file, node);
+  c.name = r.String("name");
+  c.signal = r.String("signal");
+  c.reduce = r.String("reduce", c.reduce);
+  static const char* kReductions[] = {"max", "min", "mean", "rms", "final", "max_abs"};
+  bool known = false;
+  for (const char* k : kReductions) known = known || c.reduce == k;
+  if (!known) r.Fail("reduce", "unknown reduction '" + c.reduce + "' (known: max, min, mean, rms, final, max_abs)");
+  c.min = r.Number("min", c.min);
+  c.max = r.Number("max", c.max);
+  if (!r.Has("min") && !r.Has("max")) r.Fail("max", "a check needs a bound: min, max or both");
+  c.from_s = r.Number("from", c.from_s);
+  c.to_s = r.Number("to", c.to_s);
+  if (c.to_s < c.from_s) r.Fail("to", "must be >= from");
+  r.Finish();
+  return c;
+}
+
+}  // namespace
+
+std::string ResolveScenarioPath(const std::string& arg) {
+  if (fs::is_regular_file(arg)) return arg;
+  for (const char* ext : {".yaml", ".yml"}) {
+    if (fs::is_regular_file(arg + ext)) return arg + ext;
+  }
+  return arg;
+}
+
+Scenario LoadScenario(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  if (!root.IsMap()) throw InputError(path + ": a scenario must be a YAML mapping");
+  MapReader r(path, root, "");
+  Scenario s;
+  s.file = path;
+  s.name = r.String("name", fs::path(path).stem().string());
+  if (s.name.empty() || s.name.find_first_of("/\\") != std::string::npos || s.name[0] == '.') {
+    r.Fail("name", "must be a plain folder name");
+  }
+  s.description = r.String("description", "");
+  const std::string scene = r.String("scene");
+  s.scene = (fs::path(path).parent_path() / scene).lexically_normal().string();
+  s.duration_s = r.Number("duration");
+  if (!(s.duration_s > 0)) r.Fail("duration", "must be > 0 s");
+  s.control_period_s = r.Number("control_period", s.control_period_s);
+  if (!(s.control_period_s > 0)) r.Fail("control_period", "must be > 0 s");
+  const double seed = r.Number("seed", 1);
+  if (seed < 0 || seed != std::floor(seed) || seed > 9007199254740992.0) r.Fail("seed", "must be a non-negative integer");
+  s.seed = static_cast<std::uint64_t>(seed);
+  s.clock = r.String("clock", s.clock);
+  if (s.clock != "fast") r.Fail("clock", "unknown clock '" + s.clock + "' (known: fast)");
+  s.allow_warnings = r.Strings("allow_warnings", {});
+  for (const std::string& w : s.allow_warnings) {
+    if (WarningIndex(w) < 0 || IsDivergenceWarning(WarningIndex(w))) {
+      r.Fail("allow_warnings", "unknown or non-allowable warning '" + w +
+                                   "' (allowable: inertia, contactfull, cnstrfull, vgeomfull, badctrl)");
+    }
+  }
+
+  const YAML::Node devices = r.Sequence("devices");
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    s.devices.push_back(ReadDevice(path, devices[i], "devices[" + std::to_string(i) + "]"));
+    for (std::size_t j = 0; j < i; ++j) {
+      if (s.devices[j].name == s.devices[i].name) {
+        throw InputError(s.devices[i].where + ": devices[" + std::to_string(i) + "].name: duplicate device name '" +
+                         s.devices[i].name + "'");
+      }
+    }
+  }
+  if (r.Has("controller")) s.controller = ReadController(r.Map("controller"));
+  MapReader outputs = r.Map("outputs");
+  s.outputs.log = outputs.Bool("log", s.outputs.log);
+  outputs.Finish();
+  const YAML::Node checks = r.Sequence("checks");
+  for (std::size_t i = 0; i < checks.size(); ++i) {
+    s.checks.push_back(ReadCheck(path, checks[i], "checks[" + std::to_string(i) + "]"));
+  }
+  r.Finish();
+  return s;
+}
+
+}  // namespace vlab::lab

@@ -1,0 +1,124 @@
+// Scenario files: what to simulate, for how long, with which devices,
+// controller, outputs and checks.
+//
+// A scenario is a YAML document (see docs/scenarios.md for every key). Loading
+// validates types and rejects unknown keys; binding names to MuJoCo elements
+// happens later, when the lab is created from the scenario and its scene.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace vlab::lab {
+
+/// Joint servo of a simulated arm: the drive electronics between a command
+/// and the motor torque (position and velocity modes).
+struct ServoConfig {
+  double bandwidth_hz = 10.0;  ///< closed-loop natural frequency of each joint servo
+  double damping_ratio = 1.0;  ///< its damping ratio
+};
+
+struct ArmDeviceConfig {
+  std::vector<std::string> joints;     ///< MJCF joint names, in device order
+  std::vector<std::string> actuators;  ///< MJCF motor actuators (torque), default: joint names
+  std::vector<double> initial;         ///< initial joint positions, rad (default: qpos0)
+  ServoConfig servo;
+};
+
+struct WrenchDeviceConfig {
+  std::string site;           ///< sensor site (documentation; frames come from the sensors)
+  std::string force_sensor;   ///< MJCF force sensor at the site
+  std::string torque_sensor;  ///< MJCF torque sensor at the site
+  std::string model = "67M25A";
+  std::vector<double> full_scale;  ///< 6 values, N and N·m; empty: the model's defaults
+  int filter = 4;
+  bool noise = true;
+  bool bias = true;
+  bool quantization = true;
+};
+
+struct DeviceConfig {
+  std::string name;
+  std::string kind;  ///< "arm" or "wrench"
+  std::string where;  ///< "FILE:LINE" for messages about binding
+  ArmDeviceConfig arm;
+  WrenchDeviceConfig wrench;
+};
+
+struct CartesianWaypoint {
+  Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< m
+  Eigen::Quaterniond orientation_W = Eigen::Quaterniond::Identity();
+  double duration_s = 1.0;  ///< time to reach this waypoint from the previous one
+};
+
+struct JointWaypoint {
+  std::vector<double> q;  ///< rad
+  double duration_s = 1.0;
+};
+
+struct ControllerConfig {
+  std::string type = "none";  ///< none | joint_pd | task_space
+  std::string arm;            ///< arm device it commands
+  std::string where;
+  std::string base_body = "world";  ///< chain from this body ...
+  std::string tip_site;             ///< ... to this site
+  // task_space
+  double k_position = 20.0;     ///< 1/s
+  double k_orientation = 20.0;  ///< 1/s
+  double k_null = 1.0;          ///< 1/s
+  double damping = 1e-3;        ///< DLS damping of the pseudo-inverse
+  std::vector<CartesianWaypoint> cartesian;
+  // joint_pd
+  std::vector<double> kp, kd;  ///< N·m/rad, N·m·s/rad (empty: from bandwidth_hz)
+  double pd_bandwidth_hz = 5.0;  ///< default gains: kp = H_ii w², kd = 2 H_ii w at the start pose
+  std::vector<JointWaypoint> joint;
+  // both
+  std::string timing = "quintic";  ///< quintic | trapezoidal
+  double start_s = 0.0;            ///< hold until this time, then follow the path
+};
+
+/// A pass/fail rule over one logged signal.
+struct CheckConfig {
+  std::string name;
+  std::string signal;          ///< a log column name
+  std::string reduce = "max";  ///< max | min | mean | rms | final | max_abs
+  double min = -std::numeric_limits<double>::infinity();  ///< value must be >= min
+  double max = std::numeric_limits<double>::infinity();   ///< value must be <= max
+  double from_s = 0.0;
+  double to_s = std::numeric_limits<double>::infinity();
+  std::string where;
+};
+
+struct OutputsConfig {
+  bool log = true;  ///< write log.csv
+};
+
+struct Scenario {
+  std::string file;        ///< path as given
+  std::string name;        ///< output folder name (default: file stem)
+  std::string description;
+  std::string scene;       ///< MJCF path, resolved relative to the scenario file
+  double duration_s = 1.0;
+  double control_period_s = 0.002;
+  std::uint64_t seed = 1;
+  std::string clock = "fast";
+  std::vector<std::string> allow_warnings;
+  std::vector<DeviceConfig> devices;
+  ControllerConfig controller;
+  OutputsConfig outputs;
+  std::vector<CheckConfig> checks;
+};
+
+/// Resolves a scenario argument: PATH, or PATH.yaml when PATH does not exist.
+std::string ResolveScenarioPath(const std::string& arg);
+
+/// Loads and validates a scenario file. Throws InputError naming the file, the
+/// line and the key.
+Scenario LoadScenario(const std::string& path);
+
+}  // namespace vlab::lab
