@@ -194,11 +194,14 @@ TEST_F(Pa10Dynamics, MassesAndComHeightsAreTheDatasheetValues) {
   EXPECT_NEAR(total, 34.21, 1e-9) << "DATASHEET 1.3 sum, base + 7 links";
 
   // JR3 67M25A 0.17 kg [EST]; tool = aluminium adapter D67x15 + pointer D25x150 mm
+  // (the JR3 is split at its measuring plane into two halves)
   const int jr3 = mj_name2id(model_.get(), mjOBJ_BODY, "jr3_body");
+  const int jr3_tool_side = mj_name2id(model_.get(), mjOBJ_BODY, "jr3_tool_side");
   const int tool = mj_name2id(model_.get(), mjOBJ_BODY, "tool_body");
   ASSERT_GE(jr3, 0);
+  ASSERT_GE(jr3_tool_side, 0);
   ASSERT_GE(tool, 0);
-  EXPECT_NEAR(model_->body_mass[jr3], 0.17, 1e-12);
+  EXPECT_NEAR(model_->body_mass[jr3] + model_->body_mass[jr3_tool_side], 0.17, 1e-12);
   const double kPi = 3.14159265358979323846, rho = 2700;
   const double m_adapter = rho * kPi * 0.0335 * 0.0335 * 0.015;
   const double m_pointer = rho * kPi * 0.0125 * 0.0125 * 0.150;
