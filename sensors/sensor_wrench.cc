@@ -1,6 +1,8 @@
 // JR3 sensor model: Reset and the 8 kHz sample loop (ADC, quantisation, filter cascade).
 #include "sensors/sensor_wrench.h"
 
+#include "sensors/sensor_random.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -14,19 +16,11 @@ constexpr double kPhaseSnapSamples = 1e-6;
 // Update refuses longer steps (a unit error, not a control period)
 constexpr double kMaxUpdateDtSeconds = 60.0;
 
-// uniform in [0, 1) with 53 random bits
-double Uniform53(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
-
-// six independent standard normal draws (three Box–Muller pairs)
-Wrench DrawStandardNormal(std::mt19937_64& rng) {
+// six independent standard normal draws
+Wrench DrawStandardNormal(Xoshiro256pp& rng) {
+  static const ZigguratNormal normal;  // immutable tables, built once
   Wrench out;
-  for (int i = 0; i < 6; i += 2) {
-    const double u1 = 1.0 - Uniform53(rng);  // (0, 1]: log is finite
-    const double u2 = Uniform53(rng);
-    const double radius = std::sqrt(-2.0 * std::log(u1));
-    out[i] = radius * std::cos(kTwoPi * u2);
-    out[i + 1] = radius * std::sin(kTwoPi * u2);
-  }
+  for (int i = 0; i < 6; ++i) out[i] = normal(rng);
   return out;
 }
 
@@ -83,7 +77,8 @@ void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state,
   // cascade: stage k runs every 4^(k-1) samples on the latest output of stage k-1
   for (int k = 1; k < kWrenchFilterCount; ++k) {
     const WrenchFilterStage& stage = model.stage(k);
-    if (state.sample_count % stage.decimation != 0) break;  // later stages are slower still
+    // decimation is a power of 4: a mask is the remainder
+    if ((state.sample_count & (stage.decimation - 1)) != 0) break;  // later stages are slower still
     const Wrench& in = state.output[k - 1];
     Wrench& z1 = state.z1[k - 1];
     Wrench& z2 = state.z2[k - 1];
@@ -100,7 +95,7 @@ void Reset(const WrenchSensorModel& model, WrenchSensorState& state, const Wrenc
   if (!initial_load.allFinite()) {
     throw std::invalid_argument("wrench sensor: Reset initial_load must be finite");
   }
-  state.rng.seed(model.seed());
+  state.rng.Seed(model.seed());
   // always draw, so the noise stream does not depend on enable_bias
   const Wrench unit_bias = DrawStandardNormal(state.rng);
   state.bias = model.bias_sigma().cwiseProduct(unit_bias);
@@ -124,20 +119,17 @@ void Reset(const WrenchSensorModel& model, WrenchSensorState& state, const Wrenc
   state.ready = true;
 }
 
-WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state,
-                     const Wrench& true_wrench, double dt) {
-  WrenchReading reading;
-  reading.filter = model.filter();
+WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench,
+                     double dt, WrenchReading* flags) {
   if (!state.ready) {
     ++state.rejected_updates;
-    reading.status = WrenchStatus::kNotReset;
-    return reading;
+    flags->status = WrenchStatus::kNotReset;
+    return flags->status;
   }
   if (!std::isfinite(dt) || dt < 0.0 || dt > kMaxUpdateDtSeconds || !true_wrench.allFinite()) {
     ++state.rejected_updates;
-    reading.status = WrenchStatus::kRejectedInput;
-    FillReading(model, state, reading);
-    return reading;
+    flags->status = WrenchStatus::kRejectedInput;
+    return flags->status;
   }
 
   // sample instants in (t, t + dt]; the fractional phase carries to the next call
@@ -148,8 +140,23 @@ WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state,
   state.phase_samples = phase - whole;
   const auto samples = static_cast<std::uint64_t>(whole);
 
-  for (std::uint64_t i = 0; i < samples; ++i) ProcessSample(model, state, true_wrench, reading);
-  reading.samples = static_cast<int>(samples);
+  for (std::uint64_t i = 0; i < samples; ++i) ProcessSample(model, state, true_wrench, *flags);
+  flags->samples += samples;
+  flags->status = WrenchStatus::kOk;
+  return flags->status;
+}
+
+WrenchReading Read(const WrenchSensorModel& model, const WrenchSensorState& state) {
+  WrenchReading reading;
+  FillReading(model, state, reading);
+  return reading;
+}
+
+WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state,
+                     const Wrench& true_wrench, double dt) {
+  WrenchReading reading;
+  reading.filter = model.filter();
+  if (Advance(model, state, true_wrench, dt, &reading) == WrenchStatus::kNotReset) return reading;
   FillReading(model, state, reading);
   return reading;
 }

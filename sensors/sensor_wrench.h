@@ -61,6 +61,8 @@
 
 #include <Eigen/Core>
 
+#include "sensors/sensor_random.h"
+
 namespace vlab::sensors {
 
 /// Fx Fy Fz [N], Mx My Mz [N·m], in the sensor frame.
@@ -101,7 +103,7 @@ struct WrenchSensorConfig {
   bool enable_noise = true;
   bool enable_bias = true;
   bool enable_quantization = true;
-  /// Seed of the bias and noise generator (std::mt19937_64 + Box–Muller).
+  /// Seed of the bias and noise generator (xoshiro256++ and ziggurat normals, sensor_random.h).
   std::uint64_t seed = 1;
 };
 
@@ -159,7 +161,7 @@ struct WrenchSensorState {
   std::array<Wrench, kWrenchFilterCount> output{};  // latest unquantised data sets 0..6
   std::array<Wrench, kWrenchFilterCount - 1> z1{}, z2{};  // transposed DF-II states, stage 1..6
   Wrench bias = Wrench::Zero();                     // drawn at Reset [N, N·m]
-  std::mt19937_64 rng;
+  Xoshiro256pp rng;
   std::uint64_t sample_count = 0;     // samples processed since Reset
   double phase_samples = 0.0;         // time since the last sample, in sample periods, [0, 1)
   bool saturated_latched = false;     // any sample clipped since Reset
@@ -189,6 +191,16 @@ struct WrenchReading {
 /// Setup path: throws std::invalid_argument if initial_load is not finite.
 void Reset(const WrenchSensorModel& model, WrenchSensorState& state,
            const Wrench& initial_load = Wrench::Zero());
+
+/// Advances the sensor like Update but forms no reading: for callers that feed the sensor
+/// more often than they read it (the lab feeds it every physics step and reads it once per
+/// control period). Sets flags->status, adds to flags->samples and sets (never clears)
+/// flags->saturated / near_saturated; the data sets in *flags are left untouched.
+WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench,
+                     double dt, WrenchReading* flags);
+
+/// What the host reads now: every data set as clipped (and rounded) counts times lsb.
+WrenchReading Read(const WrenchSensorModel& model, const WrenchSensorState& state);
 
 /// Advances the sensor by dt [s] with `true_wrench` held over (t, t + dt] and returns what the
 /// host reads at t + dt. dt = 0 only reads. Never throws, never allocates: bad input is

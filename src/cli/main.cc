@@ -22,9 +22,8 @@ int main(int argc, char** argv) {
       ->required();
   run_cmd->add_option("--out", run.out_dir, "Output folder (default: out/<scenario name>)");
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress bar and no per-check lines");
-  run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s")
-      ->check(CLI::PositiveNumber);
-  run_cmd->add_option("--seed", run.seed, "Override the scenario's seed")->check(CLI::NonNegativeNumber);
+  run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0)");
+  run_cmd->add_option("--seed", run.seed, "Override the scenario's seed (>= 0)");
   run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
 
   vlab::cli::BenchArgs bench;
@@ -33,15 +32,29 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::IsMember({"physics"}));
   bench_cmd->add_option("--scenario", bench.scenario, "Scenario to measure (default: scenes/pa10_reach)");
-  bench_cmd->add_option("--duration", bench.duration_s, "Simulated seconds per measurement")
-      ->check(CLI::PositiveNumber);
-  bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant (best kept)")->check(CLI::Range(1, 100));
+  bench_cmd->add_option("--duration", bench.duration_s, "Simulated seconds per measurement (> 0)");
+  bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant, 1 to 100 (best kept)");
 
   try {
     app.parse(argc, argv);
+    // range checks here, so that each error is one short line
+    auto given = [](CLI::App* cmd, const char* name) { return cmd->get_option(name)->count() > 0; };
+    if (run_cmd->parsed() && given(run_cmd, "--duration") && !(run.duration_s > 0)) {
+      throw CLI::ValidationError("--duration must be > 0 s");
+    }
+    if (run_cmd->parsed() && given(run_cmd, "--seed") && run.seed < 0) {
+      throw CLI::ValidationError("--seed must be >= 0");
+    }
+    if (bench_cmd->parsed() && given(bench_cmd, "--duration") && !(bench.duration_s > 0)) {
+      throw CLI::ValidationError("--duration must be > 0 s");
+    }
+    if (bench_cmd->parsed() && (bench.repeat < 1 || bench.repeat > 100)) {
+      throw CLI::ValidationError("--repeat must be 1 to 100");
+    }
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::fprintf(stderr, "vlab: error: %s (see vlab --help)\n", e.what());
+    return 2;
   }
   if (run_cmd->parsed()) return vlab::cli::RunCommand(run);
   if (bench_cmd->parsed()) return vlab::cli::BenchCommand(bench);

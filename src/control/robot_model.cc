@@ -110,11 +110,23 @@ void RobotModel::SetState(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
 }
 
 void RobotModel::Recompute() {
-  // position-dependent quantities, then velocity-dependent ones
+  // kinematics now (every quantity needs it); inertia and velocity terms on demand
   mj_kinematics(model_, data_);
   mj_comPos(model_, data_);
+  inertia_ready_ = false;
+  velocity_ready_ = false;
+}
+
+void RobotModel::EnsureInertia() const {
+  if (inertia_ready_) return;
   mj_crb(model_, data_);
+  inertia_ready_ = true;
+}
+
+void RobotModel::EnsureVelocity() const {
+  if (velocity_ready_) return;
   mj_comVel(model_, data_);
+  velocity_ready_ = true;
 }
 
 Pose RobotModel::TipPose() const {
@@ -141,6 +153,7 @@ Eigen::MatrixXd RobotModel::Jacobian() const {
 }
 
 Eigen::MatrixXd RobotModel::MassMatrix() const {
+  EnsureInertia();
   mj_fullM(model_, full_m_.data(), data_->qM);
   const int nv = model_->nv;
   Eigen::MatrixXd H(dof(), dof());
@@ -151,6 +164,7 @@ Eigen::MatrixXd RobotModel::MassMatrix() const {
 }
 
 Eigen::VectorXd RobotModel::Bias() const {
+  EnsureVelocity();
   mj_rne(model_, data_, 0, rne_.data());
   Eigen::VectorXd h(dof());
   for (int i = 0; i < dof(); ++i) h[i] = rne_[dof_addresses_[i]];
@@ -166,7 +180,7 @@ Eigen::VectorXd RobotModel::Gravity() const {
   mj_comVel(model_, data_);
   mj_rne(model_, data_, 0, rne_.data());
   std::copy(saved.begin(), saved.begin() + nv, data_->qvel);
-  mj_comVel(model_, data_);
+  velocity_ready_ = false;
   Eigen::VectorXd g(dof());
   for (int i = 0; i < dof(); ++i) g[i] = rne_[dof_addresses_[i]];
   return g;

@@ -79,7 +79,7 @@ class RobotModel {
 
   /// Sets the evaluation state: the whole model's qpos/qvel copied from `data`
   /// (so joints outside the chain, e.g. a mobile base, are respected), then the
-  /// kinematics and inertia recomputed.
+  /// kinematics recomputed (inertia and velocity terms on first use).
   void SetState(const mjData& data);
   /// Sets the evaluation state from chain coordinates; joints outside the chain
   /// keep the positions of the last SetState(data) (qpos0 initially) and zero
@@ -100,6 +100,8 @@ class RobotModel {
  private:
   RobotModel(const mjModel* model, mjData* data);
   void Recompute();
+  void EnsureInertia() const;   // mj_crb once per state
+  void EnsureVelocity() const;  // mj_comVel once per state
 
   const mjModel* model_;
   mjData* data_;
@@ -109,6 +111,8 @@ class RobotModel {
   std::vector<int> dof_addresses_;
   std::vector<std::string> joint_names_;
   Eigen::VectorXd lower_, upper_;
+  mutable bool inertia_ready_ = false;
+  mutable bool velocity_ready_ = false;
   // scratch buffers sized at creation
   mutable std::vector<mjtNum> full_m_;
   mutable std::vector<mjtNum> rne_;

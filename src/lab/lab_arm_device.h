@@ -63,7 +63,8 @@ class SimArm {
 
   /// Log columns: NAME.q.JOINT, NAME.qd.JOINT, NAME.tau.JOINT, NAME.limit_violation.
   std::vector<std::string> Columns() const;
-  /// Writes Columns().size() values for the current state.
+  int ColumnCount() const { return 3 * dof() + 1; }
+  /// Writes ColumnCount() values for the current state.
   void Row(const mjData& data, double* out) const;
 
   long refused_commands() const { return refused_; }

@@ -5,6 +5,7 @@
 // window holds no sample fails with value NaN.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -32,7 +33,9 @@ class CheckSet {
  private:
   struct Accumulator {
     int column = 0;
-    double max = -1e308, min = 1e308, max_abs = 0.0, sum = 0.0, sum_sq = 0.0, last = 0.0;
+    double max = -std::numeric_limits<double>::infinity();
+    double min = std::numeric_limits<double>::infinity();
+    double max_abs = 0.0, sum = 0.0, sum_sq = 0.0, last = 0.0;
     long count = 0;
   };
   std::vector<CheckConfig> checks_;

@@ -145,7 +145,7 @@ void Lab::Impl::WriteRow(double time_s, std::vector<double>& row) const {
   *out++ = time_s;
   for (const auto& arm : arms) {
     arm->Row(*data, out);
-    out += arm->Columns().size();
+    out += arm->ColumnCount();
   }
   for (const auto& w : wrenches) {
     w->Row(out);
@@ -165,7 +165,9 @@ RunResult Lab::Run(const RunOptions& options) {
   s.ResetState();
   std::unique_ptr<Clock> clock = MakeClock(s.scenario.clock, s.scenario.control_period_s);
 
-  // outputs: staging folder, log, checks
+  // checks first: a bad signal name is bad input, and must leave nothing behind
+  CheckSet checks(s.scenario.checks, s.columns);
+  // outputs: staging folder, log
   std::unique_ptr<OutputDir> out;
   std::unique_ptr<CsvLog> log;
   if (!options.out_dir.empty()) {
@@ -177,7 +179,6 @@ RunResult Lab::Run(const RunOptions& options) {
     });
     if (s.scenario.outputs.log) log = CsvLog::Open(out->File("log.csv"), s.columns);
   }
-  CheckSet checks(s.scenario.checks, s.columns);
   std::vector<double> row(s.columns.size(), 0.0);
   const std::size_t controller_offset = s.columns.size() - (s.controller ? s.controller->Columns().size() : 0);
 
@@ -185,7 +186,35 @@ RunResult Lab::Run(const RunOptions& options) {
   const double dt = m->opt.timestep;
   int warning_counts[mjNWARNING] = {0};
   double warning_first[mjNWARNING] = {0};
-  if (options.record_controls) result.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
+  if (options.record) {
+    result.recording.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
+  }
+  // the controller's work for one period: computed, or replayed from a recording
+  const std::size_t controller_columns = s.controller ? s.controller->Columns().size() : 0;
+  std::size_t replay_at = 0;
+  auto run_controller = [&](double t) {
+    const int a = s.controller_arm;
+    bridge::ArmCommand& cmd = s.arm_commands[a];
+    double* columns = row.data() + controller_offset;
+    if (options.replay) {
+      if (replay_at + 1 + s.arms[a]->dof() + controller_columns > options.replay->controller.size()) {
+        throw std::runtime_error("replay: the recording is shorter than this run");
+      }
+      const double* r = options.replay->controller.data() + replay_at;
+      cmd.mode = static_cast<bridge::ArmMode>(static_cast<int>(r[0]));
+      cmd.value = Eigen::Map<const Eigen::VectorXd>(r + 1, s.arms[a]->dof());
+      std::copy(r + 1 + s.arms[a]->dof(), r + 1 + s.arms[a]->dof() + controller_columns, columns);
+      replay_at += 1 + s.arms[a]->dof() + controller_columns;
+      return;
+    }
+    s.controller->Update(t, s.arm_states[a], &cmd, columns);
+    if (options.record) {
+      std::vector<double>& rec = result.recording.controller;
+      rec.push_back(static_cast<double>(static_cast<int>(cmd.mode)));
+      for (int i = 0; i < s.arms[a]->dof(); ++i) rec.push_back(i < cmd.value.size() ? cmd.value[i] : 0.0);
+      rec.insert(rec.end(), columns, columns + controller_columns);
+    }
+  };
 
   auto emit_row = [&](double t) {
     s.WriteRow(t, row);
@@ -193,10 +222,7 @@ RunResult Lab::Run(const RunOptions& options) {
     checks.Add(t, row.data());
   };
   // controller columns of row 0: let the controller see the initial state
-  if (s.controller) {
-    bridge::ArmCommand& cmd = s.arm_commands[s.controller_arm];
-    s.controller->Update(0.0, s.arm_states[s.controller_arm], &cmd, row.data() + controller_offset);
-  }
+  if (s.controller) run_controller(0.0);
   emit_row(0.0);
 
   const auto t_loop = WallClock::now();
@@ -211,7 +237,7 @@ RunResult Lab::Run(const RunOptions& options) {
     // 1. commands: the controller answers the newest sample
     if (s.controller) {
       const int a = s.controller_arm;
-      if (k > 0) s.controller->Update(t_k, s.arm_states[a], &s.arm_commands[a], row.data() + controller_offset);
+      if (k > 0) run_controller(t_k);
       if (s.arm_commands[a].mode != bridge::ArmMode::kHold || k > 0) s.arms[a]->Command(s.arm_commands[a]);
     }
     // 2. physics
@@ -219,7 +245,7 @@ RunResult Lab::Run(const RunOptions& options) {
       const double t_step = d->time;
       mj_step1(m, d);
       for (auto& arm : s.arms) arm->Actuate(*d, dt);
-      if (options.record_controls) result.controls.insert(result.controls.end(), d->ctrl, d->ctrl + m->nu);
+      if (options.record) result.recording.controls.insert(result.recording.controls.end(), d->ctrl, d->ctrl + m->nu);
       mj_step2(m, d);
       for (auto& w : s.wrenches) w->Step(*d, dt);
       ++result.steps;
@@ -235,6 +261,7 @@ RunResult Lab::Run(const RunOptions& options) {
     }
     if (diverged) break;
     // 3. sample devices and log
+    for (auto& w : s.wrenches) w->EndPeriod();
     for (std::size_t i = 0; i < s.arms.size(); ++i) s.arms[i]->Sample(*d, t_next, &s.arm_states[i]);
     emit_row(t_next);
     clock->EndPeriod(k);

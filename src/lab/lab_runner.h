@@ -29,8 +29,18 @@ struct RunOptions {
   std::function<void(double fraction)> progress;
   /// Set from a signal handler to stop the run early (counted as an error).
   const volatile bool* interrupt = nullptr;
-  /// Keep every physics step's ctrl vector (for the physics benchmark replay).
-  bool record_controls = false;
+  /// Record what the run computed, for replay (the physics benchmark).
+  bool record = false;
+  /// Replay a recording of the same scenario: the controller's commands and
+  /// log columns come from it instead of the controller (same trajectory, no
+  /// controller cost).
+  const struct Recording* replay = nullptr;
+};
+
+/// What a recorded run computed.
+struct Recording {
+  std::vector<double> controls;    ///< nu motor controls per physics step
+  std::vector<double> controller;  ///< per control period: mode, command values, controller columns
 };
 
 struct WarningReport {
@@ -51,7 +61,7 @@ struct RunResult {
   double sim_time_s = 0.0;
   double loop_wall_s = 0.0;   ///< wall time of the step loop
   double total_wall_s = 0.0;  ///< wall time including writing outputs
-  std::vector<double> controls;  ///< nu values per step, if record_controls
+  Recording recording;  ///< if RunOptions::record
 };
 
 class Lab {

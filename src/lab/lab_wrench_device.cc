@@ -57,22 +57,28 @@ sensors::Wrench SimWrench::TrueLoad(const mjData& d) const {
 
 void SimWrench::Reset(const mjData& d) {
   sensors::Reset(*sensor_, state_, TrueLoad(d));
-  reading_ = sensors::WrenchReading{};
-  reading_.filter = sensor_->filter();
-  reading_.wrench = state_.output[sensor_->filter()];
+  reading_ = sensors::Read(*sensor_, state_);
+  saturated_ = false;
   saturated_in_period_ = false;
 }
 
 void SimWrench::Step(const mjData& d, double dt) {
-  reading_ = sensors::Update(*sensor_, state_, TrueLoad(d), dt);
-  saturated_in_period_ = saturated_in_period_ || reading_.saturated;
+  sensors::WrenchReading flags;
+  sensors::Advance(*sensor_, state_, TrueLoad(d), dt, &flags);
+  saturated_in_period_ = saturated_in_period_ || flags.saturated;
+}
+
+void SimWrench::EndPeriod() {
+  reading_ = sensors::Read(*sensor_, state_);
+  saturated_ = saturated_in_period_;
+  saturated_in_period_ = false;
 }
 
 void SimWrench::Sample(double time_s, bridge::WrenchState* s) const {
   s->time_s = time_s;
   s->wrench = reading_.wrench;
   s->filter = reading_.filter;
-  s->saturated = saturated_in_period_;
+  s->saturated = saturated_;
 }
 
 std::vector<std::string> SimWrench::Columns() const {
@@ -84,7 +90,7 @@ std::vector<std::string> SimWrench::Columns() const {
 
 void SimWrench::Row(double* out) const {
   for (int i = 0; i < 6; ++i) out[i] = reading_.wrench[i];
-  out[6] = saturated_in_period_ ? 1.0 : 0.0;
+  out[6] = saturated_ ? 1.0 : 0.0;
 }
 
 }  // namespace vlab::lab

@@ -35,6 +35,9 @@ class SimWrench {
   void Reset(const mjData& data);
   /// Feeds the load of the physics step just taken (after mj_step2).
   void Step(const mjData& data, double dt);
+  /// Forms the host's reading at the end of a control period (once per period).
+  void EndPeriod();
+  /// The reading formed by the last EndPeriod().
   void Sample(double time_s, bridge::WrenchState* state) const;
 
   /// Log columns: NAME.Fx .. NAME.Mz, NAME.saturated.
@@ -53,7 +56,8 @@ class SimWrench {
   std::unique_ptr<sensors::WrenchSensorModel> sensor_;
   sensors::WrenchSensorState state_;
   sensors::WrenchReading reading_;
-  bool saturated_in_period_ = false;
+  bool saturated_in_period_ = false;  // since the last EndPeriod
+  bool saturated_ = false;            // during the period the reading closes
 };
 
 }  // namespace vlab::lab
