@@ -1,0 +1,282 @@
+// The vlab executable end to end: the default scenario passes and writes a
+// complete, deterministic output folder; bad input exits 2 with one line naming
+// the cause and writes nothing; divergence and failed checks exit 1.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lab/lab_log.h"
+#include "test_util.h"
+
+namespace vlab::lab {
+namespace {
+
+namespace fs = std::filesystem;
+using vlab::testing::ReadFile;
+using vlab::testing::RunVlab;
+using vlab::testing::TempDir;
+using vlab::testing::WriteFile;
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::stringstream s(text);
+  std::string l;
+  while (std::getline(s, l)) lines.push_back(l);
+  return lines;
+}
+
+std::vector<std::string> Split(const std::string& line) {
+  std::vector<std::string> fields;
+  std::stringstream s(line);
+  std::string f;
+  while (std::getline(s, f, ',')) fields.push_back(f);
+  return fields;
+}
+
+std::set<std::string> Entries(const std::string& dir) {
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  return names;
+}
+
+bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// The default scenario with the scene given by absolute path, `duration` and the
+// checks replaced by `checks` (YAML list items), written to dir/name.yaml.
+std::string DefaultScenarioWith(const TempDir& dir, const std::string& name, const std::string& checks,
+                                const std::string& device_joints = "[S1, S2, S3, E1, E2, W1, W2]") {
+  std::string text = ReadFile(VLAB_SOURCE_DIR "/scenes/pa10_reach.yaml");
+  auto replace = [&text](const std::string& from, const std::string& to) {
+    const auto at = text.find(from);
+    if (at == std::string::npos) throw std::runtime_error("pa10_reach.yaml has no '" + from + "'");
+    text.replace(at, from.size(), to);
+  };
+  replace("name: pa10_reach", "name: " + name);
+  replace("scene: pa10.xml", "scene: " VLAB_SOURCE_DIR "/scenes/pa10.xml");
+  replace("duration: 13.0", "duration: 1.0");
+  replace("joints: [S1, S2, S3, E1, E2, W1, W2]", "joints: " + device_joints);
+  text = text.substr(0, text.find("\nchecks:")) + "\nchecks:\n" + checks;
+  const std::string path = dir / (name + ".yaml");
+  WriteFile(path, text);
+  return path;
+}
+
+TEST(CliTest, DefaultScenarioPassesAndWritesOutputs) {
+  TempDir tmp;
+  const auto r = RunVlab("run scenes/pa10_reach -q --out '" + (tmp / "out") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(Entries(tmp.path()), std::set<std::string>{"out"});  // no staging folder left
+  EXPECT_EQ(Entries(tmp / "out"), (std::set<std::string>{"log.csv", "summary.json"}));
+
+  const nlohmann::json s = nlohmann::json::parse(ReadFile(tmp / "out/summary.json"));
+  EXPECT_EQ(s.at("result"), "pass");
+  EXPECT_EQ(s.at("exit_code"), 0);
+  EXPECT_EQ(s.at("seed"), 7);
+  EXPECT_EQ(s.at("versions").at("mujoco"), "2.2.2");
+  ASSERT_EQ(s.at("checks").size(), 4u);
+  for (const auto& c : s.at("checks")) {
+    EXPECT_TRUE(c.at("value").is_number()) << c.dump();
+    EXPECT_TRUE(c.at("bound").contains("max")) << c.dump();
+    EXPECT_LE(c.at("value").get<double>(), c.at("bound").at("max").get<double>()) << c.dump();
+    EXPECT_EQ(c.at("pass"), true) << c.dump();
+  }
+  EXPECT_EQ(s.at("checks")[0].at("name"), "position_tracking");
+  const auto& t = s.at("timings");
+  EXPECT_EQ(t.at("steps"), 13000);  // 13 s at the scene's 1 ms timestep
+  EXPECT_EQ(t.at("control_periods"), 6500);
+  EXPECT_DOUBLE_EQ(t.at("sim_time_s").get<double>(), 13.0);
+  EXPECT_GT(t.at("loop_wall_s").get<double>(), 0.0);
+
+  const std::vector<std::string> lines = Lines(ReadFile(tmp / "out/log.csv"));
+  ASSERT_EQ(lines.size(), 1u + 13.0 / 0.002 + 1);  // header, initial row, one row per period
+  const std::vector<std::string> header = Split(lines[0]);
+  EXPECT_EQ(header[0], "time");
+  for (std::size_t k = 1; k < lines.size(); ++k) {
+    const std::vector<std::string> row = Split(lines[k]);
+    ASSERT_EQ(row.size(), header.size()) << "row " << k - 1;
+    ASSERT_EQ(row[0], FormatDouble((k - 1) * 0.002)) << "row " << k - 1;
+  }
+  EXPECT_EQ(Split(lines[4])[0], "0.006");
+  EXPECT_EQ(Split(lines.back())[0], "13");
+}
+
+TEST(CliTest, RunsAreDeterministicAndSeedOnlyMovesTheSensor) {
+  TempDir tmp;
+  for (const char* run : {"a", "b"}) {
+    const auto r = RunVlab("run scenes/pa10_reach -q --duration 3 --out '" + (tmp / run) + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  ASSERT_EQ(RunVlab("run scenes/pa10_reach -q --duration 3 --seed 8 --out '" + (tmp / "c") + "'").exit_code, 0);
+  const std::string a = ReadFile(tmp / "a/log.csv"), b = ReadFile(tmp / "b/log.csv"), c = ReadFile(tmp / "c/log.csv");
+  ASSERT_EQ(Lines(a).size(), 1u + 1500 + 1);
+  EXPECT_TRUE(a == b) << "same scenario, same seed: logs differ";
+  EXPECT_FALSE(a == c) << "a different seed must change the JR3 noise";
+  // the JR3 acts on nothing: time, arm and controller columns are the same for any seed
+  const auto la = Lines(a), lc = Lines(c);
+  ASSERT_EQ(la.size(), lc.size());
+  const std::vector<std::string> header = Split(la[0]);
+  int arm_columns = 0, jr3_columns_differing = 0;
+  std::set<std::size_t> differing;
+  for (std::size_t k = 1; k < la.size(); ++k) {
+    const auto ra = Split(la[k]), rc = Split(lc[k]);
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (ra[i] != rc[i]) differing.insert(i);
+    }
+  }
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    const std::string& h = header[i];
+    if (h == "time" || h.rfind("pa10.", 0) == 0 || h.rfind("controller.", 0) == 0) {
+      ++arm_columns;
+      EXPECT_EQ(differing.count(i), 0u) << h << " depends on the seed";
+    } else if (h.rfind("jr3.F", 0) == 0 || h.rfind("jr3.M", 0) == 0) {
+      jr3_columns_differing += static_cast<int>(differing.count(i));
+    }
+  }
+  EXPECT_EQ(arm_columns, 1 + 3 * 7 + 1 + 8);
+  EXPECT_EQ(jr3_columns_differing, 6);
+}
+
+struct BadInput {
+  std::string what;
+  std::string args;                 // "run ..." (the test adds -q and --out)
+  std::vector<std::string> expect;  // substrings of the one stderr line
+};
+
+// Runs each case with --out DIR/OUT_LEAF in a fresh DIR: exit 2, exactly one line on
+// stderr naming the cause, and DIR left empty (no output, staging or parent folder).
+void ExpectRejected(const std::vector<BadInput>& cases, const std::string& out_leaf = "out") {
+  for (const BadInput& c : cases) {
+    TempDir tmp;
+    const auto r = RunVlab(c.args + " -q --out '" + (tmp / out_leaf) + "'");
+    EXPECT_EQ(r.exit_code, 2) << c.what << ": " << r.err;
+    EXPECT_FALSE(r.err.empty()) << c.what;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << c.what << ": not exactly one line:\n" << r.err;
+    for (const auto& part : c.expect) EXPECT_TRUE(Has(r.err, part)) << c.what << ": no '" << part << "' in " << r.err;
+    const auto left = Entries(tmp.path());
+    EXPECT_TRUE(left.empty()) << c.what << ": left " << *left.begin() << " in the output's parent";
+  }
+}
+
+// Scenarios that load but do not bind: an unknown check signal, an unknown joint,
+// a control period that is not a whole number of timesteps.
+struct BindingCases {
+  TempDir dir;
+  std::vector<BadInput> cases;
+  BindingCases() {
+    const std::string bad_signal = DefaultScenarioWith(
+        dir, "bad_signal", "  - {name: tracking, signal: controller.postion_error, reduce: max, max: 1}\n");
+    const std::string bad_joint =
+        DefaultScenarioWith(dir, "bad_joint", "  - {name: t, signal: time, max: 100}\n", "[S1, S2, S3, E1, E7, W1, W2]");
+    const std::string text = ReadFile(bad_signal);
+    const auto line = 1 + std::count(text.begin(), text.begin() + text.find("{name: tracking"), '\n');
+    std::string period = ReadFile(DefaultScenarioWith(dir, "period", "  - {name: t, signal: time, max: 100}\n"));
+    period.replace(period.find("control_period: 0.002"), 21, "control_period: 0.0015");
+    WriteFile(dir / "period.yaml", period);
+    cases = {
+        {"unknown signal", "run '" + bad_signal + "'",
+         {"bad_signal.yaml:" + std::to_string(line) + ": ", "check 'tracking'", "unknown signal 'controller.postion_error'"}},
+        {"unknown joint", "run '" + bad_joint + "'", {"bad_joint.yaml:", "device 'pa10'", "no joint 'E7'"}},
+        {"control period", "run '" + (dir / "period.yaml") + "'",
+         {"period.yaml", "control_period 0.0015", "not a whole multiple", "0.001"}},
+    };
+  }
+};
+
+TEST(CliTest, BadFilesExit2WithOneLineAndWriteNothing) {
+  const bool had_mujoco_log = fs::exists(VLAB_SOURCE_DIR "/MUJOCO_LOG.TXT");
+  ExpectRejected({
+      {"missing file", "run tests/data/no_such_scenario", {"no_such_scenario", "cannot open"}},
+      {"malformed YAML", "run tests/data/malformed", {"malformed.yaml:3", "malformed YAML"}},
+      {"unknown key", "run tests/data/unknown_key", {"unknown_key.yaml:8", "dampingratio", "unknown key"}},
+      {"wrong type", "run tests/data/wrong_type", {"wrong_type.yaml:2", "duration", "ten seconds"}},
+      {"broken scene", "run tests/data/broken_scene", {"broken_scene.xml", "undefined_attribute"}},
+  });
+  ExpectRejected(BindingCases().cases);
+  // MuJoCo's default handlers would write MUJOCO_LOG.TXT into the working folder
+  if (!had_mujoco_log) {
+    EXPECT_FALSE(fs::exists(VLAB_SOURCE_DIR "/MUJOCO_LOG.TXT"));
+  }
+}
+
+TEST(CliTest, BadBindingCreatesNoOutputParent) {
+  // --out runs/out: on bad input not even the parent "runs" may appear
+  ExpectRejected(BindingCases().cases, "runs/out");
+}
+
+TEST(CliTest, BadOptionsExit2WithOneLine) {
+  ExpectRejected({
+      {"no scenario", "run", {"scenario"}},
+      {"negative duration", "run scenes/pa10_reach --duration -1", {"--duration"}},
+      {"unknown option", "run scenes/pa10_reach --durration 1", {"--durration"}},
+  });
+}
+
+TEST(CliTest, DivergingModelExits1NamingTheCause) {
+  TempDir tmp;
+  const auto r = RunVlab("run tests/data/diverge -q --out '" + (tmp / "out") + "'", 60);
+  ASSERT_EQ(r.exit_code, 1) << r.err;  // 124 would be the timeout: a hang
+  EXPECT_TRUE(Has(r.err, "diverged")) << r.err;
+  EXPECT_TRUE(Has(r.err, "QACC")) << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(ReadFile(tmp / "out/summary.json"));
+  EXPECT_EQ(s.at("result"), "fail");
+  EXPECT_TRUE(Has(s.at("failure").get<std::string>(), "diverged"));
+  EXPECT_LT(s.at("timings").at("sim_time_s").get<double>(), 2.0);  // stopped early
+}
+
+TEST(CliTest, FailedCheckExits1AndWritesCompleteOutput) {
+  TempDir tmp;
+  const std::string scenario = DefaultScenarioWith(
+      tmp, "strict",
+      "  - {name: loose, signal: controller.position_error, reduce: max, max: 1.0}\n"
+      "  - {name: impossible, signal: controller.position_error, reduce: max, max: 1e-12}\n");
+  const auto r = RunVlab("run '" + scenario + "' -q --out '" + (tmp / "out") + "'");
+  ASSERT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(Has(r.err, "check 'impossible' failed")) << r.err;
+  EXPECT_EQ(Entries(tmp.path()), (std::set<std::string>{"out", "strict.yaml"}));
+  EXPECT_EQ(Entries(tmp / "out"), (std::set<std::string>{"log.csv", "summary.json"}));
+  const nlohmann::json s = nlohmann::json::parse(ReadFile(tmp / "out/summary.json"));
+  EXPECT_EQ(s.at("result"), "fail");
+  ASSERT_EQ(s.at("checks").size(), 2u);
+  EXPECT_EQ(s.at("checks")[0].at("pass"), true);
+  EXPECT_EQ(s.at("checks")[1].at("name"), "impossible");
+  EXPECT_EQ(s.at("checks")[1].at("pass"), false);
+  EXPECT_GT(s.at("checks")[1].at("value").get<double>(), 1e-12);
+  EXPECT_EQ(Lines(ReadFile(tmp / "out/log.csv")).size(), 1u + 500 + 1);  // the whole 1 s run
+}
+
+TEST(CliTest, ListSignalsPrintsColumnsAndWritesNothing) {
+  TempDir tmp;
+  const auto r = RunVlab("run scenes/pa10_reach --list-signals --out '" + (tmp / "out") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = Lines(r.out);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines[0], "time");
+  const std::set<std::string> names(lines.begin(), lines.end());
+  for (const char* c : {"pa10.q.S1", "pa10.tau.W2", "pa10.limit_violation", "jr3.Fz", "jr3.Mx",
+                        "controller.position_error", "controller.orientation_error"}) {
+    EXPECT_EQ(names.count(c), 1u) << c;
+  }
+  EXPECT_EQ(names.size(), lines.size());  // no duplicates
+  EXPECT_TRUE(Entries(tmp.path()).empty());
+}
+
+TEST(CliTest, HelpNamesSubcommands) {
+  const auto r = RunVlab("--help");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(Has(r.out, "run")) << r.out;
+  EXPECT_TRUE(Has(r.out, "bench")) << r.out;
+  EXPECT_TRUE(Has(r.out, "Exit codes")) << r.out;
+  EXPECT_NE(RunVlab("").exit_code, 0);  // a subcommand is required
+}
+
+}  // namespace
+}  // namespace vlab::lab
