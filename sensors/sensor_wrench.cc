@@ -17,10 +17,9 @@ constexpr double kPhaseSnapSamples = 1e-6;
 constexpr double kMaxUpdateDtSeconds = 60.0;
 
 // six independent standard normal draws
-Wrench DrawStandardNormal(Xoshiro256pp& rng) {
-  static const ZigguratNormal normal;  // immutable tables, built once
+Wrench DrawStandardNormal(const WrenchSensorModel& model, Xoshiro256pp& rng) {
   Wrench out;
-  for (int i = 0; i < 6; ++i) out[i] = normal(rng);
+  for (int i = 0; i < 6; ++i) out[i] = model.normal()(rng);
   return out;
 }
 
@@ -61,7 +60,7 @@ void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state,
   // sensor signal plus bias and white noise
   Wrench signal = true_wrench + state.bias;
   if (model.noise_enabled()) {
-    signal += model.noise_sigma().cwiseProduct(DrawStandardNormal(state.rng));
+    signal += model.noise_sigma().cwiseProduct(DrawStandardNormal(model, state.rng));
   }
 
   // ADC clip and quantisation give filter0
@@ -97,7 +96,7 @@ void Reset(const WrenchSensorModel& model, WrenchSensorState& state, const Wrenc
   }
   state.rng.Seed(model.seed());
   // always draw, so the noise stream does not depend on enable_bias
-  const Wrench unit_bias = DrawStandardNormal(state.rng);
+  const Wrench unit_bias = DrawStandardNormal(model, state.rng);
   state.bias = model.bias_sigma().cwiseProduct(unit_bias);
 
   // filter0 holds the noise-free ADC value of the initial load; every stage is in steady state

@@ -137,6 +137,8 @@ class WrenchSensorModel {
   std::uint64_t seed() const { return seed_; }
   /// Stage k = 1..6 (k outside that range returns stage 1).
   const WrenchFilterStage& stage(int k) const;
+  /// Standard normal generator used for bias and noise.
+  const ZigguratNormal& normal() const { return normal_; }
 
  private:
   WrenchSensorModel() = default;
@@ -153,6 +155,7 @@ class WrenchSensorModel {
   bool enable_quantization_ = true;
   std::uint64_t seed_ = 0;
   std::array<WrenchFilterStage, kWrenchFilterCount - 1> stages_{};
+  ZigguratNormal normal_;  // noise deviates (tables built with the model)
 };
 
 /// Mutable sensor state: filter states, generator, bias, sample clock. Call Reset before use.
