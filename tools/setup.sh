@@ -30,9 +30,17 @@ vlab_install_packages() {
       echo "vlab: need root or sudo to install: $missing" >&2; return 1
     fi
   fi
-  $sudo apt-get update -qq
+  local log
+  log="$(mktemp)"
   # shellcheck disable=SC2086
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends $missing
+  if ! { $sudo apt-get update -qq && DEBIAN_FRONTEND=noninteractive \
+         $sudo apt-get install -y -qq --no-install-recommends $missing; } >"$log" 2>&1; then
+    tail -20 "$log" >&2
+    echo "vlab: package installation failed" >&2
+    rm -f "$log"
+    return 1
+  fi
+  rm -f "$log"
 }
 
 vlab_build() {
