@@ -232,6 +232,28 @@ TEST(CliTest, DivergingModelExits1NamingTheCause) {
   EXPECT_LT(s.at("timings").at("sim_time_s").get<double>(), 2.0);  // stopped early
 }
 
+// a MuJoCo warning fails the run and is reported, unless the scenario allows it
+TEST(CliTest, WarningsFailUnlessAllowed) {
+  TempDir tmp;
+  const auto r = RunVlab("run tests/data/contact_overflow -q --out '" + (tmp / "a") + "'", 60);
+  ASSERT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(Has(r.err, "MuJoCo warning 'contactfull'")) << r.err;
+  const nlohmann::json a = nlohmann::json::parse(ReadFile(tmp / "a/summary.json"));
+  EXPECT_EQ(a.at("result"), "fail");
+  ASSERT_EQ(a.at("warnings").size(), 1u);
+  EXPECT_EQ(a.at("warnings")[0].at("name"), "contactfull");
+  EXPECT_GT(a.at("warnings")[0].at("count").get<int>(), 0);
+  EXPECT_FALSE(a.at("warnings")[0].at("allowed").get<bool>());
+  EXPECT_TRUE(Has(a.at("warnings")[0].at("message").get<std::string>(), "nconmax"));
+
+  const auto allowed = RunVlab("run tests/data/contact_overflow_allowed -q --out '" + (tmp / "b") + "'", 60);
+  ASSERT_EQ(allowed.exit_code, 0) << allowed.err;
+  const nlohmann::json b = nlohmann::json::parse(ReadFile(tmp / "b/summary.json"));
+  EXPECT_EQ(b.at("result"), "pass");
+  ASSERT_EQ(b.at("warnings").size(), 1u);
+  EXPECT_TRUE(b.at("warnings")[0].at("allowed").get<bool>());
+}
+
 TEST(CliTest, FailedCheckExits1AndWritesCompleteOutput) {
   TempDir tmp;
   const std::string scenario = DefaultScenarioWith(
