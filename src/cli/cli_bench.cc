@@ -19,7 +19,6 @@
 #include <unistd.h>
 
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 
@@ -49,7 +48,7 @@ double BareReplay(const lab::Lab& lab, const std::vector<double>& controls, cons
 }  // namespace
 
 int BenchCommand(const BenchArgs& args) {
-  try {
+  return WithErrorReport([&args] {
     lab::Scenario scenario =
         lab::LoadScenario(lab::ResolveScenarioPath(args.scenario.empty() ? "scenes/pa10_reach" : args.scenario));
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
@@ -97,13 +96,7 @@ int BenchCommand(const BenchArgs& args) {
     std::printf("  a and b reproduce the recorded trajectory bit for bit: %s\n", bare_same && replay_same ? "yes" : "NO");
     std::printf("  goal: b/a >= 0.90 -> %s\n", ratio >= 0.90 ? "met" : "NOT met");
     return 0;
-  } catch (const lab::InputError& e) {
-    std::fprintf(stderr, "vlab: error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "vlab: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace vlab::cli

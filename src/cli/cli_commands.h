@@ -3,6 +3,7 @@
 // diverged, 2 bad input.
 #pragma once
 
+#include <functional>
 #include <string>
 
 namespace vlab::cli {
@@ -24,6 +25,10 @@ struct BenchArgs {
   int repeat = 3;         ///< measurements per variant; the best is reported
 };
 int BenchCommand(const BenchArgs& args);
+
+/// Runs a command body; an InputError prints one line and gives exit code 2,
+/// any other exception one line and exit code 1.
+int WithErrorReport(const std::function<int()>& body);
 
 /// Progress bar on stderr, drawn only on a terminal and only once a run has
 /// lasted about a second.

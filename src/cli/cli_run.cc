@@ -51,8 +51,20 @@ void ProgressBar::Finish() {
   drawn_ = false;
 }
 
-int RunCommand(const RunArgs& args) {
+int WithErrorReport(const std::function<int()>& body) {
   try {
+    return body();
+  } catch (const lab::InputError& e) {
+    std::fprintf(stderr, "vlab: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vlab: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+int RunCommand(const RunArgs& args) {
+  return WithErrorReport([&args] {
     lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario));
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
     if (args.seed >= 0) scenario.seed = static_cast<std::uint64_t>(args.seed);
@@ -85,13 +97,7 @@ int RunCommand(const RunArgs& args) {
                 r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, rtf, out_dir.c_str());
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;
-  } catch (const lab::InputError& e) {
-    std::fprintf(stderr, "vlab: error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "vlab: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace vlab::cli

@@ -1,7 +1,9 @@
 #include "lab/lab_runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -13,10 +15,6 @@
 #include "lab/lab_log.h"
 #include "lab/lab_output.h"
 #include "lab/lab_wrench_device.h"
-
-#ifndef VLAB_VERSION
-#define VLAB_VERSION "0.0.0"
-#endif
 
 namespace vlab::lab {
 
@@ -55,6 +53,9 @@ struct Lab::Impl {
 
   void ResetState();
   void WriteRow(double time_s, std::vector<double>& row) const;
+  // one controller period: computed (and recorded), or replayed from a recording
+  void RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
+                     double* columns);
 };
 
 Lab::Lab(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -153,111 +154,172 @@ void Lab::Impl::WriteRow(double time_s, std::vector<double>& row) const {
   }
 }
 
+namespace {
+
+// MuJoCo's warning counters, watched after every step. A divergence resets
+// mjData (its counters and time included), so the watch keeps its own.
+class WarningWatch {
+ public:
+  /// Records new warnings of the step that started at t_step; true on divergence.
+  bool Update(const mjData& d, double t_step) {
+    bool diverged = false;
+    for (int w = 0; w < mjNWARNING; ++w) {
+      if (d.warning[w].number > count_[w]) {
+        if (count_[w] == 0) first_[w] = t_step;
+        count_[w] = d.warning[w].number;
+        last_info_[w] = d.warning[w].lastinfo;
+        diverged = diverged || IsDivergenceWarning(w);
+      }
+    }
+    return diverged;
+  }
+
+  /// One report per kind that occurred, with MuJoCo's text.
+  std::vector<WarningReport> Reports(const std::vector<std::string>& allowed) const {
+    std::vector<WarningReport> reports;
+    for (int w = 0; w < mjNWARNING; ++w) {
+      if (count_[w] == 0) continue;
+      WarningReport r;
+      r.name = WarningName(w);
+      r.count = count_[w];
+      r.first_time_s = first_[w];
+      r.message = mju_warningText(w, last_info_[w]);
+      r.allowed = std::find(allowed.begin(), allowed.end(), r.name) != allowed.end();
+      reports.push_back(r);
+    }
+    return reports;
+  }
+
+ private:
+  int count_[mjNWARNING] = {0};
+  int last_info_[mjNWARNING] = {0};
+  double first_[mjNWARNING] = {0};
+};
+
+// The first reason a run fails, in order: divergence, a warning the scenario
+// does not allow, a failed check; "" when it passes.
+std::string Verdict(const RunResult& r, bool diverged) {
+  for (const auto& w : r.warnings) {
+    if (diverged && IsDivergenceWarning(WarningIndex(w.name))) {
+      return "diverged at t = " + FormatDouble(w.first_time_s) + " s: " + w.message;
+    }
+  }
+  for (const auto& w : r.warnings) {
+    if (!w.allowed) {
+      return "MuJoCo warning '" + w.name + "' (" + std::to_string(w.count) + "x, first at t = " +
+             FormatDouble(w.first_time_s) + " s): " + w.message;
+    }
+  }
+  for (const auto& c : r.checks) {
+    if (!c.pass) {
+      return "check '" + c.config.name + "' failed: " + c.config.reduce + "(" + c.config.signal +
+             ") = " + FormatDouble(c.value);
+    }
+  }
+  return "";
+}
+
+// Clears the MuJoCo error cleanup when a run ends, however it ends.
+struct ErrorCleanupGuard {
+  ~ErrorCleanupGuard() { SetMujocoErrorCleanup(nullptr); }
+};
+
+}  // namespace
+
+void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
+                              double* columns) {
+  const int a = controller_arm;
+  const int n = arms[a]->dof();
+  const std::size_t width = 1 + n + controller->Columns().size();
+  bridge::ArmCommand& cmd = arm_commands[a];
+  if (options.replay) {
+    // the recorded command and columns instead of the controller's work
+    if (*replay_at + width > options.replay->controller.size()) {
+      throw std::runtime_error("replay: the recording is shorter than this run");
+    }
+    const double* r = options.replay->controller.data() + *replay_at;
+    cmd.mode = static_cast<bridge::ArmMode>(static_cast<int>(r[0]));
+    cmd.value = Eigen::Map<const Eigen::VectorXd>(r + 1, n);
+    std::copy(r + 1 + n, r + width, columns);
+    *replay_at += width;
+    return;
+  }
+  controller->Update(t, arm_states[a], &cmd, columns);
+  if (options.record) {
+    std::vector<double>& rec = result->recording.controller;
+    rec.push_back(static_cast<double>(static_cast<int>(cmd.mode)));
+    for (int i = 0; i < n; ++i) rec.push_back(i < cmd.value.size() ? cmd.value[i] : 0.0);
+    rec.insert(rec.end(), columns, columns + (width - 1 - n));
+  }
+}
+
 RunResult Lab::Run(const RunOptions& options) {
   Impl& s = *impl_;
   const auto t_start = WallClock::now();
   const mjModel* m = s.model.get();
   mjData* d = s.data.get();
+  const double period = s.scenario.control_period_s;
   RunResult result;
 
   InstallMujocoHandlers();
   TakeMujocoWarningTexts();
   s.ResetState();
-  std::unique_ptr<Clock> clock = MakeClock(s.scenario.clock, s.scenario.control_period_s);
+  std::unique_ptr<Clock> clock = MakeClock(s.scenario.clock, period);
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
   CheckSet checks(s.scenario.checks, s.columns);
-  // outputs: staging folder, log
+  // outputs: staging folder (removed on a MuJoCo error too), log
   std::unique_ptr<OutputDir> out;
   std::unique_ptr<CsvLog> log;
+  ErrorCleanupGuard cleanup_guard;
   if (!options.out_dir.empty()) {
     out = OutputDir::Create(options.out_dir);
-    const std::string staging = out->File("");
-    SetMujocoErrorCleanup([staging] {
+    SetMujocoErrorCleanup([staging = out->File("")] {
       std::error_code ec;
       std::filesystem::remove_all(staging, ec);
     });
     if (s.scenario.outputs.log) log = CsvLog::Open(out->File("log.csv"), s.columns);
   }
+
+  const long periods = std::lround(s.scenario.duration_s / period);
+  if (options.record) result.recording.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
   std::vector<double> row(s.columns.size(), 0.0);
-  const std::size_t controller_offset = s.columns.size() - (s.controller ? s.controller->Columns().size() : 0);
-
-  const long periods = std::lround(s.scenario.duration_s / s.scenario.control_period_s);
-  const double dt = m->opt.timestep;
-  int warning_counts[mjNWARNING] = {0};
-  double warning_first[mjNWARNING] = {0};
-  if (options.record) {
-    result.recording.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
-  }
-  // the controller's work for one period: computed, or replayed from a recording
-  const std::size_t controller_columns = s.controller ? s.controller->Columns().size() : 0;
+  double* controller_columns = row.data() + s.columns.size() - (s.controller ? s.controller->Columns().size() : 0);
   std::size_t replay_at = 0;
-  auto run_controller = [&](double t) {
-    const int a = s.controller_arm;
-    bridge::ArmCommand& cmd = s.arm_commands[a];
-    double* columns = row.data() + controller_offset;
-    if (options.replay) {
-      if (replay_at + 1 + s.arms[a]->dof() + controller_columns > options.replay->controller.size()) {
-        throw std::runtime_error("replay: the recording is shorter than this run");
-      }
-      const double* r = options.replay->controller.data() + replay_at;
-      cmd.mode = static_cast<bridge::ArmMode>(static_cast<int>(r[0]));
-      cmd.value = Eigen::Map<const Eigen::VectorXd>(r + 1, s.arms[a]->dof());
-      std::copy(r + 1 + s.arms[a]->dof(), r + 1 + s.arms[a]->dof() + controller_columns, columns);
-      replay_at += 1 + s.arms[a]->dof() + controller_columns;
-      return;
-    }
-    s.controller->Update(t, s.arm_states[a], &cmd, columns);
-    if (options.record) {
-      std::vector<double>& rec = result.recording.controller;
-      rec.push_back(static_cast<double>(static_cast<int>(cmd.mode)));
-      for (int i = 0; i < s.arms[a]->dof(); ++i) rec.push_back(i < cmd.value.size() ? cmd.value[i] : 0.0);
-      rec.insert(rec.end(), columns, columns + controller_columns);
-    }
-  };
-
   auto emit_row = [&](double t) {
     s.WriteRow(t, row);
     if (log) log->Append(row.data());
     checks.Add(t, row.data());
   };
-  // controller columns of row 0: let the controller see the initial state
-  if (s.controller) run_controller(0.0);
+  // row 0: the initial state, with the controller's view of it
+  if (s.controller) s.RunController(0.0, options, &replay_at, &result, controller_columns);
   emit_row(0.0);
 
+  WarningWatch warnings;
   const auto t_loop = WallClock::now();
   auto t_progress = t_loop;
   bool diverged = false;
   long k = 0;
   for (; k < periods && !diverged; ++k) {
     // period k runs from t_k = k T to t_k+1; times are exact multiples of T
-    const double t_k = k * s.scenario.control_period_s;
-    const double t_next = (k + 1) * s.scenario.control_period_s;
+    const double t_k = k * period;
+    const double t_next = (k + 1) * period;
     clock->BeginPeriod(k, t_k);
     // 1. commands: the controller answers the newest sample
     if (s.controller) {
-      const int a = s.controller_arm;
-      if (k > 0) run_controller(t_k);
-      if (s.arm_commands[a].mode != bridge::ArmMode::kHold || k > 0) s.arms[a]->Command(s.arm_commands[a]);
+      if (k > 0) s.RunController(t_k, options, &replay_at, &result, controller_columns);
+      s.arms[s.controller_arm]->Command(s.arm_commands[s.controller_arm]);
     }
-    // 2. physics
-    for (int i = 0; i < s.steps_per_period; ++i) {
+    // 2. physics: the servo acts between the two halves of every step
+    for (int i = 0; i < s.steps_per_period && !diverged; ++i) {
       const double t_step = d->time;
       mj_step1(m, d);
-      for (auto& arm : s.arms) arm->Actuate(*d, dt);
+      for (auto& arm : s.arms) arm->Actuate(*d, m->opt.timestep);
       if (options.record) result.recording.controls.insert(result.recording.controls.end(), d->ctrl, d->ctrl + m->nu);
       mj_step2(m, d);
-      for (auto& w : s.wrenches) w->Step(*d, dt);
+      for (auto& w : s.wrenches) w->Step(*d, m->opt.timestep);
       ++result.steps;
-      for (int w = 0; w < mjNWARNING; ++w) {
-        // (a divergence resets mjData, time and other counters included: keep ours)
-        if (d->warning[w].number > warning_counts[w]) {
-          if (warning_counts[w] == 0) warning_first[w] = t_step;
-          warning_counts[w] = d->warning[w].number;
-          if (IsDivergenceWarning(w)) diverged = true;
-        }
-      }
-      if (diverged) break;
+      diverged = warnings.Update(*d, t_step);
     }
     if (diverged) break;
     // 3. sample devices and log
@@ -266,62 +328,20 @@ RunResult Lab::Run(const RunOptions& options) {
     emit_row(t_next);
     clock->EndPeriod(k);
     if (options.interrupt && *options.interrupt) {
-      if (log) log->Close();
       throw std::runtime_error("interrupted at t = " + FormatDouble(t_next) + " s; nothing written");
     }
-    if (options.progress && (k & 63) == 0) {
-      const auto now = WallClock::now();
-      if (Seconds(t_progress, now) > 0.1) {
-        options.progress(static_cast<double>(k + 1) / periods);
-        t_progress = now;
-      }
+    if (options.progress && (k & 63) == 0 && Seconds(t_progress, WallClock::now()) > 0.1) {
+      options.progress(static_cast<double>(k + 1) / periods);
+      t_progress = WallClock::now();
     }
   }
   result.loop_wall_s = Seconds(t_loop, WallClock::now());
   result.periods = k;
-  result.sim_time_s = k * s.scenario.control_period_s;
-
-  // warnings: MuJoCo's own text for the last occurrence of each kind
-  TakeMujocoWarningTexts();
-  for (int w = 0; w < mjNWARNING; ++w) {
-    if (warning_counts[w] == 0) continue;
-    WarningReport report;
-    report.name = WarningName(w);
-    report.count = warning_counts[w];
-    report.first_time_s = warning_first[w];
-    report.message = mju_warningText(w, d->warning[w].lastinfo);
-    for (const auto& allowed : s.scenario.allow_warnings) report.allowed = report.allowed || allowed == report.name;
-    result.warnings.push_back(report);
-  }
+  result.sim_time_s = k * period;
+  TakeMujocoWarningTexts();  // their content is in the reports: mju_warningText
+  result.warnings = warnings.Reports(s.scenario.allow_warnings);
   result.checks = checks.Results();
-
-  // verdict: divergence first, then disallowed warnings, then checks
-  if (diverged) {
-    for (const auto& wr : result.warnings) {
-      if (IsDivergenceWarning(WarningIndex(wr.name))) {
-        result.failure = "diverged at t = " + FormatDouble(wr.first_time_s) + " s: " + wr.message;
-        break;
-      }
-    }
-  }
-  if (result.failure.empty()) {
-    for (const auto& wr : result.warnings) {
-      if (!wr.allowed) {
-        result.failure = "MuJoCo warning '" + wr.name + "' (" + std::to_string(wr.count) + "x, first at t = " +
-                         FormatDouble(wr.first_time_s) + " s): " + wr.message;
-        break;
-      }
-    }
-  }
-  if (result.failure.empty()) {
-    for (const auto& c : result.checks) {
-      if (!c.pass) {
-        result.failure = "check '" + c.config.name + "' failed: " + c.config.reduce + "(" + c.config.signal +
-                         ") = " + FormatDouble(c.value);
-        break;
-      }
-    }
-  }
+  result.failure = Verdict(result, diverged);
   result.exit_code = result.failure.empty() ? 0 : 1;
 
   if (out) {
@@ -332,55 +352,9 @@ RunResult Lab::Run(const RunOptions& options) {
     summary.close();
     if (!summary) throw std::runtime_error("summary '" + out->File("summary.json") + "': write failed");
     out->Commit();
-    SetMujocoErrorCleanup(nullptr);
   }
   result.total_wall_s = Seconds(t_start, WallClock::now());
   return result;
-}
-
-nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult& r) {
-  using nlohmann::json;
-  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
-  json checks = json::array();
-  for (const auto& c : r.checks) {
-    json bound = json::object();
-    if (std::isfinite(c.config.min)) bound["min"] = c.config.min;
-    if (std::isfinite(c.config.max)) bound["max"] = c.config.max;
-    json window = {{"from", c.config.from_s}, {"to", number(c.config.to_s)}};
-    checks.push_back({{"name", c.config.name}, {"signal", c.config.signal}, {"reduce", c.config.reduce},
-                      {"value", number(c.value)}, {"bound", bound}, {"window_s", window},
-                      {"samples", c.samples}, {"pass", c.pass}});
-  }
-  json warnings = json::array();
-  for (const auto& w : r.warnings) {
-    warnings.push_back({{"name", w.name}, {"count", w.count}, {"first_time_s", w.first_time_s},
-                        {"message", w.message}, {"allowed", w.allowed}});
-  }
-  const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
-  return {
-      {"scenario", sc.name},
-      {"file", sc.file},
-      {"description", sc.description},
-      {"scene", sc.scene},
-      {"result", r.exit_code == 0 ? "pass" : "fail"},
-      {"exit_code", r.exit_code},
-      {"failure", r.failure},
-      {"seed", sc.seed},
-      {"clock", sc.clock},
-      {"duration_s", sc.duration_s},
-      {"control_period_s", sc.control_period_s},
-      {"timestep_s", m->opt.timestep},
-      {"checks", checks},
-      {"warnings", warnings},
-      {"versions",
-       {{"vlab", VLAB_VERSION}, {"mujoco", MujocoVersion()}, {"compiler", __VERSION__},
-        {"eigen", std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
-                      std::to_string(EIGEN_MINOR_VERSION)}}},
-      {"timings",
-       {{"sim_time_s", r.sim_time_s}, {"steps", r.steps}, {"control_periods", r.periods},
-        {"loop_wall_s", r.loop_wall_s}, {"total_wall_s", r.total_wall_s},
-        {"steps_per_s", r.loop_wall_s > 0 ? r.steps / r.loop_wall_s : 0.0}, {"realtime_factor", rtf}}},
-  };
 }
 
 }  // namespace vlab::lab

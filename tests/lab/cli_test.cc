@@ -19,32 +19,13 @@ namespace vlab::lab {
 namespace {
 
 namespace fs = std::filesystem;
+using vlab::testing::Entries;
+using vlab::testing::Lines;
 using vlab::testing::ReadFile;
+using vlab::testing::SplitCsv;
 using vlab::testing::RunVlab;
 using vlab::testing::TempDir;
 using vlab::testing::WriteFile;
-
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::stringstream s(text);
-  std::string l;
-  while (std::getline(s, l)) lines.push_back(l);
-  return lines;
-}
-
-std::vector<std::string> Split(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream s(line);
-  std::string f;
-  while (std::getline(s, f, ',')) fields.push_back(f);
-  return fields;
-}
-
-std::set<std::string> Entries(const std::string& dir) {
-  std::set<std::string> names;
-  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
-  return names;
-}
 
 bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -97,15 +78,15 @@ TEST(CliTest, DefaultScenarioPassesAndWritesOutputs) {
 
   const std::vector<std::string> lines = Lines(ReadFile(tmp / "out/log.csv"));
   ASSERT_EQ(lines.size(), 1u + 13.0 / 0.002 + 1);  // header, initial row, one row per period
-  const std::vector<std::string> header = Split(lines[0]);
+  const std::vector<std::string> header = SplitCsv(lines[0]);
   EXPECT_EQ(header[0], "time");
   for (std::size_t k = 1; k < lines.size(); ++k) {
-    const std::vector<std::string> row = Split(lines[k]);
+    const std::vector<std::string> row = SplitCsv(lines[k]);
     ASSERT_EQ(row.size(), header.size()) << "row " << k - 1;
     ASSERT_EQ(row[0], FormatDouble((k - 1) * 0.002)) << "row " << k - 1;
   }
-  EXPECT_EQ(Split(lines[4])[0], "0.006");
-  EXPECT_EQ(Split(lines.back())[0], "13");
+  EXPECT_EQ(SplitCsv(lines[4])[0], "0.006");
+  EXPECT_EQ(SplitCsv(lines.back())[0], "13");
 }
 
 TEST(CliTest, RunsAreDeterministicAndSeedOnlyMovesTheSensor) {
@@ -122,11 +103,11 @@ TEST(CliTest, RunsAreDeterministicAndSeedOnlyMovesTheSensor) {
   // the JR3 acts on nothing: time, arm and controller columns are the same for any seed
   const auto la = Lines(a), lc = Lines(c);
   ASSERT_EQ(la.size(), lc.size());
-  const std::vector<std::string> header = Split(la[0]);
+  const std::vector<std::string> header = SplitCsv(la[0]);
   int arm_columns = 0, jr3_columns_differing = 0;
   std::set<std::size_t> differing;
   for (std::size_t k = 1; k < la.size(); ++k) {
-    const auto ra = Split(la[k]), rc = Split(lc[k]);
+    const auto ra = SplitCsv(la[k]), rc = SplitCsv(lc[k]);
     for (std::size_t i = 0; i < header.size(); ++i) {
       if (ra[i] != rc[i]) differing.insert(i);
     }

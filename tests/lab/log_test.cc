@@ -26,7 +26,10 @@ namespace vlab::lab {
 namespace {
 
 namespace fs = std::filesystem;
+using vlab::testing::Entries;
+using vlab::testing::Lines;
 using vlab::testing::ReadFile;
+using vlab::testing::SplitCsv;
 using vlab::testing::TempDir;
 using vlab::testing::WriteFile;
 
@@ -43,29 +46,6 @@ double Parse(const std::string& text) {
   const double v = std::strtod(text.c_str(), &end);
   EXPECT_EQ(*end, '\0') << "'" << text << "' not fully parsed";
   return v;
-}
-
-std::vector<std::string> Split(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream s(line);
-  std::string f;
-  while (std::getline(s, f, ',')) fields.push_back(f);
-  if (!line.empty() && line.back() == ',') fields.push_back("");
-  return fields;
-}
-
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::stringstream s(text);
-  std::string l;
-  while (std::getline(s, l)) lines.push_back(l);
-  return lines;
-}
-
-std::set<std::string> Entries(const std::string& dir) {
-  std::set<std::string> names;
-  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
-  return names;
 }
 
 TEST(CsvLogTest, HeaderAndManyRowsReadBackExactly) {
@@ -100,14 +80,14 @@ TEST(CsvLogTest, HeaderAndManyRowsReadBackExactly) {
   ASSERT_EQ(lines.size(), static_cast<std::size_t>(kRows + 1));
   EXPECT_EQ(lines[0], "time,a.q,b.tau,c");
   for (int r = 0; r < kRows; ++r) {
-    const std::vector<std::string> fields = Split(lines[r + 1]);
+    const std::vector<std::string> fields = SplitCsv(lines[r + 1]);
     ASSERT_EQ(fields.size(), columns.size()) << "row " << r;
     for (std::size_t c = 0; c < columns.size(); ++c) {
       const double expected = written[r * columns.size() + c];
       ASSERT_EQ(Bits(Parse(fields[c])), Bits(expected)) << "row " << r << " col " << c << ": '" << fields[c] << "'";
     }
   }
-  EXPECT_EQ(Split(lines[4])[0], "0.006");  // row 3: 3 * 0.002 in shortest form
+  EXPECT_EQ(SplitCsv(lines[4])[0], "0.006");  // row 3: 3 * 0.002 in shortest form
 }
 
 TEST(CsvLogTest, DestructorFlushesPendingRows) {

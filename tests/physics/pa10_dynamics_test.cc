@@ -25,19 +25,14 @@
 #include <mujoco/mujoco.h>
 
 #include "control/robot_model.h"
+#include "physics/pa10_scene.h"
 
 namespace vlab::control {
 namespace {
 
 constexpr int kDof = 7;
-using ModelPtr = std::unique_ptr<mjModel, decltype(&mj_deleteModel)>;
-
-ModelPtr LoadScene() {
-  char error[1000] = "";
-  mjModel* m = mj_loadXML(VLAB_SOURCE_DIR "/scenes/pa10.xml", nullptr, error, sizeof(error));
-  EXPECT_STREQ(error, "") << "load error or compiler warning";
-  return ModelPtr(m, mj_deleteModel);
-}
+using ModelPtr = testing::Pa10ModelPtr;
+using testing::LoadPa10Scene;
 
 Eigen::Vector3d Vec(const mjtNum* v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
 Eigen::Matrix3d Rot(const mjtNum* q) {
@@ -146,7 +141,7 @@ class OwnDynamics {
 class Pa10Dynamics : public ::testing::Test {
  protected:
   void SetUp() override {
-    model_ = LoadScene();
+    model_ = LoadPa10Scene();
     ASSERT_NE(model_, nullptr);
     robot_ = RobotModel::Create(model_.get(), {"world", "flange"});
     ASSERT_EQ(robot_->dof(), kDof);
@@ -279,7 +274,7 @@ void CountWarning(const char* message) {
 TEST(Pa10Scene, SimulatesFiveSecondsWithZeroTorqueQuietly) {
   void (*previous)(const char*) = mju_user_warning;
   mju_user_warning = CountWarning;
-  ModelPtr model = LoadScene();
+  ModelPtr model = LoadPa10Scene();
   ASSERT_NE(model, nullptr);
   EXPECT_DOUBLE_EQ(model->opt.timestep, 0.001);
   for (const char* key : {"zero", "ready"}) {

@@ -29,6 +29,7 @@
 #include <mujoco/mujoco.h>
 
 #include "control/robot_model.h"
+#include "physics/pa10_scene.h"
 
 namespace vlab::control {
 namespace {
@@ -48,14 +49,8 @@ constexpr double kOffset[kDof] = {0, 0, 0, 0, 0, 0, 0};
 // MHI joint limits, deg (DATASHEET 1.4)
 constexpr double kLimitDeg[kDof] = {177, 94, 174, 137, 255, 165, 255};
 
-using ModelPtr = std::unique_ptr<mjModel, decltype(&mj_deleteModel)>;
-
-ModelPtr LoadScene() {
-  char error[1000] = "";
-  mjModel* m = mj_loadXML(VLAB_SOURCE_DIR "/scenes/pa10.xml", nullptr, error, sizeof(error));
-  EXPECT_STREQ(error, "") << "load error or compiler warning";
-  return ModelPtr(m, mj_deleteModel);
-}
+using ModelPtr = testing::Pa10ModelPtr;
+using testing::LoadPa10Scene;
 
 // A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha)
 Eigen::Isometry3d DhStep(double theta, double d, double a, double alpha) {
@@ -101,7 +96,7 @@ Eigen::VectorXd RandomConfiguration(const RobotModel& rm, std::mt19937& rng) {
 class Pa10Kinematics : public ::testing::Test {
  protected:
   void SetUp() override {
-    model_ = LoadScene();
+    model_ = LoadPa10Scene();
     ASSERT_NE(model_, nullptr);
     robot_ = RobotModel::Create(model_.get(), {"world", "flange"});
     ASSERT_EQ(robot_->dof(), kDof);
