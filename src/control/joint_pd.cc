@@ -19,6 +19,14 @@ void CheckSize(const char* name, const Eigen::VectorXd& v, Eigen::Index n) {
 Eigen::VectorXd JointPdGravityTorque(const JointPdGains& gains, const Eigen::VectorXd& q,
                                      const Eigen::VectorXd& qd, const Eigen::VectorXd& q_des,
                                      const Eigen::VectorXd& qd_des, const Eigen::VectorXd& g) {
+  Eigen::VectorXd tau;
+  JointPdGravityTorque(gains, q, qd, q_des, qd_des, g, &tau);
+  return tau;
+}
+
+void JointPdGravityTorque(const JointPdGains& gains, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                          const Eigen::VectorXd& q_des, const Eigen::VectorXd& qd_des, const Eigen::VectorXd& g,
+                          Eigen::VectorXd* tau) {
   const Eigen::Index n = q.size();
   CheckSize("kp", gains.kp, n);
   CheckSize("kd", gains.kd, n);
@@ -26,7 +34,8 @@ Eigen::VectorXd JointPdGravityTorque(const JointPdGains& gains, const Eigen::Vec
   CheckSize("q_des", q_des, n);
   CheckSize("qd_des", qd_des, n);
   CheckSize("g", g, n);
-  return gains.kp.cwiseProduct(q_des - q) + gains.kd.cwiseProduct(qd_des - qd) + g;
+  tau->resize(n);
+  tau->noalias() = gains.kp.cwiseProduct(q_des - q) + gains.kd.cwiseProduct(qd_des - qd) + g;
 }
 
 }  // namespace vlab::control

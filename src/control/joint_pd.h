@@ -25,4 +25,10 @@ Eigen::VectorXd JointPdGravityTorque(const JointPdGains& gains, const Eigen::Vec
                                      const Eigen::VectorXd& qd, const Eigen::VectorXd& q_des,
                                      const Eigen::VectorXd& qd_des, const Eigen::VectorXd& g);
 
+/// The same, written into `tau` (resized to the joint count; no allocation
+/// when it already has that size): for control loops.
+void JointPdGravityTorque(const JointPdGains& gains, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                          const Eigen::VectorXd& q_des, const Eigen::VectorXd& qd_des, const Eigen::VectorXd& g,
+                          Eigen::VectorXd* tau);
+
 }  // namespace vlab::control

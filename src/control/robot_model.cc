@@ -164,14 +164,25 @@ Eigen::MatrixXd RobotModel::MassMatrix() const {
 }
 
 Eigen::VectorXd RobotModel::Bias() const {
-  EnsureVelocity();
-  mj_rne(model_, data_, 0, rne_.data());
-  Eigen::VectorXd h(dof());
-  for (int i = 0; i < dof(); ++i) h[i] = rne_[dof_addresses_[i]];
+  Eigen::VectorXd h;
+  Bias(&h);
   return h;
 }
 
 Eigen::VectorXd RobotModel::Gravity() const {
+  Eigen::VectorXd g;
+  Gravity(&g);
+  return g;
+}
+
+void RobotModel::Bias(Eigen::VectorXd* out) const {
+  EnsureVelocity();
+  mj_rne(model_, data_, 0, rne_.data());
+  out->resize(dof());
+  for (int i = 0; i < dof(); ++i) (*out)[i] = rne_[dof_addresses_[i]];
+}
+
+void RobotModel::Gravity(Eigen::VectorXd* out) const {
   // rne with zero velocity leaves only gravity; restore the velocity state after
   const int nv = model_->nv;
   std::vector<mjtNum>& saved = jacp_;  // 3·nv >= nv scratch, refilled by Jacobian()
@@ -181,9 +192,8 @@ Eigen::VectorXd RobotModel::Gravity() const {
   mj_rne(model_, data_, 0, rne_.data());
   std::copy(saved.begin(), saved.begin() + nv, data_->qvel);
   velocity_ready_ = false;
-  Eigen::VectorXd g(dof());
-  for (int i = 0; i < dof(); ++i) g[i] = rne_[dof_addresses_[i]];
-  return g;
+  out->resize(dof());
+  for (int i = 0; i < dof(); ++i) (*out)[i] = rne_[dof_addresses_[i]];
 }
 
 }  // namespace vlab::control

@@ -92,6 +92,10 @@ class RobotModel {
   Eigen::MatrixXd MassMatrix() const;
   Eigen::VectorXd Bias() const;
   Eigen::VectorXd Gravity() const;
+  /// The same, written into `out` (resized to dof(); no allocation when it
+  /// already has that size): for control loops.
+  void Bias(Eigen::VectorXd* out) const;
+  void Gravity(Eigen::VectorXd* out) const;
 
   /// Scratch data holding the evaluation state (read-only view).
   const mjData& data() const { return *data_; }

@@ -117,8 +117,11 @@ bool SimArm::Command(const bridge::ArmCommand& cmd) {
       if (mode_ != bridge::ArmMode::kHold) qd_ref_.setZero();
       break;
     case bridge::ArmMode::kPosition:
-      qd_ref_ = have_position_command_ ? ((cmd.value - last_position_command_) / command_period_s_).eval()
-                                       : Eigen::VectorXd::Zero(dof());
+      if (have_position_command_) {
+        qd_ref_ = (cmd.value - last_position_command_) / command_period_s_;
+      } else {
+        qd_ref_.setZero();
+      }
       q_ref_ = cmd.value;
       last_position_command_ = cmd.value;
       have_position_command_ = true;

@@ -31,6 +31,7 @@ struct BoundChain {
   std::unique_ptr<RobotModel> model;
   std::vector<int> arm_index;  // chain joint i is arm joint arm_index[i]
   int arm_dof = 0;
+  Eigen::VectorXd q, qd;       // chain state of the current period (sized once)
 };
 
 BoundChain BindChain(const mjModel* m, const ControllerConfig& c, const std::vector<std::string>& joints) {
@@ -46,13 +47,17 @@ BoundChain BindChain(const mjModel* m, const ControllerConfig& c, const std::vec
     b.arm_index.push_back(static_cast<int>(it - joints.begin()));
   }
   b.arm_dof = static_cast<int>(joints.size());
+  b.q.setZero(b.model->dof());
+  b.qd.setZero(b.model->dof());
   return b;
 }
 
-Eigen::VectorXd ToChain(const BoundChain& b, const Eigen::VectorXd& arm_values) {
-  Eigen::VectorXd out(b.arm_index.size());
-  for (std::size_t i = 0; i < b.arm_index.size(); ++i) out[i] = arm_values[b.arm_index[i]];
-  return out;
+// the chain's joints out of the arm's state (no allocation)
+void ToChain(BoundChain& b, const bridge::ArmState& state) {
+  for (std::size_t i = 0; i < b.arm_index.size(); ++i) {
+    b.q[i] = state.q[b.arm_index[i]];
+    b.qd[i] = state.qd[b.arm_index[i]];
+  }
 }
 
 void ToArm(const BoundChain& b, const Eigen::VectorXd& chain_values, Eigen::VectorXd* arm_values) {
@@ -73,9 +78,9 @@ class TaskSpaceBuiltin final : public Controller {
     tc.k_null = c.k_null;
     tc.damping = c.damping;
     RobotModel& model = *chain_.model;
-    const Eigen::VectorXd q0 = ToChain(chain_, initial.q);
-    model.SetState(q0, Eigen::VectorXd::Zero(q0.size()));
-    tc.q_rest = q0;  // the null-space term keeps the arm near its start posture
+    ToChain(chain_, initial);
+    model.SetState(chain_.q, Eigen::VectorXd::Zero(chain_.q.size()));
+    tc.q_rest = chain_.q;  // the null-space term keeps the arm near its start posture
     control::CartesianTrajectoryConfig path;
     path.waypoints.push_back(model.TipPose());
     for (const auto& w : c.cartesian) {
@@ -101,14 +106,14 @@ class TaskSpaceBuiltin final : public Controller {
 
   void Update(double t, const bridge::ArmState& state, bridge::ArmCommand* command, double* columns) override {
     RobotModel& model = *chain_.model;
-    const Eigen::VectorXd q = ToChain(chain_, state.q);
-    model.SetState(q, ToChain(chain_, state.qd));
+    ToChain(chain_, state);
+    model.SetState(chain_.q, chain_.qd);
     const control::CartesianSample desired = path_->Evaluate(std::max(0.0, t - start_s_));
     control::TaskSpaceTarget target;
     target.pose = desired.pose;
     target.v_W = desired.v_W;
     target.w_W = desired.w_W;
-    const control::TaskSpaceOutput& out = controller_->Update(model, q, target);
+    const control::TaskSpaceOutput& out = controller_->Update(model, chain_.q, target);
     command->mode = bridge::ArmMode::kVelocity;
     ToArm(chain_, out.qd_cmd, &command->value);
     const control::Pose tip = model.TipPose();
@@ -136,8 +141,10 @@ class JointPdBuiltin final : public Controller {
       : chain_(BindChain(m, c, joints)), start_s_(c.start_s) {
     RobotModel& model = *chain_.model;
     const int n = model.dof();
-    const Eigen::VectorXd q0 = ToChain(chain_, initial.q);
+    ToChain(chain_, initial);
+    const Eigen::VectorXd q0 = chain_.q;
     model.SetState(q0, Eigen::VectorXd::Zero(n));
+    zero_.setZero(n);
     // gains: given, or from the bandwidth rule on the start pose's inertia
     const Eigen::VectorXd inertia = model.MassMatrix().diagonal();
     const double w = 2.0 * M_PI * c.pd_bandwidth_hz;
@@ -177,16 +184,15 @@ class JointPdBuiltin final : public Controller {
 
   void Update(double t, const bridge::ArmState& state, bridge::ArmCommand* command, double* columns) override {
     RobotModel& model = *chain_.model;
-    const Eigen::VectorXd q = ToChain(chain_, state.q);
-    const Eigen::VectorXd qd = ToChain(chain_, state.qd);
-    model.SetState(q, Eigen::VectorXd::Zero(q.size()));
-    const control::JointSample desired = path_->Evaluate(std::max(0.0, t - start_s_));
-    Eigen::VectorXd tau =
-        control::JointPdGravityTorque(gains_, q, qd, desired.q, desired.qd, model.Gravity());
-    tau = tau.cwiseMax(-tau_max_).cwiseMin(tau_max_);
+    ToChain(chain_, state);
+    model.SetState(chain_.q, zero_);
+    path_->Evaluate(std::max(0.0, t - start_s_), &desired_);
+    model.Gravity(&g_);
+    control::JointPdGravityTorque(gains_, chain_.q, chain_.qd, desired_.q, desired_.qd, g_, &tau_);
+    tau_ = tau_.cwiseMax(-tau_max_).cwiseMin(tau_max_);
     command->mode = bridge::ArmMode::kTorque;
-    ToArm(chain_, tau, &command->value);
-    columns[0] = (desired.q - q).cwiseAbs().maxCoeff();
+    ToArm(chain_, tau_, &command->value);
+    columns[0] = (desired_.q - chain_.q).cwiseAbs().maxCoeff();
   }
 
  private:
@@ -195,6 +201,9 @@ class JointPdBuiltin final : public Controller {
   control::JointPdGains gains_;
   Eigen::VectorXd tau_max_;
   std::unique_ptr<control::JointTrajectory> path_;
+  // per-period buffers, sized once
+  control::JointSample desired_;
+  Eigen::VectorXd zero_, g_, tau_;
 };
 
 }  // namespace

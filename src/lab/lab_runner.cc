@@ -47,6 +47,7 @@ struct Lab::Impl {
   std::vector<std::unique_ptr<SimWrench>> wrenches;
   std::unique_ptr<Controller> controller;
   int controller_arm = -1;
+  std::size_t controller_columns = 0;  // log columns the controller writes
   std::vector<std::string> columns;
   std::vector<bridge::ArmState> arm_states;
   std::vector<bridge::ArmCommand> arm_commands;
@@ -116,6 +117,7 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
     }
     SimArm& arm = *impl->arms[impl->controller_arm];
     impl->controller = MakeController(m, cc, arm.joint_names(), impl->arm_states[impl->controller_arm]);
+    impl->controller_columns = impl->controller->Columns().size();
     for (auto& c : impl->controller->Columns()) impl->columns.push_back(c);
   }
   return std::unique_ptr<Lab>(new Lab(std::move(impl)));
@@ -230,7 +232,7 @@ void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* 
                               double* columns) {
   const int a = controller_arm;
   const int n = arms[a]->dof();
-  const std::size_t width = 1 + n + controller->Columns().size();
+  const std::size_t width = 1 + n + controller_columns;
   bridge::ArmCommand& cmd = arm_commands[a];
   if (options.replay) {
     // the recorded command and columns instead of the controller's work
@@ -284,7 +286,7 @@ RunResult Lab::Run(const RunOptions& options) {
   const long periods = std::lround(s.scenario.duration_s / period);
   if (options.record) result.recording.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
   std::vector<double> row(s.columns.size(), 0.0);
-  double* controller_columns = row.data() + s.columns.size() - (s.controller ? s.controller->Columns().size() : 0);
+  double* controller_columns = row.data() + s.columns.size() - s.controller_columns;
   std::size_t replay_at = 0;
   auto emit_row = [&](double t) {
     s.WriteRow(t, row);
