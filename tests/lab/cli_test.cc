@@ -220,6 +220,17 @@ TEST(CliTest, DivergingModelExits1NamingTheCause) {
   EXPECT_LT(s.at("timings").at("sim_time_s").get<double>(), 2.0);  // stopped early
 }
 
+// a MuJoCo engine error mid-run: one line, exit 1, the staging folder removed,
+// and MuJoCo's own handler (which waits on stdin, writes MUJOCO_LOG.TXT) never runs
+TEST(CliTest, MujocoErrorExits1AndLeavesNothing) {
+  TempDir tmp;
+  const auto r = RunVlab("run tests/data/stack_overflow -q --out '" + (tmp / "runs/out") + "'", 60);
+  ASSERT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.err, "vlab: MuJoCo error: Stack overflow\n");
+  EXPECT_TRUE(Entries(tmp / "runs").empty()) << "no output folder, no staging folder";
+  EXPECT_FALSE(fs::exists(VLAB_SOURCE_DIR "/MUJOCO_LOG.TXT"));
+}
+
 // a MuJoCo warning fails the run and is reported, unless the scenario allows it
 TEST(CliTest, WarningsFailUnlessAllowed) {
   TempDir tmp;
