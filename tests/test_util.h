@@ -78,10 +78,12 @@ struct ProcessResult {
 };
 
 /// Runs the built vlab binary with `args` (shell words) from the source root,
-/// with a time limit; captures stdout and stderr.
-inline ProcessResult RunVlab(const std::string& args, int timeout_s = 120) {
+/// with a time limit; captures stdout and stderr. With `signal` (e.g. "INT"),
+/// that signal ends the run at the time limit and the exit code is vlab's own.
+inline ProcessResult RunVlab(const std::string& args, int timeout_s = 120, const std::string& signal = "") {
   TempDir tmp;
-  const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && timeout " + std::to_string(timeout_s) + " '" VLAB_BINARY_DIR
+  const std::string how = signal.empty() ? "timeout " : "timeout --preserve-status -s " + signal + " ";
+  const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && " + how + std::to_string(timeout_s) + " '" VLAB_BINARY_DIR
                           "/vlab' " + args + " >'" + (tmp / "out") + "' 2>'" + (tmp / "err") + "' </dev/null";
   const int status = std::system(cmd.c_str());
   ProcessResult r;

@@ -231,6 +231,17 @@ TEST(CliTest, MujocoErrorExits1AndLeavesNothing) {
   EXPECT_FALSE(fs::exists(VLAB_SOURCE_DIR "/MUJOCO_LOG.TXT"));
 }
 
+// Ctrl-C (SIGINT) stops a long run cleanly: exit 1, one line, nothing written
+TEST(CliTest, InterruptStopsCleanlyAndWritesNothing) {
+  TempDir tmp;
+  // 2000 s of simulation take tens of seconds: the signal comes after 1 s
+  const auto r = RunVlab("run scenes/pa10_reach -q --duration 2000 --out '" + (tmp / "runs/out") + "'", 1, "INT");
+  ASSERT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(Has(r.err, "interrupted at t = ")) << r.err;
+  EXPECT_EQ(Lines(r.err).size(), 1u) << r.err;
+  EXPECT_TRUE(Entries(tmp / "runs").empty()) << "no output folder, no staging folder";
+}
+
 // a MuJoCo warning fails the run and is reported, unless the scenario allows it
 TEST(CliTest, WarningsFailUnlessAllowed) {
   TempDir tmp;
