@@ -12,7 +12,8 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"vlab " VLAB_VERSION ": a virtual robotics lab on MuJoCo.\n"
-               "Exit codes: 0 success, 1 a check failed or the run diverged, 2 bad input."};
+               "Exit codes: 0 success; 1 a check failed, the run diverged or raised a MuJoCo warning the\n"
+               "scenario does not allow; 2 bad input (file, key, option, output folder)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("vlab ") + VLAB_VERSION);
 

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "lab/lab_errors.h"
+
 namespace vlab::lab {
 
 namespace fs = std::filesystem;
@@ -15,15 +17,15 @@ std::unique_ptr<OutputDir> OutputDir::Create(const std::string& final_dir) {
   const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
   const std::string leaf = target.filename().string();
   if (leaf.empty() || leaf == "." || leaf == "..") {
-    throw std::runtime_error("output folder '" + final_dir + "': not a folder name");
+    throw InputError("output folder '" + final_dir + "': not a folder name");
   }
   std::error_code ec;
   fs::create_directories(parent, ec);
-  if (ec) throw std::runtime_error("output folder '" + parent.string() + "': " + ec.message());
+  if (ec) throw InputError("output folder '" + parent.string() + "': " + ec.message());
   const fs::path staging = parent / ("." + leaf + ".partial-" + std::to_string(::getpid()));
   fs::remove_all(staging, ec);
   fs::create_directory(staging, ec);
-  if (ec) throw std::runtime_error("output folder '" + staging.string() + "': " + ec.message());
+  if (ec) throw InputError("output folder '" + staging.string() + "': " + ec.message());
   return std::unique_ptr<OutputDir>(new OutputDir(target.string(), staging.string()));
 }
 

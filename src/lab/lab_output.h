@@ -15,7 +15,7 @@ namespace vlab::lab {
 class OutputDir {
  public:
   /// Creates the staging folder (and the parent of final_dir). Throws
-  /// std::runtime_error naming the folder on failure.
+  /// InputError naming the folder when it cannot be created there.
   static std::unique_ptr<OutputDir> Create(const std::string& final_dir);
   ~OutputDir();
   OutputDir(const OutputDir&) = delete;
