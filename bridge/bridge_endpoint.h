@@ -1,0 +1,122 @@
+// Device side of the wire: what a device does with the datagrams it receives
+// and whom it sends its states to. Shared by every server of a device kind —
+// the lab's MuJoCo devices and the kinematic simulator — so that they all
+// answer with the same bytes and the same rules.
+//
+// Ports
+//   input   datagrams from clients: commands, describe requests (Handle)
+//   output  state datagrams to every subscriber, once per control period
+//           (Publish); describe replies (JSON) to the requester
+//   rate    driven by its owner: Handle whenever a datagram arrives,
+//           BeginPeriod/Publish once per control period
+// Rules
+//   - any well-formed datagram from an address subscribes it to the states;
+//     a subscriber silent for subscriber_timeout_periods is dropped (send a
+//     describe request now and then to keep a passive subscription);
+//   - a malformed datagram is refused and counted by reason; nothing else changes;
+//   - commands (arm, sim): the first sender owns the command input; others are
+//     refused (status bit kStatusNotOwner in the states they receive) until
+//     the owner has been silent for owner_timeout_periods;
+//   - an owner's command with a seq lower than its last accepted one is stale,
+//     an equal one a duplicate: both ignored and counted;
+//   - arm commands are checked against the joint count and the position,
+//     velocity and torque limits; a refused command sets kStatusRefused and
+//     leaves the previous command in force;
+//   - watchdog: an arm whose owner sent no accepted command for
+//     watchdog_periods consecutive periods holds its position (kStatusWatchdog)
+//     until the next accepted command.
+// Never throws and never blocks in Handle, BeginPeriod or Publish.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bridge/bridge_protocol.h"
+#include "bridge/bridge_udp.h"
+
+namespace vlab::bridge {
+
+/// Counters of a device endpoint (reported by the sim device and in summary.json).
+struct EndpointCounters {
+  long received = 0;         ///< datagrams received
+  long accepted = 0;         ///< commands accepted
+  long describes = 0;        ///< describe requests answered
+  long refused = 0;          ///< all refusals, the sum of the next five
+  long refused_malformed = 0;  ///< size, magic, version, kind, type, length, NaN/Inf, domain
+  long refused_limits = 0;   ///< wrong joint count or a value beyond a limit
+  long refused_not_owner = 0;  ///< commands from a non-owner
+  long stale = 0;            ///< seq lower than the last accepted (ignored)
+  long duplicate = 0;        ///< seq equal to the last accepted (ignored)
+  long watchdog_holds = 0;   ///< times the watchdog put the arm on hold
+};
+
+struct EndpointConfig {
+  std::string name;
+  DeviceKind kind = DeviceKind::kArm;
+  std::string describe_json;  ///< the device's describe reply
+  int owner_timeout_periods = 500;
+  int subscriber_timeout_periods = 5000;
+  int watchdog_periods = 3;   ///< arm only; 0 disables
+  // arm only: one entry per joint (empty: no limit of that kind)
+  int joints = 0;
+  std::vector<double> position_min, position_max, velocity_max, torque_max;
+  int max_subscribers = 16;
+};
+
+class DeviceEndpoint {
+ public:
+  explicit DeviceEndpoint(EndpointConfig config);
+
+  /// Handles one datagram received at period `period` (replies to a describe
+  /// request through `socket`). Returns true when it was an accepted command.
+  bool Handle(const unsigned char* data, std::size_t size, const Endpoint& from, long period, UdpSocket& socket);
+
+  /// Starts period k: runs the arm watchdog. True when the arm must hold.
+  bool BeginPeriod(long period);
+
+  /// The newest accepted command not yet taken.
+  bool TakeArmCommand(ArmCommandMsg* command);
+  bool TakeSimCommand(SimCommandMsg* command);
+  /// seq of the last accepted command (-1 if none since the owner took over).
+  double last_accepted_seq() const { return last_seq_; }
+  bool has_owner() const { return owner_.has_value(); }
+
+  /// Status bits the endpoint adds for the owner (refused, watchdog).
+  std::uint32_t status_bits() const;
+
+  /// Sends one encoded state to every subscriber. For arm states, subscribers
+  /// other than the owner get kStatusNotOwner set when an owner exists.
+  void Publish(const std::vector<unsigned char>& state_packet, UdpSocket& socket);
+
+  const EndpointCounters& counters() const { return counters_; }
+  const EndpointConfig& config() const { return config_; }
+
+ private:
+  struct Subscriber {
+    Endpoint endpoint;
+    long last_period = 0;
+  };
+  void Subscribe(const Endpoint& from, long period);
+  bool CheckArmLimits(const ArmCommandMsg& command) const;
+
+  EndpointConfig config_;
+  EndpointCounters counters_;
+  std::vector<Subscriber> subscribers_;
+  std::optional<Endpoint> owner_;
+  long owner_last_period_ = 0;
+  double last_seq_ = -1;
+  long last_command_period_ = 0;
+  bool refused_flag_ = false;
+  bool watchdog_hold_ = false;
+  bool has_command_ = false;
+  ArmCommandMsg arm_command_, parsed_;
+  SimCommandMsg sim_command_;
+  // scratch, sized at construction
+  Header header_;
+  std::vector<double> payload_;
+  std::vector<unsigned char> not_owner_packet_;
+};
+
+}  // namespace vlab::bridge

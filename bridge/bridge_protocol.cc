@@ -1,0 +1,214 @@
+#include "bridge/bridge_protocol.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace vlab::bridge {
+
+void PutDouble(double v, unsigned char* out) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  for (int i = 0; i < 8; ++i) out[i] = static_cast<unsigned char>(bits >> (8 * i));
+}
+
+double GetDouble(const unsigned char* in) {
+  std::uint64_t bits = 0;
+  for (int i = 0; i < 8; ++i) bits |= static_cast<std::uint64_t>(in[i]) << (8 * i);
+  double v;
+  std::memcpy(&v, &bits, sizeof(v));
+  return v;
+}
+
+namespace {
+
+bool IsWhole(double v, double lo, double hi) { return v >= lo && v <= hi && v == std::floor(v); }
+
+void Encode(DeviceKind kind, MessageType type, double seq, double time, const std::vector<double>& payload,
+            std::vector<unsigned char>* out) {
+  Header h;
+  h.kind = static_cast<int>(kind);
+  h.type = static_cast<int>(type);
+  h.seq = seq;
+  h.time = time;
+  h.length = static_cast<int>(payload.size());
+  EncodePacket(h, payload.data(), h.length, out);
+}
+
+DecodeError Expect(const Header& h, DeviceKind kind, MessageType type) {
+  if (h.kind != static_cast<int>(kind)) return DecodeError::kBadKind;
+  if (h.type != static_cast<int>(type)) return DecodeError::kBadType;
+  return DecodeError::kNone;
+}
+
+}  // namespace
+
+const char* DecodeErrorName(DecodeError e) {
+  switch (e) {
+    case DecodeError::kNone: return "ok";
+    case DecodeError::kTooShort: return "too short";
+    case DecodeError::kTooLong: return "too long";
+    case DecodeError::kBadMagic: return "bad magic";
+    case DecodeError::kBadVersion: return "bad version";
+    case DecodeError::kBadKind: return "wrong device kind";
+    case DecodeError::kBadType: return "wrong message type";
+    case DecodeError::kBadLength: return "bad length";
+    case DecodeError::kNotFinite: return "non-finite value";
+    case DecodeError::kBadValue: return "value out of domain";
+  }
+  return "unknown";
+}
+
+void EncodePacket(const Header& h, const double* payload, int count, std::vector<unsigned char>* out) {
+  out->resize(static_cast<std::size_t>(kHeaderValues + count) * sizeof(double));
+  const double header[kHeaderValues] = {kMagic, static_cast<double>(kProtocolVersion), static_cast<double>(h.kind),
+                                        static_cast<double>(h.type), h.seq, h.time, static_cast<double>(count)};
+  unsigned char* p = out->data();
+  for (double v : header) {
+    PutDouble(v, p);
+    p += 8;
+  }
+  for (int i = 0; i < count; ++i, p += 8) PutDouble(payload[i], p);
+}
+
+DecodeError DecodePacket(const unsigned char* data, std::size_t size, Header* h, std::vector<double>* payload) {
+  if (size < kHeaderBytes || size % sizeof(double) != 0) return DecodeError::kTooShort;
+  const std::size_t values = size / sizeof(double);
+  if (values > static_cast<std::size_t>(kMaxPacketValues)) return DecodeError::kTooLong;
+  double header[kHeaderValues];
+  for (int i = 0; i < kHeaderValues; ++i) header[i] = GetDouble(data + 8 * i);
+  if (header[0] != kMagic) return DecodeError::kBadMagic;
+  if (header[1] != kProtocolVersion) return DecodeError::kBadVersion;
+  for (std::size_t i = 0; i < values; ++i) {
+    if (!std::isfinite(GetDouble(data + 8 * i))) return DecodeError::kNotFinite;
+  }
+  if (!IsWhole(header[2], 1, 255)) return DecodeError::kBadKind;
+  if (!IsWhole(header[3], 1, 3)) return DecodeError::kBadType;
+  if (!IsWhole(header[4], 0, 9007199254740992.0)) return DecodeError::kBadValue;
+  if (header[6] != static_cast<double>(values - kHeaderValues)) return DecodeError::kBadLength;
+  h->kind = static_cast<int>(header[2]);
+  h->type = static_cast<int>(header[3]);
+  h->seq = header[4];
+  h->time = header[5];
+  h->length = static_cast<int>(header[6]);
+  payload->resize(static_cast<std::size_t>(h->length));
+  for (int i = 0; i < h->length; ++i) (*payload)[i] = GetDouble(data + 8 * (kHeaderValues + i));
+  return DecodeError::kNone;
+}
+
+void EncodeArmState(double seq, double time, const ArmStateMsg& m, std::vector<unsigned char>* out) {
+  std::vector<double> p;
+  p.reserve(1 + 3 * m.q.size());
+  p.push_back(static_cast<double>(m.status));
+  p.insert(p.end(), m.q.begin(), m.q.end());
+  p.insert(p.end(), m.qd.begin(), m.qd.end());
+  p.insert(p.end(), m.tau.begin(), m.tau.end());
+  Encode(DeviceKind::kArm, MessageType::kState, seq, time, p, out);
+}
+
+void EncodeArmCommand(double seq, double time, const ArmCommandMsg& m, std::vector<unsigned char>* out) {
+  std::vector<double> p;
+  p.reserve(1 + m.value.size());
+  p.push_back(m.mode);
+  p.insert(p.end(), m.value.begin(), m.value.end());
+  Encode(DeviceKind::kArm, MessageType::kCommand, seq, time, p, out);
+}
+
+void EncodeWrenchState(double seq, double time, const WrenchStateMsg& m, std::vector<unsigned char>* out) {
+  std::vector<double> p(m.wrench, m.wrench + 6);
+  p.push_back(m.filter);
+  p.push_back(m.saturated ? 1.0 : 0.0);
+  Encode(DeviceKind::kWrench, MessageType::kState, seq, time, p, out);
+}
+
+void EncodeSimState(double seq, double time, const SimStateMsg& m, std::vector<unsigned char>* out) {
+  const std::vector<double> p = {m.sim_time,         static_cast<double>(m.mode), static_cast<double>(m.clock),
+                                 m.periods,          m.refused_packets,           m.missed_deadlines,
+                                 m.realtime_factor,  m.max_lateness};
+  Encode(DeviceKind::kSim, MessageType::kState, seq, time, p, out);
+}
+
+void EncodeSimCommand(double seq, double time, const SimCommandMsg& m, std::vector<unsigned char>* out) {
+  Encode(DeviceKind::kSim, MessageType::kCommand, seq, time, {static_cast<double>(m.op), m.arg}, out);
+}
+
+void EncodeDescribeRequest(DeviceKind kind, std::vector<unsigned char>* out) {
+  Encode(kind, MessageType::kDescribe, 0, 0, {}, out);
+}
+
+DecodeError ParseArmState(const Header& h, const std::vector<double>& p, int joints, ArmStateMsg* m) {
+  if (DecodeError e = Expect(h, DeviceKind::kArm, MessageType::kState); e != DecodeError::kNone) return e;
+  const int n = joints >= 0 ? joints : (h.length - 1) / 3;
+  if (n < 1 || h.length != 1 + 3 * n) return DecodeError::kBadLength;
+  if (!IsWhole(p[0], 0, 4294967295.0)) return DecodeError::kBadValue;
+  m->status = static_cast<std::uint32_t>(p[0]);
+  m->q.assign(p.begin() + 1, p.begin() + 1 + n);
+  m->qd.assign(p.begin() + 1 + n, p.begin() + 1 + 2 * n);
+  m->tau.assign(p.begin() + 1 + 2 * n, p.begin() + 1 + 3 * n);
+  return DecodeError::kNone;
+}
+
+DecodeError ParseArmCommand(const Header& h, const std::vector<double>& p, int joints, ArmCommandMsg* m) {
+  if (DecodeError e = Expect(h, DeviceKind::kArm, MessageType::kCommand); e != DecodeError::kNone) return e;
+  const int n = joints >= 0 ? joints : h.length - 1;
+  if (n < 1 || h.length != 1 + n) return DecodeError::kBadLength;
+  if (!IsWhole(p[0], 0, 3)) return DecodeError::kBadValue;
+  m->mode = static_cast<int>(p[0]);
+  m->value.assign(p.begin() + 1, p.end());
+  return DecodeError::kNone;
+}
+
+DecodeError ParseWrenchState(const Header& h, const std::vector<double>& p, WrenchStateMsg* m) {
+  if (DecodeError e = Expect(h, DeviceKind::kWrench, MessageType::kState); e != DecodeError::kNone) return e;
+  if (h.length != 8) return DecodeError::kBadLength;
+  if (!IsWhole(p[6], 0, 6) || !IsWhole(p[7], 0, 1)) return DecodeError::kBadValue;
+  for (int i = 0; i < 6; ++i) m->wrench[i] = p[i];
+  m->filter = static_cast<int>(p[6]);
+  m->saturated = p[7] != 0.0;
+  return DecodeError::kNone;
+}
+
+DecodeError ParseSimState(const Header& h, const std::vector<double>& p, SimStateMsg* m) {
+  if (DecodeError e = Expect(h, DeviceKind::kSim, MessageType::kState); e != DecodeError::kNone) return e;
+  if (h.length != 8) return DecodeError::kBadLength;
+  if (!IsWhole(p[1], 0, 1) || !IsWhole(p[2], 0, 2)) return DecodeError::kBadValue;
+  m->sim_time = p[0];
+  m->mode = static_cast<int>(p[1]);
+  m->clock = static_cast<int>(p[2]);
+  m->periods = p[3];
+  m->refused_packets = p[4];
+  m->missed_deadlines = p[5];
+  m->realtime_factor = p[6];
+  m->max_lateness = p[7];
+  return DecodeError::kNone;
+}
+
+DecodeError ParseSimCommand(const Header& h, const std::vector<double>& p, SimCommandMsg* m) {
+  if (DecodeError e = Expect(h, DeviceKind::kSim, MessageType::kCommand); e != DecodeError::kNone) return e;
+  if (h.length != 2) return DecodeError::kBadLength;
+  if (!IsWhole(p[0], 1, 5)) return DecodeError::kBadValue;
+  m->op = static_cast<int>(p[0]);
+  m->arg = p[1];
+  if (m->op == static_cast<int>(SimOp::kStep) && !IsWhole(m->arg, 1, 1e9)) return DecodeError::kBadValue;
+  if (m->op == static_cast<int>(SimOp::kSetRealtimeFactor) && !(m->arg > 0 && m->arg <= 1000)) {
+    return DecodeError::kBadValue;
+  }
+  return DecodeError::kNone;
+}
+
+const char* KindName(int kind) {
+  switch (kind) {
+    case 1: return "arm";
+    case 2: return "wrench";
+    case 3: return "sim";
+  }
+  return "unknown";
+}
+
+int KindFromName(const std::string& name) {
+  if (name == "arm") return 1;
+  if (name == "wrench") return 2;
+  if (name == "sim") return 3;
+  return 0;
+}
+
+}  // namespace vlab::bridge

@@ -1,0 +1,88 @@
+#include "bridge/bridge_udp.h"
+
+#include <poll.h>
+#include <sys/socket.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+#include <boost/asio/ip/address.hpp>
+
+#include "bridge/bridge_errors.h"
+
+namespace vlab::bridge {
+
+namespace asio = boost::asio;
+
+std::string EndpointText(const Endpoint& e) {
+  const std::string address = e.address().to_string();
+  return (e.address().is_v6() ? "[" + address + "]" : address) + ":" + std::to_string(e.port());
+}
+
+UdpSocket::UdpSocket() : socket_(io_) {}
+
+UdpSocket::~UdpSocket() {
+  boost::system::error_code ec;
+  socket_.close(ec);
+}
+
+Endpoint UdpSocket::MakeEndpoint(const std::string& address, int port) {
+  boost::system::error_code ec;
+  const asio::ip::address a = asio::ip::make_address(address, ec);
+  if (ec) throw NetworkError("address '" + address + "': " + ec.message());
+  if (port < 0 || port > 65535) throw NetworkError("port " + std::to_string(port) + " out of range 0..65535");
+  return Endpoint(a, static_cast<unsigned short>(port));
+}
+
+std::unique_ptr<UdpSocket> UdpSocket::Bind(const std::string& address, int port) {
+  const Endpoint at = MakeEndpoint(address, port);
+  std::unique_ptr<UdpSocket> s(new UdpSocket());
+  boost::system::error_code ec;
+  s->socket_.open(at.protocol(), ec);
+  if (!ec) s->socket_.bind(at, ec);
+  if (ec) throw NetworkError("cannot bind UDP " + EndpointText(at) + ": " + ec.message());
+  s->socket_.non_blocking(true, ec);
+  s->local_ = s->socket_.local_endpoint(ec);
+  if (ec) throw NetworkError("UDP " + EndpointText(at) + ": " + ec.message());
+  return s;
+}
+
+int UdpSocket::local_port() const { return local_.port(); }
+
+bool UdpSocket::SendTo(const unsigned char* data, std::size_t size, const Endpoint& to) {
+  boost::system::error_code ec;
+  socket_.send_to(asio::buffer(data, size), to, 0, ec);
+  return !ec;
+}
+
+long UdpSocket::Receive(unsigned char* buffer, std::size_t capacity, Endpoint* from, double timeout_s,
+                        bool* truncated) {
+  if (truncated) *truncated = false;
+  const int fd = socket_.native_handle();
+  if (timeout_s != 0) {
+    pollfd p{fd, POLLIN, 0};
+    const int ms = timeout_s < 0 ? -1 : static_cast<int>(std::ceil(timeout_s * 1000.0));
+    int ready;
+    do {
+      ready = ::poll(&p, 1, ms);
+    } while (ready < 0 && errno == EINTR);
+    if (ready <= 0) return -1;
+  }
+  // recvfrom with MSG_TRUNC reports the datagram's real size
+  sockaddr_storage addr{};
+  socklen_t len = sizeof(addr);
+  const ssize_t n = ::recvfrom(fd, buffer, capacity, MSG_TRUNC | MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&addr), &len);
+  if (n < 0) return -1;
+  if (from) {
+    from->resize(len);
+    std::memcpy(from->data(), &addr, len);
+  }
+  if (static_cast<std::size_t>(n) > capacity) {
+    if (truncated) *truncated = true;
+    return static_cast<long>(capacity);
+  }
+  return static_cast<long>(n);
+}
+
+}  // namespace vlab::bridge

@@ -1,0 +1,47 @@
+// A UDP socket for the bridge (Boost.Asio underneath), with the two calls the
+// bridge needs: send a datagram to an endpoint, and receive one datagram with a
+// time limit. Receive and send never throw: they return a status.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/udp.hpp>
+
+namespace vlab::bridge {
+
+using Endpoint = boost::asio::ip::udp::endpoint;
+
+/// "ADDR:PORT" of an endpoint, for messages.
+std::string EndpointText(const Endpoint& endpoint);
+
+class UdpSocket {
+ public:
+  /// Opens a socket bound to address:port (port 0: any free port). Throws
+  /// NetworkError naming the address when it cannot.
+  static std::unique_ptr<UdpSocket> Bind(const std::string& address, int port);
+  /// Resolves a numeric IPv4/IPv6 address and port; throws NetworkError.
+  static Endpoint MakeEndpoint(const std::string& address, int port);
+  ~UdpSocket();
+
+  int local_port() const;
+  const Endpoint& local_endpoint() const { return local_; }
+
+  /// Sends one datagram; false on error.
+  bool SendTo(const unsigned char* data, std::size_t size, const Endpoint& to);
+  /// Waits up to timeout_s (0: do not wait, < 0: wait forever) for one
+  /// datagram; returns its size (copied into buffer, truncated to capacity), or
+  /// -1 if none arrived. *truncated is set when the datagram was larger.
+  long Receive(unsigned char* buffer, std::size_t capacity, Endpoint* from, double timeout_s,
+               bool* truncated = nullptr);
+
+ private:
+  UdpSocket();
+  boost::asio::io_context io_;
+  boost::asio::ip::udp::socket socket_;
+  Endpoint local_;
+};
+
+}  // namespace vlab::bridge
