@@ -82,6 +82,12 @@ class DeviceEndpoint {
   /// seq of the last accepted command (-1 if none since the owner took over).
   double last_accepted_seq() const { return last_seq_; }
   bool has_owner() const { return owner_.has_value(); }
+  /// Frees the command input now (the lab does this when a lockstep owner
+  /// stopped answering): the next sender becomes the owner.
+  void ReleaseOwner() {
+    owner_.reset();
+    last_seq_ = -1;
+  }
 
   /// Status bits the endpoint adds for the owner (refused, watchdog).
   std::uint32_t status_bits() const;

@@ -4,7 +4,6 @@
 #include <sys/socket.h>
 
 #include <cerrno>
-#include <cmath>
 #include <cstring>
 
 #include <boost/asio/ip/address.hpp>
@@ -14,6 +13,25 @@
 namespace vlab::bridge {
 
 namespace asio = boost::asio;
+
+bool WaitReadable(const int* fds, int count, double timeout_s) {
+  pollfd p[16];
+  const int n = count < 16 ? count : 16;
+  for (int i = 0; i < n; ++i) p[i] = pollfd{fds[i], POLLIN, 0};
+  // ppoll: nanosecond timeouts (poll's milliseconds would make a 1 kHz loop late)
+  timespec ts{};
+  timespec* limit = nullptr;
+  if (timeout_s >= 0) {
+    ts.tv_sec = static_cast<time_t>(timeout_s);
+    ts.tv_nsec = static_cast<long>((timeout_s - static_cast<double>(ts.tv_sec)) * 1e9);
+    limit = &ts;
+  }
+  int ready;
+  do {
+    ready = ::ppoll(p, static_cast<nfds_t>(n), limit, nullptr);
+  } while (ready < 0 && errno == EINTR);
+  return ready > 0;
+}
 
 std::string EndpointText(const Endpoint& e) {
   const std::string address = e.address().to_string();
@@ -50,6 +68,8 @@ std::unique_ptr<UdpSocket> UdpSocket::Bind(const std::string& address, int port)
 
 int UdpSocket::local_port() const { return local_.port(); }
 
+int UdpSocket::fd() { return socket_.native_handle(); }
+
 bool UdpSocket::SendTo(const unsigned char* data, std::size_t size, const Endpoint& to) {
   boost::system::error_code ec;
   socket_.send_to(asio::buffer(data, size), to, 0, ec);
@@ -60,15 +80,7 @@ long UdpSocket::Receive(unsigned char* buffer, std::size_t capacity, Endpoint* f
                         bool* truncated) {
   if (truncated) *truncated = false;
   const int fd = socket_.native_handle();
-  if (timeout_s != 0) {
-    pollfd p{fd, POLLIN, 0};
-    const int ms = timeout_s < 0 ? -1 : static_cast<int>(std::ceil(timeout_s * 1000.0));
-    int ready;
-    do {
-      ready = ::poll(&p, 1, ms);
-    } while (ready < 0 && errno == EINTR);
-    if (ready <= 0) return -1;
-  }
+  if (timeout_s != 0 && !WaitReadable(&fd, 1, timeout_s)) return -1;
   // recvfrom with MSG_TRUNC reports the datagram's real size
   sockaddr_storage addr{};
   socklen_t len = sizeof(addr);

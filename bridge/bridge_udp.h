@@ -14,6 +14,10 @@ namespace vlab::bridge {
 
 using Endpoint = boost::asio::ip::udp::endpoint;
 
+/// Waits up to timeout_s (< 0: forever) until one of the file descriptors
+/// (sockets' fd(), at most 16) is readable; false on timeout.
+bool WaitReadable(const int* fds, int count, double timeout_s);
+
 /// "ADDR:PORT" of an endpoint, for messages.
 std::string EndpointText(const Endpoint& endpoint);
 
@@ -27,6 +31,8 @@ class UdpSocket {
   ~UdpSocket();
 
   int local_port() const;
+  /// The socket's file descriptor, for WaitReadable over several sockets.
+  int fd();
   const Endpoint& local_endpoint() const { return local_; }
 
   /// Sends one datagram; false on error.

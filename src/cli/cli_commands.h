@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace vlab::cli {
 
@@ -17,6 +18,18 @@ struct RunArgs {
   long long seed = -1;    ///< >= 0 overrides the scenario's seed
 };
 int RunCommand(const RunArgs& args);
+
+struct ServeArgs {
+  std::string scenario;
+  std::string bind = "127.0.0.1";
+  std::vector<std::string> ports;  ///< DEVICE=PORT overrides
+  std::string clock;               ///< "" = the scenario's
+  std::string out_dir;
+  double duration_s = 0;
+  bool json = false;               ///< devices: print the describe JSON too
+};
+int ServeCommand(const ServeArgs& args);
+int DevicesCommand(const ServeArgs& args);
 
 struct BenchArgs {
   std::string what;       ///< "physics"

@@ -27,6 +27,23 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--seed", run.seed, "Override the scenario's seed (>= 0)");
   run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
 
+  vlab::cli::ServeArgs serve;
+  CLI::App* serve_cmd =
+      app.add_subcommand("serve", "Run a scenario with its devices served over UDP (lockstep or realtime clock)");
+  vlab::cli::ServeArgs devices;
+  CLI::App* devices_cmd = app.add_subcommand("devices", "List a scenario's devices, UDP endpoints and layouts");
+  for (auto [cmd, a] : {std::pair{serve_cmd, &serve}, std::pair{devices_cmd, &devices}}) {
+    cmd->add_option("scenario", a->scenario, "Scenario file (YAML); the .yaml extension may be left out")
+        ->required();
+    cmd->add_option("--bind", a->bind, "Address the device sockets bind to (default 127.0.0.1)");
+    cmd->add_option("--port", a->ports, "DEVICE=PORT: serve DEVICE on PORT (0: any free port); repeatable");
+    cmd->add_option("--clock", a->clock, "fast | lockstep | realtime (default: the scenario's)")
+        ->check(CLI::IsMember({"fast", "lockstep", "realtime"}));
+  }
+  serve_cmd->add_option("--out", serve.out_dir, "Output folder (default: out/<scenario name>)");
+  serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0)");
+  devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
+
   vlab::cli::BenchArgs bench;
   CLI::App* bench_cmd = app.add_subcommand("bench", "Measure performance against a baseline in the same run");
   bench_cmd->add_option("what", bench.what, "Benchmark: physics")
@@ -46,6 +63,9 @@ int main(int argc, char** argv) {
     if (run_cmd->parsed() && given(run_cmd, "--seed") && run.seed < 0) {
       throw CLI::ValidationError("--seed must be >= 0");
     }
+    if (serve_cmd->parsed() && given(serve_cmd, "--duration") && !(serve.duration_s > 0)) {
+      throw CLI::ValidationError("--duration must be > 0 s");
+    }
     if (bench_cmd->parsed() && given(bench_cmd, "--duration") && !(bench.duration_s > 0)) {
       throw CLI::ValidationError("--duration must be > 0 s");
     }
@@ -58,6 +78,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (run_cmd->parsed()) return vlab::cli::RunCommand(run);
+  if (serve_cmd->parsed()) return vlab::cli::ServeCommand(serve);
+  if (devices_cmd->parsed()) return vlab::cli::DevicesCommand(devices);
   if (bench_cmd->parsed()) return vlab::cli::BenchCommand(bench);
   return 2;
 }

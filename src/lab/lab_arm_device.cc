@@ -66,6 +66,11 @@ std::unique_ptr<SimArm> SimArm::Create(const mjModel* m, const DeviceConfig& c) 
       }
     }
   }
+  if (!c.arm.max_velocity.empty()) {
+    arm->max_velocity_ = Eigen::Map<const Eigen::VectorXd>(c.arm.max_velocity.data(), n);
+  }
+  arm->watchdog_periods_ = c.arm.watchdog_periods;
+  arm->owner_timeout_s_ = c.arm.owner_timeout_s;
   arm->bandwidth_hz_ = c.arm.servo.bandwidth_hz;
   arm->damping_ratio_ = c.arm.servo.damping_ratio;
   arm->value_ = Eigen::VectorXd::Zero(n);
@@ -106,6 +111,7 @@ bool SimArm::Command(const bridge::ArmCommand& cmd) {
     ok = std::isfinite(v);
     if (ok && cmd.mode == bridge::ArmMode::kPosition) ok = v >= lower_[i] && v <= upper_[i];
     if (ok && cmd.mode == bridge::ArmMode::kTorque) ok = v >= tau_min_[i] && v <= tau_max_[i];
+    if (ok && cmd.mode == bridge::ArmMode::kVelocity && max_velocity_.size() > 0) ok = std::abs(v) <= max_velocity_[i];
   }
   last_refused_ = !ok;
   if (!ok) {

@@ -18,8 +18,8 @@
 //   - torque mode applies the commanded torque as is;
 //   - every torque is clipped to the motor's range (status bit when it is);
 //   - a command with the wrong size, a non-finite value, a position outside the
-//     joint range or a torque outside the motor range is refused and counted;
-//     the arm keeps its previous command.
+//     joint range, a velocity beyond max_velocity or a torque outside the motor
+//     range is refused and counted; the arm keeps its previous command.
 #pragma once
 
 #include <memory>
@@ -45,6 +45,13 @@ class SimArm {
   const std::vector<std::string>& joint_names() const { return joint_names_; }
   const Eigen::VectorXd& lower_limits() const { return lower_; }
   const Eigen::VectorXd& upper_limits() const { return upper_; }
+  /// Motor torque ranges, N m (−inf / +inf where unlimited).
+  const Eigen::VectorXd& torque_min() const { return tau_min_; }
+  const Eigen::VectorXd& torque_max() const { return tau_max_; }
+  /// |qd| limits of velocity commands, rad/s (empty: none).
+  const Eigen::VectorXd& max_velocity() const { return max_velocity_; }
+  int watchdog_periods() const { return watchdog_periods_; }
+  double owner_timeout_s() const { return owner_timeout_s_; }
 
   /// Writes the initial joint positions into qpos (if configured).
   void SetInitialPositions(mjData& data) const;
@@ -78,7 +85,9 @@ class SimArm {
   std::string name_;
   std::vector<std::string> joint_names_;
   std::vector<int> qpos_adr_, dof_adr_, actuator_ids_;
-  Eigen::VectorXd lower_, upper_, tau_min_, tau_max_, initial_;
+  Eigen::VectorXd lower_, upper_, tau_min_, tau_max_, initial_, max_velocity_;
+  int watchdog_periods_ = 3;
+  double owner_timeout_s_ = 1.0;
   bool has_initial_ = false;
   double bandwidth_hz_ = 10.0, damping_ratio_ = 1.0;
   Eigen::VectorXd kp_, kd_;

@@ -1,8 +1,16 @@
 #include "lab/lab_clock.h"
 
+#include <algorithm>
+#include <chrono>
+#include <thread>
+
 #include "lab/lab_errors.h"
 
 namespace vlab::lab {
+
+double WallNow() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 
 namespace {
 
@@ -10,19 +18,108 @@ namespace {
 class FastClock final : public Clock {
  public:
   const char* name() const override { return "fast"; }
-  void BeginPeriod(std::int64_t, double) override { ++stats_.periods; }
-  void EndPeriod(std::int64_t) override {}
-  ClockStats stats() const override { return stats_; }
+  PeriodStart BeginPeriod(std::int64_t, CommandSource*) override {
+    ++stats_.periods;
+    return PeriodStart::kReady;
+  }
+  const ClockStats& stats() const override { return stats_; }
 
  private:
   ClockStats stats_;
 };
 
+// lockstep: waits for the commands that answer period k.
+class LockstepClock final : public Clock {
+ public:
+  explicit LockstepClock(const LockstepConfig& c) : config_(c) {}
+  const char* name() const override { return "lockstep"; }
+
+  PeriodStart BeginPeriod(std::int64_t k, CommandSource* source) override {
+    ++stats_.periods;
+    if (!source) return PeriodStart::kReady;
+    const double limit = k == 0 ? config_.start_timeout_s : config_.timeout_s;
+    const double deadline = WallNow() + limit;
+    while (!source->Answered(k)) {
+      const double left = deadline - WallNow();
+      if (left <= 0) {
+        ++stats_.timeouts;
+        return config_.on_timeout == "fail" ? PeriodStart::kFail : PeriodStart::kTimedOut;
+      }
+      source->Poll(left);
+    }
+    return PeriodStart::kReady;
+  }
+  const ClockStats& stats() const override { return stats_; }
+
+ private:
+  LockstepConfig config_;
+  ClockStats stats_;
+};
+
+// realtime: period k starts at anchor + (k - k_anchor) T / factor on the
+// monotonic clock; the time until then is spent receiving commands.
+class RealtimeClock final : public Clock {
+ public:
+  RealtimeClock(double period_s, double factor, std::int64_t periods) : period_s_(period_s), factor_(factor) {
+    stats_.lateness_s.reserve(static_cast<std::size_t>(std::max<std::int64_t>(periods, 0)) + 1);
+  }
+  const char* name() const override { return "realtime"; }
+
+  PeriodStart BeginPeriod(std::int64_t k, CommandSource* source) override {
+    ++stats_.periods;
+    if (!anchored_) {
+      anchor_ = WallNow();
+      anchor_k_ = k;
+      anchored_ = true;
+    }
+    const double step = period_s_ / factor_;
+    const double deadline = anchor_ + static_cast<double>(k - anchor_k_) * step;
+    double now = WallNow();
+    // begun after its own period had already ended: the previous one overran
+    if (now > deadline + step) ++stats_.missed_deadlines;
+    while (now < deadline) {
+      if (source) {
+        source->Poll(deadline - now);
+      } else {
+        SleepUntil(deadline);
+      }
+      now = WallNow();
+    }
+    const double lateness = now - deadline;
+    stats_.max_lateness_s = std::max(stats_.max_lateness_s, lateness);
+    if (stats_.lateness_s.size() < stats_.lateness_s.capacity()) stats_.lateness_s.push_back(lateness);
+    return PeriodStart::kReady;
+  }
+  void set_factor(double factor) override {
+    factor_ = factor;
+    anchored_ = false;  // the new pace counts from the next period on, without a jump
+  }
+  double factor() const override { return factor_; }
+  const ClockStats& stats() const override { return stats_; }
+
+ private:
+  static void SleepUntil(double wall_s) {
+    const double left = wall_s - WallNow();
+    if (left > 0) std::this_thread::sleep_for(std::chrono::duration<double>(left));
+  }
+  double period_s_;
+  double factor_;
+  bool anchored_ = false;
+  double anchor_ = 0;
+  std::int64_t anchor_k_ = 0;
+  ClockStats stats_;
+};
+
 }  // namespace
 
-std::unique_ptr<Clock> MakeClock(const std::string& mode, double /*control_period_s*/) {
-  if (mode == "fast") return std::make_unique<FastClock>();
-  throw InputError("unknown clock '" + mode + "' (known: fast)");
+std::unique_ptr<Clock> MakeClock(const Scenario& scenario, const std::string& mode, std::int64_t periods) {
+  const std::string m = mode.empty() ? scenario.clock : mode;
+  if (m == "fast") return std::make_unique<FastClock>();
+  if (m == "lockstep") return std::make_unique<LockstepClock>(scenario.lockstep);
+  if (m == "realtime") {
+    return std::make_unique<RealtimeClock>(scenario.control_period_s, scenario.realtime.factor, periods);
+  }
+  throw InputError("unknown clock '" + m + "' (known: fast, lockstep, realtime)");
 }
 
 }  // namespace vlab::lab

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_arm_device.h"
+#include "lab/lab_bridge.h"
 #include "lab/lab_clock.h"
 #include "lab/lab_controller.h"
 #include "lab/lab_errors.h"
@@ -54,6 +55,9 @@ struct Lab::Impl {
 
   void ResetState();
   void WriteRow(double time_s, std::vector<double>& row) const;
+  std::unique_ptr<LabBridge> MakeBridge(const BridgeOptions& options, const std::string& clock_name);
+  // applies the sim device's commands; true when something changed
+  bool HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left);
   // one controller period: computed (and recorded), or replayed from a recording
   void RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
                      double* columns);
@@ -87,9 +91,9 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
   for (const DeviceConfig& device : scenario.devices) {
     if (device.kind == "arm") {
       impl->arms.push_back(SimArm::Create(m, device));
-    } else {
+    } else if (device.kind == "wrench") {
       impl->wrenches.push_back(SimWrench::Create(m, device, DeviceSeed(scenario.seed, device.name)));
-    }
+    }  // sim: the run's own control device, served by the bridge
   }
   if (!impl->arms.empty() && m->opt.integrator == mjINT_RK4) {
     throw InputError("scene '" + scenario.scene + "': arm devices need the Euler or implicit integrator (RK4 "
@@ -255,21 +259,44 @@ void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* 
   }
 }
 
+// The sim device's state at period k.
+bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, const LabBridge* bridge) {
+  bridge::SimStateMsg m;
+  m.sim_time = t;
+  m.mode = paused ? 1 : 0;
+  const std::string name = clock.name();
+  m.clock = name == "lockstep" ? 1 : name == "realtime" ? 2 : 0;
+  m.periods = static_cast<double>(k);
+  m.refused_packets = bridge ? static_cast<double>(bridge->refused_total()) : 0.0;
+  m.missed_deadlines = static_cast<double>(clock.stats().missed_deadlines);
+  m.realtime_factor = clock.factor();
+  m.max_lateness = clock.stats().max_lateness_s;
+  return m;
+}
+
 RunResult Lab::Run(const RunOptions& options) {
   Impl& s = *impl_;
   const auto t_start = WallClock::now();
   const mjModel* m = s.model.get();
   mjData* d = s.data.get();
   const double period = s.scenario.control_period_s;
+  const long periods = std::lround(s.scenario.duration_s / period);
   RunResult result;
 
   InstallMujocoHandlers();
   TakeMujocoWarningTexts();
   s.ResetState();
-  std::unique_ptr<Clock> clock = MakeClock(s.scenario.clock, period);
+  std::unique_ptr<Clock> clock = MakeClock(s.scenario, options.clock, periods);
+  result.clock = clock->name();
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
   CheckSet checks(s.scenario.checks, s.columns);
+  // the wire: bind every served device before anything is written
+  std::unique_ptr<LabBridge> bridge;
+  if (options.serve) {
+    bridge = s.MakeBridge(*options.serve, clock->name());
+    if (options.on_serving) options.on_serving(bridge->Devices());
+  }
   // outputs: staging folder (removed on a MuJoCo error too), log
   std::unique_ptr<OutputDir> out;
   std::unique_ptr<CsvLog> log;
@@ -283,7 +310,6 @@ RunResult Lab::Run(const RunOptions& options) {
     if (s.scenario.outputs.log) log = CsvLog::Open(out->File("log.csv"), s.columns);
   }
 
-  const long periods = std::lround(s.scenario.duration_s / period);
   if (options.record) result.recording.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
   std::vector<double> row(s.columns.size(), 0.0);
   double* controller_columns = row.data() + s.columns.size() - s.controller_columns;
@@ -293,21 +319,49 @@ RunResult Lab::Run(const RunOptions& options) {
     if (log) log->Append(row.data());
     checks.Add(t, row.data());
   };
+  bool paused = false;
+  long steps_left = -1;  // periods to run before pausing again (sim "step N"); -1: not stepping
+  auto publish = [&](long k) {
+    if (bridge) bridge->Publish(k, k * period, s.arm_states, SimState(k * period, paused, *clock, k, bridge.get()));
+  };
   // row 0: the initial state, with the controller's view of it
   if (s.controller) s.RunController(0.0, options, &replay_at, &result, controller_columns);
   emit_row(0.0);
+  publish(0);
 
   WarningWatch warnings;
   const auto t_loop = WallClock::now();
   auto t_progress = t_loop;
   bool diverged = false;
   long k = 0;
-  for (; k < periods && !diverged; ++k) {
+  while (k < periods && !diverged) {
     // period k runs from t_k = k T to t_k+1; times are exact multiples of T
     const double t_k = k * period;
     const double t_next = (k + 1) * period;
-    clock->BeginPeriod(k, t_k);
-    // 1. commands: the controller answers the newest sample
+    if (options.interrupt && *options.interrupt) {
+      throw std::runtime_error("interrupted at t = " + FormatDouble(t_k) + " s; nothing written");
+    }
+    // 0. the sim device: pause, resume, step, reset, pace
+    if (bridge && s.HandleSimCommands(*bridge, *clock, &paused, &steps_left)) publish(k);
+    if (paused) {
+      bridge->Poll(0.02);
+      continue;
+    }
+    // 1. the clock lets the period begin; commands: the newest of each device
+    const PeriodStart start = clock->BeginPeriod(k, bridge.get());
+    if (start == PeriodStart::kFail) {
+      result.failure = "lockstep: no command answering period " + std::to_string(k) + " (t = " +
+                       FormatDouble(t_k) + " s) within " + FormatDouble(s.scenario.lockstep.timeout_s) + " s";
+      break;
+    }
+    if (bridge) {
+      if (start == PeriodStart::kTimedOut) {
+        bridge->NoteTimeout(s.scenario.lockstep.release_after);
+      } else {
+        bridge->NoteAnswered();
+      }
+      bridge->ApplyArmCommands(k);
+    }
     if (s.controller) {
       if (k > 0) s.RunController(t_k, options, &replay_at, &result, controller_columns);
       s.arms[s.controller_arm]->Command(s.arm_commands[s.controller_arm]);
@@ -324,16 +378,15 @@ RunResult Lab::Run(const RunOptions& options) {
       diverged = warnings.Update(*d, t_step);
     }
     if (diverged) break;
-    // 3. sample devices and log
+    // 3. sample devices, log, publish the state that closes the period
     for (auto& w : s.wrenches) w->EndPeriod();
     for (std::size_t i = 0; i < s.arms.size(); ++i) s.arms[i]->Sample(*d, t_next, &s.arm_states[i]);
     emit_row(t_next);
-    clock->EndPeriod(k);
-    if (options.interrupt && *options.interrupt) {
-      throw std::runtime_error("interrupted at t = " + FormatDouble(t_next) + " s; nothing written");
-    }
+    ++k;
+    if (steps_left > 0 && --steps_left == 0) paused = true;
+    publish(k);
     if (options.progress && (k & 63) == 0 && Seconds(t_progress, WallClock::now()) > 0.1) {
-      options.progress(static_cast<double>(k + 1) / periods);
+      options.progress(static_cast<double>(k) / periods);
       t_progress = WallClock::now();
     }
   }
@@ -343,8 +396,13 @@ RunResult Lab::Run(const RunOptions& options) {
   TakeMujocoWarningTexts();  // their content is in the reports: mju_warningText
   result.warnings = warnings.Reports(s.scenario.allow_warnings);
   result.checks = checks.Results();
-  result.failure = Verdict(result, diverged);
+  if (result.failure.empty()) result.failure = Verdict(result, diverged);
   result.exit_code = result.failure.empty() ? 0 : 1;
+  result.clock_stats = clock->stats();
+  if (bridge) {
+    result.served = bridge->Devices();
+    result.latencies_s = bridge->latencies();
+  }
 
   if (out) {
     if (log) log->Close();
@@ -357,6 +415,60 @@ RunResult Lab::Run(const RunOptions& options) {
   }
   result.total_wall_s = Seconds(t_start, WallClock::now());
   return result;
+}
+
+std::vector<ServedDevice> Lab::Describe(const BridgeOptions& options, const std::string& clock) const {
+  const std::string name = clock.empty() ? impl_->scenario.clock : clock;
+  return impl_->MakeBridge(options, name)->Devices();
+}
+
+std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, const std::string& clock_name) {
+  std::vector<SimArm*> arm_ptrs;
+  for (auto& a : arms) arm_ptrs.push_back(a.get());
+  std::vector<SimWrench*> wrench_ptrs;
+  for (auto& w : wrenches) wrench_ptrs.push_back(w.get());
+  std::unique_ptr<LabBridge> bridge = LabBridge::Create(scenario, options, arm_ptrs, wrench_ptrs, clock_name);
+  if (controller) {
+    for (const ServedDevice& sd : bridge->Devices()) {
+      if (sd.name == scenario.controller.arm) {
+        throw InputError(scenario.controller.where + ": controller: arm '" + sd.name +
+                         "' is served over UDP and commanded by the built-in controller: one owner at a time "
+                         "(remove the controller, or the device's port)");
+      }
+    }
+  }
+  return bridge;
+}
+
+bool Lab::Impl::HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left) {
+  bool changed = false;
+  bridge::SimCommandMsg c;
+  while (bridge.TakeSimCommand(&c)) {
+    changed = true;
+    switch (static_cast<bridge::SimOp>(c.op)) {
+      case bridge::SimOp::kReset:
+        ResetState();
+        break;
+      case bridge::SimOp::kPause:
+        *paused = true;
+        *steps_left = -1;
+        break;
+      case bridge::SimOp::kResume:
+        *paused = false;
+        *steps_left = -1;
+        clock.set_factor(clock.factor());  // realtime: pace from now, no catch-up burst
+        break;
+      case bridge::SimOp::kStep:
+        *paused = false;
+        *steps_left = static_cast<long>(c.arg);
+        clock.set_factor(clock.factor());
+        break;
+      case bridge::SimOp::kSetRealtimeFactor:
+        clock.set_factor(c.arg);
+        break;
+    }
+  }
+  return changed;
 }
 
 }  // namespace vlab::lab

@@ -17,7 +17,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "lab/lab_bridge.h"
 #include "lab/lab_checks.h"
+#include "lab/lab_clock.h"
 #include "lab/lab_mujoco.h"
 #include "lab/lab_scenario.h"
 
@@ -35,6 +37,12 @@ struct RunOptions {
   /// log columns come from it instead of the controller (same trajectory, no
   /// controller cost).
   const struct Recording* replay = nullptr;
+  /// Serve the devices over UDP (vlab serve) with these options (nullptr: don't).
+  const BridgeOptions* serve = nullptr;
+  /// Clock to use instead of the scenario's ("": the scenario's).
+  std::string clock;
+  /// Called once the served devices are bound, before the first period.
+  std::function<void(const std::vector<ServedDevice>&)> on_serving;
 };
 
 /// What a recorded run computed.
@@ -62,6 +70,10 @@ struct RunResult {
   double loop_wall_s = 0.0;   ///< wall time of the step loop
   double total_wall_s = 0.0;  ///< wall time including writing outputs
   Recording recording;  ///< if RunOptions::record
+  std::string clock;     ///< the clock that ran
+  ClockStats clock_stats;
+  std::vector<ServedDevice> served;  ///< served devices with their counters (vlab serve)
+  std::vector<double> latencies_s;   ///< command arrival-to-apply latencies (vlab serve)
 };
 
 class Lab {
@@ -77,6 +89,10 @@ class Lab {
   /// Puts `data` (made for model()) into the scenario's initial state: reset,
   /// initial joint positions, mj_forward. The same state Run() starts from.
   void InitialState(mjData* data) const;
+
+  /// Binds the served devices as `vlab serve` would and returns their
+  /// endpoints and describe replies, then frees the ports.
+  std::vector<ServedDevice> Describe(const BridgeOptions& options, const std::string& clock) const;
 
   /// qpos at the end of the last Run().
   std::vector<double> FinalQpos() const;

@@ -49,6 +49,8 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
   device.where = Where(file, node);
   device.name = r.String("name");
   device.kind = r.String("kind");
+  device.port = r.Integer("port", 0);
+  if (device.port < 0 || device.port > 65535) r.Fail("port", "must be 0 (not served) to 65535");
   if (device.kind == "arm") {
     ArmDeviceConfig& arm = device.arm;
     arm.joints = r.Strings("joints", {});
@@ -60,6 +62,17 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
       r.Fail("initial", "needs one value per joint (" + std::to_string(arm.joints.size()) + ")");
     }
     MapReader servo = r.Map("servo");
+    arm.max_velocity = r.Numbers("max_velocity", {});
+    if (!arm.max_velocity.empty() && arm.max_velocity.size() != arm.joints.size()) {
+      r.Fail("max_velocity", "needs one value per joint (" + std::to_string(arm.joints.size()) + ")");
+    }
+    for (double v : arm.max_velocity) {
+      if (!(v > 0)) r.Fail("max_velocity", "values must be > 0 rad/s");
+    }
+    arm.watchdog_periods = r.Integer("watchdog_periods", arm.watchdog_periods);
+    if (arm.watchdog_periods < 0) r.Fail("watchdog_periods", "must be >= 0 (0: off)");
+    arm.owner_timeout_s = r.Number("owner_timeout", arm.owner_timeout_s);
+    if (!(arm.owner_timeout_s > 0)) r.Fail("owner_timeout", "must be > 0 s");
     arm.servo.bandwidth_hz = servo.Number("bandwidth_hz", arm.servo.bandwidth_hz);
     arm.servo.damping_ratio = servo.Number("damping_ratio", arm.servo.damping_ratio);
     if (!(arm.servo.bandwidth_hz > 0)) servo.Fail("bandwidth_hz", "must be > 0 Hz");
@@ -78,8 +91,8 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
     w.noise = r.Bool("noise", w.noise);
     w.bias = r.Bool("bias", w.bias);
     w.quantization = r.Bool("quantization", w.quantization);
-  } else {
-    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench)");
+  } else if (device.kind != "sim") {
+    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim)");
   }
   r.Finish();
   return device;
@@ -198,7 +211,25 @@ Scenario LoadScenario(const std::string& path) {
   if (seed < 0 || seed != std::floor(seed) || seed > 9007199254740992.0) r.Fail("seed", "must be a non-negative integer");
   s.seed = static_cast<std::uint64_t>(seed);
   s.clock = r.String("clock", s.clock);
-  if (s.clock != "fast") r.Fail("clock", "unknown clock '" + s.clock + "' (known: fast)");
+  if (s.clock != "fast" && s.clock != "lockstep" && s.clock != "realtime") {
+    r.Fail("clock", "unknown clock '" + s.clock + "' (known: fast, lockstep, realtime)");
+  }
+  MapReader lockstep = r.Map("lockstep");
+  s.lockstep.timeout_s = lockstep.Number("timeout", s.lockstep.timeout_s);
+  s.lockstep.start_timeout_s = lockstep.Number("start_timeout", s.lockstep.start_timeout_s);
+  s.lockstep.on_timeout = lockstep.String("on_timeout", s.lockstep.on_timeout);
+  s.lockstep.release_after = lockstep.Integer("release_after", s.lockstep.release_after);
+  if (!(s.lockstep.timeout_s > 0)) lockstep.Fail("timeout", "must be > 0 s");
+  if (!(s.lockstep.start_timeout_s > 0)) lockstep.Fail("start_timeout", "must be > 0 s");
+  if (s.lockstep.on_timeout != "hold" && s.lockstep.on_timeout != "fail") {
+    lockstep.Fail("on_timeout", "must be hold or fail");
+  }
+  if (s.lockstep.release_after < 1) lockstep.Fail("release_after", "must be >= 1");
+  lockstep.Finish();
+  MapReader realtime = r.Map("realtime");
+  s.realtime.factor = realtime.Number("factor", s.realtime.factor);
+  if (!(s.realtime.factor > 0 && s.realtime.factor <= 1000)) realtime.Fail("factor", "must be in (0, 1000]");
+  realtime.Finish();
   s.allow_warnings = r.Strings("allow_warnings", {});
   for (const std::string& w : s.allow_warnings) {
     if (WarningIndex(w) < 0 || IsDivergenceWarning(WarningIndex(w))) {

@@ -27,7 +27,10 @@ struct ArmDeviceConfig {
   std::vector<std::string> joints;     ///< MJCF joint names, in device order
   std::vector<std::string> actuators;  ///< MJCF motor actuators (torque), default: joint names
   std::vector<double> initial;         ///< initial joint positions, rad (default: qpos0)
+  std::vector<double> max_velocity;    ///< |qd| limits of velocity commands, rad/s (empty: none)
   ServoConfig servo;
+  int watchdog_periods = 3;            ///< hold after this many periods without a command (0: off)
+  double owner_timeout_s = 1.0;        ///< a silent owner gives the command input up after this
 };
 
 struct WrenchDeviceConfig {
@@ -44,8 +47,9 @@ struct WrenchDeviceConfig {
 
 struct DeviceConfig {
   std::string name;
-  std::string kind;  ///< "arm" or "wrench"
+  std::string kind;  ///< "arm", "wrench" or "sim"
   std::string where;  ///< "FILE:LINE" for messages about binding
+  int port = 0;       ///< UDP port under `vlab serve` (0: not served)
   ArmDeviceConfig arm;
   WrenchDeviceConfig wrench;
 };
@@ -98,6 +102,19 @@ struct OutputsConfig {
   bool log = true;  ///< write log.csv
 };
 
+/// Lockstep clock: the lab waits for the commands that answer each period.
+struct LockstepConfig {
+  double timeout_s = 1.0;        ///< wait per period (wall time)
+  double start_timeout_s = 30.0;  ///< wait for the first command (period 0)
+  std::string on_timeout = "hold";  ///< hold (arm holds, run continues) | fail (run stops, exit 1)
+  int release_after = 3;         ///< consecutive timeouts after which the silent owner is released
+};
+
+/// Realtime clock: periods paced to the wall clock.
+struct RealtimeConfig {
+  double factor = 1.0;  ///< simulated seconds per wall second
+};
+
 struct Scenario {
   std::string file;        ///< path as given
   std::string name;        ///< output folder name (default: file stem)
@@ -106,7 +123,9 @@ struct Scenario {
   double duration_s = 1.0;
   double control_period_s = 0.002;
   std::uint64_t seed = 1;
-  std::string clock = "fast";
+  std::string clock = "fast";  ///< fast | lockstep | realtime
+  LockstepConfig lockstep;
+  RealtimeConfig realtime;
   std::vector<std::string> allow_warnings;
   std::vector<DeviceConfig> devices;
   ControllerConfig controller;

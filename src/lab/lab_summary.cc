@@ -1,5 +1,7 @@
 // summary.json: a run's verdict, checks, warnings, versions and timings.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <string>
 
 #include <Eigen/Core>
@@ -12,6 +14,26 @@
 #endif
 
 namespace vlab::lab {
+
+namespace {
+
+// p-th percentile (0..100) of a sample, nearest rank; NaN for none
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(v.size())));
+  return v[rank == 0 ? 0 : std::min(rank, v.size()) - 1];
+}
+
+nlohmann::json Distribution(const std::vector<double>& v) {
+  auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); };
+  return {{"count", v.size()},
+          {"p50", number(Percentile(v, 50))},
+          {"p99", number(Percentile(v, 99))},
+          {"max", number(v.empty() ? std::nan("") : *std::max_element(v.begin(), v.end()))}};
+}
+
+}  // namespace
 
 nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult& r) {
   using nlohmann::json;
@@ -32,6 +54,24 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                         {"message", w.message}, {"allowed", w.allowed}});
   }
   const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
+  json clock = {{"name", r.clock}, {"periods", r.clock_stats.periods}};
+  if (r.clock == "realtime") {
+    clock["missed_deadlines"] = r.clock_stats.missed_deadlines;
+    clock["missed_fraction"] = r.clock_stats.periods ? static_cast<double>(r.clock_stats.missed_deadlines) /
+                                                           static_cast<double>(r.clock_stats.periods)
+                                                     : 0.0;
+    clock["lateness_s"] = Distribution(r.clock_stats.lateness_s);
+  }
+  if (r.clock == "lockstep") clock["timeouts"] = r.clock_stats.timeouts;
+  json served = json::array();
+  for (const auto& d : r.served) {
+    const auto& c = d.counters;
+    served.push_back({{"name", d.name}, {"kind", d.kind}, {"address", d.address}, {"port", d.port},
+                      {"received", c.received}, {"accepted", c.accepted}, {"describes", c.describes},
+                      {"refused", c.refused}, {"refused_malformed", c.refused_malformed},
+                      {"refused_limits", c.refused_limits}, {"refused_not_owner", c.refused_not_owner},
+                      {"stale", c.stale}, {"duplicate", c.duplicate}, {"watchdog_holds", c.watchdog_holds}});
+  }
   return {
       {"scenario", sc.name},
       {"file", sc.file},
@@ -41,11 +81,13 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"exit_code", r.exit_code},
       {"failure", r.failure},
       {"seed", sc.seed},
-      {"clock", sc.clock},
+      {"clock", r.clock},
       {"duration_s", sc.duration_s},
       {"control_period_s", sc.control_period_s},
       {"timestep_s", m->opt.timestep},
       {"checks", checks},
+      {"clock_stats", clock},
+      {"bridge", {{"devices", served}, {"command_latency_s", Distribution(r.latencies_s)}}},
       {"warnings", warnings},
       {"versions",
        {{"vlab", VLAB_VERSION}, {"mujoco", MujocoVersion()}, {"compiler", __VERSION__},
