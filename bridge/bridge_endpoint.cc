@@ -115,6 +115,7 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
   }
   last_seq_ = header_.seq;
   last_command_period_ = period;
+  ever_commanded_ = true;
   has_command_ = true;
   refused_flag_ = false;
   watchdog_hold_ = false;
@@ -123,8 +124,9 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
 }
 
 bool DeviceEndpoint::BeginPeriod(long period) {
-  if (config_.kind == DeviceKind::kArm && config_.watchdog_periods > 0 && owner_ && last_seq_ >= 0 &&
-      !watchdog_hold_ && period - last_command_period_ > config_.watchdog_periods) {
+  // (whether or not the silent owner still owns the input: a released arm holds too)
+  if (config_.kind == DeviceKind::kArm && config_.watchdog_periods > 0 && ever_commanded_ && !watchdog_hold_ &&
+      period - last_command_period_ > config_.watchdog_periods) {
     watchdog_hold_ = true;
     ++counters_.watchdog_holds;
   }

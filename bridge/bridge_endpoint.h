@@ -114,6 +114,7 @@ class DeviceEndpoint {
   long owner_last_period_ = 0;
   double last_seq_ = -1;
   long last_command_period_ = 0;
+  bool ever_commanded_ = false;
   bool refused_flag_ = false;
   bool watchdog_hold_ = false;
   bool has_command_ = false;
