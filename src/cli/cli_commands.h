@@ -36,8 +36,10 @@ struct BenchArgs {
   std::string scenario;   ///< scenario whose scene and devices are measured
   double duration_s = 0;  ///< simulated seconds per measurement (0: scenario's)
   int repeat = 3;         ///< measurements per variant; the best is reported
+  double realtime_s = 30;  ///< bridge: length of the realtime run, s
 };
 int BenchCommand(const BenchArgs& args);
+int BenchBridge(const BenchArgs& args);
 
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.

@@ -46,11 +46,14 @@ int main(int argc, char** argv) {
 
   vlab::cli::BenchArgs bench;
   CLI::App* bench_cmd = app.add_subcommand("bench", "Measure performance against a baseline in the same run");
-  bench_cmd->add_option("what", bench.what, "Benchmark: physics")
+  bench_cmd->add_option("what", bench.what, "Benchmark: physics | bridge")
       ->required()
-      ->check(CLI::IsMember({"physics"}));
-  bench_cmd->add_option("--scenario", bench.scenario, "Scenario to measure (default: scenes/pa10_reach)");
-  bench_cmd->add_option("--duration", bench.duration_s, "Simulated seconds per measurement (> 0)");
+      ->check(CLI::IsMember({"physics", "bridge"}));
+  bench_cmd->add_option("--scenario", bench.scenario,
+                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge)");
+  bench_cmd->add_option("--duration", bench.duration_s,
+                        "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5)");
+  bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
   bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant, 1 to 100 (best kept)");
 
   try {
@@ -69,6 +72,9 @@ int main(int argc, char** argv) {
     if (bench_cmd->parsed() && given(bench_cmd, "--duration") && !(bench.duration_s > 0)) {
       throw CLI::ValidationError("--duration must be > 0 s");
     }
+    if (bench_cmd->parsed() && !(bench.realtime_s > 0 && bench.realtime_s <= 3600)) {
+      throw CLI::ValidationError("--realtime must be > 0 and <= 3600 s");
+    }
     if (bench_cmd->parsed() && (bench.repeat < 1 || bench.repeat > 100)) {
       throw CLI::ValidationError("--repeat must be 1 to 100");
     }
@@ -80,6 +86,6 @@ int main(int argc, char** argv) {
   if (run_cmd->parsed()) return vlab::cli::RunCommand(run);
   if (serve_cmd->parsed()) return vlab::cli::ServeCommand(serve);
   if (devices_cmd->parsed()) return vlab::cli::DevicesCommand(devices);
-  if (bench_cmd->parsed()) return vlab::cli::BenchCommand(bench);
+  if (bench_cmd->parsed()) return bench.what == "bridge" ? vlab::cli::BenchBridge(bench) : vlab::cli::BenchCommand(bench);
   return 2;
 }
