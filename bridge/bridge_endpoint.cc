@@ -83,22 +83,18 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
   }
   if (config_.kind == DeviceKind::kWrench) return refuse(&counters_.refused_malformed);  // output-only device
 
-  // one owner at a time; an owner silent for too long gives the input up
+  // one owner at a time; an owner silent for too long gives the input up. A
+  // new owner takes over with its first ACCEPTED command only.
   if (owner_ && !from_owner && period - owner_last_period_ <= config_.owner_timeout_periods) {
     return refuse(&counters_.refused_not_owner);
   }
-  if (!from_owner) {
-    owner_ = from;
-    last_seq_ = -1;
-    refused_flag_ = false;
-  }
-  owner_last_period_ = period;
-
-  if (header_.seq < last_seq_) {
+  if (from_owner) owner_last_period_ = period;  // any datagram shows the owner is alive
+  const double last_seq = from_owner ? last_seq_ : -1;
+  if (header_.seq < last_seq) {
     ++counters_.stale;
     return false;
   }
-  if (header_.seq == last_seq_) {
+  if (header_.seq == last_seq) {
     ++counters_.duplicate;
     return false;
   }
@@ -109,10 +105,14 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
     if (!CheckArmLimits(parsed_)) return refuse(&counters_.refused_limits);
     std::swap(arm_command_, parsed_);
   } else {
-    if (ParseSimCommand(header_, payload_, &sim_command_) != DecodeError::kNone) {
+    SimCommandMsg parsed;
+    if (ParseSimCommand(header_, payload_, &parsed) != DecodeError::kNone) {
       return refuse(&counters_.refused_malformed);
     }
+    sim_command_ = parsed;
   }
+  if (!from_owner) owner_ = from;
+  owner_last_period_ = period;
   last_seq_ = header_.seq;
   last_command_period_ = period;
   ever_commanded_ = true;
@@ -161,7 +161,9 @@ void DeviceEndpoint::Publish(const std::vector<unsigned char>& packet, UdpSocket
     // the same state with kStatusNotOwner, for everyone but the owner
     not_owner_packet_ = packet;
     unsigned char* status = not_owner_packet_.data() + kHeaderBytes;
-    PutDouble(static_cast<double>(static_cast<std::uint32_t>(GetDouble(status)) | kStatusNotOwner), status);
+    const double value = GetDouble(status);
+    const std::uint32_t bits = value >= 0 && value <= 4294967295.0 ? static_cast<std::uint32_t>(value) : 0;
+    PutDouble(static_cast<double>(bits | kStatusNotOwner), status);
   }
   for (const Subscriber& s : subscribers_) {
     const bool to_owner = owner_ && s.endpoint == *owner_;

@@ -14,9 +14,10 @@
 //     a subscriber silent for subscriber_timeout_periods is dropped (send a
 //     describe request now and then to keep a passive subscription);
 //   - a malformed datagram is refused and counted by reason; nothing else changes;
-//   - commands (arm, sim): the first sender owns the command input; others are
-//     refused (status bit kStatusNotOwner in the states they receive) until
-//     the owner has been silent for owner_timeout_periods;
+//   - commands (arm, sim): the sender of the first accepted command owns the
+//     command input; others are refused (status bit kStatusNotOwner in the
+//     states they receive) until the owner has been silent for
+//     owner_timeout_periods, after which the next accepted command takes over;
 //   - an owner's command with a seq lower than its last accepted one is stale,
 //     an equal one a duplicate: both ignored and counted;
 //   - arm commands are checked against the joint count and the position,
@@ -43,7 +44,7 @@ struct EndpointCounters {
   long received = 0;         ///< datagrams received
   long accepted = 0;         ///< commands accepted
   long describes = 0;        ///< describe requests answered
-  long refused = 0;          ///< all refusals, the sum of the next five
+  long refused = 0;          ///< all refusals: malformed + limits + not owner (stale and duplicate apart)
   long refused_malformed = 0;  ///< size, magic, version, kind, type, length, NaN/Inf, domain
   long refused_limits = 0;   ///< wrong joint count or a value beyond a limit
   long refused_not_owner = 0;  ///< commands from a non-owner

@@ -185,13 +185,13 @@ DecodeError ParseSimState(const Header& h, const std::vector<double>& p, SimStat
 DecodeError ParseSimCommand(const Header& h, const std::vector<double>& p, SimCommandMsg* m) {
   if (DecodeError e = Expect(h, DeviceKind::kSim, MessageType::kCommand); e != DecodeError::kNone) return e;
   if (h.length != 2) return DecodeError::kBadLength;
+  // check everything before writing: *m is untouched on error
   if (!IsWhole(p[0], 1, 5)) return DecodeError::kBadValue;
-  m->op = static_cast<int>(p[0]);
+  const int op = static_cast<int>(p[0]);
+  if (op == static_cast<int>(SimOp::kStep) && !IsWhole(p[1], 1, 1e9)) return DecodeError::kBadValue;
+  if (op == static_cast<int>(SimOp::kSetRealtimeFactor) && !(p[1] > 0 && p[1] <= 1000)) return DecodeError::kBadValue;
+  m->op = op;
   m->arg = p[1];
-  if (m->op == static_cast<int>(SimOp::kStep) && !IsWhole(m->arg, 1, 1e9)) return DecodeError::kBadValue;
-  if (m->op == static_cast<int>(SimOp::kSetRealtimeFactor) && !(m->arg > 0 && m->arg <= 1000)) {
-    return DecodeError::kBadValue;
-  }
   return DecodeError::kNone;
 }
 
