@@ -106,8 +106,9 @@ lab::RunResult ServeWithController(lab::Scenario scenario, const std::string& cl
   scenario.duration_s = seconds;
   scenario.control_period_s = 0.001;  // 1 kHz: one physics step per period
   const int port = bridge::UdpSocket::Bind("127.0.0.1", 0)->local_port();
+  // only the arm is served: the example controller uses nothing else
+  for (auto& d : scenario.devices) d.port = 0;
   lab::BridgeOptions options;
-  for (const auto& d : scenario.devices) options.ports[d.name] = 0;
   options.ports["pa10"] = port;
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
   // the controller runs a little longer than the lab, so every period has its answer

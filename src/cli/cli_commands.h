@@ -27,6 +27,7 @@ struct ServeArgs {
   std::string out_dir;
   double duration_s = 0;
   bool json = false;               ///< devices: print the describe JSON too
+  bool quiet = false;              ///< serve: no per-device counter lines
 };
 int ServeCommand(const ServeArgs& args);
 int DevicesCommand(const ServeArgs& args);

@@ -72,6 +72,7 @@ int ServeCommand(const ServeArgs& args) {
     };
     const lab::RunResult r = lab->Run(options);
     for (const auto& d : r.served) {
+      if (args.quiet) break;
       const auto& c = d.counters;
       std::printf("  %-8s received %ld, accepted %ld, refused %ld (malformed %ld, limits %ld, not owner %ld), "
                   "stale %ld, duplicate %ld, watchdog holds %ld\n",

@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"fast", "lockstep", "realtime"}));
   }
   serve_cmd->add_option("--out", serve.out_dir, "Output folder (default: out/<scenario name>)");
+  serve_cmd->add_flag("-q,--quiet", serve.quiet, "Only the start line and the result line");
   serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0)");
   devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
 

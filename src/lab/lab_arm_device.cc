@@ -9,6 +9,9 @@ namespace vlab::lab {
 
 namespace {
 
+// largest |q_ref - q| the servo keeps, rad (a drive's following-error window)
+constexpr double kMaxFollowingError = 0.2;
+
 [[noreturn]] void Fail(const DeviceConfig& c, const std::string& what) {
   throw InputError(c.where + ": device '" + c.name + "': " + what);
 }
@@ -155,6 +158,9 @@ void SimArm::Actuate(mjData& d, double dt) {
       q_ref_[i] = q;  // so a later switch to a servo mode starts from here
     } else {
       if (mode_ == bridge::ArmMode::kVelocity) q_ref_[i] += qd_ref_[i] * dt;
+      // following-error limit: a blocked joint (contact, limit) must not wind
+      // the reference up, or it would spring away when released
+      q_ref_[i] = std::min(std::max(q_ref_[i], q - kMaxFollowingError), q + kMaxFollowingError);
       tau = kp_[i] * (q_ref_[i] - q) + kd_[i] * (qd_ref_[i] - qd) + d.qfrc_bias[dof_adr_[i]];
     }
     if (tau > tau_max_[i] || tau < tau_min_[i]) {

@@ -15,6 +15,8 @@
 //     commanded velocity, position mode feeds forward the command's rate;
 //   - gains follow from the requested bandwidth and damping ratio and each
 //     joint's inertia H_ii at the initial pose: kp = H_ii w^2, kd = 2 zeta H_ii w;
+//   - the servo reference stays within 0.2 rad of the measured position (a
+//     following-error window: a joint blocked by contact does not wind up);
 //   - torque mode applies the commanded torque as is;
 //   - every torque is clipped to the motor's range (status bit when it is);
 //   - a command with the wrong size, a non-finite value, a position outside the

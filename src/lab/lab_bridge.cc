@@ -153,7 +153,11 @@ void LabBridge::Poll(double timeout_s) {
 
 bool LabBridge::Answered(std::int64_t k) const {
   for (const Served& d : devices_) {
-    if (d.kind == bridge::DeviceKind::kArm && d.endpoint->last_accepted_seq() < static_cast<double>(k)) return false;
+    if (d.kind != bridge::DeviceKind::kArm) continue;
+    // period 0 waits for a controller to start; later, only a controller that
+    // owns the arm is waited for (one that left was released: the arm holds)
+    if (k == 0 && !d.endpoint->has_owner()) return false;
+    if (d.endpoint->has_owner() && d.endpoint->last_accepted_seq() < static_cast<double>(k)) return false;
   }
   return true;
 }

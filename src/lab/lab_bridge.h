@@ -53,6 +53,8 @@ class LabBridge final : public CommandSource {
 
   // CommandSource
   void Poll(double timeout_s) override;
+  /// Lockstep: every served arm with an owner has a command answering k (for
+  /// k = 0, every served arm has an owner: the run waits for its controllers).
   bool Answered(std::int64_t k) const override;
 
   /// Start of period k: the watchdog, then the newest accepted command of every

@@ -45,10 +45,12 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
     do {
       ASSERT_TRUE(reader.ReadArm(&h, &s)) << "no state " << k;
     } while (restarted && h.seq < k);
+    // the restarted controller joins a lab that ran on while nobody owned the arm
+    if (restarted && h.seq > k) k = static_cast<long>(h.seq);
     ASSERT_EQ(h.seq, k) << "states arrive in order, one per period";
     if (k == 31) saw_refused = Has(s.status, bridge::kStatusRefused);
     if (k >= 64 && k <= 70) saw_watchdog = saw_watchdog || Has(s.status, bridge::kStatusWatchdog);
-    if (k == 75) watchdog_cleared = !Has(s.status, bridge::kStatusWatchdog);
+    if (k >= 80 && k < 200 && saw_watchdog && !Has(s.status, bridge::kStatusWatchdog)) watchdog_cleared = true;
     if (restarted && k > 215) restarted_accepted = restarted_accepted || s.qd[0] > 0.05;
 
     if (k == 20) {  // malformed datagrams, then out-of-limit commands, then the valid one
@@ -81,7 +83,9 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
       peer->Command(k, 2, v);
       peer->Command(45, 2, v);  // stale (reordered)
     } else if (k >= 60 && k < 70) {
-      // silence: lockstep timeouts, the owner is released, the watchdog holds
+      // silence: three lockstep timeouts, the silent owner is released, the
+      // watchdog holds the arm, and the lab runs on without waiting until a
+      // controller owns the arm again
     } else if (k >= 100 && k < 110) {
       peer->Command(k, 2, v);
       second.Command(k, 2, {-0.1, 0, 0, 0, 0, 0, 0});  // not the owner: refused
@@ -118,7 +122,9 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
   EXPECT_EQ(arm.at("stale").get<long>(), 1);
   EXPECT_GE(arm.at("refused_not_owner").get<long>(), 10);
   EXPECT_GE(arm.at("watchdog_holds").get<long>(), 1);
-  EXPECT_GE(summary.at("clock_stats").at("timeouts").get<long>(), 11);
+  // at least 1 (refused command at k = 30) + 3 (silence, then released) + 3 (the dead
+  // controller, then released); a controller catching up after a free run may add some
+  EXPECT_GE(summary.at("clock_stats").at("timeouts").get<long>(), 7);
 }
 
 }  // namespace
