@@ -70,12 +70,14 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
     return false;
   };
   DecodeError e = DecodePacket(data, size, &header_, &payload_);
-  if (e == DecodeError::kNone && header_.kind != static_cast<int>(config_.kind)) e = DecodeError::kBadKind;
+  // a describe request is answered whatever kind it names: tools discover with it
+  const bool describe = e == DecodeError::kNone && header_.type == static_cast<int>(MessageType::kDescribe);
+  if (e == DecodeError::kNone && !describe && header_.kind != static_cast<int>(config_.kind)) e = DecodeError::kBadKind;
   if (e == DecodeError::kNone && header_.type == static_cast<int>(MessageType::kState)) e = DecodeError::kBadType;
   if (e != DecodeError::kNone) return refuse(&counters_.refused_malformed);
   Subscribe(from, period);
 
-  if (header_.type == static_cast<int>(MessageType::kDescribe)) {
+  if (describe) {
     ++counters_.describes;
     socket.SendTo(reinterpret_cast<const unsigned char*>(config_.describe_json.data()),
                   config_.describe_json.size(), from);

@@ -23,9 +23,12 @@
 //   - arm commands are checked against the joint count and the position,
 //     velocity and torque limits; a refused command sets kStatusRefused and
 //     leaves the previous command in force;
-//   - watchdog: an arm whose owner sent no accepted command for
-//     watchdog_periods consecutive periods holds its position (kStatusWatchdog)
-//     until the next accepted command.
+//   - watchdog: an arm that received no accepted command for more than
+//     watchdog_periods consecutive periods (3: hold at the start of the 4th,
+//     like the PA10's servo link after 3 missed cycles) holds its position
+//     (kStatusWatchdog) until the next accepted command;
+//   - every subscriber gets the same state; the owner's status bits (refused,
+//     watchdog) are in it, and non-owners also get kStatusNotOwner.
 // Never throws and never blocks in Handle, BeginPeriod or Publish.
 #pragma once
 

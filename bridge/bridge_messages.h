@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include "bridge/bridge_protocol.h"
+
 namespace vlab::bridge {
 
 /// Command mode of an arm device.
@@ -20,12 +22,12 @@ enum class ArmMode : int {
   kTorque = 3,    ///< value = joint torques, N·m (no gravity compensation added)
 };
 
-/// Status bits of an arm device.
+/// Status bits of an arm device: the wire's bits (bridge_protocol.h), one set.
 enum ArmStatus : std::uint32_t {
-  kArmHolding = 1u << 0,          ///< no command yet, or watchdog hold
-  kArmCommandRefused = 1u << 1,   ///< the last command was refused (NaN, limits, size)
-  kArmTorqueSaturated = 1u << 2,  ///< a joint torque hit its actuator limit this period
-  kArmAtJointLimit = 1u << 3,     ///< a joint is at or beyond its position limit
+  kArmHolding = kStatusHolding,            ///< no command yet, watchdog hold, or hold mode
+  kArmCommandRefused = kStatusRefused,     ///< the last command was refused (NaN, limits, size)
+  kArmTorqueSaturated = kStatusSaturated,  ///< a joint torque hit its actuator limit this period
+  kArmAtJointLimit = kStatusAtLimit,       ///< a joint is at or beyond its position limit
 };
 
 /// Output of an arm device, sampled at the end of a control period.

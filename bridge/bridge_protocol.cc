@@ -23,16 +23,6 @@ namespace {
 
 bool IsWhole(double v, double lo, double hi) { return v >= lo && v <= hi && v == std::floor(v); }
 
-void Encode(DeviceKind kind, MessageType type, double seq, double time, const std::vector<double>& payload,
-            std::vector<unsigned char>* out) {
-  Header h;
-  h.kind = static_cast<int>(kind);
-  h.type = static_cast<int>(type);
-  h.seq = seq;
-  h.time = time;
-  h.length = static_cast<int>(payload.size());
-  EncodePacket(h, payload.data(), h.length, out);
-}
 
 DecodeError Expect(const Header& h, DeviceKind kind, MessageType type) {
   if (h.kind != static_cast<int>(kind)) return DecodeError::kBadKind;
@@ -95,44 +85,72 @@ DecodeError DecodePacket(const unsigned char* data, std::size_t size, Header* h,
   return DecodeError::kNone;
 }
 
+namespace {
+
+// writes a packet value by value into `out` (sized once; no temporary payload)
+class PacketWriter {
+ public:
+  PacketWriter(DeviceKind kind, MessageType type, double seq, double time, std::size_t count,
+               std::vector<unsigned char>* out)
+      : out_(out) {
+    out->resize((kHeaderValues + count) * sizeof(double));
+    for (double v : {kMagic, static_cast<double>(kProtocolVersion), static_cast<double>(kind),
+                     static_cast<double>(type), seq, time, static_cast<double>(count)}) {
+      Put(v);
+    }
+  }
+  void Put(double v) {
+    PutDouble(v, out_->data() + at_);
+    at_ += sizeof(double);
+  }
+  void Put(const std::vector<double>& values) {
+    for (double v : values) Put(v);
+  }
+
+ private:
+  std::vector<unsigned char>* out_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
 void EncodeArmState(double seq, double time, const ArmStateMsg& m, std::vector<unsigned char>* out) {
-  std::vector<double> p;
-  p.reserve(1 + 3 * m.q.size());
-  p.push_back(static_cast<double>(m.status));
-  p.insert(p.end(), m.q.begin(), m.q.end());
-  p.insert(p.end(), m.qd.begin(), m.qd.end());
-  p.insert(p.end(), m.tau.begin(), m.tau.end());
-  Encode(DeviceKind::kArm, MessageType::kState, seq, time, p, out);
+  PacketWriter w(DeviceKind::kArm, MessageType::kState, seq, time, 1 + m.q.size() + m.qd.size() + m.tau.size(), out);
+  w.Put(static_cast<double>(m.status));
+  w.Put(m.q);
+  w.Put(m.qd);
+  w.Put(m.tau);
 }
 
 void EncodeArmCommand(double seq, double time, const ArmCommandMsg& m, std::vector<unsigned char>* out) {
-  std::vector<double> p;
-  p.reserve(1 + m.value.size());
-  p.push_back(m.mode);
-  p.insert(p.end(), m.value.begin(), m.value.end());
-  Encode(DeviceKind::kArm, MessageType::kCommand, seq, time, p, out);
+  PacketWriter w(DeviceKind::kArm, MessageType::kCommand, seq, time, 1 + m.value.size(), out);
+  w.Put(m.mode);
+  w.Put(m.value);
 }
 
 void EncodeWrenchState(double seq, double time, const WrenchStateMsg& m, std::vector<unsigned char>* out) {
-  std::vector<double> p(m.wrench, m.wrench + 6);
-  p.push_back(m.filter);
-  p.push_back(m.saturated ? 1.0 : 0.0);
-  Encode(DeviceKind::kWrench, MessageType::kState, seq, time, p, out);
+  PacketWriter w(DeviceKind::kWrench, MessageType::kState, seq, time, 8, out);
+  for (double v : m.wrench) w.Put(v);
+  w.Put(m.filter);
+  w.Put(m.saturated ? 1.0 : 0.0);
 }
 
 void EncodeSimState(double seq, double time, const SimStateMsg& m, std::vector<unsigned char>* out) {
-  const std::vector<double> p = {m.sim_time,         static_cast<double>(m.mode), static_cast<double>(m.clock),
-                                 m.periods,          m.refused_packets,           m.missed_deadlines,
-                                 m.realtime_factor,  m.max_lateness};
-  Encode(DeviceKind::kSim, MessageType::kState, seq, time, p, out);
+  PacketWriter w(DeviceKind::kSim, MessageType::kState, seq, time, 8, out);
+  for (double v : {m.sim_time, static_cast<double>(m.mode), static_cast<double>(m.clock), m.periods, m.refused_packets,
+                   m.missed_deadlines, m.realtime_factor, m.max_lateness}) {
+    w.Put(v);
+  }
 }
 
 void EncodeSimCommand(double seq, double time, const SimCommandMsg& m, std::vector<unsigned char>* out) {
-  Encode(DeviceKind::kSim, MessageType::kCommand, seq, time, {static_cast<double>(m.op), m.arg}, out);
+  PacketWriter w(DeviceKind::kSim, MessageType::kCommand, seq, time, 2, out);
+  w.Put(m.op);
+  w.Put(m.arg);
 }
 
 void EncodeDescribeRequest(DeviceKind kind, std::vector<unsigned char>* out) {
-  Encode(kind, MessageType::kDescribe, 0, 0, {}, out);
+  PacketWriter w(kind, MessageType::kDescribe, 0, 0, 0, out);
 }
 
 DecodeError ParseArmState(const Header& h, const std::vector<double>& p, int joints, ArmStateMsg* m) {

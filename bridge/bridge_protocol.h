@@ -136,6 +136,8 @@ struct SimCommandMsg {
   double arg = 0;
 };
 
+/// Typed encoders: write into `out`, resized; no allocation once `out` has the
+/// capacity of the packet.
 void EncodeArmState(double seq, double time, const ArmStateMsg& m, std::vector<unsigned char>* out);
 void EncodeArmCommand(double seq, double time, const ArmCommandMsg& m, std::vector<unsigned char>* out);
 void EncodeWrenchState(double seq, double time, const WrenchStateMsg& m, std::vector<unsigned char>* out);

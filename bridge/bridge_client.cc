@@ -1,0 +1,393 @@
+#include "bridge/bridge_client.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <ctime>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+#include <boost/asio/ip/udp.hpp>
+
+namespace vlab::bridge {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
+constexpr double kDescribeRetry_s = 0.25;     // resend a lost describe request this often
+constexpr double kMaxSeq = 9007199254740992.0;  // 2^53: the largest whole seq a double holds exactly
+
+std::string Number(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+std::string Seconds(double s) { return Number(s) + " s"; }
+
+Clock::time_point After(Clock::time_point t, double s) {
+  return t + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s > 0 ? s : 0));
+}
+
+// numeric address first, then a host name lookup (IPv4 preferred)
+Endpoint Resolve(const std::string& address, int port) {
+  if (port < 1 || port > 65535) throw NetworkError("port " + std::to_string(port) + " out of range 1..65535");
+  try {
+    return UdpSocket::MakeEndpoint(address, port);
+  } catch (const NetworkError&) {
+  }
+  // a host name: letters, digits, '-' and '.', not all digits (no DNS query for "300.1.2.3")
+  const bool name_chars = !address.empty() && std::all_of(address.begin(), address.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.';
+  });
+  const bool numeric = std::all_of(address.begin(), address.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c)) || c == '.';
+  });
+  if (!name_chars || numeric) throw NetworkError("address '" + address + "' is neither an IP address nor a host name");
+  boost::asio::io_context io;
+  boost::asio::ip::udp::resolver resolver(io);
+  boost::system::error_code ec;
+  const auto results = resolver.resolve(address, std::to_string(port), ec);
+  if (ec || results.empty()) {
+    throw NetworkError("address '" + address + "': " + (ec ? ec.message() : std::string("no such host")));
+  }
+  for (const auto& r : results) {
+    if (r.endpoint().address().is_v4()) return r.endpoint();
+  }
+  return results.begin()->endpoint();
+}
+
+// a json array of numbers with `n` entries, or empty; throws ProtocolError
+std::vector<double> Limits(const nlohmann::json& limits, const char* field, std::size_t n, const std::string& label) {
+  if (!limits.is_object() || !limits.contains(field)) return {};
+  const nlohmann::json& a = limits[field];
+  const bool ok = a.is_array() && (a.empty() || a.size() == n) &&
+                  std::all_of(a.begin(), a.end(), [](const nlohmann::json& v) { return v.is_number(); });
+  if (!ok) {
+    throw ProtocolError(label + ": describe field limits." + field + " is not an array of " + std::to_string(n) +
+                        " numbers");
+  }
+  return a.get<std::vector<double>>();
+}
+
+}  // namespace
+
+// ---- DeviceClient ---------------------------------------------------------------
+
+DeviceClient::DeviceClient(DeviceClient&&) noexcept = default;
+DeviceClient& DeviceClient::operator=(DeviceClient&&) noexcept = default;
+DeviceClient::~DeviceClient() = default;
+
+DeviceClient::DeviceClient(DeviceKind kind, const std::string& address, int port, double timeout_s,
+                           const std::string& bind_address)
+    : kind_(kind), device_(Resolve(address, port)), start_(Clock::now()), buffer_(kBufferBytes) {
+  payload_.reserve(kMaxPacketValues);
+  // an IPv6 device needs an IPv6 socket
+  const bool any_v4 = bind_address == "0.0.0.0";
+  socket_ = UdpSocket::Bind(any_v4 && device_.address().is_v6() ? "::" : bind_address, 0);
+  EncodeDescribeRequest(kind_, &request_);
+
+  CheckDescribe(ReceiveDescribe(timeout_s));
+}
+
+long DeviceClient::ReceiveDescribe(double timeout_s) {
+  // the reply is the first datagram starting with '{'; states are skipped; a
+  // lost request is sent again
+  const Clock::time_point deadline = After(start_, timeout_s);
+  Clock::time_point resend = start_;
+  for (;;) {
+    const Clock::time_point now = Clock::now();
+    if (now >= resend) {
+      if (!Send(request_)) throw NetworkError(Label() + ": cannot send the describe request");
+      resend = After(now, kDescribeRetry_s);
+    }
+    long size = 0;
+    if (!ReceiveFromDevice(std::min(deadline, resend), &size)) {
+      if (Clock::now() < deadline) continue;
+      throw TimeoutError(Label() + ": no describe reply within " + Seconds(timeout_s) +
+                         " (is a device of this kind serving that address and port?)");
+    }
+    if (size > 0 && buffer_[0] == '{') return size;
+    AcceptState(size, false);  // throws on anything but a state of this kind
+  }
+}
+
+void DeviceClient::CheckDescribe(long size) {
+  try {
+    describe_ = nlohmann::json::parse(buffer_.data(), buffer_.data() + size);
+  } catch (const nlohmann::json::exception& e) {
+    throw ProtocolError(Label() + ": describe reply is not valid JSON: " + e.what());
+  }
+  if (!describe_.is_object()) throw ProtocolError(Label() + ": describe reply is not a JSON object");
+  const nlohmann::json version = describe_.value("protocol", nlohmann::json());
+  if (!version.is_number()) throw ProtocolError(Label() + ": describe reply has no numeric \"protocol\"");
+  if (version.get<double>() != kProtocolVersion) {
+    throw VersionMismatch(Label() + ": the device speaks protocol version " + version.dump() +
+                          ", this client speaks version " + std::to_string(kProtocolVersion));
+  }
+  const std::string want = KindName(static_cast<int>(kind_));
+  const nlohmann::json kind = describe_.value("kind", nlohmann::json());
+  if (!kind.is_string() || kind.get<std::string>() != want) {
+    throw ProtocolError(Label() + ": the device is of kind " + kind.dump() + ", not \"" + want + "\"");
+  }
+  const nlohmann::json name = describe_.value("name", nlohmann::json());
+  if (name.is_string()) name_ = name.get<std::string>();
+}
+
+std::string DeviceClient::Label() const {
+  std::string label = KindName(static_cast<int>(kind_));
+  if (!name_.empty()) label += " '" + name_ + "'";
+  return label + " at " + EndpointText(device_);
+}
+
+int DeviceClient::local_port() const { return socket_->local_port(); }
+
+bool DeviceClient::KeepAlive() { return Send(request_); }
+
+bool DeviceClient::Send(const std::vector<unsigned char>& packet) {
+  return socket_->SendTo(packet.data(), packet.size(), device_);
+}
+
+double DeviceClient::ClientTime() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
+void DeviceClient::CheckSeq(std::int64_t seq) {
+  if (seq < 0 || static_cast<double>(seq) > kMaxSeq) {
+    throw std::invalid_argument("command seq " + std::to_string(seq) + " out of range 0..2^53");
+  }
+}
+
+bool DeviceClient::ReceiveFromDevice(Clock::time_point deadline, long* size) {
+  for (;;) {
+    const double left_s = std::chrono::duration<double>(deadline - Clock::now()).count();
+    Endpoint from;
+    const long n = socket_->Receive(buffer_.data(), buffer_.size(), &from, left_s > 0 ? left_s : 0);
+    if (n < 0) return false;
+    // a multi-homed device may answer from another address, never from another port
+    if (from.port() != device_.port()) {
+      ++skipped_;
+      continue;
+    }
+    *size = n;
+    return true;
+  }
+}
+
+bool DeviceClient::AcceptState(long size, bool parse) {
+  if (size > 0 && buffer_[0] == '{') {  // a describe reply (keep-alive)
+    ++skipped_;
+    return false;
+  }
+  Header header;
+  DecodeError e = DecodePacket(buffer_.data(), static_cast<std::size_t>(size), &header, &payload_);
+  if (e == DecodeError::kBadVersion) {
+    throw VersionMismatch(Label() + ": the device sent a packet of protocol version " +
+                          Number(GetDouble(buffer_.data() + 8)) + ", this client speaks version " +
+                          std::to_string(kProtocolVersion));
+  }
+  if (e == DecodeError::kNone && header.kind != static_cast<int>(kind_)) e = DecodeError::kBadKind;
+  if (e == DecodeError::kNone && header.type != static_cast<int>(MessageType::kState)) e = DecodeError::kBadType;
+  // (not while connecting: the layout, e.g. the joint count, is not known yet)
+  if (e == DecodeError::kNone && parse) e = ParseState(header, payload_);
+  if (e != DecodeError::kNone) {
+    throw ProtocolError(Label() + ": malformed state datagram (" + std::to_string(size) + " bytes): " +
+                        DecodeErrorName(e));
+  }
+  header_ = header;
+  return true;
+}
+
+const Header& DeviceClient::ReceiveState(double timeout_s, bool latest) {
+  const Clock::time_point deadline = After(Clock::now(), timeout_s);
+  for (;;) {
+    long size = 0;
+    if (!ReceiveFromDevice(deadline, &size)) throw TimeoutError(Label() + ": no state within " + Seconds(timeout_s));
+    if (AcceptState(size, true)) break;
+  }
+  // drain what is already queued: the newest state wins
+  for (long size = 0; latest && ReceiveFromDevice(Clock::now(), &size);) AcceptState(size, true);
+  return header_;
+}
+
+// ---- Arm --------------------------------------------------------------------------
+
+Arm::Arm(const std::string& address, int port, double timeout_s, const std::string& bind_address)
+    : DeviceClient(DeviceKind::kArm, address, port, timeout_s, bind_address) {
+  const nlohmann::json& d = describe();
+  const nlohmann::json joints = d.value("joints", nlohmann::json());
+  const bool ok = joints.is_array() && !joints.empty() &&
+                  std::all_of(joints.begin(), joints.end(), [](const nlohmann::json& j) { return j.is_string(); });
+  if (!ok) throw ProtocolError(Label() + ": describe reply has no \"joints\" array of names");
+  joint_names_ = joints.get<std::vector<std::string>>();
+  const std::size_t n = joint_names_.size();
+  const nlohmann::json limits = d.value("limits", nlohmann::json::object());
+  position_min_ = Limits(limits, "position_min", n, Label());
+  position_max_ = Limits(limits, "position_max", n, Label());
+  velocity_max_ = Limits(limits, "velocity_max", n, Label());
+  torque_max_ = Limits(limits, "torque_max", n, Label());
+  command_payload_.resize(1 + n);
+}
+
+Arm Arm::Connect(const std::string& address, int port, double timeout_s, const std::string& bind_address) {
+  return Arm(address, port, timeout_s, bind_address);
+}
+
+DecodeError Arm::ParseState(const Header& header, const std::vector<double>& payload) {
+  return ParseArmState(header, payload, joints(), &message_);
+}
+
+void Arm::CopyState(const Header& header, State* state) const {
+  const int n = joints();
+  state->seq = static_cast<std::int64_t>(header.seq);
+  state->time = header.time;
+  state->status = message_.status;
+  state->q = Eigen::Map<const Eigen::VectorXd>(message_.q.data(), n);
+  state->qd = Eigen::Map<const Eigen::VectorXd>(message_.qd.data(), n);
+  state->tau = Eigen::Map<const Eigen::VectorXd>(message_.tau.data(), n);
+}
+
+Arm::State Arm::Read(double timeout_s) {
+  State state;
+  Read(timeout_s, &state);
+  return state;
+}
+
+void Arm::Read(double timeout_s, State* state) { CopyState(ReceiveState(timeout_s, false), state); }
+
+Arm::State Arm::ReadLatest(double timeout_s) {
+  State state;
+  ReadLatest(timeout_s, &state);
+  return state;
+}
+
+void Arm::ReadLatest(double timeout_s, State* state) { CopyState(ReceiveState(timeout_s, true), state); }
+
+bool Arm::Write(ArmMode mode, const Eigen::VectorXd& values, std::int64_t seq) {
+  const int n = joints();
+  const bool hold = mode == ArmMode::kHold;
+  if (!(hold && values.size() == 0) && values.size() != n) {
+    throw std::invalid_argument(Label() + ": command has " + std::to_string(values.size()) + " values, the arm has " +
+                                std::to_string(n) + " joints");
+  }
+  if (!values.allFinite()) throw std::invalid_argument(Label() + ": command has a non-finite value");
+  CheckSeq(seq);
+  command_payload_[0] = static_cast<double>(mode);
+  for (int i = 0; i < n; ++i) command_payload_[1 + i] = values.size() == 0 ? 0.0 : values[i];
+  Header header;
+  header.kind = static_cast<int>(DeviceKind::kArm);
+  header.type = static_cast<int>(MessageType::kCommand);
+  header.seq = static_cast<double>(seq);
+  header.time = ClientTime();
+  EncodePacket(header, command_payload_.data(), 1 + n, &packet_);
+  return Send(packet_);
+}
+
+// ---- Wrench -----------------------------------------------------------------------
+
+Wrench::Wrench(const std::string& address, int port, double timeout_s, const std::string& bind_address)
+    : DeviceClient(DeviceKind::kWrench, address, port, timeout_s, bind_address) {}
+
+Wrench Wrench::Connect(const std::string& address, int port, double timeout_s, const std::string& bind_address) {
+  return Wrench(address, port, timeout_s, bind_address);
+}
+
+DecodeError Wrench::ParseState(const Header& header, const std::vector<double>& payload) {
+  return ParseWrenchState(header, payload, &message_);
+}
+
+Wrench::State Wrench::Copy(const Header& header) const {
+  State state;
+  state.seq = static_cast<std::int64_t>(header.seq);
+  state.time = header.time;
+  for (int i = 0; i < 6; ++i) state.wrench[i] = message_.wrench[i];
+  state.filter = message_.filter;
+  state.saturated = message_.saturated;
+  return state;
+}
+
+Wrench::State Wrench::Read(double timeout_s) { return Copy(ReceiveState(timeout_s, false)); }
+Wrench::State Wrench::ReadLatest(double timeout_s) { return Copy(ReceiveState(timeout_s, true)); }
+
+// ---- Sim --------------------------------------------------------------------------
+
+Sim::Sim(const std::string& address, int port, double timeout_s, const std::string& bind_address)
+    : DeviceClient(DeviceKind::kSim, address, port, timeout_s, bind_address) {}
+
+Sim Sim::Connect(const std::string& address, int port, double timeout_s, const std::string& bind_address) {
+  return Sim(address, port, timeout_s, bind_address);
+}
+
+DecodeError Sim::ParseState(const Header& header, const std::vector<double>& payload) {
+  return ParseSimState(header, payload, &message_);
+}
+
+Sim::State Sim::Copy(const Header& header) const {
+  State state;
+  static_cast<SimStateMsg&>(state) = message_;
+  state.seq = static_cast<std::int64_t>(header.seq);
+  state.time = header.time;
+  return state;
+}
+
+Sim::State Sim::Read(double timeout_s) { return Copy(ReceiveState(timeout_s, false)); }
+Sim::State Sim::ReadLatest(double timeout_s) { return Copy(ReceiveState(timeout_s, true)); }
+
+bool Sim::Write(SimOp op, double arg, std::int64_t seq) {
+  if (!std::isfinite(arg)) throw std::invalid_argument(Label() + ": sim command arg is not finite");
+  CheckSeq(seq);
+  EncodeSimCommand(static_cast<double>(seq), ClientTime(), {static_cast<int>(op), arg}, &packet_);
+  return Send(packet_);
+}
+
+// ---- FixedRateLoop ------------------------------------------------------------------
+
+namespace {
+std::int64_t MonotonicNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+}  // namespace
+
+FixedRateLoop::FixedRateLoop(double rate_hz) : rate_hz_(rate_hz) {
+  if (!(rate_hz > 0 && rate_hz <= 1e6)) {
+    throw std::invalid_argument("FixedRateLoop: rate " + std::to_string(rate_hz) + " Hz out of range (0, 1e6]");
+  }
+  period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / rate_hz));
+  Reset();
+}
+
+void FixedRateLoop::Reset() {
+  start_ns_ = MonotonicNs();
+  k_ = 0;
+}
+
+std::int64_t FixedRateLoop::Deadline(std::int64_t k) const {
+  // from k, never accumulated: no drift
+  return start_ns_ + static_cast<std::int64_t>(std::llround(static_cast<long double>(k) * 1e9L / rate_hz_));
+}
+
+bool FixedRateLoop::Wait() {
+  ++iterations_;
+  ++k_;
+  const std::int64_t now = MonotonicNs();
+  const std::int64_t deadline = Deadline(k_);
+  if (deadline <= now) {
+    // late: skip to the last deadline passed, so the next Wait aims at one ahead
+    ++overruns_;
+    const auto passed = static_cast<std::int64_t>(static_cast<long double>(now - start_ns_) * rate_hz_ / 1e9L);
+    k_ = std::max(k_, passed);
+    while (Deadline(k_ + 1) <= now) ++k_;
+    return false;
+  }
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(deadline / 1000000000);
+  ts.tv_nsec = static_cast<long>(deadline % 1000000000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+  return true;
+}
+
+}  // namespace vlab::bridge

@@ -1,0 +1,260 @@
+// The C++ client of the vlab wire protocol (docs/protocol.md): typed handles
+// for the devices an external controller talks to, and a fixed-rate loop.
+//
+//   Arm    input  command [mode, v_1..v_n]     output state [status, q, qd, tau]
+//   Wrench input  none                         output state [F (N), M (N m), filter, saturated]
+//   Sim    input  command [op, arg]            output state [sim_time, mode, clock, ...]
+//
+// Connecting sends a describe request, which also subscribes the client: from
+// then on the device sends it one state per control period. A controller's
+// loop is Read (or ReadLatest) -> compute -> Write(..., seq = state.seq); the
+// seq of a command must be the seq of the state it answers. Read and Connect
+// block up to their timeout; Write never blocks.
+//
+// Threading: a handle is not thread-safe; use one from one thread at a time.
+// Errors (bridge_errors.h): NetworkError, ProtocolError, VersionMismatch,
+// TimeoutError; std::invalid_argument for a caller's own mistake (wrong
+// number of values, non-finite values, negative seq).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "bridge/bridge_errors.h"
+#include "bridge/bridge_messages.h"
+#include "bridge/bridge_protocol.h"
+#include "bridge/bridge_udp.h"
+
+namespace vlab::bridge {
+
+/// What every device handle shares: its socket, the describe reply and the
+/// reception of states. Movable, not copyable; a moved-from handle may only be
+/// destroyed or assigned to.
+class DeviceClient {
+ public:
+  DeviceClient(DeviceClient&&) noexcept;
+  DeviceClient& operator=(DeviceClient&&) noexcept;
+  virtual ~DeviceClient();
+
+  /// The device's describe reply (JSON object), as received at connect.
+  const nlohmann::json& describe() const { return describe_; }
+  /// The device's name from its describe reply ("pa10"), or "" if it has none.
+  const std::string& name() const { return name_; }
+  DeviceKind kind() const { return kind_; }
+  /// The device's address and port.
+  const Endpoint& device_endpoint() const { return device_; }
+  /// "arm 'pa10' at 127.0.0.1:50010", for messages.
+  std::string Label() const;
+  /// The local UDP port the client receives states on.
+  int local_port() const;
+
+  /// Sends a describe request without waiting for the reply (Read skips
+  /// it). A passive client (one that never writes) must do this now and then
+  /// to stay subscribed: the device drops subscribers silent for a
+  /// scenario-defined time (5000 periods by default). False if the send failed.
+  bool KeepAlive();
+
+  /// Datagrams Read/ReadLatest skipped: describe replies and datagrams from
+  /// other ports than the device's.
+  long skipped() const { return skipped_; }
+
+ protected:
+  /// Opens a socket on bind_address, port 0 (any free port), sends a describe
+  /// request to address:port and waits up to timeout_s for the JSON reply,
+  /// skipping states that arrive meanwhile. Checks "protocol" and "kind".
+  DeviceClient(DeviceKind kind, const std::string& address, int port, double timeout_s,
+               const std::string& bind_address);
+
+  /// Turns one framed state of this device's kind into the derived class's
+  /// message; returns kNone or why the layout is wrong.
+  virtual DecodeError ParseState(const Header& header, const std::vector<double>& payload) = 0;
+  /// Waits up to timeout_s for the next state and parses it (ParseState);
+  /// with `latest`, then also parses whatever states are already queued, so
+  /// the newest wins. Returns its header. Throws TimeoutError, ProtocolError.
+  const Header& ReceiveState(double timeout_s, bool latest);
+  /// Encodes nothing: sends an already encoded packet. False if the send failed.
+  bool Send(const std::vector<unsigned char>& packet);
+  /// Seconds since connect on the monotonic clock: the time field of commands.
+  double ClientTime() const;
+  /// Checks a command seq (a whole number >= 0 that fits the wire); throws
+  /// std::invalid_argument.
+  static void CheckSeq(std::int64_t seq);
+
+  std::vector<unsigned char> packet_;  ///< scratch for encoding
+
+ private:
+  /// Sends describe requests until the JSON reply arrives; returns its size.
+  long ReceiveDescribe(double timeout_s);
+  /// Parses and checks the reply in the buffer ("protocol", "kind"), keeps it.
+  void CheckDescribe(long size);
+  /// Receives one datagram from the device within the deadline; false on timeout.
+  bool ReceiveFromDevice(std::chrono::steady_clock::time_point deadline, long* size);
+  /// Checks one received datagram: false for a describe reply (skipped),
+  /// true for a state of this kind (parsed when `parse`); throws
+  /// VersionMismatch or ProtocolError on anything else.
+  bool AcceptState(long size, bool parse);
+
+  DeviceKind kind_;
+  Endpoint device_;
+  std::unique_ptr<UdpSocket> socket_;
+  nlohmann::json describe_;
+  std::string name_;
+  std::chrono::steady_clock::time_point start_;
+  std::vector<unsigned char> buffer_;
+  std::vector<unsigned char> request_;
+  std::vector<double> payload_;
+  Header header_;
+  long skipped_ = 0;
+};
+
+/// A robot arm: n joints, commanded in hold, position, velocity or torque mode.
+class Arm : public DeviceClient {
+ public:
+  /// One state, sampled by the device at the end of control period `seq`.
+  struct State {
+    std::int64_t seq = 0;  ///< control period k; answer with Write(..., seq)
+    double time = 0;       ///< simulated time of the sample, s
+    std::uint32_t status = 0;  ///< ArmStatusBit flags (bridge_protocol.h)
+    Eigen::VectorXd q;     ///< joint positions, rad
+    Eigen::VectorXd qd;    ///< joint velocities, rad/s
+    Eigen::VectorXd tau;   ///< applied joint torques, N m
+  };
+
+  /// Connects to the arm device at address:port (numeric IPv4/IPv6 or a host
+  /// name; port 1..65535): describes it and subscribes to its states.
+  /// Throws NetworkError (bad address, no socket), TimeoutError (no reply
+  /// within timeout_s, s), VersionMismatch (another protocol version),
+  /// ProtocolError (not an arm, or a malformed reply).
+  static Arm Connect(const std::string& address, int port, double timeout_s = 1.0,
+                     const std::string& bind_address = "0.0.0.0");
+
+  /// Number of joints, from the describe reply.
+  int joints() const { return static_cast<int>(joint_names_.size()); }
+  const std::vector<std::string>& joint_names() const { return joint_names_; }
+  /// Limits from the describe reply, one per joint, or empty where the device
+  /// has none: positions (rad), |velocity| (rad/s), |torque| (N m).
+  const std::vector<double>& position_min() const { return position_min_; }
+  const std::vector<double>& position_max() const { return position_max_; }
+  const std::vector<double>& velocity_max() const { return velocity_max_; }
+  const std::vector<double>& torque_max() const { return torque_max_; }
+
+  /// Waits up to timeout_s (s) for the next state. Throws TimeoutError, or
+  /// ProtocolError when the device sends a malformed state.
+  State Read(double timeout_s);
+  /// The same into `state` (no allocation once its vectors have the size).
+  void Read(double timeout_s, State* state);
+  /// Waits up to timeout_s for at least one state, then drains the queue and
+  /// returns the newest: what a real-time controller wants. Throws as Read.
+  State ReadLatest(double timeout_s);
+  void ReadLatest(double timeout_s, State* state);
+
+  /// Sends a command answering the state `seq`: mode and one value per joint
+  /// (rad, rad/s or N m by mode; ignored for hold). Never blocks; false if the
+  /// datagram could not be sent. Throws std::invalid_argument on a wrong
+  /// value count, a non-finite value or a negative seq. Whether the device
+  /// accepted it shows in the status bits of the next states.
+  bool Write(ArmMode mode, const Eigen::VectorXd& values, std::int64_t seq);
+
+ private:
+  Arm(const std::string& address, int port, double timeout_s, const std::string& bind_address);
+  DecodeError ParseState(const Header& header, const std::vector<double>& payload) override;
+  void CopyState(const Header& header, State* state) const;
+
+  std::vector<std::string> joint_names_;
+  std::vector<double> position_min_, position_max_, velocity_max_, torque_max_;
+  ArmStateMsg message_;
+  std::vector<double> command_payload_;  ///< [mode, v_1..v_n], sized at connect
+};
+
+/// A force/torque sensor: output only.
+class Wrench : public DeviceClient {
+ public:
+  struct State {
+    std::int64_t seq = 0;  ///< control period k
+    double time = 0;       ///< simulated time of the sample, s
+    /// Fx Fy Fz (N), Mx My Mz (N m), sensor frame
+    Eigen::Matrix<double, 6, 1> wrench = Eigen::Matrix<double, 6, 1>::Zero();
+    int filter = 0;          ///< filter index the values come from (0 unfiltered)
+    bool saturated = false;  ///< an axis was beyond its range during the period
+  };
+
+  /// Connects to the wrench device at address:port; throws as Arm::Connect.
+  static Wrench Connect(const std::string& address, int port, double timeout_s = 1.0,
+                        const std::string& bind_address = "0.0.0.0");
+  /// Next state / newest state; throw as Arm::Read. A wrench client never
+  /// writes, so call KeepAlive() now and then to stay subscribed.
+  State Read(double timeout_s);
+  State ReadLatest(double timeout_s);
+
+ private:
+  Wrench(const std::string& address, int port, double timeout_s, const std::string& bind_address);
+  DecodeError ParseState(const Header& header, const std::vector<double>& payload) override;
+  State Copy(const Header& header) const;
+  WrenchStateMsg message_;
+};
+
+/// The simulation's own control device: pause, resume, step, reset, pace.
+class Sim : public DeviceClient {
+ public:
+  /// SimStateMsg's fields (sim_time s, mode 0 running / 1 paused, clock
+  /// ClockCode, periods, refused_packets, missed_deadlines, realtime_factor,
+  /// max_lateness s) plus the header's seq and time.
+  struct State : SimStateMsg {
+    std::int64_t seq = 0;
+    double time = 0;  ///< s
+  };
+
+  /// Connects to the sim device at address:port; throws as Arm::Connect.
+  static Sim Connect(const std::string& address, int port, double timeout_s = 1.0,
+                     const std::string& bind_address = "0.0.0.0");
+  State Read(double timeout_s);
+  State ReadLatest(double timeout_s);
+  /// Sends an operation answering state `seq` (arg: periods for kStep, the
+  /// factor for kSetRealtimeFactor, else 0). Never blocks; false if not sent.
+  /// Throws std::invalid_argument on a non-finite arg or negative seq.
+  bool Write(SimOp op, double arg, std::int64_t seq);
+
+ private:
+  Sim(const std::string& address, int port, double timeout_s, const std::string& bind_address);
+  DecodeError ParseState(const Header& header, const std::vector<double>& payload) override;
+  State Copy(const Header& header) const;
+  SimStateMsg message_;
+};
+
+/// Paces a loop at a fixed rate on CLOCK_MONOTONIC: deadline k is start +
+/// k * period, computed from k (never accumulated), so the loop never drifts.
+/// A Wait() that finds its deadline already past counts an overrun and moves
+/// on to the next deadline still ahead (the missed ones are skipped, the
+/// phase kept).
+class FixedRateLoop {
+ public:
+  /// Starts the clock now. Throws std::invalid_argument unless 0 < rate_hz <= 1e6.
+  explicit FixedRateLoop(double rate_hz);
+  /// Sleeps (clock_nanosleep, absolute) until the next deadline. Returns false
+  /// when the deadline had already passed (an overrun; no sleep).
+  bool Wait();
+  /// Restarts the clock now: deadline 1 is one period from now.
+  void Reset();
+
+  double period_s() const { return static_cast<double>(period_ns_) * 1e-9; }
+  long overruns() const { return overruns_; }
+  /// Wait() calls so far.
+  long iterations() const { return iterations_; }
+
+ private:
+  std::int64_t Deadline(std::int64_t k) const;
+  double rate_hz_;
+  std::int64_t period_ns_;
+  std::int64_t start_ns_ = 0;
+  std::int64_t k_ = 0;
+  long overruns_ = 0;
+  long iterations_ = 0;
+};
+
+}  // namespace vlab::bridge
