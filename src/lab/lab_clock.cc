@@ -60,13 +60,19 @@ class LockstepClock final : public Clock {
 // monotonic clock; the time until then is spent receiving commands.
 class RealtimeClock final : public Clock {
  public:
-  RealtimeClock(double period_s, double factor, std::int64_t periods) : period_s_(period_s), factor_(factor) {
+  RealtimeClock(double period_s, double factor, double start_timeout_s, std::int64_t periods)
+      : period_s_(period_s), factor_(factor), start_timeout_s_(start_timeout_s) {
     stats_.lateness_s.reserve(static_cast<std::size_t>(std::max<std::int64_t>(periods, 0)) + 1);
   }
   const char* name() const override { return "realtime"; }
 
   PeriodStart BeginPeriod(std::int64_t k, CommandSource* source) override {
     ++stats_.periods;
+    if (k == 0 && source) {
+      // the wall clock starts once the controllers are there (or after the start timeout)
+      const double until = WallNow() + start_timeout_s_;
+      while (!source->Answered(0) && WallNow() < until) source->Poll(until - WallNow());
+    }
     if (!anchored_) {
       anchor_ = WallNow();
       anchor_k_ = k;
@@ -104,6 +110,7 @@ class RealtimeClock final : public Clock {
   }
   double period_s_;
   double factor_;
+  double start_timeout_s_;
   bool anchored_ = false;
   double anchor_ = 0;
   std::int64_t anchor_k_ = 0;
@@ -117,7 +124,8 @@ std::unique_ptr<Clock> MakeClock(const Scenario& scenario, const std::string& mo
   if (m == "fast") return std::make_unique<FastClock>();
   if (m == "lockstep") return std::make_unique<LockstepClock>(scenario.lockstep);
   if (m == "realtime") {
-    return std::make_unique<RealtimeClock>(scenario.control_period_s, scenario.realtime.factor, periods);
+    return std::make_unique<RealtimeClock>(scenario.control_period_s, scenario.realtime.factor,
+                                           scenario.lockstep.start_timeout_s, periods);
   }
   throw InputError("unknown clock '" + m + "' (known: fast, lockstep, realtime)");
 }

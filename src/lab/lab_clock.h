@@ -8,7 +8,9 @@
 //             or when the wait times out (the run then holds or fails, as the
 //             scenario says)
 //   realtime  at the wall-clock deadline of period k (start + k T / factor);
-//             commands arriving meanwhile are received as they come
+//             commands arriving meanwhile are received as they come. The wall
+//             clock starts when period 0 is answered (the controllers are
+//             there), or after the lockstep start timeout
 // While a clock waits, it lets the command source receive (Poll), so commands
 // are timestamped when they arrive.
 #pragma once
