@@ -70,6 +70,26 @@ std::vector<double> EchoRoundTrips(int count) {
   return rtt;
 }
 
+// seconds of one bare physics step of the scenario's scene from its initial
+// state, the joint motors holding the arm against gravity (ctrl = bias force)
+double PhysicsStepSeconds(const lab::Scenario& scenario) {
+  std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
+  const mjModel* m = lab->model();
+  lab::DataPtr data = lab::MakeData(m);
+  mjData* d = data.get();
+  lab->InitialState(d);
+  const int steps = 5000;
+  const double t0 = lab::WallNow();
+  for (int i = 0; i < steps; ++i) {
+    mj_step1(m, d);
+    for (int a = 0; a < m->nu; ++a) {
+      if (m->actuator_trntype[a] == mjTRN_JOINT) d->ctrl[a] = d->qfrc_bias[m->jnt_dofadr[m->actuator_trnid[2 * a]]];
+    }
+    mj_step2(m, d);
+  }
+  return (lab::WallNow() - t0) / steps;
+}
+
 // the example controller, started as a child process
 class Controller {
  public:
@@ -140,6 +160,9 @@ int BenchBridge(const BenchArgs& args) {
                 ls.periods, ls.loop_wall_s, rate, 1e6 / rate);
     std::printf("  lockstep period / raw round trip = %.2f (goal <= 1.5) -> %s\n", (1.0 / rate) / rtt_p50,
                 (1.0 / rate) / rtt_p50 <= 1.5 ? "met" : "NOT met");
+    const double physics = PhysicsStepSeconds(scenario);
+    std::printf("  of a period: physics step %.1f us (bare mj_step, arm held), the rest %.1f us = %.2f x the raw round trip\n",
+                physics * 1e6, (1.0 / rate - physics) * 1e6, (1.0 / rate - physics) / rtt_p50);
     if (ls.exit_code != 0) std::printf("  (lockstep run: %s)\n", ls.failure.c_str());
 
     const double realtime_s = args.realtime_s;

@@ -13,6 +13,9 @@ namespace vlab::lab {
 
 namespace {
 
+// how long Poll spins before it sleeps, s
+constexpr double kSpinSeconds = 200e-6;
+
 std::vector<double> ToVector(const Eigen::VectorXd& v, bool keep_infinite = false) {
   std::vector<double> out;
   for (Eigen::Index i = 0; i < v.size(); ++i) {
@@ -147,7 +150,17 @@ void LabBridge::Receive(Served& d) {
 
 void LabBridge::Poll(double timeout_s) {
   if (devices_.empty()) return;
-  if (!bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), timeout_s)) return;
+  // spin briefly first: an answer usually comes within tens of microseconds, and
+  // a sleeping thread's wake-up costs about as much again
+  const double spin_until = WallNow() + std::min(timeout_s, kSpinSeconds);
+  do {
+    if (bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), 0.0)) {
+      for (Served& d : devices_) Receive(d);
+      return;
+    }
+  } while (WallNow() < spin_until);
+  const double left = timeout_s - kSpinSeconds;
+  if (left <= 0 || !bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), left)) return;
   for (Served& d : devices_) Receive(d);
 }
 
