@@ -8,14 +8,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_arm_device.h"
-#include "lab/lab_bridge.h"
-#include "lab/lab_clock.h"
-#include "lab/lab_controller.h"
 #include "lab/lab_errors.h"
 #include "lab/lab_log.h"
 #include "lab/lab_output.h"
-#include "lab/lab_wrench_device.h"
+#include "lab/lab_run_watch.h"
+#include "lab/lab_runner_impl.h"
 
 namespace vlab::lab {
 
@@ -38,30 +35,6 @@ std::uint64_t DeviceSeed(std::uint64_t seed, const std::string& name) {
 }
 
 }  // namespace
-
-struct Lab::Impl {
-  Scenario scenario;
-  ModelPtr model;
-  DataPtr data;
-  int steps_per_period = 1;
-  std::vector<std::unique_ptr<SimArm>> arms;
-  std::vector<std::unique_ptr<SimWrench>> wrenches;
-  std::unique_ptr<Controller> controller;
-  int controller_arm = -1;
-  std::size_t controller_columns = 0;  // log columns the controller writes
-  std::vector<std::string> columns;
-  std::vector<bridge::ArmState> arm_states;
-  std::vector<bridge::ArmCommand> arm_commands;
-
-  void ResetState();
-  void WriteRow(double time_s, std::vector<double>& row) const;
-  std::unique_ptr<LabBridge> MakeBridge(const BridgeOptions& options, const std::string& clock_name);
-  // applies the sim device's commands; true when something changed
-  bool HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left);
-  // one controller period: computed (and recorded), or replayed from a recording
-  void RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
-                     double* columns);
-};
 
 Lab::Lab(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Lab::~Lab() = default;
@@ -133,131 +106,12 @@ void Lab::InitialState(mjData* d) const {
   mj_forward(impl_->model.get(), d);
 }
 
-void Lab::Impl::ResetState() {
-  mjData* d = data.get();
-  mj_resetData(model.get(), d);
-  for (const auto& arm : arms) arm->SetInitialPositions(*d);
-  mj_forward(model.get(), d);
-  for (auto& arm : arms) arm->Start(*d, scenario.control_period_s);
-  // the servos hold from the first instant: recompute forces with their torques,
-  // so the sensors start settled on the load of an arm at rest
-  for (auto& arm : arms) arm->Actuate(*d, 0.0);
-  mj_forward(model.get(), d);
-  for (auto& w : wrenches) w->Reset(*d);
-  for (std::size_t i = 0; i < arms.size(); ++i) arms[i]->Sample(*d, d->time, &arm_states[i]);
-}
-
-void Lab::Impl::WriteRow(double time_s, std::vector<double>& row) const {
-  double* out = row.data();
-  *out++ = time_s;
-  for (const auto& arm : arms) {
-    arm->Row(*data, out);
-    out += arm->ColumnCount();
-  }
-  for (const auto& w : wrenches) {
-    w->Row(out);
-    out += w->ColumnCount();
-  }
-}
-
 namespace {
-
-// MuJoCo's warning counters, watched after every step. A divergence resets
-// mjData (its counters and time included), so the watch keeps its own.
-class WarningWatch {
- public:
-  /// Records new warnings of the step that started at t_step; true on divergence.
-  bool Update(const mjData& d, double t_step) {
-    bool diverged = false;
-    for (int w = 0; w < mjNWARNING; ++w) {
-      if (d.warning[w].number > count_[w]) {
-        if (count_[w] == 0) first_[w] = t_step;
-        count_[w] = d.warning[w].number;
-        last_info_[w] = d.warning[w].lastinfo;
-        diverged = diverged || IsDivergenceWarning(w);
-      }
-    }
-    return diverged;
-  }
-
-  /// One report per kind that occurred, with MuJoCo's text.
-  std::vector<WarningReport> Reports(const std::vector<std::string>& allowed) const {
-    std::vector<WarningReport> reports;
-    for (int w = 0; w < mjNWARNING; ++w) {
-      if (count_[w] == 0) continue;
-      WarningReport r;
-      r.name = WarningName(w);
-      r.count = count_[w];
-      r.first_time_s = first_[w];
-      r.message = mju_warningText(w, last_info_[w]);
-      r.allowed = std::find(allowed.begin(), allowed.end(), r.name) != allowed.end();
-      reports.push_back(r);
-    }
-    return reports;
-  }
-
- private:
-  int count_[mjNWARNING] = {0};
-  int last_info_[mjNWARNING] = {0};
-  double first_[mjNWARNING] = {0};
-};
-
-// The first reason a run fails, in order: divergence, a warning the scenario
-// does not allow, a failed check; "" when it passes.
-std::string Verdict(const RunResult& r, bool diverged) {
-  for (const auto& w : r.warnings) {
-    if (diverged && IsDivergenceWarning(WarningIndex(w.name))) {
-      return "diverged at t = " + FormatDouble(w.first_time_s) + " s: " + w.message;
-    }
-  }
-  for (const auto& w : r.warnings) {
-    if (!w.allowed) {
-      return "MuJoCo warning '" + w.name + "' (" + std::to_string(w.count) + "x, first at t = " +
-             FormatDouble(w.first_time_s) + " s): " + w.message;
-    }
-  }
-  for (const auto& c : r.checks) {
-    if (!c.pass) {
-      return "check '" + c.config.name + "' failed: " + c.config.reduce + "(" + c.config.signal +
-             ") = " + FormatDouble(c.value);
-    }
-  }
-  return "";
-}
 
 // Clears the MuJoCo error cleanup when a run ends, however it ends.
 struct ErrorCleanupGuard {
   ~ErrorCleanupGuard() { SetMujocoErrorCleanup(nullptr); }
 };
-
-}  // namespace
-
-void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
-                              double* columns) {
-  const int a = controller_arm;
-  const int n = arms[a]->dof();
-  const std::size_t width = 1 + n + controller_columns;
-  bridge::ArmCommand& cmd = arm_commands[a];
-  if (options.replay) {
-    // the recorded command and columns instead of the controller's work
-    if (*replay_at + width > options.replay->controller.size()) {
-      throw std::runtime_error("replay: the recording is shorter than this run");
-    }
-    const double* r = options.replay->controller.data() + *replay_at;
-    cmd.mode = static_cast<bridge::ArmMode>(static_cast<int>(r[0]));
-    cmd.value = Eigen::Map<const Eigen::VectorXd>(r + 1, n);
-    std::copy(r + 1 + n, r + width, columns);
-    *replay_at += width;
-    return;
-  }
-  controller->Update(t, arm_states[a], &cmd, columns);
-  if (options.record) {
-    std::vector<double>& rec = result->recording.controller;
-    rec.push_back(static_cast<double>(static_cast<int>(cmd.mode)));
-    for (int i = 0; i < n; ++i) rec.push_back(i < cmd.value.size() ? cmd.value[i] : 0.0);
-    rec.insert(rec.end(), columns, columns + (width - 1 - n));
-  }
-}
 
 // The sim device's state at period k.
 bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, const LabBridge* bridge) {
@@ -273,6 +127,8 @@ bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, 
   m.max_lateness = clock.stats().max_lateness_s;
   return m;
 }
+
+}  // namespace
 
 RunResult Lab::Run(const RunOptions& options) {
   Impl& s = *impl_;
@@ -420,55 +276,6 @@ RunResult Lab::Run(const RunOptions& options) {
 std::vector<ServedDevice> Lab::Describe(const BridgeOptions& options, const std::string& clock) const {
   const std::string name = clock.empty() ? impl_->scenario.clock : clock;
   return impl_->MakeBridge(options, name)->Devices();
-}
-
-std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, const std::string& clock_name) {
-  std::vector<SimArm*> arm_ptrs;
-  for (auto& a : arms) arm_ptrs.push_back(a.get());
-  std::vector<SimWrench*> wrench_ptrs;
-  for (auto& w : wrenches) wrench_ptrs.push_back(w.get());
-  std::unique_ptr<LabBridge> bridge = LabBridge::Create(scenario, options, arm_ptrs, wrench_ptrs, clock_name);
-  if (controller) {
-    for (const ServedDevice& sd : bridge->Devices()) {
-      if (sd.name == scenario.controller.arm) {
-        throw InputError(scenario.controller.where + ": controller: arm '" + sd.name +
-                         "' is served over UDP and commanded by the built-in controller: one owner at a time "
-                         "(remove the controller, or the device's port)");
-      }
-    }
-  }
-  return bridge;
-}
-
-bool Lab::Impl::HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left) {
-  bool changed = false;
-  bridge::SimCommandMsg c;
-  while (bridge.TakeSimCommand(&c)) {
-    changed = true;
-    switch (static_cast<bridge::SimOp>(c.op)) {
-      case bridge::SimOp::kReset:
-        ResetState();
-        break;
-      case bridge::SimOp::kPause:
-        *paused = true;
-        *steps_left = -1;
-        break;
-      case bridge::SimOp::kResume:
-        *paused = false;
-        *steps_left = -1;
-        clock.set_factor(clock.factor());  // realtime: pace from now, no catch-up burst
-        break;
-      case bridge::SimOp::kStep:
-        *paused = false;
-        *steps_left = static_cast<long>(c.arg);
-        clock.set_factor(clock.factor());
-        break;
-      case bridge::SimOp::kSetRealtimeFactor:
-        clock.set_factor(c.arg);
-        break;
-    }
-  }
-  return changed;
 }
 
 }  // namespace vlab::lab

@@ -1,0 +1,29 @@
+#include "lab/lab_run_watch.h"
+
+#include "lab/lab_log.h"
+#include "lab/lab_mujoco.h"
+
+namespace vlab::lab {
+
+std::string Verdict(const RunResult& r, bool diverged) {
+  for (const auto& w : r.warnings) {
+    if (diverged && IsDivergenceWarning(WarningIndex(w.name))) {
+      return "diverged at t = " + FormatDouble(w.first_time_s) + " s: " + w.message;
+    }
+  }
+  for (const auto& w : r.warnings) {
+    if (!w.allowed) {
+      return "MuJoCo warning '" + w.name + "' (" + std::to_string(w.count) + "x, first at t = " +
+             FormatDouble(w.first_time_s) + " s): " + w.message;
+    }
+  }
+  for (const auto& c : r.checks) {
+    if (!c.pass) {
+      return "check '" + c.config.name + "' failed: " + c.config.reduce + "(" + c.config.signal +
+             ") = " + FormatDouble(c.value);
+    }
+  }
+  return "";
+}
+
+}  // namespace vlab::lab

@@ -1,0 +1,112 @@
+#include "lab/lab_runner_impl.h"
+
+#include <algorithm>
+
+#include "lab/lab_errors.h"
+
+namespace vlab::lab {
+
+void Lab::Impl::ResetState() {
+  mjData* d = data.get();
+  mj_resetData(model.get(), d);
+  for (const auto& arm : arms) arm->SetInitialPositions(*d);
+  mj_forward(model.get(), d);
+  for (auto& arm : arms) arm->Start(*d, scenario.control_period_s);
+  // the servos hold from the first instant: recompute forces with their torques,
+  // so the sensors start settled on the load of an arm at rest
+  for (auto& arm : arms) arm->Actuate(*d, 0.0);
+  mj_forward(model.get(), d);
+  for (auto& w : wrenches) w->Reset(*d);
+  for (std::size_t i = 0; i < arms.size(); ++i) arms[i]->Sample(*d, d->time, &arm_states[i]);
+}
+
+void Lab::Impl::WriteRow(double time_s, std::vector<double>& row) const {
+  double* out = row.data();
+  *out++ = time_s;
+  for (const auto& arm : arms) {
+    arm->Row(*data, out);
+    out += arm->ColumnCount();
+  }
+  for (const auto& w : wrenches) {
+    w->Row(out);
+    out += w->ColumnCount();
+  }
+}
+
+void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
+                              double* columns) {
+  const int a = controller_arm;
+  const int n = arms[a]->dof();
+  const std::size_t width = 1 + n + controller_columns;
+  bridge::ArmCommand& cmd = arm_commands[a];
+  if (options.replay) {
+    // the recorded command and columns instead of the controller's work
+    if (*replay_at + width > options.replay->controller.size()) {
+      throw std::runtime_error("replay: the recording is shorter than this run");
+    }
+    const double* r = options.replay->controller.data() + *replay_at;
+    cmd.mode = static_cast<bridge::ArmMode>(static_cast<int>(r[0]));
+    cmd.value = Eigen::Map<const Eigen::VectorXd>(r + 1, n);
+    std::copy(r + 1 + n, r + width, columns);
+    *replay_at += width;
+    return;
+  }
+  controller->Update(t, arm_states[a], &cmd, columns);
+  if (options.record) {
+    std::vector<double>& rec = result->recording.controller;
+    rec.push_back(static_cast<double>(static_cast<int>(cmd.mode)));
+    for (int i = 0; i < n; ++i) rec.push_back(i < cmd.value.size() ? cmd.value[i] : 0.0);
+    rec.insert(rec.end(), columns, columns + (width - 1 - n));
+  }
+}
+
+std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, const std::string& clock_name) {
+  std::vector<SimArm*> arm_ptrs;
+  for (auto& a : arms) arm_ptrs.push_back(a.get());
+  std::vector<SimWrench*> wrench_ptrs;
+  for (auto& w : wrenches) wrench_ptrs.push_back(w.get());
+  std::unique_ptr<LabBridge> bridge = LabBridge::Create(scenario, options, arm_ptrs, wrench_ptrs, clock_name);
+  if (controller) {
+    for (const ServedDevice& sd : bridge->Devices()) {
+      if (sd.name == scenario.controller.arm) {
+        throw InputError(scenario.controller.where + ": controller: arm '" + sd.name +
+                         "' is served over UDP and commanded by the built-in controller: one owner at a time "
+                         "(remove the controller, or the device's port)");
+      }
+    }
+  }
+  return bridge;
+}
+
+bool Lab::Impl::HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left) {
+  bool changed = false;
+  bridge::SimCommandMsg c;
+  while (bridge.TakeSimCommand(&c)) {
+    changed = true;
+    switch (static_cast<bridge::SimOp>(c.op)) {
+      case bridge::SimOp::kReset:
+        ResetState();
+        break;
+      case bridge::SimOp::kPause:
+        *paused = true;
+        *steps_left = -1;
+        break;
+      case bridge::SimOp::kResume:
+        *paused = false;
+        *steps_left = -1;
+        clock.set_factor(clock.factor());  // realtime: pace from now, no catch-up burst
+        break;
+      case bridge::SimOp::kStep:
+        *paused = false;
+        *steps_left = static_cast<long>(c.arg);
+        clock.set_factor(clock.factor());
+        break;
+      case bridge::SimOp::kSetRealtimeFactor:
+        clock.set_factor(c.arg);
+        break;
+    }
+  }
+  return changed;
+}
+
+}  // namespace vlab::lab

@@ -1,0 +1,45 @@
+// The lab's private state (Lab::Impl), shared by lab_runner.cc (creation and
+// the run loop) and lab_runner_impl.cc (reset, log rows, controller periods,
+// the bridge, the sim device). Not a public header.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bridge/bridge_messages.h"
+#include "lab/lab_arm_device.h"
+#include "lab/lab_bridge.h"
+#include "lab/lab_clock.h"
+#include "lab/lab_controller.h"
+#include "lab/lab_mujoco.h"
+#include "lab/lab_runner.h"
+#include "lab/lab_wrench_device.h"
+
+namespace vlab::lab {
+
+struct Lab::Impl {
+  Scenario scenario;
+  ModelPtr model;
+  DataPtr data;
+  int steps_per_period = 1;
+  std::vector<std::unique_ptr<SimArm>> arms;
+  std::vector<std::unique_ptr<SimWrench>> wrenches;
+  std::unique_ptr<Controller> controller;
+  int controller_arm = -1;
+  std::size_t controller_columns = 0;  // log columns the controller writes
+  std::vector<std::string> columns;
+  std::vector<bridge::ArmState> arm_states;
+  std::vector<bridge::ArmCommand> arm_commands;
+
+  void ResetState();
+  void WriteRow(double time_s, std::vector<double>& row) const;
+  std::unique_ptr<LabBridge> MakeBridge(const BridgeOptions& options, const std::string& clock_name);
+  // applies the sim device's commands; true when something changed
+  bool HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left);
+  // one controller period: computed (and recorded), or replayed from a recording
+  void RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
+                     double* columns);
+};
+
+}  // namespace vlab::lab
