@@ -27,19 +27,14 @@
 #include "lab/lab_errors.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
+#include "lab/lab_stats.h"
 
 namespace vlab::cli {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const std::size_t rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(v.size())));
-  return v[std::min(std::max<std::size_t>(rank, 1), v.size()) - 1];
-}
+using lab::Percentile;
 
 // round trips (s) of `count` 200-byte datagrams to an echo thread on loopback
 std::vector<double> EchoRoundTrips(int count) {

@@ -67,6 +67,8 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     const int owner_periods = static_cast<int>(std::lround(c.arm.owner_timeout_s * control_hz));
     ec.owner_timeout_periods = std::max(1, owner_periods);
     ec.subscriber_timeout_periods = static_cast<int>(std::lround(10.0 * control_hz));
+    const bridge::DeviceDescription common{c.name, options.server + " (MuJoCo " + MujocoVersion() + ")", clock_name,
+                                           options.bind, d.socket->local_port(), control_hz};
     if (c.kind == "arm") {
       SimArm* arm = nullptr;
       for (std::size_t i = 0; i < arms.size(); ++i) {
@@ -92,8 +94,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
       desc.torque_max = ec.torque_max;
       desc.watchdog_periods = ec.watchdog_periods;
       desc.owner_timeout_s = c.arm.owner_timeout_s;
-      static_cast<bridge::DeviceDescription&>(desc) = {c.name, options.server + " (MuJoCo " + MujocoVersion() + ")",
-                                                         clock_name, options.bind, d.socket->local_port(), control_hz};
+      static_cast<bridge::DeviceDescription&>(desc) = common;
       ec.describe_json = bridge::DescribeJson(desc);
     } else if (c.kind == "wrench") {
       SimWrench* w = nullptr;
@@ -107,16 +108,14 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
       desc.filter = w->sensor().filter();
       desc.filter_cutoff_hz = desc.filter > 0 ? w->sensor().stage(desc.filter).cutoff_hz : 0.0;
       desc.sample_hz = w->sensor().sample_rate_hz();
-      static_cast<bridge::DeviceDescription&>(desc) = {c.name, options.server + " (MuJoCo " + MujocoVersion() + ")",
-                                                         clock_name, options.bind, d.socket->local_port(), control_hz};
+      static_cast<bridge::DeviceDescription&>(desc) = common;
       ec.describe_json = bridge::DescribeJson(desc);
     } else {
       d.kind = bridge::DeviceKind::kSim;
       ec.kind = d.kind;
       bridge::SimDescription desc;
       desc.devices = names;
-      static_cast<bridge::DeviceDescription&>(desc) = {c.name, options.server + " (MuJoCo " + MujocoVersion() + ")",
-                                                         clock_name, options.bind, d.socket->local_port(), control_hz};
+      static_cast<bridge::DeviceDescription&>(desc) = common;
       ec.describe_json = bridge::DescribeJson(desc);
     }
     d.endpoint = std::make_unique<bridge::DeviceEndpoint>(ec);

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_runner.h"
+#include "lab/lab_stats.h"
 
 #ifndef VLAB_VERSION
 #define VLAB_VERSION "0.0.0"
@@ -16,14 +17,6 @@
 namespace vlab::lab {
 
 namespace {
-
-// p-th percentile (0..100) of a sample, nearest rank; NaN for none
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(v.size())));
-  return v[rank == 0 ? 0 : std::min(rank, v.size()) - 1];
-}
 
 nlohmann::json Distribution(const std::vector<double>& v) {
   auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); };
