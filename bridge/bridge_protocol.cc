@@ -213,19 +213,17 @@ DecodeError ParseSimCommand(const Header& h, const std::vector<double>& p, SimCo
   return DecodeError::kNone;
 }
 
-const char* KindName(int kind) {
-  switch (kind) {
-    case 1: return "arm";
-    case 2: return "wrench";
-    case 3: return "sim";
-  }
-  return "unknown";
-}
+namespace {
+constexpr const char* kKindNames[kMaxDeviceKind + 1] = {"unknown", "arm",     "wrench", "sim",  "camera", "markers",
+                                                        "base",    "gripper", "feet",   "imu",  "point",  "yoyo"};
+}  // namespace
+
+const char* KindName(int kind) { return kind >= 1 && kind <= kMaxDeviceKind ? kKindNames[kind] : kKindNames[0]; }
 
 int KindFromName(const std::string& name) {
-  if (name == "arm") return 1;
-  if (name == "wrench") return 2;
-  if (name == "sim") return 3;
+  for (int kind = 1; kind <= kMaxDeviceKind; ++kind) {
+    if (name == kKindNames[kind]) return kind;
+  }
   return 0;
 }
 

@@ -6,7 +6,7 @@
 //   index  field         value
 //   0      magic         1447838018 (the ASCII bytes "VLAB" read as a big-endian uint32)
 //   1      version       1
-//   2      kind          device kind: 1 arm, 2 wrench, 3 sim
+//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-11: see DeviceKind)
 //   3      type          1 state (device -> client), 2 command (client -> device),
 //                        3 describe request (client -> device)
 //   4      seq           sequence number (see below)
@@ -53,7 +53,22 @@ inline constexpr std::size_t kHeaderBytes = kHeaderValues * sizeof(double);
 /// Largest control-rate datagram accepted (values), header included.
 inline constexpr int kMaxPacketValues = 1024;
 
-enum class DeviceKind : int { kArm = 1, kWrench = 2, kSim = 3 };
+/// Device kinds. 1-3 are described below; the others have their own headers
+/// and sections of docs/protocol.md (camera frames are chunked, not float64).
+enum class DeviceKind : int {
+  kArm = 1,
+  kWrench = 2,
+  kSim = 3,
+  kCamera = 4,   ///< bridge_camera.h
+  kMarkers = 5,  ///< tracked marker poses (vision)
+  kBase = 6,     ///< holonomic mobile base
+  kGripper = 7,  ///< parallel gripper
+  kFeet = 8,     ///< foot force-sensing resistors
+  kImu = 9,      ///< gyro and accelerometer
+  kPoint = 10,   ///< a commanded point (the yo-yo's hand)
+  kYoyo = 11,    ///< yo-yo state
+};
+inline constexpr int kMaxDeviceKind = 11;
 enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3 };
 
 /// Arm status bits (state payload value 0, as a whole number).

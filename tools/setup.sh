@@ -8,6 +8,7 @@ VLAB_APT_PACKAGES=(
   libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libboost-dev
   python3 clang libclang-rt-14-dev
   libgtest-dev
+  libopencv-dev libopencv-contrib-dev
 )
 
 vlab_missing_packages() {

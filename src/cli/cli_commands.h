@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
 namespace vlab::cli {
 
 struct RunArgs {
@@ -41,6 +43,18 @@ struct BenchArgs {
 };
 int BenchCommand(const BenchArgs& args);
 int BenchBridge(const BenchArgs& args);
+int BenchRender(const BenchArgs& args);
+
+/// A subcommand defined wholly in its own file: Add*Command adds it (name,
+/// help, options) to `app` and returns the function that runs it once parsed.
+/// The function validates its options itself (a bad value: one line, exit 2).
+struct Subcommand {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+Subcommand AddRenderCommand(CLI::App& app);  // cli_render.cc
+Subcommand AddCameraCommand(CLI::App& app);  // cli_camera.cc
+Subcommand AddVisionCommand(CLI::App& app);  // cli_vision.cc
 
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.

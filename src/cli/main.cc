@@ -1,6 +1,7 @@
 // vlab: a virtual robotics lab. See README.md and `vlab --help`.
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -47,15 +48,19 @@ int main(int argc, char** argv) {
 
   vlab::cli::BenchArgs bench;
   CLI::App* bench_cmd = app.add_subcommand("bench", "Measure performance against a baseline in the same run");
-  bench_cmd->add_option("what", bench.what, "Benchmark: physics | bridge")
+  bench_cmd->add_option("what", bench.what, "Benchmark: physics | bridge | render")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render"}));
   bench_cmd->add_option("--scenario", bench.scenario,
                         "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge)");
   bench_cmd->add_option("--duration", bench.duration_s,
                         "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5)");
   bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
   bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant, 1 to 100 (best kept)");
+
+  // subcommands that define themselves in their own files
+  const std::vector<vlab::cli::Subcommand> more = {vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app),
+                                                   vlab::cli::AddVisionCommand(app)};
 
   try {
     app.parse(argc, argv);
@@ -87,6 +92,13 @@ int main(int argc, char** argv) {
   if (run_cmd->parsed()) return vlab::cli::RunCommand(run);
   if (serve_cmd->parsed()) return vlab::cli::ServeCommand(serve);
   if (devices_cmd->parsed()) return vlab::cli::DevicesCommand(devices);
-  if (bench_cmd->parsed()) return bench.what == "bridge" ? vlab::cli::BenchBridge(bench) : vlab::cli::BenchCommand(bench);
+  if (bench_cmd->parsed()) {
+    if (bench.what == "bridge") return vlab::cli::BenchBridge(bench);
+    if (bench.what == "render") return vlab::cli::BenchRender(bench);
+    return vlab::cli::BenchCommand(bench);
+  }
+  for (const auto& sub : more) {
+    if (sub.app->parsed()) return sub.run();
+  }
   return 2;
 }

@@ -183,6 +183,7 @@ RunResult Lab::Run(const RunOptions& options) {
   // row 0: the initial state, with the controller's view of it
   if (s.controller) s.RunController(0.0, options, &replay_at, &result, controller_columns);
   emit_row(0.0);
+  if (options.observe) options.observe(0.0, m, d);
   publish(0);
 
   WarningWatch warnings;
@@ -238,6 +239,7 @@ RunResult Lab::Run(const RunOptions& options) {
     for (auto& w : s.wrenches) w->EndPeriod();
     for (std::size_t i = 0; i < s.arms.size(); ++i) s.arms[i]->Sample(*d, t_next, &s.arm_states[i]);
     emit_row(t_next);
+    if (options.observe) options.observe(t_next, m, d);
     ++k;
     if (steps_left > 0 && --steps_left == 0) paused = true;
     publish(k);

@@ -43,6 +43,11 @@ struct RunOptions {
   std::string clock;
   /// Called once the served devices are bound, before the first period.
   std::function<void(const std::vector<ServedDevice>&)> on_serving;
+  /// Called with the state at t = 0 and at the end of every period, after the
+  /// log row and before the states are published (renderers, image outputs,
+  /// cameras). It reads the state and must not change it: mjv_updateScene
+  /// wants a non-const mjData, nothing else may write through it.
+  std::function<void(double t, const mjModel* m, mjData* d)> observe;
 };
 
 /// What a recorded run computed.

@@ -91,11 +91,60 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
     w.noise = r.Bool("noise", w.noise);
     w.bias = r.Bool("bias", w.bias);
     w.quantization = r.Bool("quantization", w.quantization);
+  } else if (device.kind == "camera") {
+    CameraDeviceConfig& c = device.camera;
+    c.camera = r.String("camera");
+    c.width = r.Integer("width", c.width);
+    c.height = r.Integer("height", c.height);
+    if (c.width < 1 || c.width > 8192) r.Fail("width", "must be 1 to 8192 pixels");
+    if (c.height < 1 || c.height > 8192) r.Fail("height", "must be 1 to 8192 pixels");
+    c.fps = r.Number("fps", c.fps);
+    if (!(c.fps > 0 && c.fps <= 1000)) r.Fail("fps", "must be > 0 and <= 1000 Hz");
+    c.exposure_s = r.Number("exposure", c.exposure_s);
+    if (!(c.exposure_s >= 0 && c.exposure_s < 1 / c.fps)) r.Fail("exposure", "must be >= 0 s and shorter than a frame");
+    c.latency_s = r.Number("latency", c.latency_s);
+    if (!(c.latency_s >= 0 && c.latency_s <= 1)) r.Fail("latency", "must be 0 to 1 s");
+    c.distortion = r.Numbers("distortion", {});
+    if (!c.distortion.empty() && c.distortion.size() != 4) r.Fail("distortion", "expected 4 numbers: k1, k2, p1, p2");
+    c.noise = r.Number("noise", c.noise);
+    if (!(c.noise >= 0 && c.noise <= 64)) r.Fail("noise", "must be 0 to 64 grey levels");
+    c.encoding = r.String("encoding", c.encoding);
+    if (c.encoding != "jpeg" && c.encoding != "raw") r.Fail("encoding", "must be jpeg or raw");
+    c.jpeg_quality = r.Integer("jpeg_quality", c.jpeg_quality);
+    if (c.jpeg_quality < 1 || c.jpeg_quality > 100) r.Fail("jpeg_quality", "must be 1 to 100");
+    c.profile = r.String("profile", c.profile);
+    if (c.profile != "fast" && c.profile != "quality") r.Fail("profile", "must be fast or quality");
   } else if (device.kind != "sim") {
-    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim)");
+    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim, camera)");
   }
   r.Finish();
   return device;
+}
+
+ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& node, const std::string& path) {
+  MapReader r(file, node, path);
+  ImageOutputConfig o;
+  o.where = Where(file, node);
+  o.camera = r.String("camera");
+  o.every_s = r.Number("every", o.every_s);
+  if (!(o.every_s > 0)) r.Fail("every", "must be > 0 s");
+  o.width = r.Integer("width", o.width);
+  o.height = r.Integer("height", o.height);
+  if (o.width < 1 || o.width > 8192) r.Fail("width", "must be 1 to 8192 pixels");
+  if (o.height < 1 || o.height > 8192) r.Fail("height", "must be 1 to 8192 pixels");
+  o.png = r.Bool("png", o.png);
+  o.depth = r.Bool("depth", o.depth);
+  o.segmentation = r.Bool("segmentation", o.segmentation);
+  o.video = r.String("video", o.video);
+  if (!o.video.empty() && (o.video.find('/') != std::string::npos || o.video.size() < 5 ||
+                           o.video.compare(o.video.size() - 4, 4, ".mp4") != 0)) {
+    r.Fail("video", "must be a file name ending in .mp4, written in the output folder");
+  }
+  o.profile = r.String("profile", o.profile);
+  if (o.profile != "fast" && o.profile != "quality") r.Fail("profile", "must be fast or quality");
+  if (!o.png && !o.depth && !o.segmentation && o.video.empty()) r.Fail("png", "nothing to write: png, depth, segmentation and video are all off");
+  r.Finish();
+  return o;
 }
 
 ControllerConfig ReadController(MapReader r) {
@@ -251,6 +300,10 @@ Scenario LoadScenario(const std::string& path) {
   if (r.Has("controller")) s.controller = ReadController(r.Map("controller"));
   MapReader outputs = r.Map("outputs");
   s.outputs.log = outputs.Bool("log", s.outputs.log);
+  const YAML::Node images = outputs.Sequence("images");
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    s.outputs.images.push_back(ReadImageOutput(path, images[i], "outputs.images[" + std::to_string(i) + "]"));
+  }
   outputs.Finish();
   const YAML::Node checks = r.Sequence("checks");
   for (std::size_t i = 0; i < checks.size(); ++i) {

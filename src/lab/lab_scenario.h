@@ -45,13 +45,30 @@ struct WrenchDeviceConfig {
   bool quantization = true;
 };
 
+/// A simulated webcam: an MJCF camera rendered offscreen at the camera's own
+/// frame rate, through a lens and sensor model (sensors/sensor_camera.h).
+struct CameraDeviceConfig {
+  std::string camera;            ///< MJCF camera name
+  int width = 640;               ///< pixels (at most the scene's offscreen buffer)
+  int height = 480;
+  double fps = 30.0;             ///< frame rate, independent of the control rate
+  double exposure_s = 0.0;       ///< exposure time (0: instantaneous); the frame is stamped at its middle
+  double latency_s = 0.03;       ///< from the exposure stamp to delivery
+  std::vector<double> distortion;  ///< k1, k2, p1, p2 (Brown-Conrady); empty: none
+  double noise = 0.0;            ///< pixel noise standard deviation, 8-bit grey levels
+  std::string encoding = "jpeg";  ///< jpeg | raw (frames on the wire)
+  int jpeg_quality = 90;         ///< 1-100
+  std::string profile = "fast";  ///< fast | quality
+};
+
 struct DeviceConfig {
   std::string name;
-  std::string kind;  ///< "arm", "wrench" or "sim"
+  std::string kind;  ///< "arm", "wrench", "sim" or "camera"
   std::string where;  ///< "FILE:LINE" for messages about binding
   int port = 0;       ///< UDP port under `vlab serve` (0: not served)
   ArmDeviceConfig arm;
   WrenchDeviceConfig wrench;
+  CameraDeviceConfig camera;
 };
 
 struct CartesianWaypoint {
@@ -98,8 +115,23 @@ struct CheckConfig {
   std::string where;
 };
 
+/// Images of one MJCF camera written into the output folder during a run.
+struct ImageOutputConfig {
+  std::string camera;            ///< MJCF camera name
+  double every_s = 0.1;          ///< one frame every this many simulated seconds (from t = 0)
+  int width = 640;               ///< pixels (at most the scene's offscreen buffer)
+  int height = 480;
+  bool png = true;               ///< CAMERA/rgb_NNNNNN.png
+  bool depth = false;            ///< CAMERA/depth_NNNNNN.png: 16-bit, millimetres
+  bool segmentation = false;     ///< CAMERA/seg_NNNNNN.png: 16-bit, geom id + 1 (0: background)
+  std::string video;             ///< MP4 file name in the output folder ("": none)
+  std::string profile = "quality";  ///< fast | quality
+  std::string where;
+};
+
 struct OutputsConfig {
   bool log = true;  ///< write log.csv
+  std::vector<ImageOutputConfig> images;
 };
 
 /// Lockstep clock: the lab waits for the commands that answer each period.

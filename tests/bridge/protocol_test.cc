@@ -323,9 +323,13 @@ TEST(ProtocolTest, NamesOfKindsAndErrors) {
   EXPECT_STREQ(KindName(1), "arm");
   EXPECT_STREQ(KindName(2), "wrench");
   EXPECT_STREQ(KindName(3), "sim");
-  EXPECT_STREQ(KindName(9), "unknown");
+  EXPECT_STREQ(KindName(4), "camera");
+  EXPECT_STREQ(KindName(11), "yoyo");
+  EXPECT_STREQ(KindName(12), "unknown");
+  EXPECT_STREQ(KindName(0), "unknown");
   EXPECT_EQ(KindFromName("sim"), 3);
-  EXPECT_EQ(KindFromName("camera"), 0);
+  EXPECT_EQ(KindFromName("camera"), 4);
+  EXPECT_EQ(KindFromName("webcam"), 0);
   EXPECT_STREQ(DecodeErrorName(DecodeError::kNotFinite), "non-finite value");
 }
 
