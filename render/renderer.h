@@ -1,0 +1,103 @@
+// Offscreen rendering of MJCF cameras on OSMesa (no GPU, no display).
+//
+// One Renderer owns one OSMesa GL context and one mjrContext for one model.
+// MuJoCo's GL function pointers are process-global: create and use every
+// Renderer of a process from the same thread. Rendering reads mjData and never
+// changes it (mjv_updateScene takes a non-const pointer; nothing is written).
+//
+// Images are W x H with rows top-down (image row 0 is the top of the view),
+// for any W x H up to the scene's offscreen buffer (<visual><global offwidth
+// offheight>). Pixel (u, v) centres follow the pinhole model of
+// CameraIntrinsics(): u = fx X/Z + cx, v = fy Y/Z + cy in OpenCV's camera
+// frame (x right, y down, z forward).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+namespace vlab::render {
+
+enum class Profile {
+  kFast,     ///< no shadows, no reflections, no multisampling
+  kQuality,  ///< shadows, reflections, 4x multisampling
+};
+/// "fast" / "quality" -> Profile; throws InputError for anything else.
+Profile ProfileFromName(const std::string& name);
+
+/// 8-bit RGB, rows top-down, 3 bytes per pixel (R, G, B).
+struct RgbImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> pixels;
+};
+
+/// Distance along the optical axis (z in the camera frame), metres, rows
+/// top-down; +infinity where nothing was drawn (beyond the far plane).
+struct DepthImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> metres;
+};
+
+/// Geom id per pixel, rows top-down; -1 where no geom was drawn.
+struct SegmentationImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::int32_t> geom;
+};
+
+/// Pinhole intrinsics of an MJCF camera rendered at width x height: from the
+/// vertical field of view, fx = fy = (H/2) / tan(fovy/2), cx = W/2 - 0.5,
+/// cy = H/2 - 0.5 (pixel centres at whole numbers).
+struct Intrinsics {
+  int width = 0;
+  int height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+};
+Intrinsics CameraIntrinsics(const mjModel* m, int camera, int width, int height);
+
+/// Id of the MJCF camera `name`; throws InputError naming it and listing the
+/// model's cameras when there is none of that name.
+int CameraId(const mjModel* m, const std::string& name);
+
+class Renderer {
+ public:
+  struct Options {
+    int width = 640;   ///< largest image this renderer will draw (<= offscreen buffer)
+    int height = 480;
+    Profile profile = Profile::kFast;
+  };
+  /// Creates the GL context and MuJoCo's render context for `m` (which must
+  /// outlive the renderer). Throws InputError when width x height exceeds the
+  /// offscreen buffer (naming <visual><global offwidth offheight>), and
+  /// std::runtime_error when no GL context can be made.
+  static std::unique_ptr<Renderer> Create(const mjModel* m, const Options& options);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Renders camera `camera` of the state in `d` at rgb->width x rgb->height
+  /// (0 x 0: the renderer's size). `depth` may be null; when given it gets the
+  /// same size.
+  void Render(mjData* d, int camera, RgbImage* rgb, DepthImage* depth = nullptr);
+  /// Geom ids seen by camera `camera` at seg->width x seg->height (0 x 0: the
+  /// renderer's size).
+  void RenderSegmentation(mjData* d, int camera, SegmentationImage* seg);
+
+  int width() const;
+  int height() const;
+  Profile profile() const;
+  /// GL_RENDERER and GL_VERSION of the context, e.g. "llvmpipe (LLVM 15.0.6, 256 bits); 4.5 (Compatibility Profile) Mesa 22.3.6".
+  const std::string& gl_renderer() const;
+
+ private:
+  struct Impl;
+  explicit Renderer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vlab::render
