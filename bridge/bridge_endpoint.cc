@@ -9,6 +9,8 @@ DeviceEndpoint::DeviceEndpoint(EndpointConfig config) : config_(std::move(config
   subscribers_.reserve(config_.max_subscribers);
   arm_command_.value.reserve(kMaxPacketValues);
   parsed_.value.reserve(kMaxPacketValues);
+  command_.reserve(kMaxPacketValues);
+  if (config_.kind == DeviceKind::kArm) config_.status_first = true;
   not_owner_packet_.reserve(kMaxPacketValues * sizeof(double));
 }
 
@@ -83,7 +85,9 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
                   config_.describe_json.size(), from);
     return false;
   }
-  if (config_.kind == DeviceKind::kWrench) return refuse(&counters_.refused_malformed);  // output-only device
+  const bool commanded =
+      config_.kind == DeviceKind::kArm || config_.kind == DeviceKind::kSim || config_.command_length > 0;
+  if (!commanded) return refuse(&counters_.refused_malformed);  // output-only device
 
   // one owner at a time; an owner silent for too long gives the input up. A
   // new owner takes over with its first ACCEPTED command only.
@@ -106,6 +110,12 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
     }
     if (!CheckArmLimits(parsed_)) return refuse(&counters_.refused_limits);
     std::swap(arm_command_, parsed_);
+  } else if (config_.kind != DeviceKind::kSim) {
+    if (header_.length != config_.command_length) return refuse(&counters_.refused_malformed);
+    const CommandCheck verdict = config_.check_command ? config_.check_command(payload_) : CommandCheck::kAccept;
+    if (verdict == CommandCheck::kMalformed) return refuse(&counters_.refused_malformed);
+    if (verdict == CommandCheck::kLimits) return refuse(&counters_.refused_limits);
+    command_.assign(payload_.begin(), payload_.end());
   } else {
     SimCommandMsg parsed;
     if (ParseSimCommand(header_, payload_, &parsed) != DecodeError::kNone) {
@@ -127,7 +137,8 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
 
 bool DeviceEndpoint::BeginPeriod(long period) {
   // (whether or not the silent owner still owns the input: a released arm holds too)
-  if (config_.kind == DeviceKind::kArm && config_.watchdog_periods > 0 && ever_commanded_ && !watchdog_hold_ &&
+  const bool watched = config_.kind == DeviceKind::kArm || config_.command_length > 0;
+  if (watched && config_.watchdog_periods > 0 && ever_commanded_ && !watchdog_hold_ &&
       period - last_command_period_ > config_.watchdog_periods) {
     watchdog_hold_ = true;
     ++counters_.watchdog_holds;
@@ -150,6 +161,13 @@ bool DeviceEndpoint::TakeSimCommand(SimCommandMsg* command) {
   return true;
 }
 
+bool DeviceEndpoint::TakeCommand(std::vector<double>* payload) {
+  if (!has_command_ || config_.command_length == 0) return false;
+  payload->assign(command_.begin(), command_.end());
+  has_command_ = false;
+  return true;
+}
+
 std::uint32_t DeviceEndpoint::status_bits() const {
   std::uint32_t bits = 0;
   if (refused_flag_) bits |= kStatusRefused;
@@ -158,7 +176,7 @@ std::uint32_t DeviceEndpoint::status_bits() const {
 }
 
 void DeviceEndpoint::Publish(const std::vector<unsigned char>& packet, UdpSocket& socket) {
-  const bool mark = config_.kind == DeviceKind::kArm && owner_ && packet.size() > kHeaderBytes;
+  const bool mark = config_.status_first && owner_ && packet.size() > kHeaderBytes;
   if (mark) {
     // the same state with kStatusNotOwner, for everyone but the owner
     not_owner_packet_ = packet;

@@ -23,7 +23,9 @@
 //   - arm commands are checked against the joint count and the position,
 //     velocity and torque limits; a refused command sets kStatusRefused and
 //     leaves the previous command in force;
-//   - watchdog: an arm that received no accepted command for more than
+//   - other commanded kinds (base, gripper, point) have a fixed command length
+//     and a check of their own (EndpointConfig::command_length, check_command);
+//   - watchdog: an arm (or other commanded device) that received no accepted command for more than
 //     watchdog_periods consecutive periods (3: hold at the start of the 4th,
 //     like the PA10's servo link after 3 missed cycles) holds its position
 //     (kStatusWatchdog) until the next accepted command;
@@ -33,6 +35,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -56,6 +59,13 @@ struct EndpointCounters {
   long watchdog_holds = 0;   ///< times the watchdog put the arm on hold
 };
 
+/// Verdict of a kind's command check.
+enum class CommandCheck {
+  kAccept,
+  kMalformed,  ///< a value outside its domain (an unknown mode): counted as malformed
+  kLimits,     ///< a value beyond a limit of the device
+};
+
 struct EndpointConfig {
   std::string name;
   DeviceKind kind = DeviceKind::kArm;
@@ -67,6 +77,14 @@ struct EndpointConfig {
   int joints = 0;
   std::vector<double> position_min, position_max, velocity_max, torque_max;
   int max_subscribers = 16;
+  /// Other kinds that take commands (base, gripper, point): the command
+  /// payload's length (0: the kind takes no commands, like wrench or feet) ...
+  int command_length = 0;
+  /// ... and its check of a well-framed payload (null: any finite values).
+  std::function<CommandCheck(const std::vector<double>& payload)> check_command;
+  /// The state's first payload value is a status word (arm, base, gripper):
+  /// non-owners get kStatusNotOwner in it.
+  bool status_first = false;
 };
 
 class DeviceEndpoint {
@@ -83,6 +101,8 @@ class DeviceEndpoint {
   /// The newest accepted command not yet taken.
   bool TakeArmCommand(ArmCommandMsg* command);
   bool TakeSimCommand(SimCommandMsg* command);
+  /// The newest accepted command of a kind with EndpointConfig::command_length.
+  bool TakeCommand(std::vector<double>* payload);
   /// seq of the last accepted command (-1 if none since the owner took over).
   double last_accepted_seq() const { return last_seq_; }
   bool has_owner() const { return owner_.has_value(); }
@@ -124,6 +144,7 @@ class DeviceEndpoint {
   bool has_command_ = false;
   ArmCommandMsg arm_command_, parsed_;
   SimCommandMsg sim_command_;
+  std::vector<double> command_;  // other kinds
   // scratch, sized at construction
   Header header_;
   std::vector<double> payload_;
