@@ -10,7 +10,7 @@ namespace {
 
 using nlohmann::json;
 
-json Common(const DeviceDescription& d, const char* kind) {
+json Common(const DeviceDescription& d, const std::string& kind) {
   return {{"name", d.name},
           {"kind", kind},
           {"protocol", kProtocolVersion},
@@ -67,6 +67,12 @@ std::string DescribeJson(const SimDescription& d) {
   j["modes"] = {{"running", 0}, {"paused", 1}};
   j["clocks"] = {{"fast", 0}, {"lockstep", 1}, {"realtime", 2}};
   j["devices"] = d.devices;
+  return j.dump();
+}
+
+std::string DescribeJson(const DeviceDescription& d, const std::string& kind, const std::string& facts) {
+  json j = Common(d, kind);
+  j.update(json::parse(facts));
   return j.dump();
 }
 

@@ -44,5 +44,8 @@ struct SimDescription : DeviceDescription {
 std::string DescribeJson(const ArmDescription& d);
 std::string DescribeJson(const WrenchDescription& d);
 std::string DescribeJson(const SimDescription& d);
+/// Any other kind: the common fields, then every field of `facts` (a JSON
+/// object: layout, units and the kind's own facts).
+std::string DescribeJson(const DeviceDescription& d, const std::string& kind, const std::string& facts);
 
 }  // namespace vlab::bridge

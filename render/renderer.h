@@ -27,6 +27,8 @@ enum class Profile {
 };
 /// "fast" / "quality" -> Profile; throws InputError for anything else.
 Profile ProfileFromName(const std::string& name);
+/// Profile -> "fast" / "quality".
+const char* ProfileName(Profile profile);
 
 /// 8-bit RGB, rows top-down, 3 bytes per pixel (R, G, B).
 struct RgbImage {
@@ -49,6 +51,9 @@ struct SegmentationImage {
   int height = 0;
   std::vector<std::int32_t> geom;
 };
+/// Body ids of a segmentation (m->geom_bodyid of each pixel's geom; -1 where
+/// no geom was drawn), same layout as seg.geom.
+void GeomsToBodies(const mjModel* m, const SegmentationImage& seg, std::vector<std::int32_t>* bodies);
 
 /// Pinhole intrinsics of an MJCF camera rendered at width x height: from the
 /// vertical field of view, fx = fy = (H/2) / tan(fovy/2), cx = W/2 - 0.5,
@@ -70,6 +75,8 @@ class Renderer {
     int width = 640;   ///< largest image this renderer will draw (<= offscreen buffer)
     int height = 480;
     Profile profile = Profile::kFast;
+    std::string scene;          ///< scene file, named in error messages ("": "the scene")
+    bool log_renderer = true;   ///< print "vlab: render: GL_RENDERER; GL_VERSION" to stderr, once per process
   };
   /// Creates the GL context and MuJoCo's render context for `m` (which must
   /// outlive the renderer). Throws InputError when width x height exceeds the
@@ -82,7 +89,11 @@ class Renderer {
 
   /// Renders camera `camera` of the state in `d` at rgb->width x rgb->height
   /// (0 x 0: the renderer's size). `depth` may be null; when given it gets the
-  /// same size.
+  /// same size; it comes from a second, flat pass (no lighting, skybox or
+  /// multisampling: the depth at each pixel's centre, +inf where only sky is).
+  /// Allocates only when an image grows. Throws
+  /// std::invalid_argument for a camera id out of range or a size above the
+  /// renderer's.
   void Render(mjData* d, int camera, RgbImage* rgb, DepthImage* depth = nullptr);
   /// Geom ids seen by camera `camera` at seg->width x seg->height (0 x 0: the
   /// renderer's size).
@@ -91,7 +102,8 @@ class Renderer {
   int width() const;
   int height() const;
   Profile profile() const;
-  /// GL_RENDERER and GL_VERSION of the context, e.g. "llvmpipe (LLVM 15.0.6, 256 bits); 4.5 (Compatibility Profile) Mesa 22.3.6".
+  /// GL_RENDERER and GL_VERSION of the context, e.g.
+  /// "llvmpipe (LLVM 15.0.6, 256 bits); 4.5 (Compatibility Profile) Mesa 22.3.6".
   const std::string& gl_renderer() const;
 
  private:

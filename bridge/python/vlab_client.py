@@ -1,7 +1,8 @@
 """Python client of the vlab wire protocol, version 1 (docs/protocol.md).
 
-Standard library only (socket, struct, json, select, math, time): copy this file
-next to a script, or put its folder on sys.path.
+Standard library only (socket, struct, json, select, math, time; OpenCV's cv2 only to
+decode JPEG camera frames, and only if installed): copy this file next to a script, or
+put its folder on sys.path.
 
     from vlab_client import Arm, VELOCITY
 
@@ -11,10 +12,15 @@ next to a script, or put its folder on sys.path.
         arm.write(VELOCITY, [0.0] * arm.joints, state.seq)
 
 Devices: Arm (commands: hold, position, velocity, torque), Wrench (output only),
-Sim (pause, resume, step, reset, realtime factor). Connecting sends a describe
-request, which also subscribes the client: the device then sends it one state per
-control period. The seq of a command must be the seq of the state it answers.
+Sim (pause, resume, step, reset, realtime factor), Camera (whole frames, reassembled
+from chunks; docs/protocol_camera.md). Connecting sends a describe request, which also
+subscribes the client: the device then sends it one state per control period (a
+camera: every frame). The seq of a command must be the seq of the state it answers.
 read/read_latest wait up to their timeout; write never blocks.
+
+    with Camera("127.0.0.1", 50013) as camera:     # raw frames: standard library only
+        frame = camera.read_latest(timeout=1.0)    # id, time, width, height, rgb, pose
+        # JPEG frames are decoded with OpenCV's cv2 when it is installed
 
 Errors: VlabError > NetworkError, ProtocolError > VersionMismatch, VlabTimeout
 (also a builtin TimeoutError); ValueError for a caller's own mistake (wrong number
@@ -35,8 +41,8 @@ HEADER_VALUES = 7
 MAX_PACKET_VALUES = 1024
 MAX_SEQ = 2 ** 53
 
-KIND_ARM, KIND_WRENCH, KIND_SIM = 1, 2, 3
-KIND_NAMES = {KIND_ARM: "arm", KIND_WRENCH: "wrench", KIND_SIM: "sim"}
+KIND_ARM, KIND_WRENCH, KIND_SIM, KIND_CAMERA = 1, 2, 3, 4
+KIND_NAMES = {KIND_ARM: "arm", KIND_WRENCH: "wrench", KIND_SIM: "sim", KIND_CAMERA: "camera"}
 TYPE_STATE, TYPE_COMMAND, TYPE_DESCRIBE = 1, 2, 3
 
 # arm command modes
@@ -427,3 +433,379 @@ class Sim(Device):
             raise ValueError("%s: sim command arg is not finite" % self._label)
         self._check_seq(seq)
         return self._send(encode(KIND_SIM, TYPE_COMMAND, seq, self._time(), [op, float(arg)]))
+
+
+# ---- camera (kind 4): frames in chunks, docs/protocol_camera.md ------------------------------
+
+ENCODING_RAW, ENCODING_JPEG = 0, 1
+ENCODING_NAMES = {ENCODING_RAW: "raw", ENCODING_JPEG: "jpeg"}
+CHUNK_VALUES = 16                                      # chunk values after the 7-value header
+CHUNK_HEADER_BYTES = 8 * (HEADER_VALUES + CHUNK_VALUES)  # 184: then the chunk's frame bytes
+MAX_IMAGE_SIDE = 16384
+MAX_CHUNKS = 65535
+
+CameraFrame = collections.namedtuple(
+    "CameraFrame", "id time width height encoding data rgb pose_valid position orientation")
+CameraFrame.__doc__ = (
+    "id (frame number), time (s, middle of the exposure), width, height (px), encoding ('raw' or "
+    "'jpeg'), data (the frame's bytes as sent), rgb (RGB8 bytes, rows top-down, width*height*3; None "
+    "when not decoded), pose_valid, position (x, y, z m) and orientation (w, x, y, z) of the OpenCV "
+    "camera frame (x right, y down, z forward) in the world. As a numpy image: "
+    "numpy.frombuffer(frame.rgb, numpy.uint8).reshape(frame.height, frame.width, 3).")
+Chunk = collections.namedtuple(
+    "Chunk", "frame_id time index count width height encoding frame_bytes offset size pose_valid position "
+             "orientation data")
+Chunk.__doc__ = "One decoded camera chunk; data is a memoryview of its frame bytes."
+
+
+class ChunkError(ProtocolError):
+    """A camera chunk breaks a rule of docs/protocol_camera.md; `reason` names which."""
+
+    def __init__(self, reason):
+        super().__init__(reason)
+        self.reason = reason
+
+
+def decode_chunk(data):
+    """Checks one camera chunk datagram and splits it (the same checks, in the same order, as the
+    C++ decoder). Returns a Chunk; raises ChunkError(reason) or VersionMismatch."""
+    size = len(data)
+    if size < 8 * HEADER_VALUES:
+        raise ChunkError("too short")
+    header = struct.unpack_from("<7d", data)
+    magic, version, kind, mtype, seq, t, length = header
+    if magic != MAGIC:
+        raise ChunkError("bad magic")
+    if version != PROTOCOL_VERSION:
+        raise VersionMismatch("the device sent a chunk of protocol version %g, this client speaks version %d"
+                              % (version, PROTOCOL_VERSION))
+    if not all(math.isfinite(v) for v in header):
+        raise ChunkError("non-finite value")
+    if kind != KIND_CAMERA:
+        raise ChunkError("wrong device kind")
+    if mtype != TYPE_STATE:
+        raise ChunkError("wrong message type")
+    if not _whole(seq, 0, MAX_SEQ):
+        raise ChunkError("value out of domain")
+    if not _whole(length, CHUNK_VALUES, MAX_PACKET_VALUES - HEADER_VALUES):
+        raise ChunkError("bad length")
+    head = 8 * (HEADER_VALUES + int(length))
+    if size < head:
+        raise ChunkError("too short")
+    c = struct.unpack_from("<%dd" % int(length), data, 8 * HEADER_VALUES)
+    if not all(math.isfinite(v) for v in c):
+        raise ChunkError("non-finite value")
+    index, count, width, height, encoding, frame_bytes, offset, nbytes, pose_valid = c[:9]
+    # the image
+    if not _whole(width, 1, MAX_IMAGE_SIDE) or not _whole(height, 1, MAX_IMAGE_SIDE) or \
+            not _whole(encoding, 0, 1) or not _whole(frame_bytes, 1, 3.0 * MAX_IMAGE_SIDE * MAX_IMAGE_SIDE) or \
+            (encoding == ENCODING_RAW and frame_bytes != 3 * width * height):
+        raise ChunkError("bad image size or encoding")
+    # the layout: chunks of P bytes, chunk i at i * P, the last one ends at frame_bytes
+    if not _whole(count, 1, MAX_CHUNKS) or not _whole(index, 0, count - 1) or \
+            not _whole(offset, 0, frame_bytes - 1) or not _whole(nbytes, 1, frame_bytes - offset):
+        raise ChunkError("bad chunk layout")
+    if nbytes != size - head:
+        raise ChunkError("bad length")
+    if index < count - 1:
+        if offset != index * nbytes or math.ceil(frame_bytes / nbytes) != count:
+            raise ChunkError("bad chunk layout")
+    elif offset + nbytes != frame_bytes or (count == 1 and offset != 0) or \
+            (count > 1 and (math.fmod(offset, count - 1) != 0 or offset / (count - 1) < nbytes)):
+        raise ChunkError("bad chunk layout")
+    # the pose
+    if not _whole(pose_valid, 0, 1):
+        raise ChunkError("bad pose")
+    q = c[12:16]
+    if pose_valid == 1 and abs(sum(v * v for v in q) - 1.0) > 2e-6:
+        raise ChunkError("bad pose")
+    return Chunk(int(seq), t, int(index), int(count), int(width), int(height), int(encoding), int(frame_bytes),
+                 int(offset), int(nbytes), pose_valid == 1, tuple(c[9:12]), tuple(q), memoryview(data)[head:])
+
+
+class _Partial:
+    """A frame being reassembled."""
+
+    def __init__(self, chunk, now):
+        self.key = chunk[:2] + chunk[3:4] + chunk[4:8] + chunk[10:13]  # id, time, count, size, pose
+        self.piece = _piece(chunk)
+        self.started = now
+        self.received = 0
+        self.have = bytearray(chunk.count)
+        self.data = bytearray(chunk.frame_bytes)
+        self.chunk = chunk
+
+
+def _piece(chunk):
+    """P: the bytes of every chunk but the last."""
+    if chunk.index < chunk.count - 1:
+        return chunk.size
+    return chunk.offset // (chunk.count - 1) if chunk.count > 1 else chunk.frame_bytes
+
+
+class _FrameAssembler:
+    """Reassembly by frame id with the drop rules of docs/protocol_camera.md ("Reassembly")."""
+
+    def __init__(self, slots=4, timeout=1.0, max_frame_bytes=64 << 20, restart_gap=64, restart_time=1.0):
+        self.slots, self.timeout, self.max_frame_bytes = slots, timeout, max_frame_bytes
+        self.restart_gap, self.restart_time = restart_gap, restart_time
+        self.counters = {name: 0 for name in (
+            "chunks", "accepted", "duplicates", "late", "refused", "frames_completed", "frames_dropped",
+            "dropped_superseded", "dropped_timeout", "dropped_evicted", "overwritten", "restarts")}
+        self.refused_by = collections.Counter()
+        self._partial = {}
+        self._ready = None
+        self._floor_id, self._floor_time = -1, 0.0
+
+    def _drop(self, frame_id, reason):
+        p = self._partial.pop(frame_id)
+        self.counters["frames_dropped"] += 1
+        self.counters[reason] += 1
+        if frame_id > self._floor_id:
+            self._floor_id, self._floor_time = frame_id, p.chunk.time
+
+    def expire(self, now):
+        for frame_id in [i for i, p in self._partial.items() if now - p.started > self.timeout]:
+            self._drop(frame_id, "dropped_timeout")
+
+    def _refuse(self, reason):
+        self.counters["refused"] += 1
+        self.refused_by[reason] += 1
+        return "refused"
+
+    def add(self, data, now):
+        """Offers one datagram (receiver clock `now`, s); returns 'refused', 'accepted', 'duplicate',
+        'late' or 'completed'. Raises VersionMismatch for a chunk of another protocol version."""
+        self.counters["chunks"] += 1
+        try:
+            c = decode_chunk(data)
+        except VersionMismatch:
+            self._refuse("bad version")
+            raise
+        except ChunkError as e:
+            return self._refuse(e.reason)
+        if c.frame_bytes > self.max_frame_bytes:
+            return self._refuse("frame too large")
+        self.expire(now)
+        if c.frame_id <= self._floor_id:
+            if self._floor_id - c.frame_id <= self.restart_gap and c.time >= self._floor_time - self.restart_time:
+                self.counters["late"] += 1
+                return "late"
+            self.counters["restarts"] += 1  # the sender started again: forget the old stream
+            self.counters["frames_dropped"] += len(self._partial)
+            self._partial.clear()
+            self._floor_id, self._floor_time = -1, 0.0
+        p = self._partial.get(c.frame_id)
+        if p is None:
+            if len(self._partial) >= self.slots:
+                oldest = min(self._partial)
+                if c.frame_id < oldest:
+                    self.counters["late"] += 1
+                    return "late"
+                self._drop(oldest, "dropped_evicted")
+            p = self._partial[c.frame_id] = _Partial(c, now)
+        elif p.key != c[:2] + c[3:4] + c[4:8] + c[10:13] or p.piece != _piece(c):
+            return self._refuse("inconsistent with its frame")
+        if p.have[c.index]:
+            self.counters["duplicates"] += 1
+            return "duplicate"
+        p.data[c.offset:c.offset + c.size] = c.data
+        p.have[c.index] = 1
+        p.received += 1
+        self.counters["accepted"] += 1
+        if p.received < c.count:
+            return "accepted"
+        # complete: older frames still in progress can no longer be shown in order
+        del self._partial[c.frame_id]
+        if self._ready is not None:
+            self.counters["overwritten"] += 1
+        self._ready = (c, bytes(p.data))
+        self.counters["frames_completed"] += 1
+        self._floor_id, self._floor_time = c.frame_id, c.time
+        for frame_id in [i for i in self._partial if i < c.frame_id]:
+            self._drop(frame_id, "dropped_superseded")
+        return "completed"
+
+    def take(self):
+        """The completed frame as (last chunk, bytes), or None."""
+        ready, self._ready = self._ready, None
+        return ready
+
+
+_CV2 = []  # [module or None], imported on first need
+
+
+def _cv2():
+    if not _CV2:
+        try:
+            import cv2  # noqa: F401  (optional: JPEG frames only)
+            _CV2.append(cv2)
+        except ImportError:
+            _CV2.append(None)
+    return _CV2[0]
+
+
+class Camera(Device):
+    """A camera (webcam, simulated or real): whole frames, never torn. read()/read_latest() return
+    CameraFrame tuples. Raw frames need nothing but the standard library; JPEG frames are decoded
+    with OpenCV's Python module (cv2) when installed (decode=False gives the JPEG bytes alone).
+    The client sends a describe request every `keepalive` s while reading, so its subscription
+    never lapses. Incomplete frames are dropped; malformed chunks are counted (counters,
+    refused_by), not raised."""
+
+    KIND = KIND_CAMERA
+
+    def __init__(self, address="127.0.0.1", port=50013, timeout=1.0, bind_address=None, decode=True,
+                 receive_buffer=8 << 20, keepalive=1.0, frame_timeout=1.0, slots=4, max_frame_bytes=64 << 20):
+        """Connects as Device does, then checks the reply's width, height, fps, encoding and
+        intrinsics. Raises VlabError when the camera sends JPEG, decode is on and cv2 is missing."""
+        self._assembler = _FrameAssembler(slots, frame_timeout, max_frame_bytes)
+        self._decode = decode
+        self._keepalive = keepalive
+        self.undecodable = 0      # whole frames whose JPEG did not decode to their size
+        self.frames_skipped = 0   # whole frames read_latest passed over
+        super().__init__(address, port, timeout, bind_address)
+        try:
+            self._check_camera()
+        except BaseException:
+            self.close()
+            raise
+        self.receive_buffer = self._grow_receive_buffer(receive_buffer)
+        self._next_keepalive = time.monotonic() + keepalive
+
+    def _grow_receive_buffer(self, size):
+        """A raw VGA frame is 16 datagrams of 60 kB sent back to back: ask for a large buffer (forced
+        where permitted). Returns what the kernel granted, as getsockopt reports it."""
+        try:
+            self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, size)
+            force = getattr(socket, "SO_RCVBUFFORCE", None)
+            if force is not None and self._sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF) < 2 * size:
+                self._sock.setsockopt(socket.SOL_SOCKET, force, size)
+        except OSError:
+            pass  # no permission to force: keep what the system allows
+        return self._sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
+
+    def _check_camera(self):
+        d = self._describe
+
+        def number(obj, field, path):
+            v = obj.get(field) if isinstance(obj, dict) else None
+            if not isinstance(v, (int, float)) or isinstance(v, bool):
+                raise ProtocolError('%s: describe reply has no number "%s"' % (self._label, path))
+            return v
+
+        self.width = int(number(d, "width", "width"))
+        self.height = int(number(d, "height", "height"))
+        self.fps = float(number(d, "fps", "fps"))
+        self.encoding = d.get("encoding")
+        if self.encoding not in ("raw", "jpeg"):
+            raise ProtocolError('%s: describe reply\'s "encoding" is %s, not "raw" or "jpeg"'
+                                % (self._label, json.dumps(self.encoding)))
+        k = d.get("intrinsics")
+        self.intrinsics = {f: float(number(k, f, "intrinsics." + f)) for f in ("fx", "fy", "cx", "cy")}
+        dist = d.get("distortion")
+        self.distortion = [float(number(dist, f, "distortion." + f)) for f in ("k1", "k2", "p1", "p2")] \
+            if isinstance(dist, dict) else [0.0] * 4
+        if self.encoding == "jpeg" and self._decode and _cv2() is None:
+            raise VlabError(self._jpeg_error())
+
+    def _jpeg_error(self):
+        return ("%s sends JPEG frames; decoding them needs OpenCV's Python module (cv2), which is not "
+                "installed: install it (Debian: python3-opencv), serve raw frames (vlab camera --encoding raw; "
+                "scenario key encoding: raw), or pass decode=False for the JPEG bytes alone" % self._label)
+
+    @property
+    def counters(self):
+        """Chunk and frame counters of the reassembly (chunks, accepted, duplicates, late, refused,
+        frames_completed, frames_dropped, dropped_superseded, dropped_timeout, dropped_evicted, ...)."""
+        return dict(self._assembler.counters)
+
+    @property
+    def refused_by(self):
+        """Refused chunks by reason."""
+        return dict(self._assembler.refused_by)
+
+    def _now(self):
+        return time.monotonic() - self._start
+
+    def _frame(self, data):
+        """Chunks that arrive while connecting go to the assembler."""
+        self._assembler.add(data, self._now())
+
+    def _next(self, deadline, queued_only=False):
+        """The next whole frame (chunk, bytes) before the deadline, or None."""
+        while True:
+            ready = self._assembler.take()
+            if ready is not None:
+                return ready
+            now = time.monotonic()
+            if not queued_only and now >= deadline:
+                self._assembler.expire(self._now())
+                return None
+            if now >= self._next_keepalive:
+                self.keep_alive()
+                self._next_keepalive = now + self._keepalive
+            data = self._receive(now if queued_only else min(deadline, self._next_keepalive))
+            if data is None:
+                self._assembler.expire(self._now())
+                if queued_only:
+                    return None
+                continue
+            if data[:1] == b"{":  # a describe reply to a keep-alive
+                self.skipped += 1
+                continue
+            try:
+                self._assembler.add(data, self._now())
+            except VersionMismatch as e:
+                raise VersionMismatch("%s: %s" % (self._label, e)) from None
+
+    def _finish(self, ready):
+        """CameraFrame from (last chunk, bytes), decoded; None if its JPEG does not decode."""
+        c, data = ready
+        rgb = None
+        if c.encoding == ENCODING_RAW:
+            rgb = data
+        elif self._decode:
+            cv2 = _cv2()
+            if cv2 is None:
+                raise VlabError(self._jpeg_error())
+            import numpy  # cv2 needs it, so it is there
+            bgr = cv2.imdecode(numpy.frombuffer(data, numpy.uint8), cv2.IMREAD_COLOR)
+            if bgr is None or bgr.shape != (c.height, c.width, 3):
+                self.undecodable += 1
+                return None
+            rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB).tobytes()
+        return CameraFrame(c.frame_id, c.time, c.width, c.height, ENCODING_NAMES[c.encoding], data, rgb,
+                           c.pose_valid, c.position, c.orientation)
+
+    def read(self, timeout=1.0):
+        """The next whole frame, waiting up to `timeout` s. Raises VlabTimeout."""
+        deadline = time.monotonic() + timeout
+        while True:
+            ready = self._next(deadline)
+            if ready is None:
+                a = self._assembler.counters
+                raise VlabTimeout("%s: no whole frame within %g s (%d chunks so far, %d frames dropped incomplete, "
+                                  "%d chunks refused)" % (self._label, timeout, a["chunks"], a["frames_dropped"],
+                                                          a["refused"]))
+            frame = self._finish(ready)
+            if frame is not None:
+                return frame
+
+    def read_latest(self, timeout=1.0):
+        """Waits up to `timeout` s for a whole frame, then takes every datagram already queued and
+        returns the newest whole frame. Raises as read."""
+        deadline = time.monotonic() + timeout
+        while True:
+            ready = self._next(deadline)
+            if ready is None:
+                return self.read(0)  # raises the timeout
+            while True:
+                newer = self._next(deadline, queued_only=True)
+                if newer is None:
+                    break
+                self.frames_skipped += 1
+                ready = newer
+            frame = self._finish(ready)
+            if frame is not None:
+                return frame

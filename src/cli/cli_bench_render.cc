@@ -1,13 +1,179 @@
-// vlab bench render: not built yet (placeholder until the renderer lands).
+// vlab bench render: offscreen frames per second of one camera of a scene.
+//
+// The state is the scenario's initial state (the lab's InitialState). Per
+// variant, best of --repeat measurements of --duration wall seconds each
+// (default 2 s):
+//   a. Render() (scene update, GL render, read-back, row flip) at 640x480 and
+//      320x240 in the fast and the quality profile;
+//   b. render + JPEG encoding (cv::imencode, quality 90) at 640x480, fast;
+//   c. render + encode + send over the camera wire (SendOverCameraWire below:
+//      where the camera device's frame sender plugs in).
+// Goal: >= 100 fps at 640x480 in the fast profile on 2 cores. llvmpipe
+// renders with LP_NUM_THREADS threads (default: one per CPU); the figures are
+// what a user gets with the environment as it is.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <string>
 
 #include "cli/cli_commands.h"
+#include "lab/lab_errors.h"
+#include "lab/lab_mujoco.h"
+#include "lab/lab_runner.h"
+#include "lab/lab_scenario.h"
+#include "render/image_io.h"
+#include "render/renderer.h"
 
 namespace vlab::cli {
 
-int BenchRender(const BenchArgs&) {
-  std::fprintf(stderr, "vlab: error: 'bench render' is not available in this build\n");
-  return 2;
+namespace {
+
+constexpr const char* kCubeScenario = "scenes/pa10_cubes.yaml";
+constexpr const char* kCubeCamera = "webcam";
+constexpr const char* kFallbackScenario = "scenes/pa10_reach.yaml";
+constexpr const char* kFallbackCamera = "overview";
+constexpr double kGoalFps = 100;  // 640x480, fast profile
+constexpr int kJpegQuality = 90;
+
+using Clock = std::chrono::steady_clock;
+
+// Sends one encoded frame over the camera wire. Returns false when there is
+// no wire to send over (then the send figure is not measured). This is where
+// the camera device's frame server plugs in.
+using FrameSender = std::function<bool(const std::vector<std::uint8_t>& jpeg, int width, int height, double t)>;
+bool SendOverCameraWire(const std::vector<std::uint8_t>&, int, int, double) { return false; }
+
+// the camera measured in a scenario: its first camera device's, else "webcam", else the scene's first
+std::string PickCamera(const lab::Scenario& s, const mjModel* m) {
+  for (const auto& d : s.devices) {
+    if (d.kind == "camera") return d.camera.camera;
+  }
+  if (mj_name2id(m, mjOBJ_CAMERA, kCubeCamera) >= 0) return kCubeCamera;
+  if (m->ncam == 0) throw lab::InputError("scene '" + s.scene + "': no camera to render");
+  const char* name = mj_id2name(m, mjOBJ_CAMERA, 0);
+  if (!name) throw lab::InputError("scene '" + s.scene + "': its first camera has no name");
+  return name;
+}
+
+// frames per second of `frame` over `seconds` of wall time (after 3 warm-up frames)
+double Rate(const std::function<void()>& frame, double seconds) {
+  for (int i = 0; i < 3; ++i) frame();
+  const auto t0 = Clock::now();
+  long n = 0;
+  double elapsed = 0;
+  do {
+    frame();
+    ++n;
+    elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+  } while (elapsed < seconds);
+  return n / elapsed;
+}
+
+double Best(int repeat, const std::function<double()>& measure) {
+  double best = 0;
+  for (int i = 0; i < repeat; ++i) best = std::max(best, measure());
+  return best;
+}
+
+}  // namespace
+
+int BenchRender(const BenchArgs& args) {
+  return WithErrorReport([&args] {
+    lab::InstallMujocoHandlers();
+    std::string path = args.scenario;
+    std::string camera;
+    if (path.empty()) {
+      path = kCubeScenario;
+      camera = kCubeCamera;
+      if (!std::filesystem::exists(path)) {
+        std::printf("note: %s not found: measuring %s, camera '%s' instead\n", kCubeScenario, kFallbackScenario,
+                    kFallbackCamera);
+        path = kFallbackScenario;
+        camera = kFallbackCamera;
+      }
+    }
+    lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(path));
+    std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
+    const mjModel* m = lab->model();
+    if (camera.empty()) camera = PickCamera(scenario, m);
+    const int cam = render::CameraId(m, camera);
+    lab::DataPtr data = lab::MakeData(m);
+    mjData* d = data.get();
+    lab->InitialState(d);
+    const double seconds = args.duration_s > 0 ? args.duration_s : 2.0;
+
+    const char* lp = std::getenv("LP_NUM_THREADS");
+    const long cpus = ::sysconf(_SC_NPROCESSORS_ONLN);
+    std::printf("vlab bench render: scenario %s, scene %s, camera '%s'\n", scenario.name.c_str(),
+                scenario.scene.c_str(), camera.c_str());
+    std::printf("  state at t = 0; %.2f s of rendering per measurement, best of %d; %ld CPUs; LP_NUM_THREADS %s\n",
+                seconds, args.repeat, cpus,
+                lp ? lp : "unset (llvmpipe: one thread per CPU)");
+
+    render::RgbImage rgb;
+    double fast_vga = 0;
+    std::string gl;
+    for (render::Profile profile : {render::Profile::kFast, render::Profile::kQuality}) {
+      render::Renderer::Options options;
+      options.profile = profile;
+      options.scene = scenario.scene;
+      options.log_renderer = false;
+      std::unique_ptr<render::Renderer> r = render::Renderer::Create(m, options);
+      if (gl.empty()) {
+        gl = r->gl_renderer();
+        std::printf("  GL: %s\n", gl.c_str());
+      }
+      for (auto [w, h] : {std::pair{640, 480}, std::pair{320, 240}}) {
+        const double fps = Best(args.repeat, [&, w = w, h = h] {
+          return Rate([&] {
+            rgb.width = w;
+            rgb.height = h;
+            r->Render(d, cam, &rgb);
+          }, seconds);
+        });
+        if (profile == render::Profile::kFast && w == 640) fast_vga = fps;
+        std::printf("  a. render %-8s %4dx%-4d %8.1f fps  %6.2f ms/frame\n", render::ProfileName(profile), w, h, fps,
+                    1000 / fps);
+      }
+    }
+
+    // b and c: the camera device's path, fast profile at 640x480
+    render::Renderer::Options options;
+    options.scene = scenario.scene;
+    options.log_renderer = false;
+    std::unique_ptr<render::Renderer> r = render::Renderer::Create(m, options);
+    std::vector<std::uint8_t> jpeg;
+    rgb.width = rgb.height = 0;  // the renderer's size: 640x480
+    const double encoded = Best(args.repeat, [&] {
+      return Rate([&] {
+        r->Render(d, cam, &rgb);
+        render::EncodeJpeg(rgb, kJpegQuality, &jpeg);
+      }, seconds);
+    });
+    std::printf("  b. render + JPEG q%d (fast 640x480) %8.1f fps  %6.2f ms/frame  (%zu bytes/frame)\n", kJpegQuality,
+                encoded, 1000 / encoded, jpeg.size());
+    const FrameSender send = SendOverCameraWire;
+    if (send(jpeg, rgb.width, rgb.height, 0.0)) {
+      const double sent = Best(args.repeat, [&] {
+        return Rate([&] {
+          r->Render(d, cam, &rgb);
+          render::EncodeJpeg(rgb, kJpegQuality, &jpeg);
+          send(jpeg, rgb.width, rgb.height, d->time);
+        }, seconds);
+      });
+      std::printf("  c. render + JPEG + send (fast 640x480) %8.1f fps  %6.2f ms/frame\n", sent, 1000 / sent);
+    } else {
+      std::printf("  c. render + JPEG + send: not measured (no camera wire in this build)\n");
+    }
+    std::printf("  goal: >= %.0f fps at 640x480 fast -> %.2fx the goal: %s\n", kGoalFps, fast_vga / kGoalFps,
+                fast_vga >= kGoalFps ? "met" : "NOT met");
+    return 0;
+  });
 }
 
 }  // namespace vlab::cli

@@ -1,17 +1,252 @@
-// vlab render: not built yet (placeholder until its issue lands).
+// vlab render SCENARIO --camera NAME: runs the scenario and renders one MJCF
+// camera offscreen every --every seconds of simulated time (from t = 0):
+// RGB PNGs, optionally depth (16-bit, mm) and segmentation (16-bit, geom id +
+// 1) PNGs, frames.csv, render.json, and optionally an MP4 video.
+//
+// The run is the scenario's own (same controller, same trajectory; rendering
+// reads the state only), shortened to end right after the last frame. Its
+// checks and image outputs are not evaluated or written: this command renders.
+#include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
 
 #include "cli/cli_commands.h"
+#include "lab/lab_errors.h"
+#include "lab/lab_log.h"
+#include "lab/lab_mujoco.h"
+#include "lab/lab_output.h"
+#include "lab/lab_runner.h"
+#include "lab/lab_scenario.h"
+#include "render/image_io.h"
+#include "render/renderer.h"
+#include "render/video.h"
 
 namespace vlab::cli {
 
+namespace {
+
+struct RenderArgs {
+  std::string scenario;
+  std::string camera;
+  double fps = 0;
+  double every_s = 0;
+  long frames = 0;  // 0: all that fit
+  std::string out_dir;
+  std::string video;
+  bool depth = false;
+  bool segmentation = false;
+  int width = 0;  // 0: the scenario's setting for this camera, else 640 x 480
+  int height = 0;
+  std::string profile = "quality";
+  bool quiet = false;
+};
+
+volatile bool g_interrupted = false;
+void OnSignal(int) { g_interrupted = true; }
+
+// a frame is due when t reaches n * every, up to rounding of the period sums
+constexpr double kDueTolerance_s = 1e-9;
+
+std::string FrameName(const char* kind, long n) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%s_%06ld.png", kind, n);
+  return name;
+}
+
+// where to write `file`: inside the output folder's staging folder when the
+// file lies in the output folder, else where it was asked for
+std::string StagedPath(const std::string& file, const std::string& out_dir, const lab::OutputDir& out) {
+  namespace fs = std::filesystem;
+  const fs::path rel = fs::absolute(file).lexically_normal().lexically_relative(fs::absolute(out_dir).lexically_normal());
+  if (rel.empty() || *rel.begin() == "..") return file;
+  return out.File(rel.string());
+}
+
+// the image size the scenario sets for this camera (a camera device or an image output), else 640 x 480
+void ScenarioSize(const lab::Scenario& s, const std::string& camera, int* width, int* height) {
+  *width = 640;
+  *height = 480;
+  for (const auto& d : s.devices) {
+    if (d.kind == "camera" && d.camera.camera == camera) {
+      *width = d.camera.width;
+      *height = d.camera.height;
+      return;
+    }
+  }
+  for (const auto& o : s.outputs.images) {
+    if (o.camera == camera) {
+      *width = o.width;
+      *height = o.height;
+      return;
+    }
+  }
+}
+
+int Render(const RenderArgs& a, const CLI::App& cmd) {
+  auto given = [&cmd](const char* name) { return cmd.get_option(name)->count() > 0; };
+  if (given("--fps") && given("--every")) throw lab::InputError("--fps and --every: give one of them, not both");
+  if (given("--fps") && !(a.fps > 0 && std::isfinite(a.fps))) throw lab::InputError("--fps must be > 0");
+  if (given("--every") && !(a.every_s > 0 && std::isfinite(a.every_s))) throw lab::InputError("--every must be > 0 s");
+  if (given("--frames") && a.frames < 1) throw lab::InputError("--frames must be >= 1");
+  if (given("--width") && a.width < 1) throw lab::InputError("--width must be >= 1 pixel");
+  if (given("--height") && a.height < 1) throw lab::InputError("--height must be >= 1 pixel");
+  const render::Profile profile = render::ProfileFromName(a.profile);
+  if (!a.video.empty() && std::filesystem::path(a.video).extension() != ".mp4") {
+    throw lab::InputError("--video '" + a.video + "': the file name must end in .mp4");
+  }
+  lab::InstallMujocoHandlers();
+
+  lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(a.scenario));
+  const double period = scenario.control_period_s;
+  const double every = given("--fps") ? 1.0 / a.fps : given("--every") ? a.every_s : 0.1;
+  if (every < period * (1 - 1e-9)) {
+    throw lab::InputError("frame interval " + lab::FormatDouble(every) + " s is shorter than the control period " +
+                          lab::FormatDouble(period) + " s of " + scenario.file + " (frames are taken at period ends)");
+  }
+  // frames that fit the scenario; the run ends at the first period end at or after the last one
+  const long fit = static_cast<long>(std::floor(scenario.duration_s / every + kDueTolerance_s)) + 1;
+  const long frames = given("--frames") ? std::min(a.frames, fit) : fit;
+  if (given("--frames") && a.frames > fit && !a.quiet) {
+    std::fprintf(stderr, "vlab: note: %s lasts %s s: %ld of the %ld frames asked for fit (every %s s)\n",
+                 scenario.name.c_str(), lab::FormatDouble(scenario.duration_s).c_str(), fit, a.frames,
+                 lab::FormatDouble(every).c_str());
+  }
+  const double last_frame_s = (frames - 1) * every;
+  const double run_periods = std::ceil(last_frame_s / period - 1e-9);
+  scenario.duration_s = std::min(scenario.duration_s, std::max(0.0, run_periods) * period);
+  scenario.checks.clear();          // rendering is not a regression run
+  scenario.outputs.images.clear();  // this command writes its own images
+
+  std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
+  const mjModel* m = lab->model();
+  int camera = -1;
+  try {
+    camera = render::CameraId(m, a.camera);
+  } catch (const lab::InputError& e) {
+    throw lab::InputError("--camera: scene '" + scenario.scene + "': " + e.what());
+  }
+  int width = 0, height = 0;
+  ScenarioSize(scenario, a.camera, &width, &height);
+  if (given("--width")) width = a.width;
+  if (given("--height")) height = a.height;
+  render::Renderer::Options options;
+  options.width = width;
+  options.height = height;
+  options.profile = profile;
+  options.scene = scenario.scene;
+  options.log_renderer = !a.quiet;
+  std::unique_ptr<render::Renderer> renderer = render::Renderer::Create(m, options);
+
+  // outputs: a staging folder renamed into place whole; the video staged beside its final name
+  const std::string out_dir =
+      a.out_dir.empty() ? "out/" + scenario.name + "/render/" + a.camera : a.out_dir;
+  std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
+  std::unique_ptr<render::VideoFile> video;
+  if (!a.video.empty()) {
+    // a video inside the output folder is written into its staging folder, so
+    // that it moves into place with the frames instead of being replaced by them
+    const std::string video_path = StagedPath(a.video, out_dir, *out);
+    const std::filesystem::path parent = std::filesystem::path(video_path).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    video = render::VideoFile::Create(video_path, 1.0 / every, width, height);
+  }
+
+  render::RgbImage rgb;
+  render::DepthImage depth;
+  render::SegmentationImage seg;
+  std::vector<double> times;
+  times.reserve(static_cast<std::size_t>(frames));
+  double render_s = 0;
+  lab::RunOptions run;
+  run.clock = "fast";  // offline: as fast as rendering allows, whatever the scenario's clock
+  run.interrupt = &g_interrupted;
+  ProgressBar bar(!a.quiet);
+  run.progress = [&bar](double f) { bar.Update(f); };
+  run.observe = [&](double t, const mjModel*, mjData* d) {
+    const long n = static_cast<long>(times.size());
+    if (n >= frames || t + kDueTolerance_s < n * every) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    renderer->Render(d, camera, &rgb, a.depth ? &depth : nullptr);
+    if (a.segmentation) renderer->RenderSegmentation(d, camera, &seg);
+    render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    render::WritePng(out->File(FrameName("rgb", n)), rgb);
+    if (a.depth) render::WriteDepthPng(out->File(FrameName("depth", n)), depth);
+    if (a.segmentation) render::WriteSegmentationPng(out->File(FrameName("seg", n)), seg);
+    if (video) video->Add(rgb);
+    times.push_back(t);
+  };
+  lab::SetMujocoErrorCleanup([staging = out->File("")] {  // a MuJoCo error ends the process: leave nothing
+    std::error_code ec;
+    std::filesystem::remove_all(staging, ec);
+  });
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const lab::RunResult r = lab->Run(run);
+  bar.Finish();
+  if (r.exit_code != 0) {
+    std::fprintf(stderr, "vlab: %s; no images written\n", r.failure.c_str());
+    return 1;
+  }
+
+  // frames.csv and render.json: when each frame was taken, and how to read the images
+  {
+    std::ofstream csv(out->File("frames.csv"));
+    csv << "frame,time\n";
+    for (std::size_t n = 0; n < times.size(); ++n) csv << n << "," << lab::FormatDouble(times[n]) << "\n";
+    const render::Intrinsics k = render::CameraIntrinsics(m, camera, width, height);
+    nlohmann::json files = {{"rgb", "rgb_NNNNNN.png: 8-bit RGB"}, {"times", "frames.csv: frame, simulated time (s)"}};
+    if (a.depth) files["depth"] = "depth_NNNNNN.png: 16-bit, mm along the optical axis, 0: nothing drawn";
+    if (a.segmentation) files["segmentation"] = "seg_NNNNNN.png: 16-bit, geom id + 1, 0: no geom";
+    if (video) files["video"] = a.video;
+    const nlohmann::json meta = {
+        {"scenario", scenario.name}, {"scene", scenario.scene}, {"camera", a.camera},
+        {"width", width}, {"height", height}, {"profile", render::ProfileName(profile)},
+        {"every_s", every}, {"frames", times.size()}, {"files", files},
+        {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
+        {"gl_renderer", renderer->gl_renderer()}, {"render_wall_s", render_s}, {"mujoco", lab::MujocoVersion()}};
+    std::ofstream json(out->File("render.json"));
+    json << meta.dump(2) << "\n";
+    if (!csv || !json) throw std::runtime_error("output folder '" + out_dir + "': write failed");
+  }
+  if (video) video->Finish();
+  out->Commit();
+
+  const double fps = render_s > 0 ? times.size() / render_s : 0.0;
+  std::printf("%s: %zu frames %dx%d of camera '%s' (%s), every %s s, in %s/%s%s; %.1f fps rendered; %s\n",
+              scenario.name.c_str(), times.size(), width, height, a.camera.c_str(), render::ProfileName(profile),
+              lab::FormatDouble(every).c_str(), out_dir.c_str(), video ? "; video " : "",
+              video ? a.video.c_str() : "", fps, renderer->gl_renderer().c_str());
+  return 0;
+}
+
+}  // namespace
+
 Subcommand AddRenderCommand(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand("render", "(not available in this build)");
-  cmd->group("");  // hidden
-  return {cmd, [] {
-            std::fprintf(stderr, "vlab: error: 'render' is not available in this build\n");
-            return 2;
-          }};
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "render", "Render a scenario's camera offscreen: PNG frames (RGB, depth, segmentation) and MP4 video");
+  cmd->add_option("scenario", args->scenario, "Scenario file (YAML); the .yaml extension may be left out")
+      ->required();
+  cmd->add_option("--camera", args->camera, "MJCF camera to render")->required();
+  cmd->add_option("--fps", args->fps, "Frames per simulated second (or --every)");
+  cmd->add_option("--every", args->every_s, "Simulated seconds between frames, from t = 0 (default 0.1)");
+  cmd->add_option("--frames", args->frames, "Number of frames (default: all that fit the scenario)");
+  cmd->add_option("--out", args->out_dir, "Output folder (default: out/<scenario name>/render/<camera>)");
+  cmd->add_option("--video", args->video, "Also write an MP4 video (mp4v) to this file");
+  cmd->add_flag("--depth", args->depth, "Also write depth_NNNNNN.png (16-bit, millimetres)");
+  cmd->add_flag("--segmentation", args->segmentation, "Also write seg_NNNNNN.png (16-bit, geom id + 1)");
+  cmd->add_option("--width", args->width, "Image width, pixels (default: the scenario's for this camera, or 640)");
+  cmd->add_option("--height", args->height, "Image height, pixels (default: the scenario's, or 480)");
+  cmd->add_option("--profile", args->profile, "fast (no shadows, reflections, MSAA) | quality (default)");
+  cmd->add_flag("-q,--quiet", args->quiet, "No GL renderer line, progress bar or notes");
+  return {cmd, [args, cmd] { return WithErrorReport([&] { return Render(*args, *cmd); }); }};
 }
 
 }  // namespace vlab::cli

@@ -1,17 +1,142 @@
-// vlab vision: not built yet (placeholder until its issue lands).
+// vlab vision --camera HOST:PORT: the vision program. Subscribes to a camera
+// device, detects the described ArUco markers in every frame and serves their
+// poses (camera frame, and world frame when the camera's pose is known) as a
+// markers device. Runs until SIGINT/SIGTERM, --frames or --duration.
+#include <csignal>
 #include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
 
+#include "bridge/bridge_errors.h"
 #include "cli/cli_commands.h"
+#include "lab/lab_errors.h"
+#include "vision/vision_program.h"
 
 namespace vlab::cli {
 
+namespace {
+
+struct VisionArgs {
+  std::string camera;
+  int port = 50014;
+  std::string bind = "127.0.0.1";
+  std::string name = "vision";
+  std::vector<std::string> markers;
+  double connect_timeout_s = 10;
+  long frames = 0;
+  double duration_s = 0;
+  double max_error_px = 1.0;
+  double ambiguity_margin_px = 0.1;
+  bool quiet = false;
+};
+
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+
+// "HOST:PORT", "[v6]:PORT"
+void SplitHostPort(const std::string& text, std::string* host, int* port) {
+  const std::size_t colon = text.rfind(':');
+  bool ok = colon != std::string::npos && colon > 0 && colon + 1 < text.size();
+  if (ok) {
+    *host = text.substr(0, colon);
+    if (host->size() > 2 && host->front() == '[' && host->back() == ']') *host = host->substr(1, host->size() - 2);
+    const std::string digits = text.substr(colon + 1);
+    ok = digits.find_first_not_of("0123456789") == std::string::npos && digits.size() <= 5;
+    *port = ok ? std::stoi(digits) : 0;
+    ok = ok && *port >= 1 && *port <= 65535;
+  }
+  if (!ok) throw lab::InputError("--camera '" + text + "': expected HOST:PORT, e.g. 127.0.0.1:50013");
+}
+
+void Report(const vision::VisionProgram& p, double elapsed_s) {
+  const vision::VisionCounters& c = p.counters();
+  const double mean_ms = c.frames > 0 ? 1000 * c.process_s_sum / static_cast<double>(c.frames) : 0;
+  std::printf(
+      "vlab vision: %ld frames (%.1f/s), %ld skipped, %ld markers reported (%ld valid), %ld unknown; "
+      "%.1f ms mean, %.1f ms max per frame; %d subscribers, %ld refused\n",
+      c.frames, elapsed_s > 0 ? static_cast<double>(c.frames) / elapsed_s : 0.0, c.frames_skipped, c.reported, c.valid,
+      c.unknown, mean_ms, 1000 * c.process_s_max, p.server().subscribers(), p.server().counters().refused);
+  std::fflush(stdout);
+}
+
+int Vision(const VisionArgs& a) {
+  vision::VisionConfig config;
+  SplitHostPort(a.camera, &config.camera_address, &config.camera_port);
+  if (a.port < 0 || a.port > 65535) throw lab::InputError("--port " + std::to_string(a.port) + " outside 0..65535");
+  if (a.frames < 0) throw lab::InputError("--frames must be >= 0");
+  if (a.duration_s < 0) throw lab::InputError("--duration must be >= 0 s");
+  if (!(a.connect_timeout_s > 0)) throw lab::InputError("--connect-timeout must be > 0 s");
+  if (!(a.max_error_px > 0)) throw lab::InputError("--max-error must be > 0 px");
+  if (!(a.ambiguity_margin_px >= 0)) throw lab::InputError("--ambiguity-margin must be >= 0 px");
+  for (const std::string& m : a.markers) {
+    const auto more = vision::ParseMarkerOption(m);
+    config.markers.insert(config.markers.end(), more.begin(), more.end());
+  }
+  config.connect_timeout_s = a.connect_timeout_s;
+  config.server.name = a.name;
+  config.server.bind_address = a.bind;
+  config.server.port = a.port;
+  config.detector.max_reprojection_error_px = a.max_error_px;
+  config.detector.min_alternative_error_px = a.ambiguity_margin_px;
+
+  std::unique_ptr<vision::VisionProgram> program;
+  try {
+    program = vision::VisionProgram::Create(config);
+  } catch (const bridge::NetworkError& e) {
+    throw lab::InputError(e.what());  // a bad address or a port in use: the options' fault
+  }
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const vision::CameraModel& m = program->camera_model();
+  if (!a.quiet) {
+    std::printf(
+        "vlab vision: markers device '%s' on %s:%d (kind markers), %zu markers described; %s, "
+        "%dx%d, fx %.1f fy %.1f cx %.1f cy %.1f px\n",
+        a.name.c_str(), a.bind.c_str(), program->server().local_port(), program->server().table().size(),
+        program->camera().Label().c_str(), m.width, m.height, m.fx, m.fy, m.cx, m.cy);
+    std::fflush(stdout);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  double next_report_s = 5;
+  while (!g_stop) {
+    program->Step(0.05);
+    if (a.frames > 0 && program->counters().frames >= a.frames) break;
+    if (a.duration_s > 0 && elapsed() >= a.duration_s) break;
+    if (!a.quiet && elapsed() >= next_report_s) {
+      Report(*program, elapsed());
+      next_report_s += 5;
+    }
+  }
+  Report(*program, elapsed());
+  return 0;
+}
+
+}  // namespace
+
 Subcommand AddVisionCommand(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand("vision", "(not available in this build)");
-  cmd->group("");  // hidden
-  return {cmd, [] {
-            std::fprintf(stderr, "vlab: error: 'vision' is not available in this build\n");
-            return 2;
-          }};
+  auto args = std::make_shared<VisionArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "vision", "Detect ArUco markers in a camera device's frames and serve their poses as a markers device");
+  cmd->add_option("--camera", args->camera, "Camera device to subscribe to, HOST:PORT (e.g. 127.0.0.1:50013)")
+      ->required();
+  cmd->add_option("--port", args->port, "UDP port of the markers device (default 50014; 0: any free port)");
+  cmd->add_option("--bind", args->bind, "Address the markers device binds to (default 127.0.0.1)");
+  cmd->add_option("--name", args->name, "Device name in the describe reply (default vision)");
+  cmd->add_option("--marker", args->markers,
+                  "DICT:ID:SIDE or DICT:FIRST-LAST:SIDE, side in m (e.g. 4X4_50:0-35:0.03); repeatable. Clients "
+                  "may describe more markers over UDP");
+  cmd->add_option("--connect-timeout", args->connect_timeout_s, "Wait this long for the camera, s (default 10)");
+  cmd->add_option("--max-error", args->max_error_px,
+                  "Largest RMS reprojection error of a valid pose, px (default 1.0)");
+  cmd->add_option("--ambiguity-margin", args->ambiguity_margin_px,
+                  "The other IPPE pose must fit at least this badly for a valid pose, px RMS (default 0.1; "
+                  "for a real camera 2-3 times its corner noise)");
+  cmd->add_option("--frames", args->frames, "Stop after this many frames (default: run until interrupted)");
+  cmd->add_option("--duration", args->duration_s, "Stop after this many seconds (default: run until interrupted)");
+  cmd->add_flag("-q,--quiet", args->quiet, "Only the final counter line");
+  return {cmd, [args] { return WithErrorReport([&] { return Vision(*args); }); }};
 }
 
 }  // namespace vlab::cli

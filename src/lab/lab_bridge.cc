@@ -39,7 +39,7 @@ std::vector<double> TorqueMax(const SimArm& arm) {
 
 std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const BridgeOptions& options,
                                              const std::vector<SimArm*>& arms, const std::vector<SimWrench*>& wrenches,
-                                             const std::string& clock_name) {
+                                             const std::vector<SimDevice*>& devices, const std::string& clock_name) {
   std::unique_ptr<LabBridge> b(new LabBridge());
   const double control_hz = 1.0 / scenario.control_period_s;
   std::vector<std::string> names;
@@ -53,7 +53,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
   for (const DeviceConfig& c : scenario.devices) {
     const auto override_port = options.ports.find(c.name);
     const bool served = override_port != options.ports.end() || c.port > 0;
-    if (!served) continue;
+    if (!served || c.kind == "camera") continue;  // cameras: their own server (chunked frames)
     const int port = override_port != options.ports.end() ? override_port->second : c.port;
     Served d;
     d.name = c.name;
@@ -110,6 +110,19 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
       desc.sample_hz = w->sensor().sample_rate_hz();
       static_cast<bridge::DeviceDescription&>(desc) = common;
       ec.describe_json = bridge::DescribeJson(desc);
+    } else if (IsSimDeviceKind(c.kind)) {
+      for (SimDevice* x : devices) d.device = x->name() == c.name ? x : d.device;
+      d.kind = d.device->kind();
+      ec.kind = d.kind;
+      ec.command_length = d.device->command_length();
+      if (ec.command_length > 0) {
+        SimDevice* device = d.device;
+        ec.check_command = [device](const std::vector<double>& p) { return device->CheckCommand(p); };
+        ec.status_first = true;
+        ec.watchdog_periods = device->watchdog_periods();
+        ec.owner_timeout_periods = std::max(1, static_cast<int>(std::lround(device->owner_timeout_s() * control_hz)));
+      }
+      ec.describe_json = bridge::DescribeJson(common, c.kind, d.device->DescribeFacts());
     } else {
       d.kind = bridge::DeviceKind::kSim;
       ec.kind = d.kind;
@@ -127,6 +140,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
   }
   if (b->devices_.size() > 16) throw InputError(scenario.file + ": at most 16 devices can be served");
   b->buffer_.resize(65536);
+  b->payload_.reserve(bridge::kMaxPacketValues);
   b->packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
   b->latencies_.reserve(1 << 20);
   return b;
@@ -164,14 +178,21 @@ void LabBridge::Poll(double timeout_s) {
 }
 
 bool LabBridge::Answered(std::int64_t k) const {
+  // every commanded device that has an owner is waited for; period 0 also waits
+  // for a controller to start: one per served arm, or, where no arm is served,
+  // one for any commanded device (one that left was released: the device holds)
+  bool any_arm = false, any_owner = false, any_commanded = false;
   for (const Served& d : devices_) {
-    if (d.kind != bridge::DeviceKind::kArm) continue;
-    // period 0 waits for a controller to start; later, only a controller that
-    // owns the arm is waited for (one that left was released: the arm holds)
-    if (k == 0 && !d.endpoint->has_owner()) return false;
+    const bool arm = d.kind == bridge::DeviceKind::kArm;
+    const bool commanded = arm || (d.device && d.device->command_length() > 0);
+    if (!commanded) continue;
+    any_arm = any_arm || arm;
+    any_commanded = true;
+    any_owner = any_owner || d.endpoint->has_owner();
+    if (k == 0 && arm && !d.endpoint->has_owner()) return false;
     if (d.endpoint->has_owner() && d.endpoint->last_accepted_seq() < static_cast<double>(k)) return false;
   }
-  return true;
+  return !(k == 0 && !any_arm && any_commanded && !any_owner);
 }
 
 void LabBridge::ApplyArmCommands(std::int64_t k) {
@@ -179,6 +200,10 @@ void LabBridge::ApplyArmCommands(std::int64_t k) {
   for (Served& d : devices_) Receive(d);  // what came since the clock's last poll
   const double now = WallNow();
   for (Served& d : devices_) {
+    if (d.device && d.device->command_length() > 0) {
+      if (d.endpoint->BeginPeriod(k)) d.device->Hold();
+      if (d.endpoint->TakeCommand(&payload_)) d.device->Command(payload_);
+    }
     if (d.kind != bridge::DeviceKind::kArm) continue;
     if (d.endpoint->BeginPeriod(k)) {
       command_.mode = bridge::ArmMode::kHold;
@@ -203,7 +228,7 @@ bool LabBridge::TakeSimCommand(bridge::SimCommandMsg* command) {
 void LabBridge::NoteTimeout(int release_after) {
   if (++consecutive_timeouts_ < release_after) return;
   for (Served& d : devices_) {
-    if (d.kind == bridge::DeviceKind::kArm) d.endpoint->ReleaseOwner();
+    if (d.kind == bridge::DeviceKind::kArm || (d.device && d.device->command_length() > 0)) d.endpoint->ReleaseOwner();
   }
 }
 
@@ -226,6 +251,15 @@ void LabBridge::Publish(std::int64_t k, double t, const std::vector<bridge::ArmS
       m.filter = w.filter;
       m.saturated = w.saturated;
       bridge::EncodeWrenchState(seq, t, m, &d.last_state);
+    } else if (d.device) {
+      d.device->State(&payload_);
+      bridge::Header h;
+      h.kind = static_cast<int>(d.kind);
+      h.type = static_cast<int>(bridge::MessageType::kState);
+      h.seq = seq;
+      h.time = t;
+      h.length = static_cast<int>(payload_.size());
+      bridge::EncodePacket(h, payload_.data(), h.length, &d.last_state);
     } else {
       bridge::EncodeSimState(seq, t, sim_state, &d.last_state);
     }

@@ -21,6 +21,7 @@
 #include "bridge/bridge_udp.h"
 #include "lab/lab_arm_device.h"
 #include "lab/lab_clock.h"
+#include "lab/lab_device.h"
 #include "lab/lab_scenario.h"
 #include "lab/lab_wrench_device.h"
 
@@ -49,7 +50,7 @@ class LabBridge final : public CommandSource {
   /// Throws InputError naming the device and address when a port cannot be bound.
   static std::unique_ptr<LabBridge> Create(const Scenario& scenario, const BridgeOptions& options,
                                            const std::vector<SimArm*>& arms, const std::vector<SimWrench*>& wrenches,
-                                           const std::string& clock_name);
+                                           const std::vector<SimDevice*>& devices, const std::string& clock_name);
 
   // CommandSource
   void Poll(double timeout_s) override;
@@ -58,7 +59,8 @@ class LabBridge final : public CommandSource {
   bool Answered(std::int64_t k) const override;
 
   /// Start of period k: the watchdog, then the newest accepted command of every
-  /// served arm goes to its SimArm (latency from arrival to now recorded).
+  /// served arm goes to its SimArm, and of every other commanded device to it
+  /// (latency from arrival to now recorded for arms).
   void ApplyArmCommands(std::int64_t k);
   /// The newest sim command since the last call, if any.
   bool TakeSimCommand(bridge::SimCommandMsg* command);
@@ -88,6 +90,7 @@ class LabBridge final : public CommandSource {
     SimArm* arm = nullptr;
     int arm_index = -1;  // in the lab's arm list (and its arm_states)
     SimWrench* wrench = nullptr;
+    SimDevice* device = nullptr;  // base, feet, imu, ...
     std::vector<unsigned char> last_state;  // latest encoded state, for new subscribers
     double command_arrival = -1;            // wall time the pending command arrived
   };
@@ -106,6 +109,7 @@ class LabBridge final : public CommandSource {
   bridge::ArmStateMsg arm_msg_;
   bridge::ArmCommandMsg arm_command_;
   bridge::ArmCommand command_;
+  std::vector<double> payload_;
 };
 
 }  // namespace vlab::lab

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_errors.h"
+#include "lab/lab_images.h"
 #include "lab/lab_log.h"
 #include "lab/lab_output.h"
 #include "lab/lab_run_watch.h"
@@ -66,6 +67,10 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
       impl->arms.push_back(SimArm::Create(m, device));
     } else if (device.kind == "wrench") {
       impl->wrenches.push_back(SimWrench::Create(m, device, DeviceSeed(scenario.seed, device.name)));
+    } else if (device.kind == "camera") {
+      impl->cameras.push_back(SimCamera::Create(m, device, scenario.scene, DeviceSeed(scenario.seed, device.name)));
+    } else if (IsSimDeviceKind(device.kind)) {
+      impl->devices.push_back(MakeSimDevice(m, device, DeviceSeed(scenario.seed, device.name)));
     }  // sim: the run's own control device, served by the bridge
   }
   if (!impl->arms.empty() && m->opt.integrator == mjINT_RK4) {
@@ -79,6 +84,9 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
   }
   for (const auto& w : impl->wrenches) {
     for (auto& c : w->Columns()) impl->columns.push_back(c);
+  }
+  for (const auto& dev : impl->devices) {
+    for (auto& c : dev->Columns()) impl->columns.push_back(c);
   }
   impl->arm_states.resize(impl->arms.size());
   impl->arm_commands.resize(impl->arms.size());
@@ -142,16 +150,22 @@ RunResult Lab::Run(const RunOptions& options) {
   InstallMujocoHandlers();
   TakeMujocoWarningTexts();
   s.ResetState();
+  for (auto& c : s.cameras) c->Unserve();  // MakeBridge serves them again when serving
   std::unique_ptr<Clock> clock = MakeClock(s.scenario, options.clock, periods);
   result.clock = clock->name();
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
   CheckSet checks(s.scenario.checks, s.columns);
+  // image outputs: cameras and sizes checked against the scene before anything is written
+  std::unique_ptr<ImageOutputs> images;
+  if (!options.out_dir.empty() && !s.scenario.outputs.images.empty()) {
+    images = ImageOutputs::Create(m, s.scenario.outputs.images, s.scenario.scene, period);
+  }
   // the wire: bind every served device before anything is written
   std::unique_ptr<LabBridge> bridge;
   if (options.serve) {
     bridge = s.MakeBridge(*options.serve, clock->name());
-    if (options.on_serving) options.on_serving(bridge->Devices());
+    if (options.on_serving) options.on_serving(s.ServedDevices(*bridge));
   }
   // outputs: staging folder (removed on a MuJoCo error too), log
   std::unique_ptr<OutputDir> out;
@@ -164,6 +178,7 @@ RunResult Lab::Run(const RunOptions& options) {
       std::filesystem::remove_all(staging, ec);
     });
     if (s.scenario.outputs.log) log = CsvLog::Open(out->File("log.csv"), s.columns);
+    if (images) images->Open(*out);
   }
 
   if (options.record) result.recording.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
@@ -184,6 +199,8 @@ RunResult Lab::Run(const RunOptions& options) {
   if (s.controller) s.RunController(0.0, options, &replay_at, &result, controller_columns);
   emit_row(0.0);
   if (options.observe) options.observe(0.0, m, d);
+  for (auto& c : s.cameras) c->Observe(0.0, d);
+  if (images) images->Observe(0.0, d);
   publish(0);
 
   WarningWatch warnings;
@@ -228,6 +245,7 @@ RunResult Lab::Run(const RunOptions& options) {
       const double t_step = d->time;
       mj_step1(m, d);
       for (auto& arm : s.arms) arm->Actuate(*d, m->opt.timestep);
+      for (auto& dev : s.devices) dev->Actuate(*d, m->opt.timestep);
       if (options.record) result.recording.controls.insert(result.recording.controls.end(), d->ctrl, d->ctrl + m->nu);
       mj_step2(m, d);
       for (auto& w : s.wrenches) w->Step(*d, m->opt.timestep);
@@ -238,8 +256,11 @@ RunResult Lab::Run(const RunOptions& options) {
     // 3. sample devices, log, publish the state that closes the period
     for (auto& w : s.wrenches) w->EndPeriod();
     for (std::size_t i = 0; i < s.arms.size(); ++i) s.arms[i]->Sample(*d, t_next, &s.arm_states[i]);
+    for (auto& dev : s.devices) dev->Sample(*d, t_next);
     emit_row(t_next);
     if (options.observe) options.observe(t_next, m, d);
+    for (auto& c : s.cameras) c->Observe(t_next, d);
+    if (images) images->Observe(t_next, d);
     ++k;
     if (steps_left > 0 && --steps_left == 0) paused = true;
     publish(k);
@@ -258,15 +279,18 @@ RunResult Lab::Run(const RunOptions& options) {
   result.exit_code = result.failure.empty() ? 0 : 1;
   result.clock_stats = clock->stats();
   if (bridge) {
-    result.served = bridge->Devices();
+    result.served = s.ServedDevices(*bridge);
     result.latencies_s = bridge->latencies();
   }
 
   if (out) {
     if (log) log->Close();
+    if (images) images->Finish();
     result.total_wall_s = Seconds(t_start, WallClock::now());
+    nlohmann::json summary_json = SummaryJson(s.scenario, m, result);
+    if (images) summary_json["images"] = images->Summary();
     std::ofstream summary(out->File("summary.json"));
-    summary << SummaryJson(s.scenario, m, result).dump(2) << "\n";
+    summary << summary_json.dump(2) << "\n";
     summary.close();
     if (!summary) throw std::runtime_error("summary '" + out->File("summary.json") + "': write failed");
     out->Commit();
@@ -277,7 +301,10 @@ RunResult Lab::Run(const RunOptions& options) {
 
 std::vector<ServedDevice> Lab::Describe(const BridgeOptions& options, const std::string& clock) const {
   const std::string name = clock.empty() ? impl_->scenario.clock : clock;
-  return impl_->MakeBridge(options, name)->Devices();
+  std::unique_ptr<LabBridge> bridge = impl_->MakeBridge(options, name);
+  std::vector<ServedDevice> out = impl_->ServedDevices(*bridge);
+  for (auto& cam : impl_->cameras) cam->Unserve();
+  return out;
 }
 
 }  // namespace vlab::lab

@@ -17,6 +17,7 @@ void Lab::Impl::ResetState() {
   for (auto& arm : arms) arm->Actuate(*d, 0.0);
   mj_forward(model.get(), d);
   for (auto& w : wrenches) w->Reset(*d);
+  for (auto& dev : devices) dev->Reset(*d);
   for (std::size_t i = 0; i < arms.size(); ++i) arms[i]->Sample(*d, d->time, &arm_states[i]);
 }
 
@@ -30,6 +31,10 @@ void Lab::Impl::WriteRow(double time_s, std::vector<double>& row) const {
   for (const auto& w : wrenches) {
     w->Row(out);
     out += w->ColumnCount();
+  }
+  for (const auto& dev : devices) {
+    dev->Row(out);
+    out += dev->ColumnCount();
   }
 }
 
@@ -65,7 +70,19 @@ std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, c
   for (auto& a : arms) arm_ptrs.push_back(a.get());
   std::vector<SimWrench*> wrench_ptrs;
   for (auto& w : wrenches) wrench_ptrs.push_back(w.get());
-  std::unique_ptr<LabBridge> bridge = LabBridge::Create(scenario, options, arm_ptrs, wrench_ptrs, clock_name);
+  std::vector<SimDevice*> device_ptrs;
+  for (auto& dev : devices) device_ptrs.push_back(dev.get());
+  std::unique_ptr<LabBridge> bridge =
+      LabBridge::Create(scenario, options, arm_ptrs, wrench_ptrs, device_ptrs, clock_name);
+  const std::string server = options.server + " (MuJoCo " + MujocoVersion() + ")";
+  for (auto& cam : cameras) {
+    cam->Unserve();
+    int port = 0;
+    for (const DeviceConfig& c : scenario.devices) port = c.name == cam->name() ? c.port : port;
+    const auto override_port = options.ports.find(cam->name());
+    if (override_port == options.ports.end() && port == 0) continue;
+    cam->Serve(options.bind, override_port != options.ports.end() ? override_port->second : port, server, clock_name);
+  }
   if (controller) {
     for (const ServedDevice& sd : bridge->Devices()) {
       if (sd.name == scenario.controller.arm) {
@@ -76,6 +93,16 @@ std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, c
     }
   }
   return bridge;
+}
+
+std::vector<ServedDevice> Lab::Impl::ServedDevices(const LabBridge& bridge) const {
+  std::vector<ServedDevice> out = bridge.Devices();
+  for (const auto& cam : cameras) {
+    if (!cam->served()) continue;
+    const bridge::CameraServer& s = *cam->server();
+    out.push_back({cam->name(), "camera", s.config().bind_address, s.port(), s.describe_json(), s.counters().endpoint});
+  }
+  return out;
 }
 
 bool Lab::Impl::HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left) {

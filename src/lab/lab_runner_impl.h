@@ -10,8 +10,10 @@
 #include "bridge/bridge_messages.h"
 #include "lab/lab_arm_device.h"
 #include "lab/lab_bridge.h"
+#include "lab/lab_camera_device.h"
 #include "lab/lab_clock.h"
 #include "lab/lab_controller.h"
+#include "lab/lab_device.h"
 #include "lab/lab_mujoco.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_wrench_device.h"
@@ -25,6 +27,8 @@ struct Lab::Impl {
   int steps_per_period = 1;
   std::vector<std::unique_ptr<SimArm>> arms;
   std::vector<std::unique_ptr<SimWrench>> wrenches;
+  std::vector<std::unique_ptr<SimDevice>> devices;  // base, feet, imu, ...
+  std::vector<std::unique_ptr<SimCamera>> cameras;
   std::unique_ptr<Controller> controller;
   int controller_arm = -1;
   std::size_t controller_columns = 0;  // log columns the controller writes
@@ -34,7 +38,10 @@ struct Lab::Impl {
 
   void ResetState();
   void WriteRow(double time_s, std::vector<double>& row) const;
+  /// Binds every served device (cameras too); throws InputError.
   std::unique_ptr<LabBridge> MakeBridge(const BridgeOptions& options, const std::string& clock_name);
+  /// The bridge's devices and the served cameras.
+  std::vector<ServedDevice> ServedDevices(const LabBridge& bridge) const;
   // applies the sim device's commands; true when something changed
   bool HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left);
   // one controller period: computed (and recorded), or replayed from a recording

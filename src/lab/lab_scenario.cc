@@ -114,8 +114,36 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
     if (c.jpeg_quality < 1 || c.jpeg_quality > 100) r.Fail("jpeg_quality", "must be 1 to 100");
     c.profile = r.String("profile", c.profile);
     if (c.profile != "fast" && c.profile != "quality") r.Fail("profile", "must be fast or quality");
+  } else if (device.kind == "feet" || device.kind == "imu") {
+    device.sensors.sensors = r.Strings("sensors", {});
+    if (device.sensors.sensors.empty()) r.Fail("sensors", "needs at least one MJCF sensor");
+    device.sensors.noise = r.Number("noise", 0.0);
+    if (!(device.sensors.noise >= 0)) r.Fail("noise", "must be >= 0");
+  } else if (device.kind == "base") {
+    BaseDeviceConfig& b = device.base;
+    b.joints = r.Strings("joints", {});
+    if (b.joints.size() != 3) r.Fail("joints", "a base needs 3 joints: x, y (slide) and yaw (hinge)");
+    b.actuators = r.Strings("actuators", b.joints);
+    if (b.actuators.size() != 3) r.Fail("actuators", "needs one velocity actuator per joint (3)");
+    b.max_velocity = r.Numbers("max_velocity", b.max_velocity);
+    b.max_acceleration = r.Numbers("max_acceleration", b.max_acceleration);
+    for (const char* key : {"max_velocity", "max_acceleration"}) {
+      const auto& v = std::string(key) == "max_velocity" ? b.max_velocity : b.max_acceleration;
+      if (v.size() != 3 || !(v[0] > 0 && v[1] > 0 && v[2] > 0)) r.Fail(key, "expected 3 numbers > 0 (x, y, yaw)");
+    }
+    MapReader odometry = r.Map("odometry");
+    b.odometry_drift = odometry.Bool("drift", b.odometry_drift);
+    b.drift_scale = odometry.Number("scale_std", b.drift_scale);
+    b.drift_yaw_rate = odometry.Number("yaw_rate_std", b.drift_yaw_rate);
+    if (!(b.drift_scale >= 0 && b.drift_scale < 0.5)) odometry.Fail("scale_std", "must be 0 to 0.5");
+    if (!(b.drift_yaw_rate >= 0)) odometry.Fail("yaw_rate_std", "must be >= 0 rad/s");
+    odometry.Finish();
+    b.watchdog_periods = r.Integer("watchdog_periods", b.watchdog_periods);
+    if (b.watchdog_periods < 0) r.Fail("watchdog_periods", "must be >= 0 (0: off)");
+    b.owner_timeout_s = r.Number("owner_timeout", b.owner_timeout_s);
+    if (!(b.owner_timeout_s > 0)) r.Fail("owner_timeout", "must be > 0 s");
   } else if (device.kind != "sim") {
-    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim, camera)");
+    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim, camera, base, feet, imu)");
   }
   r.Finish();
   return device;

@@ -61,14 +61,36 @@ struct CameraDeviceConfig {
   std::string profile = "fast";  ///< fast | quality
 };
 
+/// A device that reads MJCF sensors as they are (kinds feet and imu).
+struct SensorDeviceConfig {
+  std::vector<std::string> sensors;  ///< MJCF sensors, in payload order
+  double noise = 0.0;                ///< Gaussian noise std added to every value (sensor units; 0: none)
+};
+
+/// A holonomic mobile base (kind base): planar x, y, yaw joints driven by
+/// velocity actuators, commanded in the base or the world frame.
+struct BaseDeviceConfig {
+  std::vector<std::string> joints;     ///< world x, world y (slide) and yaw (hinge) joints
+  std::vector<std::string> actuators;  ///< velocity actuators of those joints (default: the joint names)
+  std::vector<double> max_velocity = {1.0, 1.0, 2.0};      ///< vx, vy (m/s), wz (rad/s)
+  std::vector<double> max_acceleration = {1.0, 1.0, 2.0};  ///< m/s^2, m/s^2, rad/s^2
+  bool odometry_drift = false;  ///< seeded odometry errors (scale and yaw-rate bias)
+  double drift_scale = 0.01;    ///< std of the odometry's scale errors (fraction)
+  double drift_yaw_rate = 0.002;  ///< std of the odometry's yaw-rate bias, rad/s
+  int watchdog_periods = 3;     ///< stop after this many periods without a command (0: off)
+  double owner_timeout_s = 1.0;
+};
+
 struct DeviceConfig {
   std::string name;
-  std::string kind;  ///< "arm", "wrench", "sim" or "camera"
+  std::string kind;  ///< arm, wrench, sim, camera, base, feet or imu
   std::string where;  ///< "FILE:LINE" for messages about binding
   int port = 0;       ///< UDP port under `vlab serve` (0: not served)
   ArmDeviceConfig arm;
   WrenchDeviceConfig wrench;
   CameraDeviceConfig camera;
+  SensorDeviceConfig sensors;
+  BaseDeviceConfig base;
 };
 
 struct CartesianWaypoint {

@@ -1,0 +1,294 @@
+#include "bridge/bridge_camera_client.h"
+
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+#include <boost/asio/ip/udp.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bridge/bridge_camera_socket.h"
+#include "bridge/bridge_protocol.h"
+
+namespace vlab::bridge {
+
+struct CameraClient::Impl {
+  explicit Impl(const AssemblerConfig& config) : assembler(config) {}
+  FrameAssembler assembler;
+  CameraFrame pending;  // a frame being passed over by ReceiveLatest
+  cv::Mat bgr;          // JPEG decoder output
+};
+
+namespace {
+
+constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
+constexpr double kDescribeRetry_s = 0.25;    // resend a lost describe request this often
+
+std::string Number(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+// numeric address first, then a host name lookup (IPv4 preferred)
+Endpoint Resolve(const std::string& address, int port) {
+  if (port < 1 || port > 65535) throw NetworkError("port " + std::to_string(port) + " out of range 1..65535");
+  try {
+    return UdpSocket::MakeEndpoint(address, port);
+  } catch (const NetworkError&) {
+  }
+  const bool name_chars = !address.empty() && std::all_of(address.begin(), address.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.';
+  });
+  const bool numeric = std::all_of(address.begin(), address.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c)) || c == '.';
+  });
+  if (!name_chars || numeric) throw NetworkError("address '" + address + "' is neither an IP address nor a host name");
+  boost::asio::io_context io;
+  boost::asio::ip::udp::resolver resolver(io);
+  boost::system::error_code ec;
+  const auto results = resolver.resolve(address, std::to_string(port), ec);
+  if (ec || results.empty()) {
+    throw NetworkError("address '" + address + "': " + (ec ? ec.message() : std::string("no such host")));
+  }
+  for (const auto& r : results) {
+    if (r.endpoint().address().is_v4()) return r.endpoint();
+  }
+  return results.begin()->endpoint();
+}
+
+double Seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+std::chrono::steady_clock::time_point After(std::chrono::steady_clock::time_point t, double s) {
+  return t + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+CameraClient::CameraClient(CameraClient&&) noexcept = default;
+CameraClient& CameraClient::operator=(CameraClient&&) noexcept = default;
+CameraClient::~CameraClient() = default;
+
+CameraClient CameraClient::Connect(const std::string& address, int port, const CameraClientOptions& options) {
+  return CameraClient(address, port, options);
+}
+
+CameraClient::CameraClient(const std::string& address, int port, const CameraClientOptions& options)
+    : options_(options),
+      device_(Resolve(address, port)),
+      impl_(new Impl(options.assembler)),
+      buffer_(kBufferBytes),
+      start_(Clock::now()) {
+  const bool any_v4 = options.bind_address == "0.0.0.0";
+  socket_ = UdpSocket::Bind(any_v4 && device_.address().is_v6() ? "::" : options.bind_address, 0);
+  receive_buffer_bytes_ = SetSocketBuffer(socket_->fd(), SO_RCVBUF, options.receive_buffer_bytes);
+  EncodeDescribeRequest(DeviceKind::kCamera, &request_);
+
+  // the reply is the first datagram from the device that starts with '{';
+  // chunks arriving meanwhile are fed to the assembler; a lost request is resent
+  const Clock::time_point deadline = After(start_, options.timeout_s);
+  Clock::time_point resend = start_;
+  for (;;) {
+    const Clock::time_point now = Clock::now();
+    if (now >= resend) {
+      if (!KeepAlive()) throw NetworkError(Label() + ": cannot send the describe request");
+      resend = After(now, kDescribeRetry_s);
+    }
+    const double wait_s = std::max(0.0, Seconds(std::min(deadline, resend) - now));
+    Endpoint from;
+    const long n = socket_->Receive(buffer_.data(), buffer_.size(), &from, wait_s);
+    if (n < 0) {
+      if (Clock::now() < deadline) continue;
+      throw TimeoutError(Label() + ": no describe reply within " + Number(options.timeout_s) +
+                         " s (is a camera serving that address and port?)");
+    }
+    if (from.port() != device_.port()) {
+      ++datagrams_skipped_;
+      continue;
+    }
+    if (n > 0 && buffer_[0] == '{') {
+      CheckDescribe(buffer_.data(), n);
+      break;
+    }
+    impl_->assembler.Add(buffer_.data(), static_cast<std::size_t>(n), Seconds(Clock::now() - start_));
+  }
+  next_keepalive_ = After(Clock::now(), options_.keepalive_s);
+}
+
+void CameraClient::CheckDescribe(const unsigned char* data, long size) {
+  try {
+    describe_ = nlohmann::json::parse(data, data + size);
+  } catch (const nlohmann::json::exception& e) {
+    throw ProtocolError(Label() + ": describe reply is not valid JSON: " + e.what());
+  }
+  if (!describe_.is_object()) throw ProtocolError(Label() + ": describe reply is not a JSON object");
+  const nlohmann::json version = describe_.value("protocol", nlohmann::json());
+  if (!version.is_number()) throw ProtocolError(Label() + ": describe reply has no numeric \"protocol\"");
+  if (version.get<double>() != kProtocolVersion) {
+    throw VersionMismatch(Label() + ": the device speaks protocol version " + version.dump() +
+                          ", this client speaks version " + std::to_string(kProtocolVersion));
+  }
+  const nlohmann::json kind = describe_.value("kind", nlohmann::json());
+  if (!kind.is_string() || kind.get<std::string>() != "camera") {
+    throw ProtocolError(Label() + ": the device is of kind " + kind.dump() + ", not \"camera\"");
+  }
+  const nlohmann::json name = describe_.value("name", nlohmann::json());
+  if (name.is_string()) name_ = name.get<std::string>();
+
+  // the facts a client relies on
+  auto number = [&](const nlohmann::json& object, const char* field, const std::string& path) {
+    if (!object.is_object() || !object.contains(field) || !object[field].is_number()) {
+      throw ProtocolError(Label() + ": describe reply has no number \"" + path + "\"");
+    }
+    return object[field].get<double>();
+  };
+  calibration_.width = static_cast<int>(number(describe_, "width", "width"));
+  calibration_.height = static_cast<int>(number(describe_, "height", "height"));
+  fps_ = number(describe_, "fps", "fps");
+  const nlohmann::json encoding = describe_.value("encoding", nlohmann::json());
+  if (!encoding.is_string() || !EncodingFromName(encoding.get<std::string>(), &encoding_)) {
+    throw ProtocolError(Label() + ": describe reply's \"encoding\" is " + encoding.dump() +
+                        ", not \"raw\" or \"jpeg\"");
+  }
+  const nlohmann::json intrinsics = describe_.value("intrinsics", nlohmann::json());
+  calibration_.fx = number(intrinsics, "fx", "intrinsics.fx");
+  calibration_.fy = number(intrinsics, "fy", "intrinsics.fy");
+  calibration_.cx = number(intrinsics, "cx", "intrinsics.cx");
+  calibration_.cy = number(intrinsics, "cy", "intrinsics.cy");
+  calibration_.source = intrinsics.value("source", "");
+  const nlohmann::json distortion = describe_.value("distortion", nlohmann::json());
+  if (distortion.is_object()) {
+    const char* fields[4] = {"k1", "k2", "p1", "p2"};
+    for (int i = 0; i < 4; ++i) {
+      calibration_.distortion[i] = number(distortion, fields[i], std::string("distortion.") + fields[i]);
+    }
+  }
+}
+
+std::string CameraClient::Label() const {
+  std::string label = "camera";
+  if (!name_.empty()) label += " '" + name_ + "'";
+  return label + " at " + EndpointText(device_);
+}
+
+int CameraClient::local_port() const { return socket_->local_port(); }
+
+const AssemblerCounters& CameraClient::counters() const { return impl_->assembler.counters(); }
+
+bool CameraClient::KeepAlive() { return socket_->SendTo(request_.data(), request_.size(), device_); }
+
+bool CameraClient::NextFrame(Clock::time_point deadline, bool queued_only, CameraFrame* frame) {
+  FrameAssembler& assembler = impl_->assembler;
+  for (;;) {
+    if (assembler.Take(frame)) return true;
+    Clock::time_point now = Clock::now();
+    // a stream of chunks that never completes a frame must not hold the caller past its deadline
+    if (!queued_only && now >= deadline) {
+      assembler.Expire(Seconds(now - start_));
+      return false;
+    }
+    if (now >= next_keepalive_) {
+      KeepAlive();
+      next_keepalive_ = After(now, options_.keepalive_s);
+    }
+    const double wait_s = queued_only ? 0.0 : std::max(0.0, Seconds(std::min(deadline, next_keepalive_) - now));
+    Endpoint from;
+    const long n = socket_->Receive(buffer_.data(), buffer_.size(), &from, wait_s);
+    now = Clock::now();
+    if (n < 0) {
+      assembler.Expire(Seconds(now - start_));
+      if (queued_only || now >= deadline) return false;
+      continue;
+    }
+    if (from.port() != device_.port() || (n > 0 && buffer_[0] == '{')) {
+      ++datagrams_skipped_;  // another sender, or a describe reply to a keep-alive
+      continue;
+    }
+    ChunkError error;
+    assembler.Add(buffer_.data(), static_cast<std::size_t>(n), Seconds(now - start_), &error);
+    if (error == ChunkError::kBadVersion) {
+      throw VersionMismatch(Label() + ": the device sent a chunk of protocol version " +
+                            Number(GetDouble(buffer_.data() + 8)) + ", this client speaks version " +
+                            std::to_string(kProtocolVersion));
+    }
+  }
+}
+
+bool CameraClient::Decode(Frame* frame) {
+  if (!options_.decode) {
+    frame->rgb.clear();
+    return true;
+  }
+  const std::size_t bytes = 3u * static_cast<std::size_t>(frame->width) * frame->height;
+  if (frame->encoding == CameraEncoding::kRaw) {
+    frame->rgb.assign(frame->data.begin(), frame->data.end());
+    return true;
+  }
+  const cv::Mat jpeg(1, static_cast<int>(frame->data.size()), CV_8U, frame->data.data());
+  try {
+    cv::imdecode(jpeg, cv::IMREAD_COLOR, &impl_->bgr);
+  } catch (const cv::Exception&) {
+    return false;
+  }
+  if (impl_->bgr.cols != frame->width || impl_->bgr.rows != frame->height || impl_->bgr.type() != CV_8UC3) {
+    return false;
+  }
+  frame->rgb.resize(bytes);
+  cv::Mat rgb(frame->height, frame->width, CV_8UC3, frame->rgb.data());
+  cv::cvtColor(impl_->bgr, rgb, cv::COLOR_BGR2RGB);
+  return true;
+}
+
+void CameraClient::ThrowTimeout(double timeout_s) const {
+  const AssemblerCounters& c = counters();
+  throw TimeoutError(Label() + ": no whole frame within " + Number(timeout_s) + " s (" + std::to_string(c.chunks) +
+                     " chunks so far, " + std::to_string(c.frames_dropped) + " frames dropped incomplete, " +
+                     std::to_string(c.refused) + " chunks refused)");
+}
+
+void CameraClient::Receive(double timeout_s, Frame* frame) {
+  const Clock::time_point deadline = After(Clock::now(), std::max(0.0, timeout_s));
+  for (;;) {
+    if (!NextFrame(deadline, false, frame)) ThrowTimeout(timeout_s);
+    if (Decode(frame)) break;
+    ++undecodable_;
+  }
+  ++frames_returned_;
+}
+
+CameraClient::Frame CameraClient::Receive(double timeout_s) {
+  Frame frame;
+  Receive(timeout_s, &frame);
+  return frame;
+}
+
+void CameraClient::ReceiveLatest(double timeout_s, Frame* frame) {
+  const Clock::time_point deadline = After(Clock::now(), std::max(0.0, timeout_s));
+  bool have = false;
+  for (;;) {
+    // wait for the first whole frame; then only take what is already queued
+    CameraFrame& next = impl_->pending;
+    if (!NextFrame(deadline, have, &next)) {
+      if (!have) ThrowTimeout(timeout_s);
+      if (Decode(frame)) break;
+      ++undecodable_;
+      have = false;  // wait again, up to the deadline
+      continue;
+    }
+    if (have) ++frames_skipped_;
+    have = true;
+    static_cast<CameraFrame&>(*frame).id = next.id;
+    frame->time_s = next.time_s;
+    frame->width = next.width;
+    frame->height = next.height;
+    frame->encoding = next.encoding;
+    frame->pose = next.pose;
+    std::swap(frame->data, next.data);
+  }
+  ++frames_returned_;
+}
+
+}  // namespace vlab::bridge

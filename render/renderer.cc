@@ -1,0 +1,241 @@
+#include "render/renderer.h"
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include "lab/lab_errors.h"
+#include "render/render_context.h"
+
+namespace vlab::render {
+
+namespace {
+
+constexpr int kQualitySamples = 4;  // MSAA samples of the quality profile
+
+// room for every model geom plus the decorations MuJoCo adds (tendon segments, ...)
+int SceneCapacity(const mjModel* m) { return 1000 + 2 * m->ngeom + 2 * m->nwrap; }
+
+std::atomic<bool> g_logged{false};
+
+}  // namespace
+
+Profile ProfileFromName(const std::string& name) {
+  if (name == "fast") return Profile::kFast;
+  if (name == "quality") return Profile::kQuality;
+  throw lab::InputError("unknown render profile '" + name + "' (known: fast, quality)");
+}
+
+const char* ProfileName(Profile profile) { return profile == Profile::kFast ? "fast" : "quality"; }
+
+Intrinsics CameraIntrinsics(const mjModel* m, int camera, int width, int height) {
+  if (camera < 0 || camera >= m->ncam) {
+    throw std::invalid_argument("CameraIntrinsics: no camera " + std::to_string(camera));
+  }
+  Intrinsics k;
+  k.width = width;
+  k.height = height;
+  const double half_fovy_rad = 0.5 * m->cam_fovy[camera] * M_PI / 180.0;
+  k.fy = 0.5 * height / std::tan(half_fovy_rad);
+  k.fx = k.fy;
+  k.cx = 0.5 * width - 0.5;
+  k.cy = 0.5 * height - 0.5;
+  return k;
+}
+
+int CameraId(const mjModel* m, const std::string& name) {
+  const int id = mj_name2id(m, mjOBJ_CAMERA, name.c_str());
+  if (id >= 0) return id;
+  std::string known;
+  for (int i = 0; i < m->ncam; ++i) {
+    const char* n = mj_id2name(m, mjOBJ_CAMERA, i);
+    known += (i ? ", " : "") + std::string(n ? n : "(unnamed #" + std::to_string(i) + ")");
+  }
+  throw lab::InputError("no camera '" + name + "' in the scene (" +
+                        (known.empty() ? std::string("it has no cameras") : "cameras: " + known) + ")");
+}
+
+void GeomsToBodies(const mjModel* m, const SegmentationImage& seg, std::vector<std::int32_t>* bodies) {
+  bodies->resize(seg.geom.size());
+  for (std::size_t i = 0; i < seg.geom.size(); ++i) {
+    const std::int32_t g = seg.geom[i];
+    (*bodies)[i] = (g >= 0 && g < m->ngeom) ? m->geom_bodyid[g] : -1;
+  }
+}
+
+struct Renderer::Impl {
+  const mjModel* m = nullptr;
+  Options options;
+  std::unique_ptr<GlContext> gl;
+  mjvScene scene;
+  mjvOption vis;
+  mjvCamera camera;
+  mjrContext context;
+  bool scene_made = false;
+  bool context_made = false;
+  std::vector<std::uint8_t> raw_rgb;  // bottom-up rows from mjr_readPixels
+  std::vector<float> raw_depth;
+
+  ~Impl() {
+    if (!gl) return;
+    gl->MakeCurrent();
+    if (context_made) mjr_freeContext(&context);
+    if (scene_made) mjv_freeScene(&scene);
+  }
+
+  // size of the next image: the requested one, or the renderer's when 0 x 0
+  void Size(int* width, int* height) const {
+    if (*width == 0 && *height == 0) {
+      *width = options.width;
+      *height = options.height;
+    }
+    if (*width < 1 || *height < 1 || *width > options.width || *height > options.height) {
+      throw std::invalid_argument("Renderer: image " + std::to_string(*width) + "x" + std::to_string(*height) +
+                                  " outside 1x1 .. " + std::to_string(options.width) + "x" +
+                                  std::to_string(options.height));
+    }
+  }
+
+  // the scene of `cam` for the state in d
+  void Update(mjData* d, int cam) {
+    if (cam < 0 || cam >= m->ncam) throw std::invalid_argument("Renderer: no camera " + std::to_string(cam));
+    gl->MakeCurrent();
+    camera.type = mjCAMERA_FIXED;
+    camera.fixedcamid = cam;
+    mjv_updateScene(m, d, &vis, nullptr, &camera, mjCAT_ALL, &scene);
+  }
+
+  // one mjr_render pass into the offscreen buffer's lower-left corner; flat: segmentation colours,
+  // no lighting, no skybox, no multisampling (depth and ids exactly at pixel centres)
+  void Pass(const mjrRect& viewport, bool flat) {
+    scene.flags[mjRND_SEGMENT] = flat;
+    scene.flags[mjRND_IDCOLOR] = flat;
+    mjr_render(viewport, &scene, &context);
+    scene.flags[mjRND_SEGMENT] = 0;
+    scene.flags[mjRND_IDCOLOR] = 0;
+  }
+};
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Renderer::~Renderer() = default;
+int Renderer::width() const { return impl_->options.width; }
+int Renderer::height() const { return impl_->options.height; }
+Profile Renderer::profile() const { return impl_->options.profile; }
+const std::string& Renderer::gl_renderer() const { return impl_->gl->description(); }
+
+std::unique_ptr<Renderer> Renderer::Create(const mjModel* m, const Options& options) {
+  const int max_w = m->vis.global.offwidth, max_h = m->vis.global.offheight;
+  if (options.width < 1 || options.height < 1 || options.width > max_w || options.height > max_h) {
+    const std::string scene = options.scene.empty() ? "the scene" : "scene '" + options.scene + "'";
+    throw lab::InputError("image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+                          " does not fit the offscreen buffer " + std::to_string(max_w) + "x" +
+                          std::to_string(max_h) + " of " + scene + " (raise <visual><global offwidth=\"...\" " +
+                          "offheight=\"...\"/> in the scene)");
+  }
+  auto impl = std::make_unique<Impl>();
+  Impl& r = *impl;
+  r.m = m;
+  r.options = options;
+  r.gl = GlContext::Create();
+
+  mjv_defaultOption(&r.vis);
+  // a camera sees bodies, not the modelling aids: no sites, joints, rangefinder rays
+  for (int i = 0; i < mjNGROUP; ++i) r.vis.sitegroup[i] = 0;
+  r.vis.flags[mjVIS_RANGEFINDER] = 0;
+  mjv_defaultCamera(&r.camera);
+  mjv_defaultScene(&r.scene);
+  mjv_makeScene(m, &r.scene, SceneCapacity(m));
+  r.scene_made = true;
+  const bool quality = options.profile == Profile::kQuality;
+  r.scene.flags[mjRND_SHADOW] = quality;
+  r.scene.flags[mjRND_REFLECTION] = quality;
+
+  // offsamples is read only by mjr_makeContext: set it for this context, then restore the shared model
+  mjModel* shared = const_cast<mjModel*>(m);
+  const int samples = shared->vis.quality.offsamples;
+  shared->vis.quality.offsamples = quality ? kQualitySamples : 0;
+  mjr_defaultContext(&r.context);
+  mjr_makeContext(m, &r.context, mjFONTSCALE_100);
+  shared->vis.quality.offsamples = samples;
+  r.context_made = true;
+  mjr_setBuffer(mjFB_OFFSCREEN, &r.context);
+  if (r.context.currentBuffer != mjFB_OFFSCREEN) throw std::runtime_error("MuJoCo: no offscreen framebuffer");
+
+  const std::size_t pixels = static_cast<std::size_t>(options.width) * options.height;
+  r.raw_rgb.resize(pixels * 3);
+  r.raw_depth.resize(pixels);
+  if (options.log_renderer && !g_logged.exchange(true)) {
+    std::fprintf(stderr, "vlab: render: %s\n", r.gl->description().c_str());
+  }
+  return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+void Renderer::Render(mjData* d, int camera, RgbImage* rgb, DepthImage* depth) {
+  Impl& r = *impl_;
+  int w = rgb->width, h = rgb->height;
+  r.Size(&w, &h);
+  r.Update(d, camera);
+  const mjrRect viewport = {0, 0, w, h};
+  r.Pass(viewport, false);
+  mjr_readPixels(r.raw_rgb.data(), nullptr, viewport, &r.context);
+
+  // rows bottom-up -> top-down
+  const std::size_t row = static_cast<std::size_t>(w) * 3;
+  rgb->width = w;
+  rgb->height = h;
+  rgb->pixels.resize(row * h);
+  for (int y = 0; y < h; ++y) {
+    std::memcpy(rgb->pixels.data() + row * y, r.raw_rgb.data() + row * (h - 1 - y), row);
+  }
+  if (!depth) return;
+
+  // depth from a flat pass: the colour pass's depth buffer holds the skybox, and one
+  // multisample per pixel (not its centre)
+  r.Pass(viewport, true);
+  mjr_readPixels(nullptr, r.raw_depth.data(), viewport, &r.context);
+  // window depth b in [0, 1] of a perspective projection with near n and far f:
+  // b = (1/n - 1/z) / (1/n - 1/f), so z = n f / (f - b (f - n))
+  const double n = r.scene.camera[0].frustum_near, f = r.scene.camera[0].frustum_far;
+  depth->width = w;
+  depth->height = h;
+  depth->metres.resize(static_cast<std::size_t>(w) * h);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int y = 0; y < h; ++y) {
+    const float* src = r.raw_depth.data() + static_cast<std::size_t>(w) * (h - 1 - y);
+    float* dst = depth->metres.data() + static_cast<std::size_t>(w) * y;
+    for (int x = 0; x < w; ++x) {
+      const double b = src[x];
+      dst[x] = b >= 1.0 ? inf : static_cast<float>(n * f / (f - b * (f - n)));
+    }
+  }
+}
+
+void Renderer::RenderSegmentation(mjData* d, int camera, SegmentationImage* seg) {
+  Impl& r = *impl_;
+  int w = seg->width, h = seg->height;
+  r.Size(&w, &h);
+  // flat colours: scene geom index + 1 in 24 bits (R low byte), 0 where nothing was drawn
+  r.Update(d, camera);
+  const mjrRect viewport = {0, 0, w, h};
+  r.Pass(viewport, true);
+  mjr_readPixels(r.raw_rgb.data(), nullptr, viewport, &r.context);
+
+  seg->width = w;
+  seg->height = h;
+  seg->geom.resize(static_cast<std::size_t>(w) * h);
+  const mjvScene& scene = r.scene;
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* src = r.raw_rgb.data() + static_cast<std::size_t>(w) * 3 * (h - 1 - y);
+    std::int32_t* dst = seg->geom.data() + static_cast<std::size_t>(w) * y;
+    for (int x = 0; x < w; ++x, src += 3) {
+      const int id = src[0] | (src[1] << 8) | (src[2] << 16);
+      const int i = id - 1;  // index of the scene geom
+      dst[x] = (i >= 0 && i < scene.ngeom && scene.geoms[i].objtype == mjOBJ_GEOM) ? scene.geoms[i].objid : -1;
+    }
+  }
+}
+
+}  // namespace vlab::render

@@ -1,0 +1,102 @@
+// Device side of the markers device (kind 5, bridge/bridge_markers.h): one UDP
+// socket, the subscribers, the marker table and the describe reply.
+//
+// Ports
+//   input   datagrams from clients (Poll): describe requests, marker
+//           descriptions (commands)
+//   output  one state per processed camera frame to every subscriber
+//           (Publish); describe replies (JSON) to the requester
+//   rate    driven by its owner: Poll whenever convenient (the vision
+//           program polls between frames), Publish once per frame
+// Rules (those of bridge::DeviceEndpoint, with seconds for periods)
+//   - any well-formed datagram (right framing; a describe request of any
+//     kind, or a command of kind markers) subscribes its sender; a subscriber
+//     silent for subscriber_timeout_s is dropped; at most max_subscribers,
+//     when full the one silent the longest is dropped;
+//   - a marker-description command from anyone is applied whole (no owner;
+//     the latest description of a marker wins); a malformed one (framing,
+//     layout, unknown dictionary or id, side outside [0, 10] m) or one that
+//     would overfill the table is refused and counted, and changes nothing;
+//   - a state datagram, or a command of another kind, is refused and counted.
+// Never throws and never blocks in Poll or Publish. Not thread-safe.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bridge/bridge_markers.h"
+#include "bridge/bridge_udp.h"
+#include "vision/vision_locate.h"
+
+namespace vlab::vision {
+
+struct MarkersServerConfig {
+  std::string name = "vision";
+  std::string bind_address = "127.0.0.1";
+  int port = 50014;  ///< 0: any free port
+  double subscriber_timeout_s = 10;
+  int max_subscribers = 16;
+  std::size_t max_markers = 256;  ///< capacity of the marker table (the describe reply must fit a datagram)
+  /// Facts merged into the describe reply (camera, detector, rates).
+  nlohmann::json describe_extra = nlohmann::json::object();
+};
+
+struct MarkersServerCounters {
+  long received = 0;           ///< datagrams received
+  long describes = 0;          ///< describe requests answered
+  long accepted = 0;           ///< marker-description commands applied
+  long refused = 0;            ///< all refusals
+  long refused_malformed = 0;  ///< framing, kind, type, layout, domain
+  long refused_limits = 0;     ///< the table would exceed max_markers
+  long states = 0;             ///< states published (frames)
+};
+
+class MarkersServer {
+ public:
+  /// Binds the socket. Throws NetworkError naming the address when it cannot.
+  static std::unique_ptr<MarkersServer> Create(const MarkersServerConfig& config);
+
+  /// Handles every datagram already queued; never waits. `now_s`: a
+  /// monotonic clock in seconds (subscriber timeouts). Returns how many.
+  int Poll(double now_s);
+  /// Sends one state (seq = frame id, time = exposure time, s) to every subscriber.
+  void Publish(double seq, double time, const bridge::MarkersStateMsg& state, double now_s);
+
+  /// The marker table; Describe changes it as a command would (false: full).
+  const MarkerTable& table() const { return table_; }
+  bool Describe(const std::vector<bridge::MarkerDescriptionMsg>& descriptions);
+
+  /// The describe reply now (JSON text).
+  const std::string& describe_json() const { return describe_json_; }
+  int local_port() const { return socket_->local_port(); }
+  int fd() { return socket_->fd(); }
+  int subscribers() const { return static_cast<int>(subscribers_.size()); }
+  const MarkersServerCounters& counters() const { return counters_; }
+
+ private:
+  struct Subscriber {
+    bridge::Endpoint endpoint;
+    double last_s = 0;
+  };
+  explicit MarkersServer(const MarkersServerConfig& config);
+  void Handle(long size, const bridge::Endpoint& from, bool truncated, double now_s);
+  void Subscribe(const bridge::Endpoint& from, double now_s);
+  void RebuildDescribe();
+
+  MarkersServerConfig config_;
+  std::unique_ptr<bridge::UdpSocket> socket_;
+  MarkerTable table_;
+  MarkersServerCounters counters_;
+  std::vector<Subscriber> subscribers_;
+  std::string describe_json_;
+  // scratch
+  std::vector<unsigned char> buffer_;
+  std::vector<unsigned char> packet_;
+  std::vector<double> payload_;
+  std::vector<bridge::MarkerDescriptionMsg> descriptions_;
+};
+
+}  // namespace vlab::vision

@@ -1,0 +1,275 @@
+// Tests the base, feet and imu devices (src/lab/lab_base_device.cc,
+// lab_sensor_device.cc): a holonomic base on planar joints with velocity
+// actuators tracks commands within its acceleration limits, in the base and
+// the world frame, brakes on hold, keeps exact odometry without drift and a
+// seeded, repeatable drift with it; touch sensors under a resting body sum to
+// its weight and an IMU at rest reads +g. Then the same base served over UDP
+// in lockstep, commanded by the generic client.
+#include <cmath>
+#include <future>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "bridge/bridge_client_device.h"
+#include "lab/lab_device.h"
+#include "lab/lab_errors.h"
+#include "lab/lab_mujoco.h"
+#include "lab/lab_runner.h"
+#include "test_util.h"
+
+namespace vlab::lab {
+namespace {
+
+// 40 kg base on x, y, yaw joints; four feet with touch sensors; an IMU.
+constexpr const char* kBaseXml = R"(
+<mujoco>
+  <option timestep="0.001"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 0.1"/>
+    <body name="base" pos="0 0 0.1">
+      <joint name="bx" type="slide" axis="1 0 0" damping="1"/>
+      <joint name="by" type="slide" axis="0 1 0" damping="1"/>
+      <joint name="byaw" type="hinge" axis="0 0 1" damping="1"/>
+      <geom type="box" size="0.3 0.3 0.1" mass="40" contype="0" conaffinity="0"/>
+      <site name="imu" pos="0 0 0.05"/>
+    </body>
+    <body name="block" pos="2 2 0.1">
+      <freejoint/>
+      <geom type="box" size="0.1 0.1 0.1" mass="5" contype="0" conaffinity="0"/>
+      <geom name="f1" type="sphere" size="0.01" pos=" 0.09  0.09 -0.1" mass="0.01"/>
+      <geom name="f2" type="sphere" size="0.01" pos="-0.09  0.09 -0.1" mass="0.01"/>
+      <geom name="f3" type="sphere" size="0.01" pos=" 0.09 -0.09 -0.1" mass="0.01"/>
+      <geom name="f4" type="sphere" size="0.01" pos="-0.09 -0.09 -0.1" mass="0.01"/>
+      <site name="s1" type="sphere" size="0.02" pos=" 0.09  0.09 -0.1"/>
+      <site name="s2" type="sphere" size="0.02" pos="-0.09  0.09 -0.1"/>
+      <site name="s3" type="sphere" size="0.02" pos=" 0.09 -0.09 -0.1"/>
+      <site name="s4" type="sphere" size="0.02" pos="-0.09 -0.09 -0.1"/>
+      <site name="block_imu" pos="0 0 0"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <velocity name="vx" joint="bx" kv="4000"/>
+    <velocity name="vy" joint="by" kv="4000"/>
+    <velocity name="wz" joint="byaw" kv="400"/>
+  </actuator>
+  <sensor>
+    <touch name="t1" site="s1"/> <touch name="t2" site="s2"/> <touch name="t3" site="s3"/> <touch name="t4" site="s4"/>
+    <gyro name="gyro" site="block_imu"/> <accelerometer name="acc" site="block_imu"/>
+  </sensor>
+</mujoco>)";
+
+DeviceConfig BaseConfig(bool drift) {
+  DeviceConfig c;
+  c.name = "nomad";
+  c.kind = "base";
+  c.where = "test.yaml:1";
+  c.base.joints = {"bx", "by", "byaw"};
+  c.base.actuators = {"vx", "vy", "wz"};
+  c.base.max_velocity = {1.0, 1.0, 2.0};
+  c.base.max_acceleration = {1.0, 1.0, 2.0};
+  c.base.odometry_drift = drift;
+  c.base.drift_scale = 0.02;
+  c.base.drift_yaw_rate = 0.01;
+  return c;
+}
+
+struct Rig {
+  ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
+  DataPtr data = MakeData(model.get());
+  std::unique_ptr<SimDevice> base;
+  explicit Rig(bool drift = false, std::uint64_t seed = 7) {
+    base = MakeSimDevice(model.get(), BaseConfig(drift), seed);
+    mj_forward(model.get(), data.get());
+    base->Reset(*data);
+  }
+  // one control period of 10 ms
+  void Period() {
+    for (int i = 0; i < 10; ++i) {
+      mj_step1(model.get(), data.get());
+      base->Actuate(*data, 0.001);
+      mj_step2(model.get(), data.get());
+    }
+    base->Sample(*data, data->time);
+  }
+  std::vector<double> State() const {
+    std::vector<double> s;
+    base->State(&s);
+    return s;
+  }
+};
+
+TEST(BaseDeviceTest, TracksABaseFrameCommandWithinTheAccelerationLimit) {
+  Rig rig;
+  EXPECT_EQ(rig.State()[0], static_cast<double>(bridge::kStatusHolding));
+  rig.base->Command({0, 0.5, 0, 0});
+  rig.Period();  // 10 ms at 1 m/s^2: at most 0.01 m/s
+  EXPECT_LE(rig.State()[4], 0.0101);
+  EXPECT_GT(rig.State()[4], 0.002);  // moving, behind the reference by the servo lag (10 ms)
+  for (int k = 0; k < 100; ++k) rig.Period();  // 1 s: long reached 0.5 m/s
+  const std::vector<double> s = rig.State();
+  EXPECT_EQ(s[0], 0.0);
+  EXPECT_NEAR(s[4], 0.5, 0.005);   // vx
+  EXPECT_NEAR(s[5], 0.0, 1e-3);    // vy
+  // position after the ramp (0.5 s, 0.125 m) and 0.51 s at 0.5 m/s, within the servo lag
+  EXPECT_NEAR(s[1], 0.125 + 0.5 * 0.51, 0.01);
+}
+
+TEST(BaseDeviceTest, BaseFrameFollowsTheYawWorldFrameDoesNot) {
+  Rig rig;
+  rig.data->qpos[2] = M_PI / 2;  // facing +y
+  mj_forward(rig.model.get(), rig.data.get());
+  rig.base->Reset(*rig.data);
+  rig.base->Command({0, 0.3, 0, 0});  // forward = world +y
+  for (int k = 0; k < 150; ++k) rig.Period();
+  EXPECT_NEAR(rig.data->qvel[0], 0.0, 2e-3);
+  EXPECT_NEAR(rig.data->qvel[1], 0.3, 3e-3);
+  rig.base->Command({1, 0.3, 0, 0});  // world +x, whatever the yaw
+  for (int k = 0; k < 150; ++k) rig.Period();
+  EXPECT_NEAR(rig.data->qvel[0], 0.3, 3e-3);
+  EXPECT_NEAR(rig.data->qvel[1], 0.0, 2e-3);
+  EXPECT_NEAR(rig.State()[5], -0.3, 3e-3);  // seen from the base: to its right
+}
+
+TEST(BaseDeviceTest, HoldBrakesAtTheAccelerationLimit) {
+  Rig rig;
+  rig.base->Command({0, 0.8, 0, 1.0});
+  for (int k = 0; k < 120; ++k) rig.Period();
+  rig.base->Hold();
+  for (int k = 0; k < 40; ++k) rig.Period();  // 0.4 s of 0.8 s needed to stop
+  EXPECT_NEAR(std::hypot(rig.State()[4], rig.State()[5]), 0.4, 0.02);
+  for (int k = 0; k < 60; ++k) rig.Period();
+  for (int i = 4; i < 7; ++i) EXPECT_NEAR(rig.State()[i], 0.0, 1e-3);
+  EXPECT_EQ(rig.State()[0], static_cast<double>(bridge::kStatusHolding));
+}
+
+TEST(BaseDeviceTest, OdometryIsExactWithoutDriftAndSeededWithIt) {
+  Rig exact, drift_a(true, 7), drift_b(true, 7), drift_c(true, 8);
+  for (Rig* r : {&exact, &drift_a, &drift_b, &drift_c}) {
+    r->base->Command({0, 0.4, 0.1, 0.5});
+    for (int k = 0; k < 300; ++k) r->Period();
+  }
+  const std::vector<double> e = exact.State();
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(e[1 + i], exact.data->qpos[i], 1e-12);
+  const std::vector<double> a = drift_a.State(), b = drift_b.State(), c = drift_c.State();
+  EXPECT_EQ(a, b);  // same seed: the same drift, bit for bit
+  EXPECT_NE(a[1], c[1]);
+  const double error = std::hypot(a[1] - drift_a.data->qpos[0], a[2] - drift_a.data->qpos[1]);
+  EXPECT_GT(error, 1e-5);  // it drifts ...
+  EXPECT_LT(error, 0.2);   // ... by a few percent of the 1.2 m travelled at most
+}
+
+TEST(BaseDeviceTest, ChecksCommands) {
+  Rig rig;
+  EXPECT_EQ(rig.base->command_length(), 4);
+  EXPECT_EQ(rig.base->CheckCommand({0, 1.0, -1.0, 2.0}), bridge::CommandCheck::kAccept);
+  EXPECT_EQ(rig.base->CheckCommand({2, 0, 0, 0}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.base->CheckCommand({0.5, 0, 0, 0}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.base->CheckCommand({1, 1.01, 0, 0}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(rig.base->CheckCommand({1, 0, 0, -2.5}), bridge::CommandCheck::kLimits);
+}
+
+TEST(BaseDeviceTest, BadBindingsNameTheElement) {
+  ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
+  DeviceConfig c = BaseConfig(false);
+  c.base.joints[2] = "nope";
+  EXPECT_THROW(
+      {
+        try {
+          MakeSimDevice(model.get(), c, 1);
+        } catch (const InputError& e) {
+          EXPECT_NE(std::string(e.what()).find("no joint 'nope'"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      InputError);
+  c = BaseConfig(false);
+  c.base.joints = {"by", "bx", "bx"};  // yaw must be a hinge
+  EXPECT_THROW(MakeSimDevice(model.get(), c, 1), InputError);
+  c = BaseConfig(false);
+  c.base.actuators = {"vy", "vx", "wz"};  // actuators of the wrong joints
+  EXPECT_THROW(MakeSimDevice(model.get(), c, 1), InputError);
+  DeviceConfig feet;
+  feet.name = "feet";
+  feet.kind = "feet";
+  feet.sensors.sensors = {"t1", "gyro"};  // a gyro is no foot sensor
+  EXPECT_THROW(MakeSimDevice(model.get(), feet, 1), InputError);
+}
+
+TEST(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
+  ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
+  DataPtr data = MakeData(model.get());
+  DeviceConfig feet;
+  feet.name = "feet";
+  feet.kind = "feet";
+  feet.sensors.sensors = {"t1", "t2", "t3", "t4"};
+  DeviceConfig imu;
+  imu.name = "imu";
+  imu.kind = "imu";
+  imu.sensors.sensors = {"gyro", "acc"};
+  auto f = MakeSimDevice(model.get(), feet, 1);
+  auto i = MakeSimDevice(model.get(), imu, 1);
+  EXPECT_EQ(f->Columns().size(), 4u);
+  EXPECT_EQ(i->Columns(), (std::vector<std::string>{"imu.gyro.x", "imu.gyro.y", "imu.gyro.z", "imu.acc.x",
+                                                     "imu.acc.y", "imu.acc.z"}));
+  for (int k = 0; k < 2000; ++k) mj_step(model.get(), data.get());
+  f->Sample(*data, data->time);
+  i->Sample(*data, data->time);
+  std::vector<double> forces, imu_values;
+  f->State(&forces);
+  i->State(&imu_values);
+  double sum = 0;
+  for (double v : forces) sum += v;
+  const double weight = 5.04 * 9.81;  // box and the four feet
+  EXPECT_NEAR(sum, weight, 0.005 * weight);
+  for (double v : forces) EXPECT_NEAR(v, weight / 4, 0.05 * weight);  // symmetric
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(imu_values[k], 0.0, 1e-3);
+  EXPECT_NEAR(imu_values[5], 9.81, 0.01);
+}
+
+// The base in a lockstep lab, commanded over UDP by the generic client.
+TEST(BaseServeTest, LockstepCommandsOverUdpMoveTheBase) {
+  vlab::testing::TempDir dir;
+  vlab::testing::WriteFile(dir.path() + "/base.xml", kBaseXml);
+  vlab::testing::WriteFile(dir.path() + "/base.yaml", R"(
+scene: base.xml
+duration: 1.0
+control_period: 0.01
+clock: lockstep
+devices:
+  - {name: nomad, kind: base, joints: [bx, by, byaw], actuators: [vx, vy, wz], port: 0}
+  - {name: feet, kind: feet, sensors: [t1, t2, t3, t4], port: 0}
+checks:
+  - {name: moved, signal: nomad.true_x, reduce: final, min: 0.3}
+)");
+  std::unique_ptr<Lab> lab = Lab::Create(LoadScenario(dir.path() + "/base.yaml"));
+  BridgeOptions bo;
+  bo.ports = {{"nomad", 0}, {"feet", 0}};
+  std::promise<std::vector<ServedDevice>> served;
+  RunOptions ro;
+  ro.serve = &bo;
+  ro.on_serving = [&](const std::vector<ServedDevice>& d) { served.set_value(d); };
+  RunResult result;
+  std::thread run([&] { result = lab->Run(ro); });
+  const std::vector<ServedDevice> devices = served.get_future().get();
+  ASSERT_EQ(devices.size(), 2u);
+  auto base = bridge::Device::Connect(bridge::DeviceKind::kBase, "127.0.0.1", devices[0].port, 5.0);
+  auto feet = bridge::Device::Connect(bridge::DeviceKind::kFeet, "127.0.0.1", devices[1].port, 5.0);
+  EXPECT_EQ(base.command_length(), 4);
+  EXPECT_EQ(base.state_length(), 7);
+  EXPECT_EQ(feet.state_length(), 4);
+  EXPECT_EQ(base.describe()["kind"], "base");
+  bridge::Device::State s = base.Read(5.0);
+  while (s.seq < 100) {
+    base.Write({1, 0.5, 0, 0}, s.seq);  // world x at 0.5 m/s
+    s = base.Read(5.0);
+  }
+  run.join();
+  EXPECT_EQ(result.exit_code, 0) << result.failure;
+  EXPECT_EQ(result.periods, 100);
+  EXPECT_NEAR(s.values[1], 0.125 + 0.5 * 0.5, 0.02);  // odometry x after the ramp and 0.5 s at speed
+  EXPECT_NEAR(s.values[4], 0.5, 0.01);
+}
+
+}  // namespace
+}  // namespace vlab::lab

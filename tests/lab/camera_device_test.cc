@@ -1,0 +1,126 @@
+// Tests the lab's simulated webcam (src/lab/lab_camera_device.cc) end to end:
+// a scenario's camera device served by the lab in realtime, received by the
+// C++ camera client. Frames come at the camera's rate with consecutive ids,
+// stamped with the simulated time they show, carrying the camera's pose; the
+// describe reply has the intrinsics of the MJCF camera; a red box lies where
+// the intrinsics project it. Bad bindings fail at creation with the device's name.
+#include <cmath>
+#include <future>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "bridge/bridge_camera_client.h"
+#include "lab/lab_errors.h"
+#include "lab/lab_runner.h"
+#include "test_util.h"
+
+namespace vlab::lab {
+namespace {
+
+// a camera 1 m above the floor looking straight down; a red box below it, 0.1 m right of the optical axis
+constexpr const char* kSceneXml = R"(
+<mujoco>
+  <visual><global offwidth="640" offheight="480"/></visual>
+  <worldbody>
+    <light pos="0 0 3" dir="0 0 -1"/>
+    <geom type="plane" size="2 2 0.1" rgba="0.8 0.8 0.8 1"/>
+    <geom type="box" size="0.02 0.02 0.001" pos="0.1 0 0.001" rgba="1 0 0 1"/>
+    <camera name="top" pos="0 0 1" fovy="45"/>
+  </worldbody>
+</mujoco>)";
+
+std::string Scenario(const std::string& camera = "top", int width = 320) {
+  return "scene: scene.xml\nduration: 1.5\ncontrol_period: 0.002\nclock: realtime\ndevices:\n"
+         "  - {name: webcam, kind: camera, camera: " + camera + ", width: " + std::to_string(width) +
+         ", height: 240, fps: 25, latency: 0.04, encoding: raw, port: 0}\n";
+}
+
+TEST(CameraDeviceTest, FramesArriveAtTheCameraRateWithStampsPoseAndIntrinsics) {
+  vlab::testing::TempDir dir;
+  vlab::testing::WriteFile(dir / "scene.xml", kSceneXml);
+  vlab::testing::WriteFile(dir / "cam.yaml", Scenario());
+  std::unique_ptr<Lab> lab = Lab::Create(LoadScenario(dir / "cam.yaml"));
+  BridgeOptions bo;
+  bo.ports = {{"webcam", 0}};  // any free port
+  std::promise<std::vector<ServedDevice>> served;
+  RunOptions ro;
+  ro.serve = &bo;
+  ro.on_serving = [&](const std::vector<ServedDevice>& d) { served.set_value(d); };
+  RunResult result;
+  std::thread run([&] { result = lab->Run(ro); });
+  const std::vector<ServedDevice> devices = served.get_future().get();
+  ASSERT_EQ(devices.size(), 1u);
+  EXPECT_EQ(devices[0].kind, "camera");
+  bridge::CameraClientOptions co;
+  co.timeout_s = 5;
+  auto client = bridge::CameraClient::Connect("127.0.0.1", devices[0].port, co);
+  const double f = 120.0 / std::tan(22.5 * M_PI / 180);  // (H/2) / tan(fovy/2)
+  EXPECT_NEAR(client.calibration().fx, f, 1e-9);
+  EXPECT_NEAR(client.calibration().cx, 159.5, 1e-12);
+  EXPECT_EQ(client.width(), 320);
+  EXPECT_EQ(client.describe()["latency_s"], 0.04);
+  std::vector<bridge::CameraClient::Frame> frames;
+  for (;;) {
+    try {
+      frames.push_back(client.Receive(1.0));
+    } catch (const bridge::TimeoutError&) {
+      break;  // the run is over
+    }
+  }
+  run.join();
+  EXPECT_EQ(result.exit_code, 0) << result.failure;
+  ASSERT_GE(frames.size(), 20u);  // 1.5 s at 25 Hz, less the time to connect
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].id, frames[i - 1].id + 1);
+    // rendered at the first period end at or after i / fps
+    const double nominal = frames[i].id / 25.0;
+    EXPECT_GE(frames[i].time_s, nominal - 1e-9);
+    EXPECT_LT(frames[i].time_s, nominal + 0.002 + 1e-9);
+  }
+  const bridge::CameraClient::Frame& last = frames.back();
+  ASSERT_TRUE(last.pose.valid);
+  EXPECT_NEAR(last.pose.p_WC.z(), 1.0, 1e-12);
+  // looking down: OpenCV z (forward) is world -z, x (right) is world +x
+  const Eigen::Matrix3d r = last.pose.q_WC.toRotationMatrix();
+  EXPECT_NEAR(r(2, 2), -1.0, 1e-9);
+  EXPECT_NEAR(r(0, 0), 1.0, 1e-9);
+  // the red box's pixels: centred where the pinhole model puts (0.1, 0, 0) seen from 1 m
+  double su = 0, sv = 0, n = 0;
+  for (int v = 0; v < last.height; ++v) {
+    for (int u = 0; u < last.width; ++u) {
+      const std::uint8_t* p = last.rgb.data() + 3 * (v * last.width + u);
+      if (p[0] > p[1] + 60 && p[0] > p[2] + 60) {  // red (lit: about 255, 90, 90)
+        su += u;
+        sv += v;
+        n += 1;
+      }
+    }
+  }
+  ASSERT_GT(n, 20);
+  EXPECT_NEAR(su / n, f * 0.1 / 0.999 + 159.5, 1.0);
+  EXPECT_NEAR(sv / n, 119.5, 1.0);
+}
+
+TEST(CameraDeviceTest, BadBindingsNameTheDevice) {
+  vlab::testing::TempDir dir;
+  vlab::testing::WriteFile(dir / "scene.xml", kSceneXml);
+  auto message = [&](const std::string& camera, int width) {
+    vlab::testing::WriteFile(dir / "bad.yaml", Scenario(camera, width));
+    try {
+      Lab::Create(LoadScenario(dir / "bad.yaml"));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string unknown = message("nope", 320);
+  EXPECT_NE(unknown.find("no camera 'nope'"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("device 'webcam'"), std::string::npos) << unknown;
+  const std::string big = message("top", 1280);
+  EXPECT_NE(big.find("device 'webcam'"), std::string::npos) << big;
+  EXPECT_NE(big.find("offscreen buffer"), std::string::npos) << big;
+}
+
+}  // namespace
+}  // namespace vlab::lab
