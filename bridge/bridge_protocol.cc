@@ -215,7 +215,8 @@ DecodeError ParseSimCommand(const Header& h, const std::vector<double>& p, SimCo
 
 namespace {
 constexpr const char* kKindNames[kMaxDeviceKind + 1] = {"unknown", "arm",     "wrench", "sim",  "camera", "markers",
-                                                        "base",    "gripper", "feet",   "imu",  "point",  "yoyo"};
+                                                        "base",    "gripper", "feet",   "imu",  "point",  "yoyo",
+                                                        "gaze",    "pose"};
 }  // namespace
 
 const char* KindName(int kind) { return kind >= 1 && kind <= kMaxDeviceKind ? kKindNames[kind] : kKindNames[0]; }

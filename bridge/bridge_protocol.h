@@ -6,7 +6,7 @@
 //   index  field         value
 //   0      magic         1447838018 (the ASCII bytes "VLAB" read as a big-endian uint32)
 //   1      version       1
-//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-11: see DeviceKind)
+//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-13: see DeviceKind)
 //   3      type          1 state (device -> client), 2 command (client -> device),
 //                        3 describe request (client -> device)
 //   4      seq           sequence number (see below)
@@ -67,8 +67,10 @@ enum class DeviceKind : int {
   kImu = 9,      ///< gyro and accelerometer
   kPoint = 10,   ///< a commanded point (the yo-yo's hand)
   kYoyo = 11,    ///< yo-yo state
+  kGaze = 12,    ///< ground-truth gaze of a camera on a target (lab only)
+  kPose = 13,    ///< pose of a tracked frame, like a motion-capture system
 };
-inline constexpr int kMaxDeviceKind = 11;
+inline constexpr int kMaxDeviceKind = 13;
 enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3 };
 
 /// Arm status bits (state payload value 0, as a whole number).

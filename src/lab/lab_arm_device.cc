@@ -74,6 +74,7 @@ std::unique_ptr<SimArm> SimArm::Create(const mjModel* m, const DeviceConfig& c) 
   }
   arm->watchdog_periods_ = c.arm.watchdog_periods;
   arm->owner_timeout_s_ = c.arm.owner_timeout_s;
+  arm->log_following_error_ = c.arm.log_following_error;
   arm->bandwidth_hz_ = c.arm.servo.bandwidth_hz;
   arm->damping_ratio_ = c.arm.servo.damping_ratio;
   arm->value_ = Eigen::VectorXd::Zero(n);
@@ -198,6 +199,7 @@ std::vector<std::string> SimArm::Columns() const {
     for (const auto& joint : joint_names_) columns.push_back(name_ + "." + quantity + "." + joint);
   }
   columns.push_back(name_ + ".limit_violation");
+  if (log_following_error_) columns.push_back(name_ + ".following_error");
   return columns;
 }
 
@@ -212,6 +214,10 @@ void SimArm::Row(const mjData& d, double* out) const {
     violation = std::max({violation, lower_[i] - q, q - upper_[i]});
   }
   out[3 * n] = violation;
+  if (!log_following_error_) return;
+  double following = 0.0;  // (torque mode: q_ref follows q, one step behind)
+  for (int i = 0; i < n; ++i) following = std::max(following, std::abs(q_ref_[i] - d.qpos[qpos_adr_[i]]));
+  out[3 * n + 1] = following;
 }
 
 }  // namespace vlab::lab

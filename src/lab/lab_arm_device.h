@@ -70,9 +70,10 @@ class SimArm {
   /// Samples the device output.
   void Sample(const mjData& data, double time_s, bridge::ArmState* state) const;
 
-  /// Log columns: NAME.q.JOINT, NAME.qd.JOINT, NAME.tau.JOINT, NAME.limit_violation.
+  /// Log columns: NAME.q.JOINT, NAME.qd.JOINT, NAME.tau.JOINT, NAME.limit_violation,
+  /// and NAME.following_error (largest |q_ref - q| of the servo, rad) when configured.
   std::vector<std::string> Columns() const;
-  int ColumnCount() const { return 3 * dof() + 1; }
+  int ColumnCount() const { return 3 * dof() + 1 + (log_following_error_ ? 1 : 0); }
   /// Writes ColumnCount() values for the current state.
   void Row(const mjData& data, double* out) const;
 
@@ -91,6 +92,7 @@ class SimArm {
   int watchdog_periods_ = 3;
   double owner_timeout_s_ = 1.0;
   bool has_initial_ = false;
+  bool log_following_error_ = false;
   double bandwidth_hz_ = 10.0, damping_ratio_ = 1.0;
   Eigen::VectorXd kp_, kd_;
   // servo state

@@ -161,6 +161,17 @@ void LabBridge::Receive(Served& d) {
   }
 }
 
+void LabBridge::WatchPeerExit(int fd) {
+  peer_exit_fd_ = fd;
+  fds_.push_back(fd);
+}
+
+void LabBridge::CheckPeerExit() {
+  if (peer_gone_ || peer_exit_fd_ < 0 || !bridge::WaitReadable(&peer_exit_fd_, 1, 0.0)) return;
+  peer_gone_ = true;  // end of file: it stays readable, so stop waiting on it
+  fds_.erase(std::remove(fds_.begin(), fds_.end(), peer_exit_fd_), fds_.end());
+}
+
 void LabBridge::Poll(double timeout_s) {
   if (devices_.empty()) return;
   // spin briefly first: an answer usually comes within tens of microseconds, and
@@ -169,15 +180,18 @@ void LabBridge::Poll(double timeout_s) {
   do {
     if (bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), 0.0)) {
       for (Served& d : devices_) Receive(d);
+      CheckPeerExit();
       return;
     }
   } while (WallNow() < spin_until);
   const double left = timeout_s - kSpinSeconds;
   if (left <= 0 || !bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), left)) return;
   for (Served& d : devices_) Receive(d);
+  CheckPeerExit();
 }
 
 bool LabBridge::Answered(std::int64_t k) const {
+  if (peer_gone_) return true;  // the controller vlab run started has exited: nobody to wait for
   // every commanded device that has an owner is waited for; period 0 also waits
   // for a controller to start: one per served arm, or, where no arm is served,
   // one for any commanded device (one that left was released: the device holds)

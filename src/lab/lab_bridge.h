@@ -62,6 +62,11 @@ class LabBridge final : public CommandSource {
   /// served arm goes to its SimArm, and of every other commanded device to it
   /// (latency from arrival to now recorded for arms).
   void ApplyArmCommands(std::int64_t k);
+  /// Also wait on fd, which becomes readable when the controller process
+  /// that `vlab run` started has exited: from then on no period waits.
+  void WatchPeerExit(int fd);
+  /// True once the watched controller process has exited.
+  bool peer_gone() const { return peer_gone_; }
   /// The newest sim command since the last call, if any.
   bool TakeSimCommand(bridge::SimCommandMsg* command);
   /// Lockstep: period k began without the commands. After release_after such
@@ -100,6 +105,9 @@ class LabBridge final : public CommandSource {
   std::vector<Served> devices_;
   Served* sim_ = nullptr;
   std::vector<int> fds_;
+  int peer_exit_fd_ = -1;
+  bool peer_gone_ = false;
+  void CheckPeerExit();
   std::int64_t period_ = 0;
   int consecutive_timeouts_ = 0;
   std::vector<double> latencies_;

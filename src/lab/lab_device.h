@@ -68,7 +68,7 @@ class SimDevice {
   std::string name_;
 };
 
-/// Makes the device a scenario entry names (kinds base, gripper, feet, imu).
+/// Makes the device a scenario entry names (kinds base, gripper, feet, imu, gaze, pose).
 /// Throws InputError naming the device and the MJCF element it cannot bind.
 std::unique_ptr<SimDevice> MakeSimDevice(const mjModel* m, const DeviceConfig& config, std::uint64_t seed);
 

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_errors.h"
+#include "lab/lab_external.h"
 #include "lab/lab_images.h"
 #include "lab/lab_log.h"
 #include "lab/lab_output.h"
@@ -52,6 +53,13 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
   impl->model = LoadModel(scenario.scene);
   const mjModel* m = impl->model.get();
   impl->data = MakeData(m);
+  if (!scenario.keyframe.empty()) {
+    impl->keyframe = mj_name2id(m, mjOBJ_KEY, scenario.keyframe.c_str());
+    if (impl->keyframe < 0) {
+      throw InputError(scenario.keyframe_where + ": keyframe: the scene '" + scenario.scene + "' has no keyframe '" +
+                       scenario.keyframe + "'");
+    }
+  }
 
   // the control period must be a whole number of physics steps
   const double ts = m->opt.timestep;
@@ -93,7 +101,9 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
 
   impl->ResetState();
   const ControllerConfig& cc = scenario.controller;
-  if (cc.type != "none") {
+  if (cc.type == "external") {
+    ExpandCommand(cc.command, CommandValues(scenario, {}), cc.where);  // placeholders checked now
+  } else if (cc.type != "none") {
     for (std::size_t i = 0; i < impl->arms.size(); ++i) {
       if (impl->arms[i]->name() == cc.arm) impl->controller_arm = static_cast<int>(i);
     }
@@ -109,7 +119,7 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
 }
 
 void Lab::InitialState(mjData* d) const {
-  mj_resetData(impl_->model.get(), d);
+  impl_->ResetData(d);
   for (const auto& arm : impl_->arms) arm->SetInitialPositions(*d);
   mj_forward(impl_->model.get(), d);
 }
@@ -120,6 +130,15 @@ namespace {
 struct ErrorCleanupGuard {
   ~ErrorCleanupGuard() { SetMujocoErrorCleanup(nullptr); }
 };
+
+// how long an external controller gets to exit after SIGTERM at the end of a run
+constexpr double kControllerGrace_s = 2.0;
+
+std::string ControllerFailure(ExternalController& c, double t) {
+  const std::string last = c.LastLogLine();
+  return "controller '" + c.program() + "' ended with " + c.Outcome() + " (t = " + FormatDouble(t) + " s)" +
+         (last.empty() ? "" : ": " + last);
+}
 
 // The sim device's state at period k.
 bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, const LabBridge* bridge) {
@@ -151,7 +170,12 @@ RunResult Lab::Run(const RunOptions& options) {
   TakeMujocoWarningTexts();
   s.ResetState();
   for (auto& c : s.cameras) c->Unserve();  // MakeBridge serves them again when serving
-  std::unique_ptr<Clock> clock = MakeClock(s.scenario, options.clock, periods);
+  // a scenario's external controller: vlab run serves on loopback and starts it
+  const bool external = StartsExternalController(s.scenario, options.serve != nullptr);
+  const BridgeOptions external_serve = external ? ExternalBridgeOptions(s.scenario) : BridgeOptions{};
+  const BridgeOptions* serve = external ? &external_serve : options.serve;
+  std::unique_ptr<Clock> clock =
+      MakeClock(s.scenario, external ? ExternalClock(s.scenario, options.clock) : options.clock, periods);
   result.clock = clock->name();
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
@@ -163,9 +187,9 @@ RunResult Lab::Run(const RunOptions& options) {
   }
   // the wire: bind every served device before anything is written
   std::unique_ptr<LabBridge> bridge;
-  if (options.serve) {
-    bridge = s.MakeBridge(*options.serve, clock->name());
-    if (options.on_serving) options.on_serving(s.ServedDevices(*bridge));
+  if (serve) {
+    bridge = s.MakeBridge(*serve, clock->name());
+    if (options.on_serving && !external) options.on_serving(s.ServedDevices(*bridge));
   }
   // outputs: staging folder (removed on a MuJoCo error too), log
   std::unique_ptr<OutputDir> out;
@@ -179,6 +203,15 @@ RunResult Lab::Run(const RunOptions& options) {
     });
     if (s.scenario.outputs.log) log = CsvLog::Open(out->File("log.csv"), s.columns);
     if (images) images->Open(*out);
+  }
+  std::unique_ptr<ExternalController> controller;
+  if (external) {
+    const std::string log_path = out ? out->File("controller.log") : "";
+    controller = ExternalController::Start(
+        ExpandCommand(s.scenario.controller.command, CommandValues(s.scenario, s.ServedDevices(*bridge)),
+                      s.scenario.controller.where),
+        log_path);
+    bridge->WatchPeerExit(controller->exit_fd());
   }
 
   if (options.record) result.recording.controls.reserve(static_cast<std::size_t>(periods) * s.steps_per_period * m->nu);
@@ -223,6 +256,10 @@ RunResult Lab::Run(const RunOptions& options) {
     }
     // 1. the clock lets the period begin; commands: the newest of each device
     const PeriodStart start = clock->BeginPeriod(k, bridge.get());
+    if (controller && bridge->peer_gone() && controller->Exited() && !controller->Succeeded()) {
+      result.failure = ControllerFailure(*controller, t_k);
+      break;
+    }
     if (start == PeriodStart::kFail) {
       result.failure = "lockstep: no command answering period " + std::to_string(k) + " (t = " +
                        FormatDouble(t_k) + " s) within " + FormatDouble(s.scenario.lockstep.timeout_s) + " s";
@@ -270,6 +307,11 @@ RunResult Lab::Run(const RunOptions& options) {
     }
   }
   result.loop_wall_s = Seconds(t_loop, WallClock::now());
+  if (controller) {
+    controller->Stop(kControllerGrace_s);
+    if (!controller->Succeeded() && result.failure.empty()) result.failure = ControllerFailure(*controller, k * period);
+    result.controller = {controller->program(), controller->Outcome()};
+  }
   result.periods = k;
   result.sim_time_s = k * period;
   TakeMujocoWarningTexts();  // their content is in the reports: mju_warningText

@@ -79,6 +79,11 @@ struct RunResult {
   ClockStats clock_stats;
   std::vector<ServedDevice> served;  ///< served devices with their counters (vlab serve)
   std::vector<double> latencies_s;   ///< command arrival-to-apply latencies (vlab serve)
+  /// The external controller `vlab run` started: program and how it ended ("" when none).
+  struct {
+    std::string program;
+    std::string outcome;
+  } controller;
 };
 
 class Lab {

@@ -6,9 +6,18 @@
 
 namespace vlab::lab {
 
+void Lab::Impl::ResetData(mjData* d) const {
+  if (keyframe < 0) {
+    mj_resetData(model.get(), d);
+    return;
+  }
+  mj_resetDataKeyframe(model.get(), d, keyframe);
+  d->time = 0;  // the run's time starts at 0 whatever the keyframe's time
+}
+
 void Lab::Impl::ResetState() {
   mjData* d = data.get();
-  mj_resetData(model.get(), d);
+  ResetData(d);
   for (const auto& arm : arms) arm->SetInitialPositions(*d);
   mj_forward(model.get(), d);
   for (auto& arm : arms) arm->Start(*d, scenario.control_period_s);

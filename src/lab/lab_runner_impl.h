@@ -31,12 +31,15 @@ struct Lab::Impl {
   std::vector<std::unique_ptr<SimCamera>> cameras;
   std::unique_ptr<Controller> controller;
   int controller_arm = -1;
+  int keyframe = -1;  // scene keyframe of every reset (-1: qpos0)
   std::size_t controller_columns = 0;  // log columns the controller writes
   std::vector<std::string> columns;
   std::vector<bridge::ArmState> arm_states;
   std::vector<bridge::ArmCommand> arm_commands;
 
   void ResetState();
+  /// mj_resetData, or mj_resetDataKeyframe of the scenario's keyframe (at time 0).
+  void ResetData(mjData* d) const;
   void WriteRow(double time_s, std::vector<double>& row) const;
   /// Binds every served device (cameras too); throws InputError.
   std::unique_ptr<LabBridge> MakeBridge(const BridgeOptions& options, const std::string& clock_name);

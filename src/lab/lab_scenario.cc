@@ -73,6 +73,7 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
     if (arm.watchdog_periods < 0) r.Fail("watchdog_periods", "must be >= 0 (0: off)");
     arm.owner_timeout_s = r.Number("owner_timeout", arm.owner_timeout_s);
     if (!(arm.owner_timeout_s > 0)) r.Fail("owner_timeout", "must be > 0 s");
+    arm.log_following_error = r.Bool("log_following_error", arm.log_following_error);
     arm.servo.bandwidth_hz = servo.Number("bandwidth_hz", arm.servo.bandwidth_hz);
     arm.servo.damping_ratio = servo.Number("damping_ratio", arm.servo.damping_ratio);
     if (!(arm.servo.bandwidth_hz > 0)) servo.Fail("bandwidth_hz", "must be > 0 Hz");
@@ -119,6 +120,16 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
     if (device.sensors.sensors.empty()) r.Fail("sensors", "needs at least one MJCF sensor");
     device.sensors.noise = r.Number("noise", 0.0);
     if (!(device.sensors.noise >= 0)) r.Fail("noise", "must be >= 0");
+    if (device.kind == "feet") {
+      SensorDeviceConfig& f = device.sensors;
+      f.pads = r.Strings("pads", {});
+      if (!f.pads.empty() && f.pads.size() != f.sensors.size()) {
+        r.Fail("pads", "needs one site per sensor (" + std::to_string(f.sensors.size()) + ")");
+      }
+      f.weight_of = r.String("weight_of", "");
+      f.contact_threshold = r.Number("contact_threshold", f.contact_threshold);
+      if (!(f.contact_threshold >= 0)) r.Fail("contact_threshold", "must be >= 0 N");
+    }
   } else if (device.kind == "base") {
     BaseDeviceConfig& b = device.base;
     b.joints = r.Strings("joints", {});
@@ -142,8 +153,34 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
     if (b.watchdog_periods < 0) r.Fail("watchdog_periods", "must be >= 0 (0: off)");
     b.owner_timeout_s = r.Number("owner_timeout", b.owner_timeout_s);
     if (!(b.owner_timeout_s > 0)) r.Fail("owner_timeout", "must be > 0 s");
+  } else if (device.kind == "gripper") {
+    GripperDeviceConfig& g = device.gripper;
+    g.servo = r.String("servo", g.servo);
+    g.force_actuator = r.String("force_actuator", g.force_actuator);
+    g.touch = r.Strings("touch", g.touch);
+    if (g.touch.empty()) r.Fail("touch", "needs at least one pad touch sensor");
+    g.max_speed = r.Number("max_speed", g.max_speed);
+    if (!(g.max_speed > 0)) r.Fail("max_speed", "must be > 0 m/s");
+    g.grasp_force = r.Number("grasp_force", g.grasp_force);
+    if (!(g.grasp_force > 0)) r.Fail("grasp_force", "must be > 0 N");
+    g.watchdog_periods = r.Integer("watchdog_periods", g.watchdog_periods);
+    if (g.watchdog_periods < 0) r.Fail("watchdog_periods", "must be >= 0 (0: off)");
+    g.owner_timeout_s = r.Number("owner_timeout", g.owner_timeout_s);
+    if (!(g.owner_timeout_s > 0)) r.Fail("owner_timeout", "must be > 0 s");
+  } else if (device.kind == "pose") {
+    device.pose.site = r.String("site");
+    device.pose.relative_to = r.String("relative_to", device.pose.relative_to);
+    device.pose.target = r.String("target", "");
+  } else if (device.kind == "gaze") {
+    GazeDeviceConfig& g = device.gaze;
+    g.camera = r.String("camera");
+    g.target = r.String("target");
+    g.width = r.Integer("width", g.width);
+    g.height = r.Integer("height", g.height);
+    if (g.width < 1 || g.width > 8192) r.Fail("width", "must be 1 to 8192 pixels");
+    if (g.height < 1 || g.height > 8192) r.Fail("height", "must be 1 to 8192 pixels");
   } else if (device.kind != "sim") {
-    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim, camera, base, feet, imu)");
+    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim, camera, base, gripper, feet, imu, gaze, pose)");
   }
   r.Finish();
   return device;
@@ -180,6 +217,12 @@ ControllerConfig ReadController(MapReader r) {
   c.where = Where(r.file(), r.node());
   c.type = r.String("type", c.type);
   if (c.type == "none") {
+    r.Finish();
+    return c;
+  }
+  if (c.type == "external") {
+    c.command = r.Strings("command", {});
+    if (c.command.empty() || c.command[0].empty()) r.Fail("command", "expected [PROGRAM, ARGUMENT, ...]");
     r.Finish();
     return c;
   }
@@ -230,7 +273,7 @@ ControllerConfig ReadController(MapReader r) {
       c.joint.push_back(wp);
     }
   } else {
-    r.Fail("type", "unknown controller type '" + c.type + "' (known: none, joint_pd, task_space)");
+    r.Fail("type", "unknown controller type '" + c.type + "' (known: none, joint_pd, task_space, external)");
   }
   r.Finish();
   return c;
@@ -307,6 +350,8 @@ Scenario LoadScenario(const std::string& path) {
   s.realtime.factor = realtime.Number("factor", s.realtime.factor);
   if (!(s.realtime.factor > 0 && s.realtime.factor <= 1000)) realtime.Fail("factor", "must be in (0, 1000]");
   realtime.Finish();
+  s.keyframe = r.String("keyframe", "");
+  if (r.Has("keyframe")) s.keyframe_where = Where(path, root["keyframe"]);
   s.allow_warnings = r.Strings("allow_warnings", {});
   for (const std::string& w : s.allow_warnings) {
     if (WarningIndex(w) < 0 || IsDivergenceWarning(WarningIndex(w))) {

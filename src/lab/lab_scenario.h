@@ -31,6 +31,7 @@ struct ArmDeviceConfig {
   ServoConfig servo;
   int watchdog_periods = 3;            ///< hold after this many periods without a command (0: off)
   double owner_timeout_s = 1.0;        ///< a silent owner gives the command input up after this
+  bool log_following_error = false;    ///< log NAME.following_error: max |q_ref - q| of the servo, rad
 };
 
 struct WrenchDeviceConfig {
@@ -65,6 +66,30 @@ struct CameraDeviceConfig {
 struct SensorDeviceConfig {
   std::vector<std::string> sensors;  ///< MJCF sensors, in payload order
   double noise = 0.0;                ///< Gaussian noise std added to every value (sensor units; 0: none)
+  // feet only: log columns of the whole support (not on the wire)
+  std::vector<std::string> pads;     ///< one MJCF site per sensor: where it presses (empty: no CoP columns)
+  std::string weight_of;             ///< body whose subtree weight the sum is compared with ("": none)
+  double contact_threshold = 0.0;    ///< N: a pad reading more than this is in contact
+};
+
+/// A parallel gripper (kind gripper): an opening servo and a grip-force drive
+/// on one tendon, and a touch sensor per pad (mjcf/gripper's names by default).
+struct GripperDeviceConfig {
+  std::string servo = "gripper";              ///< position actuator of the opening tendon (ctrl: opening, m)
+  std::string force_actuator = "gripper_force";  ///< force actuator of the same tendon (ctrl: N, negative closes)
+  std::vector<std::string> touch = {"gripper_touch_left", "gripper_touch_right"};  ///< pad touch sensors
+  double max_speed = 0.083;       ///< m/s: opening set-points ramp at this speed (PG 70: 83 mm/s)
+  double grasp_force = 2.0;       ///< N on every pad (and the jaws at rest) for "grasped"
+  int watchdog_periods = 3;       ///< hold after this many periods without a command (0: off)
+  double owner_timeout_s = 1.0;
+};
+
+/// A tracked frame (kind pose), like a motion-capture system's rigid body:
+/// an MJCF site's pose in the frame of a body, and its distance to a target.
+struct PoseDeviceConfig {
+  std::string site;                  ///< the tracked site
+  std::string relative_to = "world";  ///< the body whose frame the pose is given in
+  std::string target;                ///< a site whose distance is logged ("": none)
 };
 
 /// A holonomic mobile base (kind base): planar x, y, yaw joints driven by
@@ -81,6 +106,15 @@ struct BaseDeviceConfig {
   double owner_timeout_s = 1.0;
 };
 
+/// A ground-truth gaze probe (kind gaze): where a target lies relative to an
+/// MJCF camera's optical axis and in its pinhole image (no lens distortion).
+struct GazeDeviceConfig {
+  std::string camera;  ///< MJCF camera name
+  std::string target;  ///< MJCF site or body name (a site wins when both exist)
+  int width = 640;     ///< image size for the intrinsics, pixels (fx = fy = (height/2) / tan(fovy/2))
+  int height = 480;
+};
+
 struct DeviceConfig {
   std::string name;
   std::string kind;  ///< arm, wrench, sim, camera, base, feet or imu
@@ -91,6 +125,9 @@ struct DeviceConfig {
   CameraDeviceConfig camera;
   SensorDeviceConfig sensors;
   BaseDeviceConfig base;
+  GripperDeviceConfig gripper;
+  PoseDeviceConfig pose;
+  GazeDeviceConfig gaze;
 };
 
 struct CartesianWaypoint {
@@ -105,7 +142,7 @@ struct JointWaypoint {
 };
 
 struct ControllerConfig {
-  std::string type = "none";  ///< none | joint_pd | task_space
+  std::string type = "none";  ///< none | joint_pd | task_space | external
   std::string arm;            ///< arm device it commands
   std::string where;
   std::string base_body = "world";  ///< chain from this body ...
@@ -120,7 +157,10 @@ struct ControllerConfig {
   std::vector<double> kp, kd;  ///< N·m/rad, N·m·s/rad (empty: from bandwidth_hz)
   double pd_bandwidth_hz = 5.0;  ///< default gains: kp = H_ii w², kd = 2 H_ii w at the start pose
   std::vector<JointWaypoint> joint;
-  // both
+  // external: a program `vlab run` starts, with {DEVICE}, {bin}, {scenario_dir}
+  // and {duration} expanded (lab_external.h); `vlab serve` does not start it
+  std::vector<std::string> command;
+  // joint_pd and task_space
   std::string timing = "quintic";  ///< quintic | trapezoidal
   double start_s = 0.0;            ///< hold until this time, then follow the path
 };
@@ -181,6 +221,8 @@ struct Scenario {
   LockstepConfig lockstep;
   RealtimeConfig realtime;
   std::vector<std::string> allow_warnings;
+  std::string keyframe;        ///< scene keyframe every reset starts from ("": the model's qpos0)
+  std::string keyframe_where;  ///< "FILE:LINE" of the keyframe key, for messages
   std::vector<DeviceConfig> devices;
   ControllerConfig controller;
   OutputsConfig outputs;

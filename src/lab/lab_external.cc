@@ -1,0 +1,219 @@
+// External controllers started by the lab (see lab_external.h).
+#include "lab/lab_external.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "lab/lab_errors.h"
+
+namespace vlab::lab {
+
+std::vector<std::string> ExpandCommand(const std::vector<std::string>& command,
+                                       const std::map<std::string, std::string>& values, const std::string& where) {
+  std::vector<std::string> out;
+  for (const std::string& arg : command) {
+    std::string expanded;
+    std::size_t at = 0;
+    while (at < arg.size()) {
+      const std::size_t open = arg.find('{', at);
+      if (open == std::string::npos) {
+        expanded += arg.substr(at);
+        break;
+      }
+      const std::size_t close = arg.find('}', open);
+      if (close == std::string::npos) {
+        throw InputError(where + ": controller.command: '" + arg + "': a '{' without its '}'");
+      }
+      const std::string name = arg.substr(open + 1, close - open - 1);
+      const auto it = values.find(name);
+      if (it == values.end()) {
+        std::string known;
+        for (const auto& [k, v] : values) known += (known.empty() ? "" : ", ") + ("{" + k + "}");
+        throw InputError(where + ": controller.command: unknown placeholder {" + name + "} (known: " + known +
+                         "; a device needs a port to be named)");
+      }
+      expanded += arg.substr(at, open - at) + it->second;
+      at = close + 1;
+    }
+    out.push_back(expanded);
+  }
+  return out;
+}
+
+bool StartsExternalController(const Scenario& scenario, bool serving) {
+  return scenario.controller.type == "external" && !serving;
+}
+
+BridgeOptions ExternalBridgeOptions(const Scenario& scenario) {
+  BridgeOptions options;
+  options.bind = "127.0.0.1";
+  for (const DeviceConfig& d : scenario.devices) {
+    if (d.port > 0) options.ports[d.name] = 0;
+  }
+  return options;
+}
+
+std::string ExternalClock(const Scenario& scenario, const std::string& requested) {
+  const std::string clock = requested.empty() ? scenario.clock : requested;
+  return clock == "fast" ? "lockstep" : clock;
+}
+
+std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served) {
+  std::map<std::string, std::string> values;
+  for (const DeviceConfig& d : scenario.devices) {
+    if (d.port > 0) values[d.name] = "127.0.0.1:0";
+  }
+  for (const ServedDevice& d : served) values[d.name] = d.address + ":" + std::to_string(d.port);
+  values["bin"] = ExecutableDir();
+  const std::string dir = std::filesystem::path(scenario.file).parent_path().string();
+  values["scenario_dir"] = dir.empty() ? "." : dir;
+  char duration[32];
+  std::snprintf(duration, sizeof(duration), "%.17g", scenario.duration_s);
+  values["duration"] = duration;
+  return values;
+}
+
+std::string ExecutableDir() {
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string() : self.parent_path().string();
+}
+
+std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<std::string>& argv,
+                                                              const std::string& log_path) {
+  if (argv.empty() || argv[0].empty()) throw InputError("controller.command: no program named");
+  std::unique_ptr<ExternalController> c(new ExternalController());
+  c->program_ = argv[0];
+  c->log_path_ = log_path;
+  if (log_path.empty()) {
+    char name[] = "/tmp/vlab-controller-XXXXXX";
+    const int fd = ::mkstemp(name);
+    if (fd < 0) throw std::runtime_error("controller '" + argv[0] + "': no temporary file for its output");
+    ::close(fd);
+    c->log_path_ = name;
+    c->log_is_temporary_ = true;
+  }
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+
+  const int log = ::open(c->log_path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  const int null = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  int exit_pipe[2] = {-1, -1}, error_pipe[2] = {-1, -1};
+  if (log < 0 || null < 0 || ::pipe2(exit_pipe, O_CLOEXEC) != 0 || ::pipe2(error_pipe, O_CLOEXEC) != 0) {
+    const std::string why = std::strerror(errno);
+    for (int fd : {log, null, exit_pipe[0], exit_pipe[1], error_pipe[0], error_pipe[1]}) {
+      if (fd >= 0) ::close(fd);
+    }
+    throw std::runtime_error("controller '" + argv[0] + "': cannot set up its output '" + c->log_path_ + "': " + why);
+  }
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // child: own process group, ended with its parent; only async-signal-safe calls until exec
+    ::setpgid(0, 0);
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() != parent) ::_exit(127);
+    ::dup2(null, 0);
+    ::dup2(log, 1);
+    ::dup2(log, 2);
+    ::fcntl(exit_pipe[1], F_SETFD, 0);  // held open until the program (and its children) exit
+    sigset_t none;
+    sigemptyset(&none);
+    ::sigprocmask(SIG_SETMASK, &none, nullptr);
+    ::signal(SIGINT, SIG_DFL);
+    ::signal(SIGTERM, SIG_DFL);
+    ::execvp(args[0], args.data());
+    const int error = errno;
+    (void)!::write(error_pipe[1], &error, sizeof(error));
+    ::_exit(127);
+  }
+  const int fork_error = errno;
+  ::close(log);
+  ::close(null);
+  ::close(exit_pipe[1]);
+  ::close(error_pipe[1]);
+  c->exit_fd_ = exit_pipe[0];
+  if (pid < 0) {
+    ::close(error_pipe[0]);
+    throw std::runtime_error("controller '" + argv[0] + "': fork failed: " + std::strerror(fork_error));
+  }
+  c->pid_ = pid;
+  ::setpgid(pid, pid);  // also here: no race with the first kill
+  int exec_error = 0;
+  ssize_t n;
+  do {
+    n = ::read(error_pipe[0], &exec_error, sizeof(exec_error));
+  } while (n < 0 && errno == EINTR);
+  ::close(error_pipe[0]);
+  if (n == static_cast<ssize_t>(sizeof(exec_error))) {
+    ::waitpid(pid, &c->status_, 0);
+    c->reaped_ = true;
+    throw InputError("controller.command: cannot run '" + argv[0] + "': " + std::strerror(exec_error));
+  }
+  return c;
+}
+
+ExternalController::~ExternalController() {
+  Stop(1.0);
+  if (exit_fd_ >= 0) ::close(exit_fd_);
+  if (log_is_temporary_) ::unlink(log_path_.c_str());
+}
+
+bool ExternalController::Exited() {
+  if (!reaped_ && pid_ > 0 && ::waitpid(pid_, &status_, WNOHANG) == pid_) reaped_ = true;
+  return reaped_;
+}
+
+void ExternalController::Stop(double grace_s) {
+  if (pid_ <= 0) return;
+  if (!Exited()) {
+    stopped_ = true;
+    ::kill(-pid_, SIGTERM);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace_s);
+    while (!Exited() && std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (!Exited()) {
+      ::kill(-pid_, SIGKILL);
+      ::waitpid(pid_, &status_, 0);
+      reaped_ = true;
+    }
+  }
+  ::kill(-pid_, SIGKILL);  // whatever the program left running in its group
+  pid_ = -1;
+}
+
+bool ExternalController::Succeeded() const {
+  if (!reaped_) return false;
+  return stopped_ || (WIFEXITED(status_) && WEXITSTATUS(status_) == 0);
+}
+
+std::string ExternalController::Outcome() const {
+  if (!reaped_) return "running";
+  if (WIFEXITED(status_)) return "exit status " + std::to_string(WEXITSTATUS(status_));
+  if (WIFSIGNALED(status_)) return "killed by signal " + std::to_string(WTERMSIG(status_));
+  return "ended";
+}
+
+std::string ExternalController::LastLogLine() const {
+  std::ifstream in(log_path_);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  }
+  return last;
+}
+
+}  // namespace vlab::lab

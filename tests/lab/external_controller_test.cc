@@ -1,0 +1,124 @@
+// Scenario controllers of type `external` (src/lab/lab_external.cc), through
+// the real vlab binary: `vlab run` serves the devices on free loopback ports,
+// starts the program with its placeholders expanded, runs lockstep and keeps
+// the program's output in controller.log; the same scenario twice gives the same log bit for
+// bit; a controller that fails ends the run at once with its exit status and
+// last line (the output folder says why); a program that cannot run and an unknown placeholder are bad
+// input (exit 2, nothing written). Placeholder expansion itself is checked
+// directly.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "lab/lab_errors.h"
+#include "lab/lab_external.h"
+#include "test_util.h"
+
+namespace vlab::testing {
+namespace {
+
+// the PA10 served on port 50010 (vlab run binds a free port instead), a JR3
+// served and never named, and a controller command
+std::string Scenario(const std::string& command, double duration = 6.5) {
+  return R"(
+name: external
+scene: )" VLAB_SOURCE_DIR R"(/scenes/pa10.xml
+duration: )" + std::to_string(duration) + R"(
+control_period: 0.002
+seed: 5
+clock: fast
+lockstep: {timeout: 1.0, start_timeout: 600.0}
+devices:
+  - name: pa10
+    kind: arm
+    port: 50010
+    joints: [S1, S2, S3, E1, E2, W1, W2]
+    initial: [0, 0.523599, 0, 1.047198, 0, 1.570796, 0]
+  - {name: jr3, kind: wrench, port: 50011, force_sensor: jr3_force, torque_sensor: jr3_torque}
+controller:
+  type: external
+  command: )" + command + R"(
+checks:
+  - {name: joint_limits, signal: pa10.limit_violation, reduce: max, max: 0.0}
+)";
+}
+
+TEST(ExternalController, RunStartsItAndTheLogIsTheSameTwice) {
+  TempDir dir;
+  WriteFile(dir / "s.yaml", Scenario(R"(["{bin}/examples/joint_control", "--arm", "{pa10}"])"));
+  const ProcessResult a = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "a"));
+  ASSERT_EQ(a.exit_code, 0) << a.err << a.out;
+  const ProcessResult b = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "b"));
+  ASSERT_EQ(b.exit_code, 0) << b.err << b.out;
+  EXPECT_EQ(ReadFile(dir / "a/log.csv"), ReadFile(dir / "b/log.csv"));
+  EXPECT_EQ(Lines(ReadFile(dir / "a/log.csv")).size(), 1u + 1u + 3250u);  // header, t = 0, 3250 periods
+
+  const auto summary = nlohmann::json::parse(ReadFile(dir / "a/summary.json"));
+  EXPECT_EQ(summary["clock"], "lockstep");  // fast becomes lockstep with an external controller
+  EXPECT_EQ(summary["controller"]["type"], "external");
+  EXPECT_NE(summary["controller"]["program"].get<std::string>().find("examples/joint_control"), std::string::npos);
+  // every period was answered: the arm accepted one command per period
+  long accepted = -1;
+  for (const auto& d : summary["bridge"]["devices"]) {
+    if (d["name"] == "pa10") accepted = d["accepted"];
+    EXPECT_EQ(d["address"], "127.0.0.1");
+    EXPECT_NE(d["port"], 50010);  // a free port, not the scenario's
+  }
+  EXPECT_GE(accepted, 3250);
+  EXPECT_EQ(summary["clock_stats"]["timeouts"], 0);
+  // the controller's own output is kept (joint_control prints its tracking error)
+  EXPECT_NE(ReadFile(dir / "a/controller.log").find("max tracking error"), std::string::npos);
+}
+
+TEST(ExternalController, AFailingControllerEndsTheRunWithItsStatus) {
+  TempDir dir;
+  WriteFile(dir / "s.yaml", Scenario(R"(["sh", "-c", "echo cannot reach {pa10} >&2; exit 3"])"));
+  // the start timeout is 600 s and RunVlab gives up after 60 s (exit 124): only
+  // a lab that sees the program exit ends the run with exit 1
+  const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"), 60);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("controller 'sh' ended with exit status 3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("cannot reach 127.0.0.1:"), std::string::npos) << r.err;
+  // a failed run is written whole, with the controller's output and the reason
+  EXPECT_NE(ReadFile(dir / "out/controller.log").find("cannot reach 127.0.0.1:"), std::string::npos);
+  const auto summary = nlohmann::json::parse(ReadFile(dir / "out/summary.json"));
+  EXPECT_EQ(summary["result"], "fail");
+  EXPECT_EQ(summary["controller"]["outcome"], "exit status 3");
+}
+
+TEST(ExternalController, BadCommandsAreBadInput) {
+  TempDir dir;
+  WriteFile(dir / "missing.yaml", Scenario(R"(["{bin}/examples/no_such_controller", "--arm", "{pa10}"])"));
+  ProcessResult r = RunVlab("run " + (dir / "missing.yaml") + " -q --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("cannot run '"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no_such_controller': No such file or directory"), std::string::npos) << r.err;
+
+  WriteFile(dir / "unknown.yaml", Scenario(R"(["{bin}/examples/joint_control", "--arm", "{nomad}"])"));
+  r = RunVlab("run " + (dir / "unknown.yaml") + " -q --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("controller.command: unknown placeholder {nomad}"), std::string::npos) << r.err;
+
+  WriteFile(dir / "empty.yaml", Scenario("[]"));
+  r = RunVlab("run " + (dir / "empty.yaml") + " -q --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("controller.command"), std::string::npos) << r.err;
+  EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"missing.yaml", "unknown.yaml", "empty.yaml"}));
+}
+
+TEST(ExpandCommand, PlaceholdersAnywhereInAnArgument) {
+  const std::map<std::string, std::string> values = {{"pa10", "127.0.0.1:4000"}, {"bin", "/opt/vlab"}};
+  EXPECT_EQ(lab::ExpandCommand({"{bin}/x", "--arm={pa10}", "{pa10}{pa10}", "plain"}, values, "s.yaml:3"),
+            (std::vector<std::string>{"/opt/vlab/x", "--arm=127.0.0.1:4000", "127.0.0.1:4000127.0.0.1:4000",
+                                      "plain"}));
+  try {
+    lab::ExpandCommand({"{bin"}, values, "s.yaml:3");
+    FAIL() << "an unclosed brace must be refused";
+  } catch (const lab::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.yaml:3: controller.command: '{bin': a '{' without its '}'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace vlab::testing
