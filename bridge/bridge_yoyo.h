@@ -1,0 +1,32 @@
+// Layouts of the yo-yo case study's device kinds (docs/protocol.md), shared by
+// every server of them (the lab, vlab-yoyosim, the vision program) and their
+// clients, so that they send the same values in the same order.
+//
+//   point (kind 10): a point that is commanded and measured, e.g. the robot's
+//     hand. Command [x, y, z]: where the point should go (m, world frame).
+//     State [status, x, y, z, vx, vy, vz]: where it is (m) and how fast it moves
+//     (m/s), world frame; status bits as an arm's (holding, refused, watchdog,
+//     not_owner).
+//   yoyo (kind 11): a yo-yo on its string, measured. No commands.
+//     State [status, x, y, z, vz, string_force, spin]: the yo-yo's centre (m,
+//     world), its vertical velocity (m/s), the string's tension at the hand (N,
+//     >= 0; 0 while the string is slack) and the spin rate (rad/s). status bit
+//     kYoyoNotSeen: a measurement that has no fresh position (e.g. vision lost
+//     it); the values are then the last ones.
+#pragma once
+
+#include <array>
+
+namespace vlab::bridge {
+
+/// Value names of the point kind's command and state.
+inline constexpr std::array<const char*, 3> kPointCommandLayout = {"x", "y", "z"};
+inline constexpr std::array<const char*, 7> kPointStateLayout = {"status", "x", "y", "z", "vx", "vy", "vz"};
+
+/// Value names of the yoyo kind's state (it takes no commands).
+inline constexpr std::array<const char*, 7> kYoyoStateLayout = {"status", "x", "y", "z", "vz", "string_force", "spin"};
+
+/// Yoyo status bit: no fresh measurement of the position in this state.
+inline constexpr unsigned kYoyoNotSeen = 1u << 6;  // after the arm bits (bridge_protocol.h)
+
+}  // namespace vlab::bridge

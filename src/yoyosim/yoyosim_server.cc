@@ -1,0 +1,241 @@
+#include "yoyosim/yoyosim_server.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "bridge/bridge_describe.h"
+#include "lab/lab_errors.h"
+#include "yoyosim/yoyosim_describe.h"
+
+namespace vlab::yoyosim {
+
+namespace {
+
+// the most datagrams handled per socket and call, so that a flood cannot stall the loop
+constexpr int kMaxDatagramsPerReceive = 1000;
+// longest single wait: a stop request (signal) is seen within this, s
+constexpr double kPollSlice_s = 0.05;
+
+long Periods(double seconds, double period_s) { return std::max(1L, std::lround(seconds / period_s)); }
+
+void Require(bool ok, const std::string& what) {
+  if (!ok) throw lab::InputError(what);
+}
+
+}  // namespace
+
+std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std::unique_ptr<YoyoSim> sim) {
+  Require(sim != nullptr, "yoyosim: no simulation");
+  Require(c.clock == "lockstep" || c.clock == "realtime", "--clock must be lockstep or realtime, not '" + c.clock + "'");
+  Require(c.duration_s >= 0 && std::isfinite(c.duration_s), "--duration must be >= 0 s");
+  Require(c.start_timeout_s >= 0 && std::isfinite(c.start_timeout_s), "--start-timeout must be >= 0 s");
+  Require(c.timeout_s > 0 && std::isfinite(c.timeout_s), "--timeout must be > 0 s");
+  Require(c.release_after >= 1, "release_after must be >= 1");
+  Require(c.speed_max > 0 && std::isfinite(c.speed_max), "--max-speed must be > 0 m/s");
+  Require(c.watchdog_periods >= 0, "watchdog periods must be >= 0");
+  Require(c.owner_timeout_s > 0 && std::isfinite(c.owner_timeout_s), "owner timeout must be > 0 s");
+  Require(c.subscriber_timeout_s > 0 && std::isfinite(c.subscriber_timeout_s), "subscriber timeout must be > 0 s");
+
+  std::unique_ptr<YoyoSimServer> s(new YoyoSimServer());
+  s->config_ = c;
+  s->point_socket_ = bridge::UdpSocket::Bind(c.bind_address, c.point_port);  // throws NetworkError naming it
+  s->yoyo_socket_ = bridge::UdpSocket::Bind(c.bind_address, c.yoyo_port);
+  const double period = sim->period_s();
+
+  bridge::DeviceDescription d;
+  d.server = "vlab-yoyosim (MuJoCo " + lab::MujocoVersion() + ")";
+  d.clock = c.clock;
+  d.address = s->point_socket_->local_endpoint().address().to_string();
+  d.control_hz = 1.0 / period;
+
+  bridge::EndpointConfig point;
+  d.name = point.name = "point";
+  d.port = s->point_socket_->local_port();
+  point.kind = bridge::DeviceKind::kPoint;
+  point.describe_json = PointDescribeJson(d, *sim, PointFacts{c.speed_max, c.watchdog_periods, c.owner_timeout_s});
+  point.owner_timeout_periods = static_cast<int>(Periods(c.owner_timeout_s, period));
+  point.subscriber_timeout_periods = static_cast<int>(Periods(c.subscriber_timeout_s, period));
+  point.watchdog_periods = c.watchdog_periods;
+  point.command_length = 3;
+  point.status_first = true;
+  YoyoSimServer* self = s.get();
+  point.check_command = [self](const std::vector<double>& p) { return self->CheckSetPoint(p); };
+  s->point_ = std::make_unique<bridge::DeviceEndpoint>(std::move(point));
+
+  bridge::EndpointConfig yoyo;
+  d.name = yoyo.name = "yoyo";
+  d.port = s->yoyo_socket_->local_port();
+  yoyo.kind = bridge::DeviceKind::kYoyo;
+  yoyo.describe_json = YoyoDescribeJson(d, *sim);
+  yoyo.subscriber_timeout_periods = point.subscriber_timeout_periods;
+  s->yoyo_ = std::make_unique<bridge::DeviceEndpoint>(std::move(yoyo));
+
+  // the lab's clock, configured as a scenario would
+  lab::Scenario scenario;
+  scenario.clock = c.clock;
+  scenario.control_period_s = period;
+  scenario.lockstep.timeout_s = c.timeout_s;
+  scenario.lockstep.start_timeout_s = c.start_timeout_s;
+  scenario.lockstep.on_timeout = "hold";
+  scenario.lockstep.release_after = c.release_after;
+  scenario.realtime.factor = 1.0;
+  const long periods = c.duration_s > 0 ? std::lround(c.duration_s / period) : 0;
+  s->clock_ = lab::MakeClock(scenario, "", periods);
+
+  // one byte more than the largest valid datagram, so that a longer one is seen as too long
+  s->datagram_.resize((bridge::kMaxPacketValues + 1) * sizeof(double));
+  s->point_state_.reserve(bridge::kMaxPacketValues * sizeof(double));
+  s->yoyo_state_.reserve(bridge::kMaxPacketValues * sizeof(double));
+  s->command_.reserve(bridge::kMaxPacketValues);
+  s->sim_ = std::move(sim);
+  return s;
+}
+
+bridge::CommandCheck YoyoSimServer::CheckSetPoint(const std::vector<double>& p) const {
+  return sim_->WithinWorkspace(p.data()) ? bridge::CommandCheck::kAccept : bridge::CommandCheck::kLimits;
+}
+
+void YoyoSimServer::Receive() {
+  for (bool point : {true, false}) {
+    bridge::UdpSocket& socket = point ? *point_socket_ : *yoyo_socket_;
+    bridge::DeviceEndpoint& endpoint = point ? *point_ : *yoyo_;
+    const std::vector<unsigned char>& last_state = point ? point_state_ : yoyo_state_;
+    for (int i = 0; i < kMaxDatagramsPerReceive; ++i) {
+      bridge::Endpoint from;
+      const long size = socket.Receive(datagram_.data(), datagram_.size(), &from, 0.0);
+      if (size < 0) break;
+      const long describes = endpoint.counters().describes;
+      const bool accepted = endpoint.Handle(datagram_.data(), static_cast<std::size_t>(size), from, period_, socket);
+      // a new subscriber gets the latest state at once (it may be what lockstep waits on)
+      if (endpoint.counters().describes != describes) socket.SendTo(last_state.data(), last_state.size(), from);
+      if (!accepted || !point) continue;
+      // an accepted set-point: the newest, applied at the next period start
+      point_->TakeCommand(&command_);
+      std::copy(command_.begin(), command_.begin() + 3, pending_W_.begin());
+      pending_ = true;
+    }
+  }
+}
+
+void YoyoSimServer::Poll(double timeout_s) {
+  if (stop_ && *stop_) return;
+  const int fds[2] = {point_socket_->fd(), yoyo_socket_->fd()};
+  if (bridge::WaitReadable(fds, 2, std::min(timeout_s, kPollSlice_s))) Receive();
+}
+
+bool YoyoSimServer::Answered(std::int64_t k) const {
+  if (stop_ && *stop_) return true;  // stop waiting: the loop ends
+  if (!point_->has_owner()) return k > 0;
+  return point_->last_accepted_seq() >= static_cast<double>(k);
+}
+
+void YoyoSimServer::BeginPeriod(long k, lab::PeriodStart start) {
+  // lockstep: a silent owner costs a timeout per period, then loses the point
+  if (start == lab::PeriodStart::kTimedOut) {
+    ++counters_.timeouts;
+    if (++consecutive_timeouts_ >= config_.release_after && point_->has_owner()) {
+      point_->ReleaseOwner();
+      ++counters_.releases;
+      if (!config_.quiet) {
+        std::fprintf(stderr, "vlab-yoyosim: no command for %d periods in a row (t = %.3f s): point released\n",
+                     consecutive_timeouts_, sim_->time());
+      }
+    }
+  } else {
+    consecutive_timeouts_ = 0;
+  }
+  Receive();  // what came since the clock's last poll
+  // watchdog: hold where the hand is, once, until the next accepted command
+  if (point_->BeginPeriod(k)) {
+    if (!watchdog_hold_) {
+      sim_->Hold();
+      pending_ = false;  // the hold ends the way to the last set-point
+    }
+    watchdog_hold_ = true;
+  } else {
+    watchdog_hold_ = false;
+  }
+  // the set-point in force moves towards the newest command by at most
+  // speed_max x period in a period (a far command is reached at speed_max)
+  if (pending_) {
+    Vec3 next = sim_->target();
+    double distance = 0;
+    for (int i = 0; i < 3; ++i) distance += (pending_W_[i] - next[i]) * (pending_W_[i] - next[i]);
+    distance = std::sqrt(distance);
+    const double step = config_.speed_max * sim_->period_s();
+    const double f = distance > step ? step / distance : 1.0;
+    for (int i = 0; i < 3; ++i) next[i] += f * (pending_W_[i] - next[i]);
+    if (sim_->SetTarget(next.data())) ++counters_.applied;
+    pending_ = f < 1.0;
+  }
+}
+
+void YoyoSimServer::Publish(long k) {
+  const bridge::Header point{static_cast<int>(bridge::DeviceKind::kPoint), static_cast<int>(bridge::MessageType::kState),
+                             static_cast<double>(k), static_cast<double>(k) * sim_->period_s(), 7};
+  sim_->SamplePoint(values_);
+  values_[0] = static_cast<double>(static_cast<std::uint32_t>(values_[0]) | point_->status_bits());
+  bridge::EncodePacket(point, values_, 7, &point_state_);
+  point_->Publish(point_state_, *point_socket_);
+  bridge::Header yoyo = point;
+  yoyo.kind = static_cast<int>(bridge::DeviceKind::kYoyo);
+  sim_->SampleYoyo(values_);
+  bridge::EncodePacket(yoyo, values_, 7, &yoyo_state_);
+  yoyo_->Publish(yoyo_state_, *yoyo_socket_);
+}
+
+int YoyoSimServer::Run(const volatile std::sig_atomic_t* stop) {
+  stop_ = stop;
+  auto stopped = [stop] { return stop && *stop; };
+  const long last = config_.duration_s > 0 ? std::lround(config_.duration_s / sim_->period_s()) : -1;
+  int result = 0;
+  Publish(0);
+  for (long k = 0; (last < 0 || k < last) && !stopped(); ++k) {
+    period_ = k;
+    const lab::PeriodStart start = clock_->BeginPeriod(k, this);
+    if (stopped()) break;
+    BeginPeriod(k, start);
+    if (!sim_->Step()) {
+      std::fprintf(stderr, "vlab-yoyosim: error: the simulation diverged in the period from t = %.3f s (MuJoCo: %s)\n",
+                   sim_->time(), sim_->divergence());
+      result = 1;
+      break;
+    }
+    counters_.periods = k + 1;
+    Publish(k + 1);
+  }
+  const lab::ClockStats& stats = clock_->stats();
+  counters_.missed_deadlines = stats.missed_deadlines;
+  counters_.max_lateness_s = stats.max_lateness_s;
+  return result;
+}
+
+std::string YoyoSimServer::StartLine() const {
+  char text[512];
+  std::snprintf(text, sizeof(text), "vlab-yoyosim: point on %s, yoyo on %s, %s, %g Hz, scene %s",
+                bridge::EndpointText(point_socket_->local_endpoint()).c_str(),
+                bridge::EndpointText(yoyo_socket_->local_endpoint()).c_str(), config_.clock.c_str(),
+                1.0 / sim_->period_s(), sim_->scene().c_str());
+  return text;
+}
+
+std::string YoyoSimServer::ReportText() const {
+  const bridge::EndpointCounters& p = point_->counters();
+  const bridge::EndpointCounters& y = yoyo_->counters();
+  const ServerCounters& s = counters_;
+  char text[1024];
+  std::snprintf(text, sizeof(text),
+                "vlab-yoyosim: %ld periods (%.3f s), set-points applied %ld, lockstep timeouts %ld, releases %ld, "
+                "missed deadlines %ld (max lateness %.3f ms)\n"
+                "vlab-yoyosim: point: received %ld, describes %ld, accepted %ld, refused %ld (malformed %ld, "
+                "limits %ld, not owner %ld), stale %ld, duplicate %ld, watchdog holds %ld\n"
+                "vlab-yoyosim: yoyo: received %ld, describes %ld, refused %ld",
+                s.periods, sim_->time(), s.applied, s.timeouts, s.releases, s.missed_deadlines,
+                s.max_lateness_s * 1e3, p.received, p.describes, p.accepted, p.refused, p.refused_malformed,
+                p.refused_limits, p.refused_not_owner, p.stale, p.duplicate, p.watchdog_holds, y.received,
+                y.describes, y.refused);
+  return text;
+}
+
+}  // namespace vlab::yoyosim
