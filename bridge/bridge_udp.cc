@@ -15,8 +15,8 @@ namespace vlab::bridge {
 namespace asio = boost::asio;
 
 bool WaitReadable(const int* fds, int count, double timeout_s) {
-  pollfd p[16];
-  const int n = count < 16 ? count : 16;
+  pollfd p[kMaxWaitFds];
+  const int n = count < kMaxWaitFds ? count : kMaxWaitFds;
   for (int i = 0; i < n; ++i) p[i] = pollfd{fds[i], POLLIN, 0};
   // ppoll: nanosecond timeouts (poll's milliseconds would make a 1 kHz loop late)
   timespec ts{};

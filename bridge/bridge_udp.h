@@ -14,8 +14,11 @@ namespace vlab::bridge {
 
 using Endpoint = boost::asio::ip::udp::endpoint;
 
+/// Most file descriptors WaitReadable watches (the rest are ignored).
+inline constexpr int kMaxWaitFds = 64;
+
 /// Waits up to timeout_s (< 0: forever) until one of the file descriptors
-/// (sockets' fd(), at most 16) is readable; false on timeout.
+/// (sockets' fd(), at most kMaxWaitFds) is readable; false on timeout.
 bool WaitReadable(const int* fds, int count, double timeout_s);
 
 /// "ADDR:PORT" of an endpoint, for messages.

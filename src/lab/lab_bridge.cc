@@ -78,6 +78,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
         }
       }
       d.arm = arm;
+      for (const DeviceConfig& p : scenario.devices) d.driven = d.driven || (p.kind == "point" && p.point.arm == c.name);
       d.kind = bridge::DeviceKind::kArm;
       ec.kind = d.kind;
       ec.joints = arm->dof();
@@ -166,6 +167,11 @@ void LabBridge::WatchPeerExit(int fd) {
   fds_.push_back(fd);
 }
 
+void LabBridge::AddPollable(int fd, std::function<void()> on_readable) {
+  fds_.push_back(fd);
+  pollables_.push_back(std::move(on_readable));
+}
+
 void LabBridge::CheckPeerExit() {
   if (peer_gone_ || peer_exit_fd_ < 0 || !bridge::WaitReadable(&peer_exit_fd_, 1, 0.0)) return;
   peer_gone_ = true;  // end of file: it stays readable, so stop waiting on it
@@ -173,13 +179,14 @@ void LabBridge::CheckPeerExit() {
 }
 
 void LabBridge::Poll(double timeout_s) {
-  if (devices_.empty()) return;
+  if (fds_.empty()) return;
   // spin briefly first: an answer usually comes within tens of microseconds, and
   // a sleeping thread's wake-up costs about as much again
   const double spin_until = WallNow() + std::min(timeout_s, kSpinSeconds);
   do {
     if (bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), 0.0)) {
       for (Served& d : devices_) Receive(d);
+      for (auto& poll : pollables_) poll();
       CheckPeerExit();
       return;
     }
@@ -187,6 +194,7 @@ void LabBridge::Poll(double timeout_s) {
   const double left = timeout_s - kSpinSeconds;
   if (left <= 0 || !bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), left)) return;
   for (Served& d : devices_) Receive(d);
+  for (auto& poll : pollables_) poll();
   CheckPeerExit();
 }
 
@@ -197,7 +205,7 @@ bool LabBridge::Answered(std::int64_t k) const {
   // one for any commanded device (one that left was released: the device holds)
   bool any_arm = false, any_owner = false, any_commanded = false;
   for (const Served& d : devices_) {
-    const bool arm = d.kind == bridge::DeviceKind::kArm;
+    const bool arm = d.kind == bridge::DeviceKind::kArm && !d.driven;  // a driven arm: its point device is waited for
     const bool commanded = arm || (d.device && d.device->command_length() > 0);
     if (!commanded) continue;
     any_arm = any_arm || arm;

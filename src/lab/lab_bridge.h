@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <map>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,6 +66,10 @@ class LabBridge final : public CommandSource {
   /// Also wait on fd, which becomes readable when the controller process
   /// that `vlab run` started has exited: from then on no period waits.
   void WatchPeerExit(int fd);
+  /// Also wait on fd (a camera's socket) and call on_readable whenever the
+  /// wait wakes up, so that such a device answers describe requests while
+  /// lockstep waits for commands. on_readable must not block.
+  void AddPollable(int fd, std::function<void()> on_readable);
   /// True once the watched controller process has exited.
   bool peer_gone() const { return peer_gone_; }
   /// The newest sim command since the last call, if any.
@@ -93,6 +98,7 @@ class LabBridge final : public CommandSource {
     std::unique_ptr<bridge::UdpSocket> socket;
     std::unique_ptr<bridge::DeviceEndpoint> endpoint;
     SimArm* arm = nullptr;
+    bool driven = false;  // an arm a point device drives: its own commands are overridden, not waited for
     int arm_index = -1;  // in the lab's arm list (and its arm_states)
     SimWrench* wrench = nullptr;
     SimDevice* device = nullptr;  // base, feet, imu, ...
@@ -105,6 +111,7 @@ class LabBridge final : public CommandSource {
   std::vector<Served> devices_;
   Served* sim_ = nullptr;
   std::vector<int> fds_;
+  std::vector<std::function<void()>> pollables_;
   int peer_exit_fd_ = -1;
   bool peer_gone_ = false;
   void CheckPeerExit();

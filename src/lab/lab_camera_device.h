@@ -46,6 +46,10 @@ class SimCamera {
   /// Throws InputError naming the device when the port cannot be bound.
   void Serve(const std::string& address, int port, const std::string& server, const std::string& clock);
   bool served() const { return server_ != nullptr; }
+  /// The served camera's socket (served() only), and a non-blocking pass over
+  /// what arrived on it (describe requests subscribe their senders).
+  int fd() { return server_->fd(); }
+  void PollRequests() { server_->Poll(0.0); }
   /// Closes its socket and restarts its schedule (a run without serving).
   void Unserve();
   /// At every period end t (and t = 0): answers datagrams, renders the frames

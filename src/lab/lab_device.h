@@ -35,6 +35,13 @@ class SimDevice {
     (void)d;
     (void)dt;
   }
+  /// Start of a control period at time t, after the period's commands (and
+  /// holds) were given: a device that commands another one (point: its arm)
+  /// does it here.
+  virtual void BeginPeriod(const mjData& d, double t) {
+    (void)d;
+    (void)t;
+  }
   /// End of a control period at time t.
   virtual void Sample(const mjData& d, double t) = 0;
 
@@ -68,7 +75,16 @@ class SimDevice {
   std::string name_;
 };
 
-/// Makes the device a scenario entry names (kinds base, gripper, feet, imu, gaze, pose).
+class SimArm;
+
+/// Makes a point device (kind point) that drives `arm` (the scenario's arm
+/// device its `arm` key names; it must outlive the device) at the control
+/// period. Throws InputError naming the device and the element it cannot bind.
+std::unique_ptr<SimDevice> MakePointDevice(const mjModel* m, const DeviceConfig& config, SimArm* arm,
+                                           double control_period_s);
+
+/// Makes the device a scenario entry names (kinds base, gripper, feet, imu, gaze, pose, yoyo;
+/// point: MakePointDevice).
 /// Throws InputError naming the device and the MJCF element it cannot bind.
 std::unique_ptr<SimDevice> MakeSimDevice(const mjModel* m, const DeviceConfig& config, std::uint64_t seed);
 

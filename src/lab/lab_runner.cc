@@ -77,9 +77,28 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
       impl->wrenches.push_back(SimWrench::Create(m, device, DeviceSeed(scenario.seed, device.name)));
     } else if (device.kind == "camera") {
       impl->cameras.push_back(SimCamera::Create(m, device, scenario.scene, DeviceSeed(scenario.seed, device.name)));
+    } else if (device.kind == "point") {
+      continue;  // made below, once its arm exists
     } else if (IsSimDeviceKind(device.kind)) {
       impl->devices.push_back(MakeSimDevice(m, device, DeviceSeed(scenario.seed, device.name)));
     }  // sim: the run's own control device, served by the bridge
+  }
+  // point devices drive an arm device: one point device per arm, and no built-in controller on it
+  for (const DeviceConfig& device : scenario.devices) {
+    if (device.kind != "point") continue;
+    SimArm* arm = nullptr;
+    for (auto& a : impl->arms) arm = a->name() == device.point.arm ? a.get() : arm;
+    const std::string where = device.where + ": device '" + device.name + "': arm: ";
+    if (!arm) throw InputError(where + "the scenario has no arm device '" + device.point.arm + "'");
+    for (const DeviceConfig& other : scenario.devices) {
+      if (other.kind == "point" && other.point.arm == device.point.arm && other.name != device.name) {
+        throw InputError(where + "arm '" + arm->name() + "' is driven by point device '" + other.name + "' too");
+      }
+    }
+    if (scenario.controller.type != "none" && scenario.controller.arm == device.point.arm) {
+      throw InputError(where + "arm '" + arm->name() + "' is commanded by the built-in controller: one owner at a time");
+    }
+    impl->devices.push_back(MakePointDevice(m, device, arm, scenario.control_period_s));
   }
   if (!impl->arms.empty() && m->opt.integrator == mjINT_RK4) {
     throw InputError("scene '" + scenario.scene + "': arm devices need the Euler or implicit integrator (RK4 "
@@ -277,6 +296,7 @@ RunResult Lab::Run(const RunOptions& options) {
       if (k > 0) s.RunController(t_k, options, &replay_at, &result, controller_columns);
       s.arms[s.controller_arm]->Command(s.arm_commands[s.controller_arm]);
     }
+    for (auto& dev : s.devices) dev->BeginPeriod(*d, t_k);  // point devices command their arms
     // 2. physics: the servo acts between the two halves of every step
     for (int i = 0; i < s.steps_per_period && !diverged; ++i) {
       const double t_step = d->time;

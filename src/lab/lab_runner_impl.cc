@@ -91,6 +91,8 @@ std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, c
     const auto override_port = options.ports.find(cam->name());
     if (override_port == options.ports.end() && port == 0) continue;
     cam->Serve(options.bind, override_port != options.ports.end() ? override_port->second : port, server, clock_name);
+    SimCamera* c = cam.get();
+    bridge->AddPollable(c->fd(), [c] { c->PollRequests(); });  // describe replies while lockstep waits
   }
   if (controller) {
     for (const ServedDevice& sd : bridge->Devices()) {

@@ -179,8 +179,47 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
     g.height = r.Integer("height", g.height);
     if (g.width < 1 || g.width > 8192) r.Fail("width", "must be 1 to 8192 pixels");
     if (g.height < 1 || g.height > 8192) r.Fail("height", "must be 1 to 8192 pixels");
+  } else if (device.kind == "point") {
+    PointDeviceConfig& p = device.point;
+    p.arm = r.String("arm");
+    p.site = r.String("site", p.site);
+    p.base_body = r.String("base_body", p.base_body);
+    MapReader gains = r.Map("gains");
+    p.k_position = gains.Number("position", p.k_position);
+    p.k_orientation = gains.Number("orientation", p.k_orientation);
+    p.k_null = gains.Number("null_space", p.k_null);
+    p.damping = gains.Number("damping", p.damping);
+    if (!(p.k_position > 0 && p.k_orientation >= 0 && p.k_null >= 0 && p.damping >= 0)) {
+      gains.Fail("position", "position must be > 0, the other gains >= 0");
+    }
+    gains.Finish();
+    p.max_speed = r.Number("max_speed", p.max_speed);
+    if (!(p.max_speed > 0)) r.Fail("max_speed", "must be > 0 m/s");
+    MapReader box = r.Map("workspace");
+    p.workspace_min = box.Numbers("min", p.workspace_min);
+    p.workspace_max = box.Numbers("max", p.workspace_max);
+    for (int i = 0; i < 3 && p.workspace_min.size() == 3 && p.workspace_max.size() == 3; ++i) {
+      if (!(p.workspace_min[i] < p.workspace_max[i])) box.Fail("max", "must be > min in x, y and z");
+    }
+    if (p.workspace_min.size() != 3 || p.workspace_max.size() != 3) box.Fail("min", "min and max need 3 numbers (x, y, z), m, world frame");
+    box.Finish();
+    p.watchdog_periods = r.Integer("watchdog_periods", p.watchdog_periods);
+    if (p.watchdog_periods < 0) r.Fail("watchdog_periods", "must be >= 0 (0: off)");
+    p.owner_timeout_s = r.Number("owner_timeout", p.owner_timeout_s);
+    if (!(p.owner_timeout_s > 0)) r.Fail("owner_timeout", "must be > 0 s");
+  } else if (device.kind == "yoyo") {
+    YoyoDeviceConfig& y = device.yoyo;
+    y.slide = r.String("slide", y.slide);
+    y.spin = r.String("spin", y.spin);
+    y.centre = r.String("centre", y.centre);
+    y.tension = r.Strings("tension", y.tension);
+    if (y.tension.empty()) r.Fail("tension", "needs at least one tendonlimitfrc sensor");
+    y.rate_hz = r.Number("rate", y.rate_hz);
+    if (!(y.rate_hz >= 0)) r.Fail("rate", "must be >= 0 Hz (0: every control period)");
+    y.noise = r.Number("noise", y.noise);
+    if (!(y.noise >= 0)) r.Fail("noise", "must be >= 0 m");
   } else if (device.kind != "sim") {
-    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim, camera, base, gripper, feet, imu, gaze, pose)");
+    r.Fail("kind", "unknown device kind '" + device.kind + "' (known: arm, wrench, sim, camera, base, gripper, feet, imu, gaze, pose, point, yoyo)");
   }
   r.Finish();
   return device;

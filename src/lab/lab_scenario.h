@@ -115,6 +115,42 @@ struct GazeDeviceConfig {
   int height = 480;
 };
 
+/// A task-space interface to an arm's tool (kind point), like a robot
+/// controller's Cartesian position input: a commanded point [x, y, z] that the
+/// device turns into joint velocity commands for its arm every control period
+/// (src/lab/lab_point_device.cc).
+struct PointDeviceConfig {
+  std::string arm;                  ///< the arm device it drives (a device of the same scenario)
+  std::string site = "tool";        ///< the point: an MJCF site at the end of the arm's chain
+  std::string base_body = "world";  ///< the chain starts below this body
+  double k_position = 20.0;         ///< position gain, 1/s
+  double k_orientation = 20.0;      ///< orientation gain (the start orientation is kept), 1/s
+  double k_null = 1.0;              ///< null-space gain toward the start posture, 1/s
+  double damping = 1e-3;            ///< DLS damping of the pseudo-inverse
+  double max_speed = 1.0;           ///< m/s: the set-point ramps toward each command at most this fast
+  /// Workspace box, world frame, m: commands outside [min, max] are refused (limits).
+  std::vector<double> workspace_min = {-std::numeric_limits<double>::infinity(),
+                                       -std::numeric_limits<double>::infinity(),
+                                       -std::numeric_limits<double>::infinity()};
+  std::vector<double> workspace_max = {std::numeric_limits<double>::infinity(),
+                                       std::numeric_limits<double>::infinity(),
+                                       std::numeric_limits<double>::infinity()};
+  int watchdog_periods = 3;         ///< hold after this many periods without a command (0: off)
+  double owner_timeout_s = 1.0;
+};
+
+/// The yo-yo of mjcf/yoyo measured (kind yoyo): its centre, vertical speed,
+/// string tension and spin, optionally at a camera's rate and with noise
+/// (src/lab/lab_yoyo_device.cc). Defaults: the model's names.
+struct YoyoDeviceConfig {
+  std::string slide = "yoyo_drop";   ///< slide joint d: the centre's distance below the hand, m
+  std::string spin = "yoyo_spin";    ///< hinge joint of the spin
+  std::string centre = "yoyo_centre";  ///< site at the yo-yo's centre
+  std::vector<std::string> tension = {"yoyo_string_plus_force", "yoyo_string_minus_force"};  ///< tendonlimitfrc sensors, summed
+  double rate_hz = 0.0;  ///< sample-and-hold rate of the measurement, Hz (0: every control period)
+  double noise = 0.0;    ///< Gaussian noise std on the position x, y, z, m (seeded)
+};
+
 struct DeviceConfig {
   std::string name;
   std::string kind;  ///< arm, wrench, sim, camera, base, feet or imu
@@ -128,6 +164,8 @@ struct DeviceConfig {
   GripperDeviceConfig gripper;
   PoseDeviceConfig pose;
   GazeDeviceConfig gaze;
+  PointDeviceConfig point;
+  YoyoDeviceConfig yoyo;
 };
 
 struct CartesianWaypoint {

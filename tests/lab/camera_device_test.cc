@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "bridge/bridge_camera_client.h"
+#include "bridge/bridge_client.h"
 #include "lab/lab_errors.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
@@ -100,6 +101,65 @@ TEST(CameraDeviceTest, FramesArriveAtTheCameraRateWithStampsPoseAndIntrinsics) {
   ASSERT_GT(n, 20);
   EXPECT_NEAR(su / n, f * 0.1 / 0.999 + 159.5, 1.0);
   EXPECT_NEAR(sv / n, 119.5, 1.0);
+}
+
+// In lockstep the lab waits at period 0 for a controller; a camera served
+// beside the arm answers describe requests during that wait, so a controller
+// may connect its cameras before it sends its first command.
+TEST(CameraDeviceTest, AnswersDescribeRequestsWhileLockstepWaits) {
+  vlab::testing::TempDir dir;
+  vlab::testing::WriteFile(dir / "scene.xml", R"(
+<mujoco>
+  <visual><global offwidth="640" offheight="480"/></visual>
+  <worldbody>
+    <camera name="top" pos="0 0 1" fovy="45"/>
+    <body name="link"><joint name="j" type="hinge" axis="0 1 0"/><geom type="capsule" size="0.02" fromto="0 0 0 0.3 0 0"/></body>
+  </worldbody>
+  <actuator><motor name="j" joint="j"/></actuator>
+</mujoco>)");
+  vlab::testing::WriteFile(dir / "s.yaml", R"(scene: scene.xml
+duration: 0.1
+control_period: 0.01
+clock: lockstep
+lockstep: {start_timeout: 30}
+devices:
+  - {name: arm, kind: arm, joints: [j], port: 0}
+  - {name: webcam, kind: camera, camera: top, width: 64, height: 48, fps: 10, encoding: raw, port: 0}
+)");
+  std::unique_ptr<Lab> lab = Lab::Create(LoadScenario(dir / "s.yaml"));
+  BridgeOptions bo;
+  bo.ports = {{"arm", 0}, {"webcam", 0}};
+  std::promise<std::vector<ServedDevice>> served;
+  RunOptions ro;
+  ro.serve = &bo;
+  ro.on_serving = [&](const std::vector<ServedDevice>& d) { served.set_value(d); };
+  RunResult result;
+  std::thread run([&] { result = lab->Run(ro); });
+  const std::vector<ServedDevice> devices = served.get_future().get();
+  ASSERT_EQ(devices.size(), 2u);
+  int camera_port = 0;
+  for (const auto& d : devices) camera_port = d.kind == "camera" ? d.port : camera_port;
+  bridge::CameraClientOptions co;
+  co.timeout_s = 5;  // the lab is still waiting for the arm's first command
+  bool connected = false;
+  try {
+    auto client = bridge::CameraClient::Connect("127.0.0.1", camera_port, co);
+    connected = client.width() == 64;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << e.what();
+  }
+  EXPECT_TRUE(connected);
+  EXPECT_EQ(result.periods, 0);  // not started: nobody has answered period 0 yet
+  // now a controller answers: the run goes to its end
+  auto arm = bridge::Arm::Connect("127.0.0.1", devices[0].kind == "arm" ? devices[0].port : devices[1].port, 5.0);
+  bridge::Arm::State s = arm.Read(5.0);
+  while (s.seq < 10) {
+    arm.Write(bridge::ArmMode::kHold, Eigen::VectorXd::Zero(1), s.seq);
+    s = arm.Read(5.0);
+  }
+  run.join();
+  EXPECT_EQ(result.exit_code, 0) << result.failure;
+  EXPECT_EQ(result.periods, 10);
 }
 
 TEST(CameraDeviceTest, BadBindingsNameTheDevice) {

@@ -1,0 +1,194 @@
+// Tests the point device (src/lab/lab_point_device.cc) on the PA10 of
+// scenes/pa10.xml: it holds before its first command, moves the tool tip to a
+// commanded point with the start orientation kept, ramps at max_speed, refuses
+// non-finite and out-of-workspace commands, holds on the watchdog, overrides
+// the arm's own commands, and the scenario rules around it (its arm must exist,
+// one driver per arm).
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "control/task_space.h"
+#include "lab/lab_arm_device.h"
+#include "lab/lab_device.h"
+#include "lab/lab_errors.h"
+#include "lab/lab_mujoco.h"
+#include "lab/lab_runner.h"
+#include "test_util.h"
+
+namespace vlab::lab {
+namespace {
+
+constexpr double kPeriod = 0.01;  // s: 10 physics steps of 1 ms
+
+DeviceConfig ArmConfig() {
+  DeviceConfig c;
+  c.name = "pa10";
+  c.kind = "arm";
+  c.where = "test.yaml:1";
+  c.arm.joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
+  c.arm.actuators = c.arm.joints;  // the motors have the joints' names
+  c.arm.initial = {0, 0.523599, 0, 1.047198, 0, 1.570796, 0};  // ready: tool down
+  c.arm.max_velocity = std::vector<double>(7, 3.1416);
+  return c;
+}
+
+DeviceConfig PointConfig(double max_speed = 0.2) {
+  DeviceConfig c;
+  c.name = "hand";
+  c.kind = "point";
+  c.where = "test.yaml:9";
+  c.point.arm = "pa10";
+  c.point.max_speed = max_speed;
+  c.point.workspace_min = {0.5, -0.3, 0.2};
+  c.point.workspace_max = {0.9, 0.3, 0.8};
+  return c;
+}
+
+// The arm and its point device, stepped like the lab's run loop does.
+struct Rig {
+  ModelPtr model = LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
+  DataPtr data = MakeData(model.get());
+  std::unique_ptr<SimArm> arm = SimArm::Create(model.get(), ArmConfig());
+  std::unique_ptr<SimDevice> point;
+  int tool = mj_name2id(model.get(), mjOBJ_SITE, "tool");
+
+  explicit Rig(double max_speed = 0.2) {
+    point = MakePointDevice(model.get(), PointConfig(max_speed), arm.get(), kPeriod);
+    mj_resetData(model.get(), data.get());
+    arm->SetInitialPositions(*data);
+    mj_forward(model.get(), data.get());
+    arm->Start(*data, kPeriod);
+    point->Reset(*data);
+  }
+  void Period() {
+    point->BeginPeriod(*data, data->time);
+    for (int i = 0; i < 10; ++i) {
+      mj_step1(model.get(), data.get());
+      arm->Actuate(*data, 0.001);
+      mj_step2(model.get(), data.get());
+    }
+    mj_forward(model.get(), data.get());  // positions of the state reached, for exact comparisons
+    point->Sample(*data, data->time);
+  }
+  std::vector<double> State() const {
+    std::vector<double> s;
+    point->State(&s);
+    return s;
+  }
+  Eigen::Vector3d Tool() const { return Eigen::Map<const Eigen::Vector3d>(data->site_xpos + 3 * tool); }
+  Eigen::Matrix3d ToolR() const {
+    return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(data->site_xmat + 9 * tool);
+  }
+};
+
+TEST(PointDeviceTest, HoldsBeforeTheFirstCommand) {
+  Rig rig;
+  const Eigen::Vector3d start = rig.Tool();
+  EXPECT_NEAR(start.x(), 0.725, 1e-4);  // the ready pose's tool tip (scenes/pa10.xml)
+  EXPECT_NEAR(start.z(), 0.435, 5e-4);  // 0.43471: the pose's angles are rounded to 1e-6 rad
+  for (int k = 0; k < 100; ++k) rig.Period();
+  const std::vector<double> s = rig.State();
+  ASSERT_EQ(s.size(), 7u);
+  EXPECT_EQ(s[0], static_cast<double>(bridge::kStatusHolding));
+  EXPECT_LT((rig.Tool() - start).norm(), 1e-6);
+  for (int i = 0; i < 3; ++i) EXPECT_DOUBLE_EQ(s[1 + i], rig.Tool()[i]);
+  for (int i = 4; i < 7; ++i) EXPECT_NEAR(s[i], 0.0, 1e-6);
+}
+
+TEST(PointDeviceTest, MovesTheToolToTheCommandKeepingItsOrientation) {
+  Rig rig;  // max_speed 0.2 m/s
+  const Eigen::Vector3d start = rig.Tool();
+  const Eigen::Matrix3d R_start = rig.ToolR();
+  const Eigen::Vector3d goal = start + Eigen::Vector3d(0.06, -0.03, 0.08);  // 0.1044 m away
+  rig.point->Command({goal.x(), goal.y(), goal.z()});
+  // the set-point ramps at 0.2 m/s: after 0.25 s it is 0.05 m along the line (closed form)
+  std::vector<double> row(rig.point->ColumnCount());
+  for (int k = 0; k < 25; ++k) rig.Period();
+  rig.point->Row(row.data());
+  const Eigen::Vector3d setpoint(row[6], row[7], row[8]);
+  const Eigen::Vector3d along = start + 0.05 * (goal - start).normalized();
+  EXPECT_LT((setpoint - along).norm(), 1e-12);
+  EXPECT_LT((rig.Tool() - along).norm(), 0.003);  // the tip follows within the servo's lag
+  EXPECT_NEAR(std::hypot(std::hypot(rig.State()[4], rig.State()[5]), rig.State()[6]), 0.2, 0.01);
+  EXPECT_EQ(rig.State()[0], 0.0);
+  for (int k = 0; k < 175; ++k) rig.Period();  // 2 s in all
+  EXPECT_LT((rig.Tool() - goal).norm(), 2e-6);
+  EXPECT_LT(control::OrientationError(R_start, rig.ToolR()).norm(), 2e-5);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(rig.State()[1 + i], goal[i], 2e-6);
+  EXPECT_LT(row[10], 1e-3);  // rot_error while moving, rad
+}
+
+TEST(PointDeviceTest, RefusesNonFiniteAndOutOfWorkspaceCommands) {
+  Rig rig;
+  EXPECT_EQ(rig.point->command_length(), 3);
+  EXPECT_EQ(rig.point->CheckCommand({0.7, 0.0, 0.5}), bridge::CommandCheck::kAccept);
+  EXPECT_EQ(rig.point->CheckCommand({NAN, 0.0, 0.5}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.point->CheckCommand({0.7, INFINITY, 0.5}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.point->CheckCommand({0.7, 0.0, 0.81}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(rig.point->CheckCommand({0.49, 0.0, 0.5}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(rig.point->CheckCommand({0.9, 0.3, 0.8}), bridge::CommandCheck::kAccept);  // the box's corner
+}
+
+TEST(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
+  Rig rig(1.0);
+  const Eigen::Vector3d start = rig.Tool();
+  rig.point->Command({start.x(), start.y(), start.z() + 0.2});
+  for (int k = 0; k < 10; ++k) rig.Period();  // 0.1 s of 0.2: moving up at 1 m/s
+  rig.point->Hold();
+  for (int k = 0; k < 50; ++k) rig.Period();
+  const Eigen::Vector3d held = rig.Tool();
+  EXPECT_EQ(rig.State()[0], static_cast<double>(bridge::kStatusHolding));
+  EXPECT_GT(held.z() - start.z(), 0.08);
+  EXPECT_LT(held.z() - start.z(), 0.13);
+  for (int k = 0; k < 50; ++k) rig.Period();
+  EXPECT_LT((rig.Tool() - held).norm(), 1e-6);  // stopped where it was
+  // the next command starts from there: no jump to the old set-point
+  rig.point->Command({held.x(), held.y(), held.z()});
+  rig.Period();
+  std::vector<double> row(rig.point->ColumnCount());
+  rig.point->Row(row.data());
+  EXPECT_LT((Eigen::Vector3d(row[6], row[7], row[8]) - held).norm(), 1e-6);
+}
+
+TEST(PointDeviceTest, OverridesTheArmsOwnCommandsEveryPeriod) {
+  Rig rig;
+  const Eigen::Vector3d start = rig.Tool();
+  bridge::ArmCommand spin;
+  spin.mode = bridge::ArmMode::kVelocity;
+  spin.value = Eigen::VectorXd::Zero(7);
+  spin.value[0] = 1.0;  // S1 at 1 rad/s would swing the tool 7 cm in 0.1 s
+  for (int k = 0; k < 50; ++k) {
+    ASSERT_TRUE(rig.arm->Command(spin));  // given first, as the lab's bridge does ...
+    rig.Period();                         // ... then the point device's hold replaces it
+  }
+  EXPECT_LT((rig.Tool() - start).norm(), 1e-6);
+}
+
+TEST(PointDeviceTest, ScenarioRules) {
+  vlab::testing::TempDir dir;
+  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\nduration: 0.1\n"
+                           "control_period: 0.01\ndevices:\n"
+                           "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n";
+  auto error_of = [&](const std::string& rest) -> std::string {
+    vlab::testing::WriteFile(dir.path() + "/s.yaml", head + rest);
+    try {
+      Lab::Create(LoadScenario(dir.path() + "/s.yaml"));
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of("  - {name: hand, kind: point, arm: nope}\n").find("no arm device 'nope'"), std::string::npos);
+  EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10}\n  - {name: hand2, kind: point, arm: pa10}\n")
+                .find("driven by point device"),
+            std::string::npos);
+  EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10, site: nope}\n").find("nope"), std::string::npos);
+  EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10, workspace: {min: [0, 0, 1], max: [1, 1, 0]}}\n")
+                .find("must be > min"),
+            std::string::npos);
+  EXPECT_EQ(error_of("  - {name: hand, kind: point, arm: pa10, port: 0}\n"), "");
+}
+
+}  // namespace
+}  // namespace vlab::lab
