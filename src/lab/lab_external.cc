@@ -69,7 +69,8 @@ std::string ExternalClock(const Scenario& scenario, const std::string& requested
   return clock == "fast" ? "lockstep" : clock;
 }
 
-std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served) {
+std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served,
+                                                 const std::string& out_dir) {
   std::map<std::string, std::string> values;
   for (const DeviceConfig& d : scenario.devices) {
     if (d.port > 0) values[d.name] = "127.0.0.1:0";
@@ -81,6 +82,9 @@ std::map<std::string, std::string> CommandValues(const Scenario& scenario, const
   char duration[32];
   std::snprintf(duration, sizeof(duration), "%.17g", scenario.duration_s);
   values["duration"] = duration;
+  std::string out = out_dir.empty() ? std::filesystem::temp_directory_path().string() : out_dir;
+  while (out.size() > 1 && out.back() == '/') out.pop_back();
+  values["out"] = out;
   return values;
 }
 

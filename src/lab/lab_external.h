@@ -6,7 +6,9 @@
 //   input   the program's command line, with placeholders expanded:
 //           {DEVICE} -> ADDRESS:PORT of a served device, {bin} -> the folder
 //           of the running vlab executable, {scenario_dir} -> the folder of
-//           the scenario file, {duration} -> the run's duration in seconds
+//           the scenario file, {duration} -> the run's duration in seconds,
+//           {out} -> the run's output folder (files written there move into
+//           place with log.csv: the program is stopped before that)
 //   output  the program's stdout and stderr, into a log file
 //   exit    exit_fd() becomes readable (end of file) once the program and
 //           every process it started have closed their copy of it: the lab
@@ -40,8 +42,11 @@ BridgeOptions ExternalBridgeOptions(const Scenario& scenario);
 /// `lockstep` (an external controller is never in process).
 std::string ExternalClock(const Scenario& scenario, const std::string& requested);
 /// The placeholder values of the scenario's controller command: every served
-/// device (ADDRESS:PORT; port 0 before binding), bin, scenario_dir, duration.
-std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served);
+/// device (ADDRESS:PORT; port 0 before binding), bin, scenario_dir, duration,
+/// and out: the folder the program may write its own files into (the run's
+/// output folder while it is written; "" gives the system's temporary folder).
+std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served,
+                                                 const std::string& out_dir = "");
 
 /// Expands {NAME} placeholders of a command line from `values`. Throws
 /// InputError ("WHERE: controller.command: unknown placeholder {x} (known: ...)")

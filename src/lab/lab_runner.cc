@@ -13,6 +13,7 @@
 #include "lab/lab_images.h"
 #include "lab/lab_log.h"
 #include "lab/lab_output.h"
+#include "lab/lab_plot.h"
 #include "lab/lab_run_watch.h"
 #include "lab/lab_runner_impl.h"
 
@@ -199,6 +200,7 @@ RunResult Lab::Run(const RunOptions& options) {
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
   CheckSet checks(s.scenario.checks, s.columns);
+  for (const PlotConfig& plot : s.scenario.outputs.plots) CheckPlotColumns(plot, s.columns);
   // image outputs: cameras and sizes checked against the scene before anything is written
   std::unique_ptr<ImageOutputs> images;
   if (!options.out_dir.empty() && !s.scenario.outputs.images.empty()) {
@@ -227,7 +229,8 @@ RunResult Lab::Run(const RunOptions& options) {
   if (external) {
     const std::string log_path = out ? out->File("controller.log") : "";
     controller = ExternalController::Start(
-        ExpandCommand(s.scenario.controller.command, CommandValues(s.scenario, s.ServedDevices(*bridge)),
+        ExpandCommand(s.scenario.controller.command,
+                      CommandValues(s.scenario, s.ServedDevices(*bridge), out ? out->File("") : ""),
                       s.scenario.controller.where),
         log_path);
     bridge->WatchPeerExit(controller->exit_fd());
@@ -348,6 +351,7 @@ RunResult Lab::Run(const RunOptions& options) {
   if (out) {
     if (log) log->Close();
     if (images) images->Finish();
+    for (const PlotConfig& plot : s.scenario.outputs.plots) WritePlot(out->File(""), plot);
     result.total_wall_s = Seconds(t_start, WallClock::now());
     nlohmann::json summary_json = SummaryJson(s.scenario, m, result);
     if (images) summary_json["images"] = images->Summary();

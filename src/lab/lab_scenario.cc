@@ -416,6 +416,26 @@ Scenario LoadScenario(const std::string& path) {
   for (std::size_t i = 0; i < images.size(); ++i) {
     s.outputs.images.push_back(ReadImageOutput(path, images[i], "outputs.images[" + std::to_string(i) + "]"));
   }
+  const YAML::Node plots = outputs.Sequence("plots");
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    MapReader pr(path, plots[i], "outputs.plots[" + std::to_string(i) + "]");
+    PlotConfig plot;
+    plot.where = Where(path, plots[i]);
+    plot.file = pr.String("file");
+    if (plot.file.size() < 5 || plot.file.substr(plot.file.size() - 4) != ".png" ||
+        plot.file.find('/') != std::string::npos) {
+      pr.Fail("file", "expected a PNG file name in the output folder (NAME.png)");
+    }
+    plot.csv = pr.String("csv", plot.csv);
+    if (plot.csv.find('/') != std::string::npos) pr.Fail("csv", "expected a file name in the output folder");
+    plot.x = pr.String("x", plot.x);
+    plot.y = pr.Strings("y", {});
+    if (plot.y.empty()) pr.Fail("y", "needs at least one column");
+    plot.title = pr.String("title", "");
+    plot.ylabel = pr.String("ylabel", "");
+    pr.Finish();
+    s.outputs.plots.push_back(plot);
+  }
   outputs.Finish();
   const YAML::Node checks = r.Sequence("checks");
   for (std::size_t i = 0; i < checks.size(); ++i) {

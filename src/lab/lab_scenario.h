@@ -229,9 +229,21 @@ struct ImageOutputConfig {
   std::string where;
 };
 
+/// A line plot (PNG) drawn from a CSV file of the output folder after the run.
+struct PlotConfig {
+  std::string file;              ///< PNG file name in the output folder
+  std::string csv = "log.csv";   ///< CSV in the output folder (log.csv, or a file an external controller wrote)
+  std::string x = "time";        ///< column of the horizontal axis
+  std::vector<std::string> y;    ///< columns drawn against it, one line each
+  std::string title;
+  std::string ylabel;
+  std::string where;
+};
+
 struct OutputsConfig {
   bool log = true;  ///< write log.csv
   std::vector<ImageOutputConfig> images;
+  std::vector<PlotConfig> plots;
 };
 
 /// Lockstep clock: the lab waits for the commands that answer each period.

@@ -87,6 +87,16 @@ TEST(ExternalController, AFailingControllerEndsTheRunWithItsStatus) {
   EXPECT_EQ(summary["controller"]["outcome"], "exit status 3");
 }
 
+// {out}: what the program writes there moves into the output folder with the log
+TEST(ExternalController, FilesWrittenIntoOutArriveWithTheLog) {
+  TempDir dir;
+  WriteFile(dir / "s.yaml", Scenario(R"(["sh", "-c", "echo from the controller > {out}/note.txt"])", 0.1));
+  const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir / "out/note.txt"), "from the controller\n");
+  EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"s.yaml", "out"}));  // nothing left beside it
+}
+
 TEST(ExternalController, BadCommandsAreBadInput) {
   TempDir dir;
   WriteFile(dir / "missing.yaml", Scenario(R"(["{bin}/examples/no_such_controller", "--arm", "{pa10}"])"));

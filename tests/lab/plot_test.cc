@@ -1,0 +1,80 @@
+// Tests the scenario plots (src/lab/lab_plot.cc): tick positions are 1, 2, 5 x
+// 10^k multiples covering the range; a plot of a known CSV is a PNG of the
+// documented size whose curve passes through the pixels the axes put its
+// points at; a missing column or file is an error naming the plot and the
+// column, and writes nothing; a log column a plot names is checked before a run.
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "lab/lab_errors.h"
+#include "lab/lab_plot.h"
+#include "test_util.h"
+
+namespace vlab::lab {
+namespace {
+
+TEST(PlotTest, NiceTicks) {
+  EXPECT_EQ(NiceTicks(0, 10, 10), (std::vector<double>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10}));
+  EXPECT_EQ(NiceTicks(0, 50, 10), (std::vector<double>{0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50}));
+  const std::vector<double> t = NiceTicks(-0.13, 0.37, 5);  // step 0.1
+  ASSERT_EQ(t.size(), 5u);
+  EXPECT_NEAR(t.front(), -0.1, 1e-12);
+  EXPECT_NEAR(t.back(), 0.3, 1e-12);
+}
+
+TEST(PlotTest, DrawsTheCurveWhereTheAxesPutIt) {
+  testing::TempDir dir;
+  // a straight line y = x from (0, 0) to (10, 10), and a constant
+  std::string csv = "time,a,b\n";
+  for (int i = 0; i <= 100; ++i) csv += std::to_string(i * 0.1) + "," + std::to_string(i * 0.1) + ",5\n";
+  testing::WriteFile(dir / "data.csv", csv);
+  PlotConfig p;
+  p.file = "p.png";
+  p.csv = "data.csv";
+  p.y = {"a", "b"};
+  p.title = "a test";
+  WritePlot(dir.path(), p);
+  const cv::Mat img = cv::imread(dir / "p.png");
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.cols, 1000);
+  EXPECT_EQ(img.rows, 520);
+  // y spans [0, 10] padded by 5 %: [-0.5, 10.5]; the plot area is x 80..980, y 50..460
+  auto px = [](double x) { return 80 + static_cast<int>(std::lround(x / 10 * 900)); };
+  auto py = [](double y) { return 50 + 410 - static_cast<int>(std::lround((y + 0.5) / 11 * 410)); };
+  const cv::Vec3b first = img.at<cv::Vec3b>(py(7.0), px(7.0));  // on the line a
+  const cv::Vec3b second = img.at<cv::Vec3b>(py(5.0), px(2.0));  // on the constant b
+  EXPECT_EQ(first, cv::Vec3b(200, 80, 20));
+  EXPECT_EQ(second, cv::Vec3b(30, 30, 220));
+  EXPECT_EQ(img.at<cv::Vec3b>(py(2.5), px(8.5)), cv::Vec3b(255, 255, 255));  // off both curves and the grid: background
+}
+
+TEST(PlotTest, MissingColumnsAndFilesAreNamed) {
+  testing::TempDir dir;
+  testing::WriteFile(dir / "data.csv", "time,a\n0,1\n1,2\n");
+  PlotConfig p;
+  p.file = "p.png";
+  p.csv = "data.csv";
+  p.y = {"nope"};
+  try {
+    WritePlot(dir.path(), p);
+    FAIL() << "a missing column must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "plot 'p.png': no column 'nope' in 'data.csv'");
+  }
+  p.csv = "absent.csv";
+  EXPECT_THROW(WritePlot(dir.path(), p), std::runtime_error);
+  EXPECT_EQ(testing::Entries(dir.path()), (std::set<std::string>{"data.csv"}));
+  p.csv = "log.csv";
+  p.where = "s.yaml:12";
+  try {
+    CheckPlotColumns(p, {"time", "a"});
+    FAIL() << "an unknown log column must be refused before the run";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.yaml:12: outputs.plots: no log column 'nope'"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace vlab::lab
