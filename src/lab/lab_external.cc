@@ -201,7 +201,10 @@ void ExternalController::Stop(double grace_s) {
 
 bool ExternalController::Succeeded() const {
   if (!reaped_) return false;
-  return stopped_ || (WIFEXITED(status_) && WEXITSTATUS(status_) == 0);
+  // an exit status is the program's verdict, also after our SIGTERM; a signal
+  // is a failure unless it was ours (Stop)
+  if (WIFEXITED(status_)) return WEXITSTATUS(status_) == 0;
+  return stopped_;
 }
 
 std::string ExternalController::Outcome() const {

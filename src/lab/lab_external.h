@@ -76,7 +76,8 @@ class ExternalController {
   /// Ends the program if it still runs: SIGTERM to its process group, then
   /// SIGKILL after grace_s. Returns once it has been reaped.
   void Stop(double grace_s);
-  /// True when the program ended on its own with exit status 0, or was ended by Stop().
+  /// True when the program exited with status 0 (on its own, or after the
+  /// SIGTERM of Stop()), or was killed by the signals of Stop().
   bool Succeeded() const;
   /// "exit status N" or "killed by signal N" (after Exited() or Stop()).
   std::string Outcome() const;

@@ -97,6 +97,23 @@ TEST(ExternalController, FilesWrittenIntoOutArriveWithTheLog) {
   EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"s.yaml", "out"}));  // nothing left beside it
 }
 
+// a program that gets the end-of-run SIGTERM and exits with status 1 (its own
+// verdict) fails the run; one the signal ends does not
+TEST(ExternalController, ItsVerdictAfterTheEndOfTheRunCounts) {
+  TempDir dir;
+  // joint_control answers every period; the shell around it traps SIGTERM and says no
+  WriteFile(dir / "fails.yaml",
+            Scenario(R"(["sh", "-c", "trap 'echo my check failed; exit 1' TERM; {bin}/examples/joint_control --arm {pa10} --duration 100 & wait"])",
+                     0.1));
+  ProcessResult r = RunVlab("run " + (dir / "fails.yaml") + " -q --out " + (dir / "a"));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("ended with exit status 1"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("my check failed"), std::string::npos) << r.err;
+  WriteFile(dir / "ends.yaml", Scenario(R"(["{bin}/examples/joint_control", "--arm", "{pa10}", "--duration", "100"])", 0.1));
+  r = RunVlab("run " + (dir / "ends.yaml") + " -q --out " + (dir / "b"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 TEST(ExternalController, BadCommandsAreBadInput) {
   TempDir dir;
   WriteFile(dir / "missing.yaml", Scenario(R"(["{bin}/examples/no_such_controller", "--arm", "{pa10}"])"));
