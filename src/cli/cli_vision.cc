@@ -1,7 +1,10 @@
 // vlab vision --camera HOST:PORT: the vision program. Subscribes to a camera
 // device, detects the described ArUco markers in every frame and serves their
 // poses (camera frame, and world frame when the camera's pose is known) as a
-// markers device. Runs until SIGINT/SIGTERM, --frames or --duration.
+// markers device. With --yoyo-port it tracks the yo-yo's colour blob instead
+// and serves it as a yoyo device (vision_yoyo_program.h). Runs until
+// SIGINT/SIGTERM, --frames or --duration.
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -12,6 +15,7 @@
 #include "cli/cli_commands.h"
 #include "lab/lab_errors.h"
 #include "vision/vision_program.h"
+#include "vision/vision_yoyo_program.h"
 
 namespace vlab::cli {
 
@@ -21,7 +25,10 @@ struct VisionArgs {
   std::string camera;
   int port = 50014;
   std::string bind = "127.0.0.1";
-  std::string name = "vision";
+  std::string name;  // default: vision (markers), yoyo_vision (yoyo)
+  int yoyo_port = -1;  // >= 0: the yo-yo tracker's yoyo device instead of the markers device
+  std::string blob_color = "red";
+  std::string line;  // "X,Y"
   std::vector<std::string> markers;
   double connect_timeout_s = 10;
   long frames = 0;
@@ -60,6 +67,79 @@ void Report(const vision::VisionProgram& p, double elapsed_s) {
   std::fflush(stdout);
 }
 
+// "X,Y" (m, world) -> the yo-yo's vertical line
+vision::YoyoLine ParseLine(const std::string& text) {
+  vision::YoyoLine line;
+  const std::size_t comma = text.find(',');
+  std::size_t used_x = 0, used_y = 0;
+  try {
+    if (comma != std::string::npos) {
+      line.x = std::stod(text.substr(0, comma), &used_x);
+      line.y = std::stod(text.substr(comma + 1), &used_y);
+    }
+  } catch (const std::exception&) {
+    used_x = 0;
+  }
+  if (comma == std::string::npos || used_x != comma || used_x == 0 || used_y == 0 ||
+      used_y != text.size() - comma - 1 || !std::isfinite(line.x) || !std::isfinite(line.y)) {
+    throw lab::InputError("--line '" + text + "': expected X,Y in m (world), e.g. 0.725,0");
+  }
+  return line;
+}
+
+void ReportYoyo(const vision::YoyoVisionProgram& p, double elapsed_s) {
+  const vision::YoyoVisionCounters& c = p.counters();
+  const double mean_ms = c.frames > 0 ? 1000 * c.process_s_sum / static_cast<double>(c.frames) : 0;
+  std::printf(
+      "vlab vision: %ld frames (%.1f/s), %ld skipped, yo-yo seen in %ld, no blob %ld, no pose %ld; "
+      "%.1f ms mean, %.1f ms max per frame; %ld refused\n",
+      c.frames, elapsed_s > 0 ? static_cast<double>(c.frames) / elapsed_s : 0.0, c.frames_skipped, c.seen, c.no_blob,
+      c.no_pose, mean_ms, 1000 * c.process_s_max, p.server().counters().refused);
+  std::fflush(stdout);
+}
+
+int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
+  if (a.yoyo_port > 65535) throw lab::InputError("--yoyo-port " + std::to_string(a.yoyo_port) + " outside 0..65535");
+  if (!a.markers.empty()) throw lab::InputError("--marker and --yoyo-port exclude each other: run two vision programs");
+  config.blob = vision::BlobColor(a.blob_color);
+  if (!a.line.empty()) config.line = ParseLine(a.line);
+  config.connect_timeout_s = a.connect_timeout_s;
+  config.server.name = a.name.empty() ? "yoyo_vision" : a.name;
+  config.server.bind_address = a.bind;
+  config.server.port = a.yoyo_port;
+  std::unique_ptr<vision::YoyoVisionProgram> program;
+  try {
+    program = vision::YoyoVisionProgram::Create(config);
+  } catch (const bridge::NetworkError& e) {
+    throw lab::InputError(e.what());  // a bad address or a port in use: the options' fault
+  }
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const vision::CameraModel& m = program->camera_model();
+  if (!a.quiet) {
+    std::printf(
+        "vlab vision: yoyo device '%s' on %s:%d (kind yoyo), %s blob on the line x %.3f y %.3f m; %s, "
+        "%dx%d, fx %.1f fy %.1f cx %.1f cy %.1f px\n",
+        config.server.name.c_str(), a.bind.c_str(), program->server().local_port(), config.blob.color.c_str(),
+        config.line.x, config.line.y, program->camera().Label().c_str(), m.width, m.height, m.fx, m.fy, m.cx, m.cy);
+    std::fflush(stdout);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  double next_report_s = 5;
+  while (!g_stop) {
+    program->Step(0.05);
+    if (a.frames > 0 && program->counters().frames >= a.frames) break;
+    if (a.duration_s > 0 && elapsed() >= a.duration_s) break;
+    if (!a.quiet && elapsed() >= next_report_s) {
+      ReportYoyo(*program, elapsed());
+      next_report_s += 5;
+    }
+  }
+  ReportYoyo(*program, elapsed());
+  return 0;
+}
+
 int Vision(const VisionArgs& a) {
   vision::VisionConfig config;
   SplitHostPort(a.camera, &config.camera_address, &config.camera_port);
@@ -73,8 +153,14 @@ int Vision(const VisionArgs& a) {
     const auto more = vision::ParseMarkerOption(m);
     config.markers.insert(config.markers.end(), more.begin(), more.end());
   }
+  if (a.yoyo_port >= 0) {
+    vision::YoyoVisionConfig yoyo;
+    yoyo.camera_address = config.camera_address;
+    yoyo.camera_port = config.camera_port;
+    return YoyoVision(a, yoyo);
+  }
   config.connect_timeout_s = a.connect_timeout_s;
-  config.server.name = a.name;
+  config.server.name = a.name.empty() ? "vision" : a.name;
   config.server.bind_address = a.bind;
   config.server.port = a.port;
   config.detector.max_reprojection_error_px = a.max_error_px;
@@ -123,7 +209,15 @@ Subcommand AddVisionCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--port", args->port, "UDP port of the markers device (default 50014; 0: any free port)");
   cmd->add_option("--bind", args->bind, "Address the markers device binds to (default 127.0.0.1)");
-  cmd->add_option("--name", args->name, "Device name in the describe reply (default vision)");
+  cmd->add_option("--name", args->name,
+                  "Device name in the describe reply (default vision; yoyo_vision with --yoyo-port)");
+  cmd->add_option("--yoyo-port", args->yoyo_port,
+                  "Track the yo-yo's colour blob instead of markers and serve it as a yoyo device on this UDP port "
+                  "(0: any free port)");
+  cmd->add_option("--blob-color", args->blob_color, "With --yoyo-port: the yo-yo's colour (default red)");
+  cmd->add_option("--line", args->line,
+                  "With --yoyo-port: the yo-yo's vertical line X,Y, m, world (default 0.725,0: under the PA10's "
+                  "tool in scenes/pa10_yoyo.xml's ready pose)");
   cmd->add_option("--marker", args->markers,
                   "DICT:ID:SIDE or DICT:FIRST-LAST:SIDE, side in m (e.g. 4X4_50:0-35:0.03); repeatable. Clients "
                   "may describe more markers over UDP");

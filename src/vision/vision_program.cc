@@ -14,22 +14,6 @@ namespace {
 
 using nlohmann::json;
 
-CameraModel ModelOf(const bridge::CameraClient& camera) {
-  const bridge::CameraCalibration& c = camera.calibration();
-  CameraModel m;
-  m.width = c.width;
-  m.height = c.height;
-  m.fx = c.fx;
-  m.fy = c.fy;
-  m.cx = c.cx;
-  m.cy = c.cy;
-  if (std::any_of(c.distortion.begin(), c.distortion.end(), [](double v) { return v != 0.0; })) {
-    m.distortion.assign(c.distortion.begin(), c.distortion.end());
-  }
-  CheckCameraModel(m, camera.Label());
-  return m;
-}
-
 // what the markers device's describe reply says about its camera and detector
 json DescribeExtra(const bridge::CameraClient& camera, const CameraModel& m, const DetectorConfig& d,
                    const std::string& address, int port) {
@@ -75,6 +59,22 @@ long WholeNumber(const std::string& text, const std::string& what) {
 
 }  // namespace
 
+CameraModel CameraModelOf(const bridge::CameraClient& camera) {
+  const bridge::CameraCalibration& c = camera.calibration();
+  CameraModel m;
+  m.width = c.width;
+  m.height = c.height;
+  m.fx = c.fx;
+  m.fy = c.fy;
+  m.cx = c.cx;
+  m.cy = c.cy;
+  if (std::any_of(c.distortion.begin(), c.distortion.end(), [](double v) { return v != 0.0; })) {
+    m.distortion.assign(c.distortion.begin(), c.distortion.end());
+  }
+  CheckCameraModel(m, camera.Label());
+  return m;
+}
+
 std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& text) {
   const std::size_t a = text.find(':'), b = text.rfind(':');
   if (a == std::string::npos || a == b) {
@@ -115,7 +115,7 @@ std::unique_ptr<VisionProgram> VisionProgram::Create(const VisionConfig& config)
 
 VisionProgram::VisionProgram(bridge::CameraClient camera, const VisionConfig& config)
     : camera_(std::move(camera)), detector_(config.detector), start_(std::chrono::steady_clock::now()) {
-  model_ = ModelOf(camera_);
+  model_ = CameraModelOf(camera_);
   MarkersServerConfig server = config.server;
   server.describe_extra.update(
       DescribeExtra(camera_, model_, config.detector, config.camera_address, config.camera_port), true);

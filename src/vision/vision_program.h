@@ -82,6 +82,10 @@ class VisionProgram {
   bridge::MarkersStateMsg state_;
 };
 
+/// The camera model of a camera device: its describe reply's intrinsics and
+/// distortion. Throws InputError naming the camera when they are unusable.
+CameraModel CameraModelOf(const bridge::CameraClient& camera);
+
 /// "DICT:ID:SIDE" or "DICT:FIRST-LAST:SIDE" (e.g. "4X4_50:0-35:0.03") ->
 /// descriptions. Throws InputError naming the text.
 std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& text);

@@ -1,0 +1,105 @@
+#include "vision/vision_yoyo_program.h"
+
+#include <algorithm>
+#include <optional>
+
+#include "vision/vision_program.h"
+
+namespace vlab::vision {
+
+namespace {
+
+using nlohmann::json;
+
+// what the yoyo device's describe reply says about its camera and tracker
+json DescribeExtra(const bridge::CameraClient& camera, const CameraModel& m, const YoyoVisionConfig& config) {
+  const json& cd = camera.describe();
+  const BlobConfig& b = config.blob;
+  return {{"camera",
+           {{"name", camera.name()},
+            {"address", config.camera_address},
+            {"port", config.camera_port},
+            {"server", cd.value("server", json())},
+            {"width", m.width},
+            {"height", m.height},
+            {"fps", camera.fps()},
+            {"intrinsics",
+             {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
+            {"distortion", camera.calibration().distortion},
+            {"pose", cd.value("pose", json())}}},
+          {"tracker",
+           {{"method",
+             "colour blob: HSV threshold, largest outer contour filled (holes ignored), its centroid's ray "
+             "intersected with the vertical plane through the line that faces the camera; vz from consecutive "
+             "seen frames' z and exposure times"},
+            {"color", b.color},
+            {"hsv", {{"hue_lo", b.hue_lo}, {"hue_hi", b.hue_hi}, {"s_min", b.s_min}, {"v_min", b.v_min}}},
+            {"min_area_px", b.min_area_px},
+            {"max_area_fraction", b.max_area_fraction},
+            {"line", {{"x", config.line.x}, {"y", config.line.y}}}}}};
+}
+
+}  // namespace
+
+std::unique_ptr<YoyoVisionProgram> YoyoVisionProgram::Create(const YoyoVisionConfig& config) {
+  bridge::CameraClientOptions options;
+  options.timeout_s = config.connect_timeout_s;
+  bridge::CameraClient camera = bridge::CameraClient::Connect(config.camera_address, config.camera_port, options);
+  return std::unique_ptr<YoyoVisionProgram>(new YoyoVisionProgram(std::move(camera), config));
+}
+
+YoyoVisionProgram::YoyoVisionProgram(bridge::CameraClient camera, const YoyoVisionConfig& config)
+    : camera_(std::move(camera)), tracker_(config.blob, config.line), start_(std::chrono::steady_clock::now()) {
+  model_ = CameraModelOf(camera_);
+  YoyoServerConfig server = config.server;
+  server.frame_hz = camera_.fps();
+  server.describe_extra.update(DescribeExtra(camera_, model_, config), true);
+  server_ = YoyoServer::Create(server);
+}
+
+double YoyoVisionProgram::Now() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+bool YoyoVisionProgram::Step(double wait_s) {
+  server_->Poll(Now());
+  const long skipped_before = camera_.frames_skipped();
+  try {
+    camera_.ReceiveLatest(wait_s, &frame_);
+  } catch (const bridge::TimeoutError&) {
+    return false;
+  }
+  counters_.frames_skipped += camera_.frames_skipped() - skipped_before;
+  const double t0 = Now();
+  if (frame_.width != model_.width || frame_.height != model_.height ||
+      frame_.rgb.size() != static_cast<std::size_t>(frame_.width) * frame_.height * 3) {
+    ++counters_.wrong_size;
+    return false;
+  }
+  const cv::Mat rgb(frame_.height, frame_.width, CV_8UC3, frame_.rgb.data());
+  std::optional<Eigen::Isometry3d> X_world_camera;
+  if (frame_.pose.valid) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = frame_.pose.q_WC.normalized().toRotationMatrix();
+    X.translation() = frame_.pose.p_WC;
+    X_world_camera = X;
+  }
+  const double* state = tracker_.Track(rgb, model_, X_world_camera, frame_.time_s);
+  server_->Poll(Now());  // subscribers that came meanwhile get this frame
+  server_->Publish(static_cast<double>(frame_.id), frame_.time_s, state);
+
+  ++counters_.frames;
+  if (tracker_.seen()) {
+    ++counters_.seen;
+  } else if (!tracker_.blob().found) {
+    ++counters_.no_blob;
+  } else {
+    ++counters_.no_pose;
+  }
+  const double took = Now() - t0;
+  counters_.process_s_sum += took;
+  counters_.process_s_max = std::max(counters_.process_s_max, took);
+  return true;
+}
+
+}  // namespace vlab::vision

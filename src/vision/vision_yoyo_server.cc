@@ -1,0 +1,96 @@
+#include "vision/vision_yoyo_server.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "bridge/bridge_describe.h"
+#include "bridge/bridge_protocol.h"
+#include "bridge/bridge_yoyo.h"
+
+namespace vlab::vision {
+
+namespace {
+
+using nlohmann::json;
+constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
+// DeviceEndpoint counts time in periods: the vision program's are 10 ms ticks
+// of its monotonic clock (frames may come at any rate)
+constexpr double kTicksPerSecond = 100;
+
+long Tick(double now_s) { return static_cast<long>(std::floor(now_s * kTicksPerSecond)); }
+
+}  // namespace
+
+json YoyoDescribe(const YoyoServerConfig& config, int port) {
+  bridge::DeviceDescription d;
+  d.name = config.name;
+  d.server = "vlab vision";
+  d.clock = "realtime";
+  d.address = config.bind_address;
+  d.port = port;
+  d.control_hz = config.frame_hz;
+  json facts;
+  facts["layout"] = {{"state", bridge::kYoyoStateLayout}, {"command", json::array()}};
+  facts["units"] = {{"x", "m"},
+                    {"y", "m"},
+                    {"z", "m"},
+                    {"vz", "m/s"},
+                    {"string_force", "N (not measured: always 0)"},
+                    {"spin", "rad/s (not measured: always 0)"},
+                    {"time", "s, exposure time of the frame (the camera's clock)"},
+                    {"seq", "the camera's frame id"}};
+  facts["frame"] = "world";
+  facts["status_bits"] = {{"not_seen", bridge::kYoyoNotSeen}};
+  facts["measures"] = {"x", "y", "z", "vz"};
+  facts["not_measured"] = {{"string_force", 0.0}, {"spin", 0.0}};
+  facts["rates"] = {{"control_hz", config.frame_hz}, {"frame_hz", config.frame_hz}};
+  json j = json::parse(bridge::DescribeJson(d, "yoyo", facts.dump()));
+  j.update(config.describe_extra, true);
+  return j;
+}
+
+std::unique_ptr<YoyoServer> YoyoServer::Create(const YoyoServerConfig& config) {
+  std::unique_ptr<YoyoServer> server(new YoyoServer());
+  server->socket_ = bridge::UdpSocket::Bind(config.bind_address, config.port);
+  bridge::EndpointConfig e;
+  e.name = config.name;
+  e.kind = bridge::DeviceKind::kYoyo;
+  e.describe_json = YoyoDescribe(config, server->socket_->local_port()).dump();
+  e.subscriber_timeout_periods = static_cast<int>(std::ceil(config.subscriber_timeout_s * kTicksPerSecond));
+  e.max_subscribers = std::max(1, config.max_subscribers);
+  e.watchdog_periods = 0;
+  e.command_length = 0;  // no commands
+  server->endpoint_ = std::make_unique<bridge::DeviceEndpoint>(std::move(e));
+  server->buffer_.resize(kBufferBytes);
+  server->packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
+  return server;
+}
+
+int YoyoServer::Poll(double now_s) {
+  int handled = 0;
+  for (;;) {
+    bridge::Endpoint from;
+    bool truncated = false;
+    const long size = socket_->Receive(buffer_.data(), buffer_.size(), &from, 0, &truncated);
+    if (size < 0) return handled;
+    ++handled;
+    // a truncated datagram was longer than any valid one: handed over whole-buffer, refused as too long
+    endpoint_->Handle(buffer_.data(), truncated ? buffer_.size() : static_cast<std::size_t>(size), from, Tick(now_s),
+                      *socket_);
+  }
+}
+
+void YoyoServer::Publish(double seq, double time, const double* state) {
+  bridge::Header header;
+  header.kind = static_cast<int>(bridge::DeviceKind::kYoyo);
+  header.type = static_cast<int>(bridge::MessageType::kState);
+  header.seq = seq;
+  header.time = time;
+  const int n = static_cast<int>(bridge::kYoyoStateLayout.size());
+  header.length = n;
+  bridge::EncodePacket(header, state, n, &packet_);
+  endpoint_->Publish(packet_, *socket_);
+  ++states_;
+}
+
+}  // namespace vlab::vision

@@ -1,0 +1,72 @@
+// Device side of the vision program's yoyo device (kind 11, bridge/bridge_yoyo.h):
+// one UDP socket and a bridge::DeviceEndpoint of kind yoyo, so that a
+// controller reads the yo-yo from vision exactly as it reads the lab's yoyo
+// device (same layout, same status bit, same rules).
+//
+// Ports
+//   input   datagrams from clients (Poll): describe requests (they subscribe)
+//   output  one state per camera frame to every subscriber (Publish):
+//           [status, x, y, z, vz, string_force, spin], seq = frame id,
+//           time = the frame's exposure time (s, the camera's clock);
+//           describe replies (JSON) to the requester
+//   rate    driven by its owner (the vision program): Poll between frames,
+//           Publish once per frame
+// Rules: bridge::DeviceEndpoint's. Any well-formed datagram subscribes its
+// sender; a subscriber silent for subscriber_timeout_s is dropped when a new
+// one comes; at most max_subscribers. The yoyo kind takes no commands: a
+// command (of any kind) or a state datagram is refused and counted.
+// Never throws and never blocks in Poll or Publish. Not thread-safe.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bridge/bridge_endpoint.h"
+#include "bridge/bridge_udp.h"
+
+namespace vlab::vision {
+
+struct YoyoServerConfig {
+  std::string name = "yoyo_vision";
+  std::string bind_address = "127.0.0.1";
+  int port = 50054;  ///< 0: any free port
+  double subscriber_timeout_s = 10;
+  int max_subscribers = 16;
+  double frame_hz = 0;  ///< the camera's frame rate: rates.control_hz of the describe reply
+  /// Facts merged into the describe reply (camera, tracker).
+  nlohmann::json describe_extra = nlohmann::json::object();
+};
+
+class YoyoServer {
+ public:
+  /// Binds the socket. Throws bridge::NetworkError naming the address when it cannot.
+  static std::unique_ptr<YoyoServer> Create(const YoyoServerConfig& config);
+
+  /// Handles every datagram already queued; never waits. `now_s`: a
+  /// monotonic clock in seconds (subscriber timeouts). Returns how many.
+  int Poll(double now_s);
+  /// Sends one state (7 values, bridge::kYoyoStateLayout) to every subscriber.
+  void Publish(double seq, double time, const double* state);
+
+  const std::string& describe_json() const { return endpoint_->config().describe_json; }
+  const bridge::EndpointCounters& counters() const { return endpoint_->counters(); }
+  long states() const { return states_; }
+  int local_port() const { return socket_->local_port(); }
+  int fd() { return socket_->fd(); }
+
+ private:
+  YoyoServer() = default;
+
+  std::unique_ptr<bridge::UdpSocket> socket_;
+  std::unique_ptr<bridge::DeviceEndpoint> endpoint_;
+  long states_ = 0;
+  std::vector<unsigned char> buffer_, packet_;
+};
+
+/// The describe reply of the yoyo device (without the extra facts).
+nlohmann::json YoyoDescribe(const YoyoServerConfig& config, int port);
+
+}  // namespace vlab::vision
