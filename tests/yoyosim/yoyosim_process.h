@@ -1,129 +1,39 @@
-// Runs the real vlab-yoyosim executable for a test: fork/exec with its stdout on
-// a pipe, wait for its start line (which names both ports), then either wait
-// for it to end (a --duration run) or stop it with SIGINT, and collect its report.
+// Runs the real vlab-yoyosim executable for a test (tests/test_process.h): wait
+// for its start line (which names both ports), then either wait for it to end
+// (a --duration run) or stop it with SIGINT, and collect its report.
 #pragma once
 
-#include <poll.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "test_process.h"
 
 namespace vlab::testing {
 
-class YoyosimProcess {
+class YoyosimProcess : public TestProcess {
  public:
   /// Starts VLAB_BINARY_DIR/vlab-yoyosim with `args` (plus --point-port 0
   /// --yoyo-port 0, from the source root) and waits up to timeout_s for its
   /// start line. ok() tells.
-  explicit YoyosimProcess(std::vector<std::string> args, double timeout_s = 20) {
-    int fds[2];
-    if (::pipe(fds) != 0) return;
-    args.insert(args.begin(), VLAB_BINARY_DIR "/vlab-yoyosim");
-    for (const char* a : {"--point-port", "0", "--yoyo-port", "0"}) args.emplace_back(a);
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      ::dup2(fds[1], STDOUT_FILENO);
-      ::close(fds[0]);
-      ::close(fds[1]);
-      if (::chdir(VLAB_SOURCE_DIR) != 0) ::_exit(126);
-      std::vector<char*> argv;
-      for (std::string& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    ::close(fds[1]);
-    out_fd_ = fds[0];
-    if (pid_ < 0) return;
+  explicit YoyosimProcess(std::vector<std::string> args, double timeout_s = 20)
+      : TestProcess(WithProgram(std::move(args)), timeout_s) {
     // "vlab-yoyosim: point on 127.0.0.1:P, yoyo on 127.0.0.1:Q, lockstep, 100 Hz, scene ..."
-    const auto deadline = Deadline(timeout_s);
-    while (output_.find('\n') == std::string::npos && ReadSome(deadline)) {
-    }
-    const std::size_t newline = output_.find('\n');
-    if (newline == std::string::npos) return;
-    start_line_ = output_.substr(0, newline);
     point_port_ = PortAfter("point on ");
     yoyo_port_ = PortAfter("yoyo on ");
   }
 
-  ~YoyosimProcess() {
-    if (pid_ > 0 && !ended_) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-    if (out_fd_ >= 0) ::close(out_fd_);
-  }
-  YoyosimProcess(const YoyosimProcess&) = delete;
-  YoyosimProcess& operator=(const YoyosimProcess&) = delete;
-
   bool ok() const { return point_port_ > 0 && yoyo_port_ > 0; }
   int point_port() const { return point_port_; }
   int yoyo_port() const { return yoyo_port_; }
-  const std::string& start_line() const { return start_line_; }
-
-  /// Waits up to timeout_s for it to end by itself, reading stdout to its end;
-  /// returns the exit code (-1 if it did not exit normally in time: then it is killed).
-  int Wait(double timeout_s = 20) {
-    if (pid_ <= 0 || ended_) return -1;
-    const auto deadline = Deadline(timeout_s);
-    while (ReadSome(deadline)) {
-    }
-    int status = 0;
-    pid_t done = 0;
-    while ((done = ::waitpid(pid_, &status, WNOHANG)) == 0 && std::chrono::steady_clock::now() < deadline) {
-      ::usleep(10000);
-    }
-    if (done != pid_) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, &status, 0);
-    }
-    ended_ = true;
-    return done == pid_ && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  /// Sends SIGINT, then Wait(timeout_s).
-  int Stop(double timeout_s = 20) {
-    if (pid_ <= 0 || ended_) return -1;
-    ::kill(pid_, SIGINT);
-    return Wait(timeout_s);
-  }
-  /// Everything it printed to stdout so far.
-  const std::string& output() const { return output_; }
 
  private:
-  static std::chrono::steady_clock::time_point Deadline(double seconds) {
-    return std::chrono::steady_clock::now() +
-           std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
+  static std::vector<std::string> WithProgram(std::vector<std::string> args) {
+    args.insert(args.begin(), VLAB_BINARY_DIR "/vlab-yoyosim");
+    for (const char* a : {"--point-port", "0", "--yoyo-port", "0"}) args.emplace_back(a);
+    return args;
   }
-  int PortAfter(const std::string& label) const {
-    const std::size_t at = start_line_.find(label);
-    if (at == std::string::npos) return 0;
-    const std::size_t colon = start_line_.find(':', at + label.size());
-    const std::size_t comma = start_line_.find(',', at);
-    if (colon == std::string::npos || comma == std::string::npos || comma < colon) return 0;
-    return std::stoi(start_line_.substr(colon + 1, comma - colon - 1));
-  }
-  // reads what is there; false at end of file or at the deadline
-  bool ReadSome(std::chrono::steady_clock::time_point deadline) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) return false;
-    pollfd p{out_fd_, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return false;
-    char buffer[4096];
-    const ssize_t n = ::read(out_fd_, buffer, sizeof(buffer));
-    if (n <= 0) return false;
-    output_.append(buffer, static_cast<std::size_t>(n));
-    return true;
-  }
-
-  pid_t pid_ = -1;
-  int out_fd_ = -1;
   int point_port_ = 0, yoyo_port_ = 0;
-  bool ended_ = false;
-  std::string output_, start_line_;
 };
 
 }  // namespace vlab::testing
