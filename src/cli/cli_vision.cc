@@ -98,6 +98,26 @@ void ReportYoyo(const vision::YoyoVisionProgram& p, double elapsed_s) {
   std::fflush(stdout);
 }
 
+// processes frames until SIGINT/SIGTERM, --frames or --duration; a counter line
+// every 5 s (unless --quiet) and at the end
+template <typename Program>
+int RunUntilDone(Program& program, const VisionArgs& a, void (*report)(const Program&, double)) {
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  double next_report_s = 5;
+  while (!g_stop) {
+    program.Step(0.05);
+    if (a.frames > 0 && program.counters().frames >= a.frames) break;
+    if (a.duration_s > 0 && elapsed() >= a.duration_s) break;
+    if (!a.quiet && elapsed() >= next_report_s) {
+      report(program, elapsed());
+      next_report_s += 5;
+    }
+  }
+  report(program, elapsed());
+  return 0;
+}
+
 int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
   if (a.yoyo_port > 65535) throw lab::InputError("--yoyo-port " + std::to_string(a.yoyo_port) + " outside 0..65535");
   if (!a.markers.empty()) throw lab::InputError("--marker and --yoyo-port exclude each other: run two vision programs");
@@ -124,20 +144,7 @@ int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
         config.line.x, config.line.y, program->camera().Label().c_str(), m.width, m.height, m.fx, m.fy, m.cx, m.cy);
     std::fflush(stdout);
   }
-  const auto start = std::chrono::steady_clock::now();
-  auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-  double next_report_s = 5;
-  while (!g_stop) {
-    program->Step(0.05);
-    if (a.frames > 0 && program->counters().frames >= a.frames) break;
-    if (a.duration_s > 0 && elapsed() >= a.duration_s) break;
-    if (!a.quiet && elapsed() >= next_report_s) {
-      ReportYoyo(*program, elapsed());
-      next_report_s += 5;
-    }
-  }
-  ReportYoyo(*program, elapsed());
-  return 0;
+  return RunUntilDone(*program, a, ReportYoyo);
 }
 
 int Vision(const VisionArgs& a) {
@@ -183,20 +190,7 @@ int Vision(const VisionArgs& a) {
         program->camera().Label().c_str(), m.width, m.height, m.fx, m.fy, m.cx, m.cy);
     std::fflush(stdout);
   }
-  const auto start = std::chrono::steady_clock::now();
-  auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-  double next_report_s = 5;
-  while (!g_stop) {
-    program->Step(0.05);
-    if (a.frames > 0 && program->counters().frames >= a.frames) break;
-    if (a.duration_s > 0 && elapsed() >= a.duration_s) break;
-    if (!a.quiet && elapsed() >= next_report_s) {
-      Report(*program, elapsed());
-      next_report_s += 5;
-    }
-  }
-  Report(*program, elapsed());
-  return 0;
+  return RunUntilDone(*program, a, Report);
 }
 
 }  // namespace
