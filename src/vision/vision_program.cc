@@ -59,6 +59,31 @@ long WholeNumber(const std::string& text, const std::string& what) {
 
 }  // namespace
 
+bool ReceiveFrame(bridge::CameraClient& camera, double wait_s, const CameraModel& model,
+                  bridge::CameraClient::Frame* frame, long* skipped, long* wrong_size) {
+  const long skipped_before = camera.frames_skipped();
+  try {
+    camera.ReceiveLatest(wait_s, frame);
+  } catch (const bridge::TimeoutError&) {
+    return false;
+  }
+  *skipped += camera.frames_skipped() - skipped_before;
+  if (frame->width != model.width || frame->height != model.height ||
+      frame->rgb.size() != static_cast<std::size_t>(frame->width) * frame->height * 3) {
+    ++*wrong_size;
+    return false;
+  }
+  return true;
+}
+
+std::optional<Eigen::Isometry3d> CameraPoseOf(const bridge::CameraClient::Frame& frame) {
+  if (!frame.pose.valid) return std::nullopt;
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = frame.pose.q_WC.normalized().toRotationMatrix();
+  X.translation() = frame.pose.p_WC;
+  return X;
+}
+
 CameraModel CameraModelOf(const bridge::CameraClient& camera) {
   const bridge::CameraCalibration& c = camera.calibration();
   CameraModel m;
@@ -133,28 +158,11 @@ double VisionProgram::Now() const {
 
 bool VisionProgram::Step(double wait_s) {
   server_->Poll(Now());
-  const long skipped_before = camera_.frames_skipped();
-  try {
-    camera_.ReceiveLatest(wait_s, &frame_);
-  } catch (const bridge::TimeoutError&) {
-    return false;
-  }
-  counters_.frames_skipped += camera_.frames_skipped() - skipped_before;
+  if (!ReceiveFrame(camera_, wait_s, model_, &frame_, &counters_.frames_skipped, &counters_.wrong_size)) return false;
   const double t0 = Now();
-  if (frame_.width != model_.width || frame_.height != model_.height ||
-      frame_.rgb.size() != static_cast<std::size_t>(frame_.width) * frame_.height * 3) {
-    ++counters_.wrong_size;
-    return false;
-  }
   const cv::Mat rgb(frame_.height, frame_.width, CV_8UC3, frame_.rgb.data());
   cv::cvtColor(rgb, grey_, cv::COLOR_RGB2GRAY);
-  std::optional<Eigen::Isometry3d> X_world_camera;
-  if (frame_.pose.valid) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.linear() = frame_.pose.q_WC.normalized().toRotationMatrix();
-    X.translation() = frame_.pose.p_WC;
-    X_world_camera = X;
-  }
+  const std::optional<Eigen::Isometry3d> X_world_camera = CameraPoseOf(frame_);
   server_->Poll(Now());  // descriptions that came meanwhile apply to this frame
   const LocateStats stats = LocateMarkers(grey_, model_, X_world_camera, server_->table(), detector_, &state_);
   server_->Publish(static_cast<double>(frame_.id), frame_.time_s, state_, Now());

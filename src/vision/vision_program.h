@@ -16,6 +16,7 @@
 
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,15 @@ class VisionProgram {
 /// The camera model of a camera device: its describe reply's intrinsics and
 /// distortion. Throws InputError naming the camera when they are unusable.
 CameraModel CameraModelOf(const bridge::CameraClient& camera);
+
+/// Waits up to wait_s for the newest whole frame of `camera` into *frame.
+/// False when none came (a timeout) or when its size is not `model`'s (then
+/// *wrong_size is counted); *skipped counts the frames passed over for it.
+bool ReceiveFrame(bridge::CameraClient& camera, double wait_s, const CameraModel& model,
+                  bridge::CameraClient::Frame* frame, long* skipped, long* wrong_size);
+
+/// The camera's pose in the world that travels with a frame (nullopt: unknown).
+std::optional<Eigen::Isometry3d> CameraPoseOf(const bridge::CameraClient::Frame& frame);
 
 /// "DICT:ID:SIDE" or "DICT:FIRST-LAST:SIDE" (e.g. "4X4_50:0-35:0.03") ->
 /// descriptions. Throws InputError naming the text.

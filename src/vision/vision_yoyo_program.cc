@@ -63,27 +63,10 @@ double YoyoVisionProgram::Now() const {
 
 bool YoyoVisionProgram::Step(double wait_s) {
   server_->Poll(Now());
-  const long skipped_before = camera_.frames_skipped();
-  try {
-    camera_.ReceiveLatest(wait_s, &frame_);
-  } catch (const bridge::TimeoutError&) {
-    return false;
-  }
-  counters_.frames_skipped += camera_.frames_skipped() - skipped_before;
+  if (!ReceiveFrame(camera_, wait_s, model_, &frame_, &counters_.frames_skipped, &counters_.wrong_size)) return false;
   const double t0 = Now();
-  if (frame_.width != model_.width || frame_.height != model_.height ||
-      frame_.rgb.size() != static_cast<std::size_t>(frame_.width) * frame_.height * 3) {
-    ++counters_.wrong_size;
-    return false;
-  }
   const cv::Mat rgb(frame_.height, frame_.width, CV_8UC3, frame_.rgb.data());
-  std::optional<Eigen::Isometry3d> X_world_camera;
-  if (frame_.pose.valid) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.linear() = frame_.pose.q_WC.normalized().toRotationMatrix();
-    X.translation() = frame_.pose.p_WC;
-    X_world_camera = X;
-  }
+  const std::optional<Eigen::Isometry3d> X_world_camera = CameraPoseOf(frame_);
   const double* state = tracker_.Track(rgb, model_, X_world_camera, frame_.time_s);
   server_->Poll(Now());  // subscribers that came meanwhile get this frame
   server_->Publish(static_cast<double>(frame_.id), frame_.time_s, state);
