@@ -76,5 +76,21 @@ TEST(PlotTest, MissingColumnsAndFilesAreNamed) {
   }
 }
 
+// end to end: a plot of a log column the scenario does not have is bad input
+// (exit 2, one line naming the file and line), found before anything is written
+TEST(PlotTest, UnknownLogColumnIsBadInputBeforeTheRun) {
+  testing::TempDir dir;
+  std::string yaml = testing::ReadFile(VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml");
+  const std::size_t scene = yaml.find("scene: ");
+  ASSERT_NE(scene, std::string::npos);
+  yaml.replace(scene, 7, "scene: " VLAB_SOURCE_DIR "/scenes/");
+  yaml += "\noutputs:\n  plots:\n    - {file: p.png, y: [no.such.column]}\n";
+  testing::WriteFile(dir / "s.yaml", yaml);
+  const testing::ProcessResult r = testing::RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("outputs.plots: no log column 'no.such.column'"), std::string::npos) << r.err;
+  EXPECT_EQ(testing::Entries(dir.path()), (std::set<std::string>{"s.yaml"}));
+}
+
 }  // namespace
 }  // namespace vlab::lab
