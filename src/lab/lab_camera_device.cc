@@ -9,6 +9,10 @@
 
 namespace vlab::lab {
 
+namespace {
+constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
+}  // namespace
+
 std::unique_ptr<SimCamera> SimCamera::Create(const mjModel* m, const DeviceConfig& c, const std::string& scene,
                                              std::uint64_t seed) {
   std::unique_ptr<SimCamera> cam(new SimCamera());
@@ -113,6 +117,7 @@ void SimCamera::RenderFrame(std::int64_t id, double t, mjData* d, Pending* slot)
 void SimCamera::Unserve() {
   server_.reset();
   t_prev_ = -1;
+  due_ = {0, 0};
   head_ = count_ = 0;
   id_base_ = next_id_ = 0;
 }
@@ -125,27 +130,38 @@ void SimCamera::Observe(double t, mjData* d) {
     head_ = count_ = 0;
     id_base_ = next_id_;
   }
-  // frames due: rendered from this state (skipped while nobody listens)
-  const sensors::FrameRange due = model_->DueForRender(t_prev_, t);
+  // frames due: rendered from this state (skipped while nobody listens); a frame
+  // stamped t is delivered at t only without latency, and then rendered now
+  due_ = model_->DueForRender(t_prev_, t);
+  due_t_ = t;
   t_prev_ = t;
-  for (std::int64_t i = due.first; i < due.end; ++i) {
+  if (config_.latency_s <= kSameTime_s) RenderDue(d);
+  // frames delivered: their latency has passed
+  while (count_ > 0 && queue_[head_].stamp + config_.latency_s <= t + kSameTime_s) {
+    const Pending& p = queue_[head_];
+    server_->SendImage(p.id, p.stamp, p.rgb.data(), p.pose);
+    head_ = (head_ + 1) % queue_.size();
+    --count_;
+  }
+}
+
+void SimCamera::RenderAhead(mjData* d) {
+  if (server_) RenderDue(d);
+}
+
+void SimCamera::RenderDue(mjData* d) {
+  for (std::int64_t i = due_.first; i < due_.end; ++i) {
     if (server_->subscribers() == 0) continue;
     if (count_ == queue_.size()) {  // cannot happen with FramesInFlight() + 2 slots; never block
       head_ = (head_ + 1) % queue_.size();
       --count_;
     }
     Pending& slot = queue_[(head_ + count_) % queue_.size()];
-    RenderFrame(id_base_ + i, t, d, &slot);
+    RenderFrame(id_base_ + i, due_t_, d, &slot);
     next_id_ = id_base_ + i + 1;
     ++count_;
   }
-  // frames delivered: their latency has passed
-  while (count_ > 0 && queue_[head_].stamp + config_.latency_s <= t + 1e-9) {
-    const Pending& p = queue_[head_];
-    server_->SendImage(p.id, p.stamp, p.rgb.data(), p.pose);
-    head_ = (head_ + 1) % queue_.size();
-    --count_;
-  }
+  due_.first = due_.end;
 }
 
 }  // namespace vlab::lab

@@ -52,9 +52,15 @@ class SimCamera {
   void PollRequests() { server_->Poll(0.0); }
   /// Closes its socket and restarts its schedule (a run without serving).
   void Unserve();
-  /// At every period end t (and t = 0): answers datagrams, renders the frames
-  /// due, sends the frames whose delivery time has come.
+  /// At every period end t (and t = 0), before the period's states go out:
+  /// answers datagrams, sends the frames whose delivery time has come. The
+  /// frames due at t are rendered here when they are delivered at t (no
+  /// latency); otherwise RenderAhead renders them, once the states are out.
   void Observe(double t, mjData* d);
+  /// After the states of period end t went out, with the state still that of
+  /// t: renders the frames due at t that are delivered later, so their
+  /// rendering does not delay the states (a realtime controller's period).
+  void RenderAhead(mjData* d);
 
   const bridge::CameraServer* server() const { return server_.get(); }
   long frames_rendered() const { return rendered_; }
@@ -68,6 +74,7 @@ class SimCamera {
   };
   SimCamera() = default;
   void RenderFrame(std::int64_t id, double t, mjData* d, Pending* slot);
+  void RenderDue(mjData* d);  // the frames of due_, from the state at due_t_
 
   std::string name_, where_, scene_;
   const mjModel* m_ = nullptr;
@@ -81,6 +88,8 @@ class SimCamera {
   std::vector<Pending> queue_;  // ring of frames rendered, not yet delivered
   std::size_t head_ = 0, count_ = 0;
   double t_prev_ = -1;
+  sensors::FrameRange due_{0, 0};  // frames due at due_t_, not rendered yet
+  double due_t_ = 0;
   std::int64_t id_base_ = 0;  // frame ids keep increasing across a reset of the simulated time
   std::int64_t next_id_ = 0;
   long rendered_ = 0;

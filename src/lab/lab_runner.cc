@@ -250,13 +250,20 @@ RunResult Lab::Run(const RunOptions& options) {
   auto publish = [&](long k) {
     if (bridge) bridge->Publish(k, k * period, s.arm_states, SimState(k * period, paused, *clock, k, bridge.get()));
   };
+  // what renders from the state at period end t without being part of the period's states:
+  // the camera frames delivered later, the image outputs; after the states went out, so that
+  // rendering does not delay them (the state is still that of t: the next period has not begun)
+  auto render_after_publish = [&](double t) {
+    for (auto& c : s.cameras) c->RenderAhead(d);
+    if (images) images->Observe(t, d);
+  };
   // row 0: the initial state, with the controller's view of it
   if (s.controller) s.RunController(0.0, options, &replay_at, &result, controller_columns);
   emit_row(0.0);
   if (options.observe) options.observe(0.0, m, d);
   for (auto& c : s.cameras) c->Observe(0.0, d);
-  if (images) images->Observe(0.0, d);
   publish(0);
+  render_after_publish(0.0);
 
   WarningWatch warnings;
   const auto t_loop = WallClock::now();
@@ -320,10 +327,10 @@ RunResult Lab::Run(const RunOptions& options) {
     emit_row(t_next);
     if (options.observe) options.observe(t_next, m, d);
     for (auto& c : s.cameras) c->Observe(t_next, d);
-    if (images) images->Observe(t_next, d);
     ++k;
     if (steps_left > 0 && --steps_left == 0) paused = true;
     publish(k);
+    render_after_publish(t_next);
     if (options.progress && (k & 63) == 0 && Seconds(t_progress, WallClock::now()) > 0.1) {
       options.progress(static_cast<double>(k) / periods);
       t_progress = WallClock::now();
