@@ -6,8 +6,12 @@
 //                [--string M] [--log FILE] [--check-from S --check-for S] [--timeout S] [--quiet]
 //
 // Devices: --hand, a point device (its states pace the loop: one command per state);
-// --yoyo, a yoyo device (position, at its own rate: status kYoyoNotSeen marks a held
-// value; its string_force too when there is no --force); --force, a wrench device (the
+// --yoyo, a yoyo device (position; its string_force too when there is no --force). A
+// lockstep yoyo device (its describe reply's clock; the lab's, vlab-yoyosim's) publishes
+// every period: the loop waits for period k's state, and status kYoyoNotSeen marks a held
+// value. Any other (vlab vision's: one state per camera frame, seq = the frame id) is read
+// without waiting: the states that have arrived, the newest sighting counting, timed by its
+// stamp (the exposure time, on the camera's clock: the lab's simulated time for its cameras); --force, a wrench device (the
 // JR3): string force = |Fz - Fz at the first state| (the tool-side static load, and the
 // 0.44 N of the yo-yo already falling at the start, removed); --mirror, a second point
 // device (vlab-yoyosim's hand) sent the hand's MEASURED position every period, shifted by
@@ -41,6 +45,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -67,6 +72,7 @@ constexpr double kE2 = 0.657;        // e^2: a free yo-yo keeps this share of it
 constexpr double kUp_s = 0.30, kLead = 0.03, kPre_s = 0.4, kRet_s = 0.6, kMaxStroke = 0.19, kLowFrac = 0.5;
 constexpr double kGain0 = 0.75, kGainMin = 0.2, kGainMax = 5.0, kP0 = 100.0, kForget = 0.9, kDamp = 0.8;
 constexpr double kTolerance = 0.10;  // of the level
+constexpr std::size_t kPast = 50;    // periods of the hand kept: a sample's age is at most a few
 
 struct Address { std::string host; int port = 0; };
 struct Options {
@@ -138,6 +144,31 @@ double Cosine(double from, double to, double t, double duration) {  // raised co
 }
 
 struct Swing { int n; double t, top; };
+struct HandAt { double t, z, vz; };
+
+// The yo-yo's state for period `seq`. per_period: waits for it, as ReadUntil; *seen: not
+// flagged kYoyoNotSeen. Otherwise: takes the states that have arrived, without waiting;
+// *y becomes the newest sighting among them, *seen whether there was one. False: silence
+// or a signal (per_period only).
+bool ReadYoyo(Device& yoyo, bool per_period, std::int64_t seq, double timeout_s, Device::State* y, bool* seen) {
+  const auto sighted = [](const Device::State& s) {
+    return !(static_cast<unsigned>(s.values[0]) & vlab::bridge::kYoyoNotSeen);
+  };
+  if (per_period) {
+    if (!ReadUntil(yoyo, seq, timeout_s, y)) return false;
+    *seen = sighted(*y);
+    return true;
+  }
+  *seen = false;
+  for (;;) {
+    try {
+      Device::State s = yoyo.Read(0.0);
+      if (sighted(s)) *y = std::move(s), *seen = true;
+    } catch (const vlab::bridge::TimeoutError&) {
+      return true;
+    }
+  }
+}
 
 int Run(const Options& o) {
   Device hand = Device::Connect(DeviceKind::kPoint, o.hand.host, o.hand.port, kConnect_s);
@@ -146,9 +177,12 @@ int Run(const Options& o) {
   std::unique_ptr<Device> mirror;
   if (o.force.port) force = std::make_unique<Wrench>(Wrench::Connect(o.force.host, o.force.port, kConnect_s));
   if (o.mirror.port) mirror = std::make_unique<Device>(Device::Connect(DeviceKind::kPoint, o.mirror.host, o.mirror.port, kConnect_s));
+  const bool per_period = yoyo.describe().value("clock", "") == "lockstep";
   std::string self;
   const unsigned long long hash = SelfHash(&self);
   std::printf("yoyo_control: binary %s fnv1a64 %016llx\n", self.c_str(), hash);
+  std::printf("yoyo_control: yo-yo from '%s' (%s), %s\n", yoyo.name().c_str(),
+              yoyo.describe().value("server", "?").c_str(), per_period ? "every period" : "as its states arrive");
   std::fflush(stdout);
 
   Device::State h, y, mr;
@@ -165,31 +199,44 @@ int Run(const Options& o) {
   enum Phase { kFalling, kPulse, kClimbing } phase = kFalling;
   double gain = kGain0, p_rls = kP0, stroke = 0, amp_prev = NAN, stroke_prev = 0;
   double bias = 0, t_pred = 1e9, t_pulse = 0, z_from = z0, z_cmd = z0, t_top = 0, top = -1e9, z_low = z0;
-  double s_t = -1, s_d = 0, s_rate = 0, last_top = NAN;
+  double s_t = -1, s_d = 0, s_rate = 0, rate_before = 0, last_top = NAN;  // the last sighting; its predecessor's rate
   double next_keepalive = 1.0, t = 0;
   std::vector<Swing> swings;
+  std::deque<HandAt> past;  // the hand over the last kPast periods
   bool first = true;
   do {
     t = h.time - t0;
-    if (!ReadUntil(yoyo, h.seq, o.timeout_s, &y)) break;
+    bool fresh = false;
+    if (!ReadYoyo(yoyo, per_period, h.seq, o.timeout_s, &y, &fresh)) break;
     if (force && !ReadUntil(*force, h.seq, o.timeout_s, &w)) break;
     if (mirror && !ReadUntil(*mirror, h.seq, o.timeout_s, &mr)) break;
     if (first && mirror) for (int i = 0; i < 3; ++i) offset[i] = mr.values[1 + i] - h.values[1 + i];
     if (first && force) fz0 = w.wrench(2);
     first = false;
     const double hz = h.values[3], hvz = h.values[6];
-    const double yz = y.values[3] - offset[2], yvz = y.values[4];
-    const double f = force ? std::abs(w.wrench(2) - fz0) : y.values[5];
-    const bool fresh = !(static_cast<unsigned>(y.values[0]) & vlab::bridge::kYoyoNotSeen);
-    if (fresh) s_t = t, s_d = hz - yz, s_rate = hvz - yvz;
+    const bool have_y = !y.values.empty();  // not yet: a camera's first frame still to come
+    const double yz = have_y ? y.values[3] - offset[2] : NAN, yvz = have_y ? y.values[4] : 0.0;
+    const double f = force ? std::abs(w.wrench(2) - fz0) : have_y ? y.values[5] : NAN;
+    past.push_back({t, hz, hvz});
+    if (past.size() > kPast) past.pop_front();
+    if (fresh) {  // the sample's depth and rate: against the hand at the sample's time
+      rate_before = s_rate;
+      s_t = per_period ? t : y.time - t0;
+      const HandAt& at = *std::min_element(past.begin(), past.end(), [&](const HandAt& a, const HandAt& b) {
+        return std::abs(a.t - s_t) < std::abs(b.t - s_t);
+      });
+      s_d = at.z - yz, s_rate = at.vz - yvz;
+    }
 
     if (phase == kFalling && s_t >= 0 && s_rate > 0.05) {  // predict the bottom from the last sample
       const double rest = std::max(0.0, o.string - s_d);
       const double tau = (-s_rate + std::sqrt(s_rate * s_rate + 2 * kDescent * rest)) / kDescent;
       t_pred = s_t + tau + bias;
       if (t >= t_pred - kUp_s / 2 - kLead) phase = kPulse, t_pulse = t, z_from = z_cmd;
-    } else if (phase == kPulse && fresh && s_rate < -0.05) {  // rising: the bottom is past
-      const double t_bottom = s_t - std::max(0.0, o.string - s_d) / -s_rate;  // back to d = L
+    } else if (phase == kPulse && fresh && s_rate < -0.05 && rate_before < -0.05) {  // rising: the bottom is past
+      // back to d = L on the climb's deceleration: L - d = v tau + a tau^2 / 2, v = -s_rate
+      const double v = -s_rate, rest = std::max(0.0, o.string - s_d);
+      const double t_bottom = s_t - (-v + std::sqrt(v * v + 2 * kDescent * rest)) / kDescent;
       bias = std::clamp(bias + 0.5 * (t_bottom - t_pred), -0.1, 0.1);
       phase = kClimbing, top = -1e9;
     } else if (phase == kPulse && t > t_pulse + kUp_s + 0.3) {
