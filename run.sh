@@ -1,11 +1,23 @@
 #!/usr/bin/env bash
 # vlab quick start: install what is missing, build, run a scenario headless.
-#   ./run.sh [SCENARIO] [vlab run options]     (default scenario: scenes/pa10_reach)
+#   ./run.sh [SCENARIO] [vlab run options]
+# Default: scenes/yoyo_stage1, the yo-yo case study's first stage (the PA10 keeps a yo-yo
+# swinging to a set height, lockstep); its plot is out/yoyo_stage1/yoyo.png.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 cd "$here"
 source tools/setup.sh
 vlab_setup
-scenario="${1:-scenes/pa10_reach}"
-[ $# -gt 0 ] && shift
-exec build/vlab run "$scenario" "$@"
+if [ $# -gt 0 ]; then
+  scenario=$1
+  shift
+  exec build/vlab run "$scenario" "$@"
+fi
+status=0
+build/vlab run scenes/yoyo_stage1 || status=$?
+if [ -f out/yoyo_stage1/yoyo.png ]; then
+  grep -h "amplitude check" out/yoyo_stage1/controller.log || true
+  echo "Open out/yoyo_stage1/yoyo.png: the hand's and the yo-yo's height against time (numbers in"
+  echo "out/yoyo_stage1/yoyo.csv). The other stages: ./run.sh scenes/yoyo_stage2, ./run.sh scenes/yoyo_stage3."
+fi
+exit $status

@@ -95,6 +95,10 @@ int RunCommand(const RunArgs& args) {
     const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
     std::printf("%s: %s, %.2f s simulated in %.2f s (%.0fx real time); output in %s/\n", scenario.name.c_str(),
                 r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, rtf, out_dir.c_str());
+    for (const lab::PlotConfig& plot : scenario.outputs.plots) {
+      const std::string file = out_dir + "/" + plot.file;
+      if (std::filesystem::exists(file)) std::printf("plot: %s\n", file.c_str());
+    }
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;
   });

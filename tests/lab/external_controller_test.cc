@@ -114,6 +114,37 @@ TEST(ExternalController, ItsVerdictAfterTheEndOfTheRunCounts) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// examples/with_helper.sh (a second program beside the controller, as in the yo-yo stages 2
+// and 3): the helper is ended with the controller; a helper that fails on its own fails the
+// run once the controller is done; a controller the end-of-run SIGTERM ends does not
+TEST(ExternalController, WithHelperEndsItsHelperAndReportsItsFailure) {
+  TempDir dir;
+  const std::string with = R"([")" VLAB_SOURCE_DIR R"(/examples/with_helper.sh", )";
+  // the helper notes its end in {out}; the controller answers every period until SIGTERM
+  WriteFile(dir / "ends.yaml",
+            Scenario(with + R"("sh", "-c", "trap 'echo helper ended > {out}/helper.txt; exit 0' TERM; sleep 100 & wait",
+                     "--", "{bin}/examples/joint_control", "--arm", "{pa10}", "--duration", "100"])",
+                     0.1));
+  ProcessResult r = RunVlab("run " + (dir / "ends.yaml") + " -q --out " + (dir / "a"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir / "a/helper.txt"), "helper ended\n");
+  // the helper fails at once; the controller is done (status 0) at the end of the run
+  WriteFile(dir / "fails.yaml",
+            Scenario(with + R"("sh", "-c", "exit 4", "--", "sh", "-c",
+                     "trap 'exit 0' TERM; {bin}/examples/joint_control --arm {pa10} --duration 100 & wait"])",
+                     0.1));
+  r = RunVlab("run " + (dir / "fails.yaml") + " -q --out " + (dir / "b"));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("ended with exit status 4"), std::string::npos) << r.err;
+  EXPECT_NE(ReadFile(dir / "b/controller.log").find("with_helper.sh: sh exited with status 4"), std::string::npos);
+  // no `--`: the script's usage, exit 2, and the run fails with it
+  WriteFile(dir / "usage.yaml", Scenario(with + R"("{bin}/examples/joint_control", "--arm", "{pa10}"])", 0.1));
+  r = RunVlab("run " + (dir / "usage.yaml") + " -q --out " + (dir / "c"), 60);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("ended with exit status 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("usage: with_helper.sh"), std::string::npos) << r.err;
+}
+
 TEST(ExternalController, BadCommandsAreBadInput) {
   TempDir dir;
   WriteFile(dir / "missing.yaml", Scenario(R"(["{bin}/examples/no_such_controller", "--arm", "{pa10}"])"));

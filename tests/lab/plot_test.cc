@@ -2,7 +2,8 @@
 // 10^k multiples covering the range; a plot of a known CSV is a PNG of the
 // documented size whose curve passes through the pixels the axes put its
 // points at; a missing column or file is an error naming the plot and the
-// column, and writes nothing; a log column a plot names is checked before a run.
+// column, and writes nothing; a log column a plot names is checked before a run;
+// `vlab run` writes the plot and prints its path.
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -90,6 +91,23 @@ TEST(PlotTest, UnknownLogColumnIsBadInputBeforeTheRun) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("outputs.plots: no log column 'no.such.column'"), std::string::npos) << r.err;
   EXPECT_EQ(testing::Entries(dir.path()), (std::set<std::string>{"s.yaml"}));
+}
+
+// end to end: a run writes its plots into the output folder and names each one
+TEST(PlotTest, RunWritesThePlotAndNamesIt) {
+  testing::TempDir dir;
+  std::string yaml = testing::ReadFile(VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml");
+  const std::size_t scene = yaml.find("scene: ");
+  ASSERT_NE(scene, std::string::npos);
+  yaml.replace(scene, 7, "scene: " VLAB_SOURCE_DIR "/scenes/");
+  yaml += "\noutputs:\n  plots:\n    - {file: q.png, y: [pa10.q.S1, pa10.q.E1]}\n";
+  testing::WriteFile(dir / "s.yaml", yaml);
+  const testing::ProcessResult r =
+      testing::RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("plot: " + (dir / "out/q.png") + "\n"), std::string::npos) << r.out;
+  const cv::Mat png = cv::imread(dir / "out/q.png", cv::IMREAD_UNCHANGED);
+  EXPECT_FALSE(png.empty());
 }
 
 }  // namespace
