@@ -10,13 +10,16 @@
 // lockstep yoyo device (its describe reply's clock; the lab's, vlab-yoyosim's) publishes
 // every period: the loop waits for period k's state, and status kYoyoNotSeen marks a held
 // value. Any other (vlab vision's: one state per camera frame, seq = the frame id) is read
-// without waiting: the states that have arrived, the newest sighting counting, timed by its
-// stamp (the exposure time, on the camera's clock: the lab's simulated time for its cameras); --force, a wrench device (the
+// without waiting: the states that have arrived, the newest sighting counting, timed by
+// its stamp (the exposure time, on the camera's clock: the lab's simulated time for its
+// cameras) and set against the hand's state at that time. --force, a wrench device (the
 // JR3): string force = |Fz - Fz at the first state| (the tool-side static load, and the
-// 0.44 N of the yo-yo already falling at the start, removed); --mirror, a second point
-// device (vlab-yoyosim's hand) sent the hand's MEASURED position every period, shifted by
-// (mirror start - hand start), and the yoyo device's positions are shifted back by the
-// same offset, so the yo-yo hangs from the hand in the hand's frame.
+// 0.44 N of the yo-yo already falling at the start, removed), logged; while the hand
+// accelerates it also holds the tool's inertia, so the control law, timed by the yo-yo's
+// position alone, does not use it. --mirror, a second point device (vlab-yoyosim's hand)
+// sent the hand's MEASURED position every period, shifted by (mirror start - hand start),
+// and the yoyo device's positions are shifted back by the same offset, so the yo-yo hangs
+// from the hand in the hand's frame.
 // Level: --level M is the climb height of the swing's top above the end of the string
 // with the hand at its start, z_ref = hand start z - L (L = --string, 1.0 m). A swing's
 // amplitude is its top's height above z_ref.
@@ -34,7 +37,9 @@
 // S = 0.17 m the level 0.36 m needs, within the point device's max_speed (1 m/s); kMaxStroke
 // keeps it there. Bottom: predicted from the last fresh yo-yo sample (depth below the hand d,
 // its rate, descent a = 0.928 m/s^2 of the still-hand yo-yo, bottom when d = L) plus a bias
-// learnt from the bottoms measured (extrapolated back from the first rising sample).
+// learnt from the bottoms measured: extrapolated back to d = L, on the climb's deceleration,
+// from the second rising sample in a row (a camera's rate is a difference of two frames, and
+// the first rising frame's pair may straddle the bottom).
 // Stroke: deadbeat on the model towards a_n + kDamp (level - a_n), S = (target - e^2 a_n) / G^,
 // within [0, kMaxStroke]; G^ from (a_n, S_n, a_{n+1}) by a scalar recursive least squares with
 // forgetting kForget, clamped to [kGainMin, kGainMax]. Deterministic: only state times count.
