@@ -5,6 +5,8 @@
 // column, and writes nothing; a log column a plot names is checked before a run;
 // `vlab run` writes the plot and prints its path.
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -77,17 +79,23 @@ TEST(PlotTest, MissingColumnsAndFilesAreNamed) {
   }
 }
 
+// scenes/pa10_joint_pd.yaml with one plot (a line of outputs.plots), as DIR/s.yaml;
+// runs it into DIR/out
+testing::ProcessResult RunJointPdWithPlot(const testing::TempDir& dir, const std::string& plot) {
+  std::string yaml = testing::ReadFile(VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml");
+  const std::size_t scene = yaml.find("scene: ");
+  if (scene == std::string::npos) throw std::runtime_error("pa10_joint_pd.yaml has no 'scene: '");
+  yaml.replace(scene, 7, "scene: " VLAB_SOURCE_DIR "/scenes/");
+  yaml += "\noutputs:\n  plots:\n    - " + plot + "\n";
+  testing::WriteFile(dir / "s.yaml", yaml);
+  return testing::RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+}
+
 // end to end: a plot of a log column the scenario does not have is bad input
 // (exit 2, one line naming the file and line), found before anything is written
 TEST(PlotTest, UnknownLogColumnIsBadInputBeforeTheRun) {
   testing::TempDir dir;
-  std::string yaml = testing::ReadFile(VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml");
-  const std::size_t scene = yaml.find("scene: ");
-  ASSERT_NE(scene, std::string::npos);
-  yaml.replace(scene, 7, "scene: " VLAB_SOURCE_DIR "/scenes/");
-  yaml += "\noutputs:\n  plots:\n    - {file: p.png, y: [no.such.column]}\n";
-  testing::WriteFile(dir / "s.yaml", yaml);
-  const testing::ProcessResult r = testing::RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+  const testing::ProcessResult r = RunJointPdWithPlot(dir, "{file: p.png, y: [no.such.column]}");
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("outputs.plots: no log column 'no.such.column'"), std::string::npos) << r.err;
   EXPECT_EQ(testing::Entries(dir.path()), (std::set<std::string>{"s.yaml"}));
@@ -96,14 +104,7 @@ TEST(PlotTest, UnknownLogColumnIsBadInputBeforeTheRun) {
 // end to end: a run writes its plots into the output folder and names each one
 TEST(PlotTest, RunWritesThePlotAndNamesIt) {
   testing::TempDir dir;
-  std::string yaml = testing::ReadFile(VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml");
-  const std::size_t scene = yaml.find("scene: ");
-  ASSERT_NE(scene, std::string::npos);
-  yaml.replace(scene, 7, "scene: " VLAB_SOURCE_DIR "/scenes/");
-  yaml += "\noutputs:\n  plots:\n    - {file: q.png, y: [pa10.q.S1, pa10.q.E1]}\n";
-  testing::WriteFile(dir / "s.yaml", yaml);
-  const testing::ProcessResult r =
-      testing::RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+  const testing::ProcessResult r = RunJointPdWithPlot(dir, "{file: q.png, y: [pa10.q.S1, pa10.q.E1]}");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("plot: " + (dir / "out/q.png") + "\n"), std::string::npos) << r.out;
   const cv::Mat png = cv::imread(dir / "out/q.png", cv::IMREAD_UNCHANGED);
