@@ -31,12 +31,14 @@ YAML::Node LoadYamlFile(const std::string& path) {
   }
 }
 
+std::string YamlWhere(const std::string& file, const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  return mark.line >= 0 ? file + ":" + std::to_string(mark.line + 1) : file;
+}
+
 std::string YamlError(const std::string& file, const YAML::Node& node, const std::string& path,
                       const std::string& message) {
-  std::string where = file;
-  const YAML::Mark mark = node.Mark();
-  if (mark.line >= 0) where += ":" + std::to_string(mark.line + 1);
-  return where + ": " + (path.empty() ? "" : path + ": ") + message;
+  return YamlWhere(file, node) + ": " + (path.empty() ? "" : path + ": ") + message;
 }
 
 double YamlNumber(const std::string& file, const YAML::Node& node, const std::string& path) {

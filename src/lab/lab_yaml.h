@@ -18,6 +18,9 @@ namespace vlab::lab {
 /// Parses a YAML file; throws InputError naming the file (and line on syntax errors).
 YAML::Node LoadYamlFile(const std::string& path);
 
+/// "FILE:LINE" of a node (FILE alone for a node without a line).
+std::string YamlWhere(const std::string& file, const YAML::Node& node);
+
 /// Formats "FILE:LINE: PATH: MESSAGE" for a node.
 std::string YamlError(const std::string& file, const YAML::Node& node, const std::string& path,
                       const std::string& message);
