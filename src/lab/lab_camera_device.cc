@@ -89,17 +89,25 @@ void SimCamera::Serve(const std::string& address, int port, const std::string& s
   }
 }
 
+void SimCamera::MakeRenderer() {
+  render::Renderer::Options o;
+  o.width = config_.width;
+  o.height = config_.height;
+  o.profile = render::ProfileFromName(config_.profile);
+  o.scene = scene_;
+  renderer_ = render::Renderer::Create(m_, o);
+  ideal_.width = config_.width;
+  ideal_.height = config_.height;
+}
+
+void SimCamera::Prepare(mjData* d) {
+  if (!server_ || renderer_) return;
+  MakeRenderer();
+  renderer_->Render(d, camera_, &ideal_);
+}
+
 void SimCamera::RenderFrame(std::int64_t id, double t, mjData* d, Pending* slot) {
-  if (!renderer_) {
-    render::Renderer::Options o;
-    o.width = config_.width;
-    o.height = config_.height;
-    o.profile = render::ProfileFromName(config_.profile);
-    o.scene = scene_;
-    renderer_ = render::Renderer::Create(m_, o);
-    ideal_.width = config_.width;
-    ideal_.height = config_.height;
-  }
+  if (!renderer_) MakeRenderer();
   renderer_->Render(d, camera_, &ideal_);
   model_->Apply(ideal_.pixels.data(), slot->rgb.data(), &noise_);
   slot->id = id;

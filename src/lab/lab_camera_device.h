@@ -52,6 +52,11 @@ class SimCamera {
   void PollRequests() { server_->Poll(0.0); }
   /// Closes its socket and restarts its schedule (a run without serving).
   void Unserve();
+  /// Before the run, on the thread that runs the lab: makes the renderer and
+  /// renders once from `d` (nothing is sent), so that the first frame does not
+  /// pay for the GL context and the first draw (a realtime run's first periods).
+  /// Nothing for a camera that is not served.
+  void Prepare(mjData* d);
   /// At every period end t (and t = 0), before the period's states go out:
   /// answers datagrams, sends the frames whose delivery time has come. The
   /// frames due at t are rendered here when they are delivered at t (no
@@ -74,6 +79,7 @@ class SimCamera {
   };
   SimCamera() = default;
   void RenderFrame(std::int64_t id, double t, mjData* d, Pending* slot);
+  void MakeRenderer();
   void RenderDue(mjData* d);  // the frames of due_, from the state at due_t_
 
   std::string name_, where_, scene_;

@@ -261,6 +261,7 @@ RunResult Lab::Run(const RunOptions& options) {
   if (s.controller) s.RunController(0.0, options, &replay_at, &result, controller_columns);
   emit_row(0.0);
   if (options.observe) options.observe(0.0, m, d);
+  for (auto& c : s.cameras) c->Prepare(d);
   for (auto& c : s.cameras) c->Observe(0.0, d);
   publish(0);
   render_after_publish(0.0);
