@@ -42,7 +42,7 @@ class SimCamera {
   const sensors::CameraModel& model() const { return *model_; }
 
   /// Binds its socket (address, port) and makes the describe reply; the
-  /// renderer is made on the first frame, on the thread that runs the lab.
+  /// renderer is made by Prepare (or the first frame), on the thread that runs the lab.
   /// Throws InputError naming the device when the port cannot be bound.
   void Serve(const std::string& address, int port, const std::string& server, const std::string& clock);
   bool served() const { return server_ != nullptr; }
