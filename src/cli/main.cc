@@ -19,7 +19,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("vlab ") + VLAB_VERSION);
 
   vlab::cli::RunArgs run;
-  CLI::App* run_cmd = app.add_subcommand("run", "Run a scenario headless; write out/NAME/log.csv and summary.json");
+  CLI::App* run_cmd = app.add_subcommand(
+      "run", "Run a scenario headless; write out/NAME/log.csv, summary.json and the scenario's outputs "
+             "(the plots' paths are printed)");
   run_cmd->add_option("scenario", run.scenario, "Scenario file (YAML); the .yaml extension may be left out")
       ->required();
   run_cmd->add_option("--out", run.out_dir, "Output folder (default: out/<scenario name>)");
