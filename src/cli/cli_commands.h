@@ -9,6 +9,11 @@
 
 #include <CLI/CLI.hpp>
 
+namespace vlab::lab {
+struct Scenario;
+struct RunResult;
+}  // namespace vlab::lab
+
 namespace vlab::cli {
 
 struct RunArgs {
@@ -60,6 +65,10 @@ Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.
 int WithErrorReport(const std::function<int()>& body);
+
+/// After a run into out_dir: "plot: PATH" for each plot written, "plot skipped: why"
+/// for each one the run skipped (stdout).
+void PrintPlots(const lab::Scenario& scenario, const std::string& out_dir, const lab::RunResult& result);
 
 /// Progress bar on stderr, drawn only on a terminal and only once a run has
 /// lasted about a second.

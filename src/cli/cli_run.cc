@@ -51,6 +51,14 @@ void ProgressBar::Finish() {
   drawn_ = false;
 }
 
+void PrintPlots(const lab::Scenario& scenario, const std::string& out_dir, const lab::RunResult& result) {
+  for (const lab::PlotConfig& plot : scenario.outputs.plots) {
+    const std::string file = out_dir + "/" + plot.file;
+    if (std::filesystem::exists(file)) std::printf("plot: %s\n", file.c_str());
+  }
+  for (const std::string& why : result.plots_skipped) std::printf("plot skipped: %s\n", why.c_str());
+}
+
 int WithErrorReport(const std::function<int()>& body) {
   try {
     return body();
@@ -95,10 +103,7 @@ int RunCommand(const RunArgs& args) {
     const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
     std::printf("%s: %s, %.2f s simulated in %.2f s (%.0fx real time); output in %s/\n", scenario.name.c_str(),
                 r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, rtf, out_dir.c_str());
-    for (const lab::PlotConfig& plot : scenario.outputs.plots) {
-      const std::string file = out_dir + "/" + plot.file;
-      if (std::filesystem::exists(file)) std::printf("plot: %s\n", file.c_str());
-    }
+    PrintPlots(scenario, out_dir, r);
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;
   });

@@ -81,6 +81,7 @@ int ServeCommand(const ServeArgs& args) {
     }
     std::printf("%s: %s, %.2f s simulated in %.2f s, clock %s; output in %s/\n", scenario.name.c_str(),
                 r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, r.clock.c_str(), out_dir.c_str());
+    PrintPlots(scenario, out_dir, r);
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;
   });

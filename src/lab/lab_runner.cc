@@ -359,7 +359,22 @@ RunResult Lab::Run(const RunOptions& options) {
   if (out) {
     if (log) log->Close();
     if (images) images->Finish();
-    for (const PlotConfig& plot : s.scenario.outputs.plots) WritePlot(out->File(""), plot);
+    // a plot that cannot be drawn fails the run, and the rest is written; a plot of a CSV
+    // that an external controller writes into {out} is skipped where the lab did not start
+    // the controller (vlab serve: one started by hand has no {out}) and the file is not there
+    for (const PlotConfig& plot : s.scenario.outputs.plots) {
+      if (!controller && plot.csv != "log.csv" && !std::filesystem::exists(out->File(plot.csv))) {
+        result.plots_skipped.push_back(plot.file + ": no " + plot.csv +
+                                       " (written by an external controller that vlab run starts)");
+        continue;
+      }
+      try {
+        WritePlot(out->File(""), plot);
+      } catch (const std::runtime_error& e) {
+        if (result.failure.empty()) result.failure = e.what();
+        result.exit_code = 1;
+      }
+    }
     result.total_wall_s = Seconds(t_start, WallClock::now());
     nlohmann::json summary_json = SummaryJson(s.scenario, m, result);
     if (images) summary_json["images"] = images->Summary();

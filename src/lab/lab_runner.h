@@ -79,6 +79,9 @@ struct RunResult {
   ClockStats clock_stats;
   std::vector<ServedDevice> served;  ///< served devices with their counters (vlab serve)
   std::vector<double> latencies_s;   ///< command arrival-to-apply latencies (vlab serve)
+  /// Plots not drawn, each "FILE: why": a CSV an external controller writes, where the lab
+  /// did not start the controller (vlab serve) and nobody wrote it.
+  std::vector<std::string> plots_skipped;
   /// The external controller `vlab run` started: program and how it ended ("" when none).
   struct {
     std::string program;

@@ -85,6 +85,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                       {"program", r.controller.program},
                       {"outcome", r.controller.outcome}}},
       {"warnings", warnings},
+      {"plots_skipped", r.plots_skipped},
       {"versions",
        {{"vlab", VLAB_VERSION}, {"mujoco", MujocoVersion()}, {"compiler", __VERSION__},
         {"eigen", std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +

@@ -6,6 +6,8 @@
 // last line (the output folder says why); a program that cannot run and an unknown placeholder are bad
 // input (exit 2, nothing written). Placeholder expansion itself is checked
 // directly.
+#include <filesystem>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -95,6 +97,36 @@ TEST(ExternalController, FilesWrittenIntoOutArriveWithTheLog) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ReadFile(dir / "out/note.txt"), "from the controller\n");
   EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"s.yaml", "out"}));  // nothing left beside it
+}
+
+// a plot of a CSV the controller writes into {out}: drawn under vlab run; a controller that
+// did not write it fails the run, with everything else written; under vlab serve (which
+// starts no controller) the plot is skipped and said so
+TEST(ExternalController, PlotsOfItsCsv) {
+  TempDir dir;
+  const std::string plot = "\noutputs:\n  plots:\n    - {file: c.png, csv: c.csv, x: t, y: [v]}\n";
+  WriteFile(dir / "writes.yaml",
+            Scenario(R"(["sh", "-c", "printf 't,v\\n0,1\\n1,2\\n' > {out}/c.csv"])", 0.1) + plot);
+  ProcessResult r = RunVlab("run " + (dir / "writes.yaml") + " -q --out " + (dir / "a"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("plot: " + (dir / "a/c.png")), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "a/c.png"));
+
+  WriteFile(dir / "silent.yaml", Scenario(R"(["sh", "-c", "true"])", 0.1) + plot);
+  r = RunVlab("run " + (dir / "silent.yaml") + " -q --out " + (dir / "b"));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("c.csv"), std::string::npos) << r.err;
+  const auto summary = nlohmann::json::parse(ReadFile(dir / "b/summary.json"));
+  EXPECT_EQ(summary["result"], "fail");
+  EXPECT_NE(summary["failure"].get<std::string>().find("c.png"), std::string::npos) << summary["failure"];
+  EXPECT_TRUE(std::filesystem::exists(dir / "b/log.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "b/c.png"));
+
+  r = RunVlab("serve " + (dir / "silent.yaml") + " --clock fast --out " + (dir / "c"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("plot skipped: c.png: no c.csv"), std::string::npos) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(dir / "c/summary.json"))["plots_skipped"].size(), 1u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "c/log.csv"));
 }
 
 // a program that gets the end-of-run SIGTERM and exits with status 1 (its own
