@@ -77,7 +77,7 @@ constexpr double kE2 = 0.657;        // e^2: a free yo-yo keeps this share of it
 constexpr double kUp_s = 0.30, kLead = 0.03, kPre_s = 0.4, kRet_s = 0.6, kMaxStroke = 0.19, kLowFrac = 0.5;
 constexpr double kGain0 = 0.75, kGainMin = 0.2, kGainMax = 5.0, kP0 = 100.0, kForget = 0.9, kDamp = 0.8;
 constexpr double kTolerance = 0.10;  // of the level
-constexpr std::size_t kPast = 50;    // periods of the hand kept: a sample's age is at most a few
+constexpr std::size_t kPast = 50;    // periods of the hand kept (0.5 s): a camera sample is a few periods old
 
 struct Address { std::string host; int port = 0; };
 struct Options {
