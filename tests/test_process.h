@@ -1,7 +1,7 @@
 // Runs one of the project's programs for a test: fork/exec from the source root
 // with its stdout on a pipe, wait for its start line, then wait for it to end
 // or stop it with SIGINT, and collect what it printed. Shared by the tests of
-// vlab-kinsim and vlab-yoyosim.
+// vlab-kinsim, vlab-yoyosim and vlab vision.
 #pragma once
 
 #include <poll.h>
@@ -19,7 +19,7 @@ class TestProcess {
  public:
   /// Starts `args` (args[0]: the executable's path) from VLAB_SOURCE_DIR and
   /// waits up to timeout_s for its first line of output (start_line(): empty
-  /// when none came).
+  /// when none came); timeout_s 0: does not wait (WaitForStartLine later).
   explicit TestProcess(std::vector<std::string> args, double timeout_s = 20) {
     int fds[2];
     if (::pipe(fds) != 0) return;
@@ -37,12 +37,7 @@ class TestProcess {
     }
     ::close(fds[1]);
     out_fd_ = fds[0];
-    if (pid_ < 0) return;
-    const auto deadline = Deadline(timeout_s);
-    while (output_.find('\n') == std::string::npos && ReadSome(deadline)) {
-    }
-    const std::size_t newline = output_.find('\n');
-    if (newline != std::string::npos) start_line_ = output_.substr(0, newline);
+    if (timeout_s > 0) WaitForStartLine(timeout_s);
   }
   ~TestProcess() {
     if (pid_ > 0 && !ended_) {
@@ -55,6 +50,17 @@ class TestProcess {
   TestProcess& operator=(const TestProcess&) = delete;
 
   const std::string& start_line() const { return start_line_; }
+  /// Waits up to timeout_s for its first line of output; the start line (empty when none
+  /// came). For a program that prints it only once the test has done something.
+  const std::string& WaitForStartLine(double timeout_s) {
+    if (pid_ <= 0 || !start_line_.empty()) return start_line_;
+    const auto deadline = Deadline(timeout_s);
+    while (output_.find('\n') == std::string::npos && ReadSome(deadline)) {
+    }
+    const std::size_t newline = output_.find('\n');
+    if (newline != std::string::npos) start_line_ = output_.substr(0, newline);
+    return start_line_;
+  }
   /// Everything it printed to stdout so far.
   const std::string& output() const { return output_; }
 

@@ -5,7 +5,6 @@
 // checks the poses it serves against MuJoCo's ground truth, in the camera and
 // in the world frame, frame by frame (seq = frame id, time = exposure time).
 // Also: bad options exit 2 with one line, a missing camera fails cleanly.
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -17,6 +16,7 @@
 #include "render/renderer.h"
 #include "sensors/sensor_random.h"
 #include "vision/vision_detector.h"
+#include "test_process.h"
 #include "vision_test_scene.h"
 
 namespace vlab::testing {
@@ -25,34 +25,6 @@ namespace {
 constexpr int kFrames = 24;
 
 double Uniform(sensors::Xoshiro256pp& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
-
-// the vision program as a child process, its stdout readable line by line
-class VisionProcess {
- public:
-  explicit VisionProcess(const std::string& args) {
-    const std::string cmd = "'" VLAB_BINARY_DIR "/vlab' vision " + args + " 2>&1";
-    pipe_ = ::popen(cmd.c_str(), "r");
-  }
-  ~VisionProcess() {
-    if (pipe_ != nullptr) Close();
-  }
-  std::string ReadLine() {
-    char line[1024];
-    return pipe_ != nullptr && std::fgets(line, sizeof(line), pipe_) != nullptr ? std::string(line) : std::string();
-  }
-  /// Waits for the process; its exit code, and the rest of its output in *rest.
-  int Close(std::string* rest = nullptr) {
-    std::string out;
-    for (std::string line = ReadLine(); !line.empty(); line = ReadLine()) out += line;
-    if (rest != nullptr) *rest = out;
-    const int status = ::pclose(pipe_);
-    pipe_ = nullptr;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-
- private:
-  FILE* pipe_ = nullptr;
-};
 
 class VisionProgramTest : public CubeCameraScene {};
 
@@ -80,11 +52,13 @@ TEST_F(VisionProgramTest, ServesMarkerPosesOfACameraStreamInCameraAndWorldFrames
   pose.q_WC = Eigen::Quaterniond(X_WC.linear());
 
   // the vision program knows cube A's faces 0-2 from the command line, 3-5 come over UDP
-  VisionProcess vision("--camera 127.0.0.1:" + std::to_string(camera->port()) + " --port 0 --name eyes" +
-                       " --marker 4X4_50:0-2:0.025 --frames " + std::to_string(kFrames) + " --duration 20");
+  TestProcess vision({VLAB_BINARY_DIR "/vlab", "vision", "--camera", "127.0.0.1:" + std::to_string(camera->port()),
+                      "--port", "0", "--name", "eyes", "--marker", "4X4_50:0-2:0.025", "--frames",
+                      std::to_string(kFrames), "--duration", "20"},
+                     0);  // its start line comes once it has the camera: below
   for (int i = 0; i < 5000 && camera->subscribers() == 0; ++i) camera->Poll(0.002);
   ASSERT_EQ(camera->subscribers(), 1) << "vision did not subscribe to the camera";
-  const std::string start = vision.ReadLine();
+  const std::string start = vision.WaitForStartLine(20);
   const std::size_t at = start.find("127.0.0.1:");
   ASSERT_NE(at, std::string::npos) << start;
   const int port = std::stoi(start.substr(at + 10));
@@ -151,8 +125,8 @@ TEST_F(VisionProgramTest, ServesMarkerPosesOfACameraStreamInCameraAndWorldFrames
   EXPECT_GE(valid, kFrames);  // two faces or so per frame, most of them valid
   EXPECT_EQ(world_checked, valid);
   markers.reset();
-  std::string rest;
-  EXPECT_EQ(vision.Close(&rest), 0) << rest;
+  EXPECT_EQ(vision.Wait(), 0) << vision.output();
+  const std::string& rest = vision.output();
   EXPECT_NE(rest.find("vlab vision: " + std::to_string(kFrames) + " frames"), std::string::npos) << rest;
 }
 

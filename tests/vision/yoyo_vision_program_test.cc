@@ -5,7 +5,6 @@
 // bridge::Device client, as a controller reads the lab's yoyo device: one
 // state per frame (seq = frame id, time = exposure time), z against MuJoCo's
 // ground truth, kYoyoNotSeen with the last values on frames without the yo-yo.
-#include <sys/wait.h>
 
 #include <cstdio>
 #include <optional>
@@ -15,6 +14,7 @@
 #include "bridge/bridge_camera_server.h"
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_yoyo.h"
+#include "test_process.h"
 #include "yoyo_test_scene.h"
 
 namespace vlab::testing {
@@ -22,33 +22,6 @@ namespace {
 
 constexpr int kFrames = 16;
 constexpr std::int64_t kFirstId = 500;
-
-// the vision program as a child process, its stdout readable line by line
-class VisionProcess {
- public:
-  explicit VisionProcess(const std::string& args) {
-    const std::string cmd = "'" VLAB_BINARY_DIR "/vlab' vision " + args + " 2>&1";
-    pipe_ = ::popen(cmd.c_str(), "r");
-  }
-  ~VisionProcess() {
-    if (pipe_ != nullptr) Close();
-  }
-  std::string ReadLine() {
-    char line[1024];
-    return pipe_ != nullptr && std::fgets(line, sizeof(line), pipe_) != nullptr ? std::string(line) : std::string();
-  }
-  int Close(std::string* rest = nullptr) {
-    std::string out;
-    for (std::string line = ReadLine(); !line.empty(); line = ReadLine()) out += line;
-    if (rest != nullptr) *rest = out;
-    const int status = ::pclose(pipe_);
-    pipe_ = nullptr;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-
- private:
-  FILE* pipe_ = nullptr;
-};
 
 class YoyoVisionProgramTest : public YoyoCameraScene {};
 
@@ -71,12 +44,13 @@ TEST_F(YoyoVisionProgramTest, ServesTheTrackedYoyoAsAYoyoDevice) {
   pose.p_WC = X_WC.translation();
   pose.q_WC = Eigen::Quaterniond(X_WC.linear());
 
-  VisionProcess vision("--camera 127.0.0.1:" + std::to_string(camera->port()) +
-                       " --yoyo-port 0 --blob-color red --line 0.725,0 --frames " + std::to_string(kFrames) +
-                       " --duration 30");
+  TestProcess vision({VLAB_BINARY_DIR "/vlab", "vision", "--camera", "127.0.0.1:" + std::to_string(camera->port()),
+                      "--yoyo-port", "0", "--blob-color", "red", "--line", "0.725,0", "--frames",
+                      std::to_string(kFrames), "--duration", "30"},
+                     0);  // its start line comes once it has the camera: below
   for (int i = 0; i < 5000 && camera->subscribers() == 0; ++i) camera->Poll(0.002);
   ASSERT_EQ(camera->subscribers(), 1) << "vision did not subscribe to the camera";
-  const std::string start = vision.ReadLine();
+  const std::string start = vision.WaitForStartLine(20);
   const std::size_t at = start.find("127.0.0.1:");
   ASSERT_NE(at, std::string::npos) << start;
   EXPECT_NE(start.find("(kind yoyo)"), std::string::npos) << start;
@@ -137,8 +111,8 @@ TEST_F(YoyoVisionProgramTest, ServesTheTrackedYoyoAsAYoyoDevice) {
   std::printf("vlab vision --yoyo-port over UDP: %d JPEG frames, %d seen (worst z error %.2f mm), %d not seen\n",
               kFrames, seen, worst_mm, not_seen);
   yoyo.reset();
-  std::string rest;
-  EXPECT_EQ(vision.Close(&rest), 0) << rest;
+  EXPECT_EQ(vision.Wait(), 0) << vision.output();
+  const std::string& rest = vision.output();
   EXPECT_NE(rest.find("vlab vision: " + std::to_string(kFrames) + " frames"), std::string::npos) << rest;
   EXPECT_NE(rest.find("yo-yo seen in " + std::to_string(seen) + ", no blob " + std::to_string(not_seen)),
             std::string::npos)
