@@ -98,6 +98,31 @@ void ReportYoyo(const vision::YoyoVisionProgram& p, double elapsed_s) {
   std::fflush(stdout);
 }
 
+// makes the program (it connects to its camera and binds its device) and takes SIGINT and
+// SIGTERM over; a bad address or a port in use is the options' fault (exit 2)
+template <typename Program, typename Config>
+std::unique_ptr<Program> StartProgram(const Config& config) {
+  std::unique_ptr<Program> program;
+  try {
+    program = Program::Create(config);
+  } catch (const bridge::NetworkError& e) {
+    throw lab::InputError(e.what());
+  }
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  return program;
+}
+
+// the start line's camera part: "camera 'NAME' at ADDR:PORT, WxH, fx .. cy .. px"
+template <typename Program>
+std::string CameraText(const Program& program) {
+  const vision::CameraModel& m = program.camera_model();
+  char text[160];
+  std::snprintf(text, sizeof(text), ", %dx%d, fx %.1f fy %.1f cx %.1f cy %.1f px", m.width, m.height, m.fx, m.fy, m.cx,
+                m.cy);
+  return program.camera().Label() + text;
+}
+
 // processes frames until SIGINT/SIGTERM, --frames or --duration; a counter line
 // every 5 s (unless --quiet) and at the end
 template <typename Program>
@@ -127,21 +152,11 @@ int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
   config.server.name = a.name.empty() ? "yoyo_vision" : a.name;
   config.server.bind_address = a.bind;
   config.server.port = a.yoyo_port;
-  std::unique_ptr<vision::YoyoVisionProgram> program;
-  try {
-    program = vision::YoyoVisionProgram::Create(config);
-  } catch (const bridge::NetworkError& e) {
-    throw lab::InputError(e.what());  // a bad address or a port in use: the options' fault
-  }
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  const vision::CameraModel& m = program->camera_model();
+  const auto program = StartProgram<vision::YoyoVisionProgram>(config);
   if (!a.quiet) {
-    std::printf(
-        "vlab vision: yoyo device '%s' on %s:%d (kind yoyo), %s blob on the line x %.3f y %.3f m; %s, "
-        "%dx%d, fx %.1f fy %.1f cx %.1f cy %.1f px\n",
-        config.server.name.c_str(), a.bind.c_str(), program->server().local_port(), config.blob.color.c_str(),
-        config.line.x, config.line.y, program->camera().Label().c_str(), m.width, m.height, m.fx, m.fy, m.cx, m.cy);
+    std::printf("vlab vision: yoyo device '%s' on %s:%d (kind yoyo), %s blob on the line x %.3f y %.3f m; %s\n",
+                config.server.name.c_str(), a.bind.c_str(), program->server().local_port(), config.blob.color.c_str(),
+                config.line.x, config.line.y, CameraText(*program).c_str());
     std::fflush(stdout);
   }
   return RunUntilDone(*program, a, ReportYoyo);
@@ -173,21 +188,11 @@ int Vision(const VisionArgs& a) {
   config.detector.max_reprojection_error_px = a.max_error_px;
   config.detector.min_alternative_error_px = a.ambiguity_margin_px;
 
-  std::unique_ptr<vision::VisionProgram> program;
-  try {
-    program = vision::VisionProgram::Create(config);
-  } catch (const bridge::NetworkError& e) {
-    throw lab::InputError(e.what());  // a bad address or a port in use: the options' fault
-  }
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  const vision::CameraModel& m = program->camera_model();
+  const auto program = StartProgram<vision::VisionProgram>(config);
   if (!a.quiet) {
-    std::printf(
-        "vlab vision: markers device '%s' on %s:%d (kind markers), %zu markers described; %s, "
-        "%dx%d, fx %.1f fy %.1f cx %.1f cy %.1f px\n",
-        a.name.c_str(), a.bind.c_str(), program->server().local_port(), program->server().table().size(),
-        program->camera().Label().c_str(), m.width, m.height, m.fx, m.fy, m.cx, m.cy);
+    std::printf("vlab vision: markers device '%s' on %s:%d (kind markers), %zu markers described; %s\n",
+                config.server.name.c_str(), a.bind.c_str(), program->server().local_port(),
+                program->server().table().size(), CameraText(*program).c_str());
     std::fflush(stdout);
   }
   return RunUntilDone(*program, a, Report);
