@@ -3,7 +3,6 @@
 #include <sys/socket.h>
 
 #include <algorithm>
-#include <cctype>
 #include <sstream>
 
 #include <boost/asio/ip/udp.hpp>
@@ -33,33 +32,6 @@ std::string Number(double v) {
   return out.str();
 }
 
-// numeric address first, then a host name lookup (IPv4 preferred)
-Endpoint Resolve(const std::string& address, int port) {
-  if (port < 1 || port > 65535) throw NetworkError("port " + std::to_string(port) + " out of range 1..65535");
-  try {
-    return UdpSocket::MakeEndpoint(address, port);
-  } catch (const NetworkError&) {
-  }
-  const bool name_chars = !address.empty() && std::all_of(address.begin(), address.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.';
-  });
-  const bool numeric = std::all_of(address.begin(), address.end(), [](char c) {
-    return std::isdigit(static_cast<unsigned char>(c)) || c == '.';
-  });
-  if (!name_chars || numeric) throw NetworkError("address '" + address + "' is neither an IP address nor a host name");
-  boost::asio::io_context io;
-  boost::asio::ip::udp::resolver resolver(io);
-  boost::system::error_code ec;
-  const auto results = resolver.resolve(address, std::to_string(port), ec);
-  if (ec || results.empty()) {
-    throw NetworkError("address '" + address + "': " + (ec ? ec.message() : std::string("no such host")));
-  }
-  for (const auto& r : results) {
-    if (r.endpoint().address().is_v4()) return r.endpoint();
-  }
-  return results.begin()->endpoint();
-}
-
 double Seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 std::chrono::steady_clock::time_point After(std::chrono::steady_clock::time_point t, double s) {
@@ -78,7 +50,7 @@ CameraClient CameraClient::Connect(const std::string& address, int port, const C
 
 CameraClient::CameraClient(const std::string& address, int port, const CameraClientOptions& options)
     : options_(options),
-      device_(Resolve(address, port)),
+      device_(UdpSocket::Resolve(address, port)),
       impl_(new Impl(options.assembler)),
       buffer_(kBufferBytes),
       start_(Clock::now()) {

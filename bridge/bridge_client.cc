@@ -1,7 +1,6 @@
 #include "bridge/bridge_client.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <ctime>
@@ -32,34 +31,6 @@ Clock::time_point After(Clock::time_point t, double s) {
   return t + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s > 0 ? s : 0));
 }
 
-// numeric address first, then a host name lookup (IPv4 preferred)
-Endpoint Resolve(const std::string& address, int port) {
-  if (port < 1 || port > 65535) throw NetworkError("port " + std::to_string(port) + " out of range 1..65535");
-  try {
-    return UdpSocket::MakeEndpoint(address, port);
-  } catch (const NetworkError&) {
-  }
-  // a host name: letters, digits, '-' and '.', not all digits (no DNS query for "300.1.2.3")
-  const bool name_chars = !address.empty() && std::all_of(address.begin(), address.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.';
-  });
-  const bool numeric = std::all_of(address.begin(), address.end(), [](char c) {
-    return std::isdigit(static_cast<unsigned char>(c)) || c == '.';
-  });
-  if (!name_chars || numeric) throw NetworkError("address '" + address + "' is neither an IP address nor a host name");
-  boost::asio::io_context io;
-  boost::asio::ip::udp::resolver resolver(io);
-  boost::system::error_code ec;
-  const auto results = resolver.resolve(address, std::to_string(port), ec);
-  if (ec || results.empty()) {
-    throw NetworkError("address '" + address + "': " + (ec ? ec.message() : std::string("no such host")));
-  }
-  for (const auto& r : results) {
-    if (r.endpoint().address().is_v4()) return r.endpoint();
-  }
-  return results.begin()->endpoint();
-}
-
 // a json array of numbers with `n` entries, or empty; throws ProtocolError
 std::vector<double> Limits(const nlohmann::json& limits, const char* field, std::size_t n, const std::string& label) {
   if (!limits.is_object() || !limits.contains(field)) return {};
@@ -83,7 +54,7 @@ DeviceClient::~DeviceClient() = default;
 
 DeviceClient::DeviceClient(DeviceKind kind, const std::string& address, int port, double timeout_s,
                            const std::string& bind_address)
-    : kind_(kind), device_(Resolve(address, port)), start_(Clock::now()), buffer_(kBufferBytes) {
+    : kind_(kind), device_(UdpSocket::Resolve(address, port)), start_(Clock::now()), buffer_(kBufferBytes) {
   payload_.reserve(kMaxPacketValues);
   // an IPv6 device needs an IPv6 socket
   const bool any_v4 = bind_address == "0.0.0.0";

@@ -3,10 +3,13 @@
 #include <poll.h>
 #include <sys/socket.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 
 #include <boost/asio/ip/address.hpp>
+#include <boost/asio/ip/udp.hpp>
 
 #include "bridge/bridge_errors.h"
 
@@ -51,6 +54,33 @@ Endpoint UdpSocket::MakeEndpoint(const std::string& address, int port) {
   if (ec) throw NetworkError("address '" + address + "': " + ec.message());
   if (port < 0 || port > 65535) throw NetworkError("port " + std::to_string(port) + " out of range 0..65535");
   return Endpoint(a, static_cast<unsigned short>(port));
+}
+
+Endpoint UdpSocket::Resolve(const std::string& address, int port) {
+  if (port < 1 || port > 65535) throw NetworkError("port " + std::to_string(port) + " out of range 1..65535");
+  try {
+    return MakeEndpoint(address, port);
+  } catch (const NetworkError&) {
+  }
+  // a host name: letters, digits, '-' and '.', not all digits (no DNS query for "300.1.2.3")
+  const bool name_chars = !address.empty() && std::all_of(address.begin(), address.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.';
+  });
+  const bool numeric = std::all_of(address.begin(), address.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c)) || c == '.';
+  });
+  if (!name_chars || numeric) throw NetworkError("address '" + address + "' is neither an IP address nor a host name");
+  asio::io_context io;
+  asio::ip::udp::resolver resolver(io);
+  boost::system::error_code ec;
+  const auto results = resolver.resolve(address, std::to_string(port), ec);
+  if (ec || results.empty()) {
+    throw NetworkError("address '" + address + "': " + (ec ? ec.message() : std::string("no such host")));
+  }
+  for (const auto& r : results) {
+    if (r.endpoint().address().is_v4()) return r.endpoint();
+  }
+  return results.begin()->endpoint();
 }
 
 std::unique_ptr<UdpSocket> UdpSocket::Bind(const std::string& address, int port) {

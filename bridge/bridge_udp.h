@@ -31,6 +31,9 @@ class UdpSocket {
   static std::unique_ptr<UdpSocket> Bind(const std::string& address, int port);
   /// Resolves a numeric IPv4/IPv6 address and port; throws NetworkError.
   static Endpoint MakeEndpoint(const std::string& address, int port);
+  /// A device's address: a numeric address first, then a host name lookup (IPv4
+  /// preferred); port 1..65535. Throws NetworkError naming the address.
+  static Endpoint Resolve(const std::string& address, int port);
   ~UdpSocket();
 
   int local_port() const;
