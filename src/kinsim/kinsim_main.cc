@@ -2,7 +2,6 @@
 // interface. See kinsim_server.h and `vlab-kinsim --help`.
 // Exit codes: 0 done (duration over, or SIGINT/SIGTERM); 2 bad input (scene,
 // joint, option, address or port in use); 1 anything else.
-#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -15,22 +14,9 @@
 #include "kinsim/kinsim_scene.h"
 #include "kinsim/kinsim_server.h"
 #include "lab/lab_errors.h"
+#include "lab/lab_signals.h"
 
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-
-void OnSignal(int) { g_stop = 1; }
-
-// no SA_RESTART: the signal interrupts the period's sleep, so the loop ends at once
-void InstallSignalHandlers() {
-  struct sigaction action {};
-  action.sa_handler = OnSignal;
-  sigemptyset(&action.sa_mask);
-  action.sa_flags = 0;
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-}
 
 struct Args {
   std::string name = "pa10";
@@ -100,10 +86,10 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  InstallSignalHandlers();
+  vlab::lab::InstallStopSignals();
   std::printf("%s\n", server->StartLine().c_str());
   std::fflush(stdout);
-  server->Run(&g_stop);
+  server->Run(&vlab::lab::g_stop_requested);
   std::printf("%s\n", server->ReportText().c_str());
   std::fflush(stdout);
   return 0;

@@ -4,7 +4,6 @@
 // `vlab-yoyosim --help`.
 // Exit codes: 0 done (duration over, or SIGINT/SIGTERM); 1 the simulation
 // diverged or another failure; 2 bad input (option, scene, address or port in use).
-#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <memory>
@@ -14,24 +13,11 @@
 
 #include "bridge/bridge_errors.h"
 #include "lab/lab_errors.h"
+#include "lab/lab_signals.h"
 #include "yoyosim/yoyosim.h"
 #include "yoyosim/yoyosim_server.h"
 
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-
-void OnSignal(int) { g_stop = 1; }
-
-// no SA_RESTART: the signal interrupts a wait, so the loop ends at once
-void InstallSignalHandlers() {
-  struct sigaction action {};
-  action.sa_handler = OnSignal;
-  sigemptyset(&action.sa_mask);
-  action.sa_flags = 0;
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-}
 
 int Fail(const std::string& what) {
   std::fprintf(stderr, "vlab-yoyosim: error: %s\n", what.c_str());
@@ -87,10 +73,10 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  InstallSignalHandlers();
+  vlab::lab::InstallStopSignals();
   std::printf("%s\n", server->StartLine().c_str());
   std::fflush(stdout);
-  const int result = server->Run(&g_stop);
+  const int result = server->Run(&vlab::lab::g_stop_requested);
   if (!server_config.quiet) std::printf("%s\n", server->ReportText().c_str());
   std::fflush(stdout);
   return result;
