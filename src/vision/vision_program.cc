@@ -17,20 +17,8 @@ using nlohmann::json;
 // what the markers device's describe reply says about its camera and detector
 json DescribeExtra(const bridge::CameraClient& camera, const CameraModel& m, const DetectorConfig& d,
                    const std::string& address, int port) {
-  const json& cd = camera.describe();
   return {{"rates", {{"control_hz", camera.fps()}, {"frame_hz", camera.fps()}}},
-          {"camera",
-           {{"name", camera.name()},
-            {"address", address},
-            {"port", port},
-            {"server", cd.value("server", json())},
-            {"width", m.width},
-            {"height", m.height},
-            {"fps", camera.fps()},
-            {"intrinsics",
-             {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
-            {"distortion", camera.calibration().distortion},
-            {"pose", cd.value("pose", json())}}},
+          {"camera", CameraDescribe(camera, m, address, port)},
           {"detector",
            {{"method",
              "OpenCV aruco detectMarkers, CORNER_REFINE_APRILTAG, corners - 0.5 px, outline refined "
@@ -58,6 +46,21 @@ long WholeNumber(const std::string& text, const std::string& what) {
 }
 
 }  // namespace
+
+json CameraDescribe(const bridge::CameraClient& camera, const CameraModel& m, const std::string& address, int port) {
+  const json& cd = camera.describe();
+  return {{"name", camera.name()},
+          {"address", address},
+          {"port", port},
+          {"server", cd.value("server", json())},
+          {"width", m.width},
+          {"height", m.height},
+          {"fps", camera.fps()},
+          {"intrinsics",
+           {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
+          {"distortion", camera.calibration().distortion},
+          {"pose", cd.value("pose", json())}};
+}
 
 bool ReceiveFrame(bridge::CameraClient& camera, double wait_s, const CameraModel& model,
                   bridge::CameraClient::Frame* frame, long* skipped, long* wrong_size) {

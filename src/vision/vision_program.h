@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_markers.h"
 #include "vision/vision_detector.h"
@@ -92,6 +94,11 @@ CameraModel CameraModelOf(const bridge::CameraClient& camera);
 /// *wrong_size is counted); *skipped counts the frames passed over for it.
 bool ReceiveFrame(bridge::CameraClient& camera, double wait_s, const CameraModel& model,
                   bridge::CameraClient::Frame* frame, long* skipped, long* wrong_size);
+
+/// What a vision device's describe reply says of the camera it reads (its
+/// "camera" entry): name, endpoint, server, size, rate, intrinsics, distortion, pose.
+nlohmann::json CameraDescribe(const bridge::CameraClient& camera, const CameraModel& model,
+                              const std::string& address, int port);
 
 /// The camera's pose in the world that travels with a frame (nullopt: unknown).
 std::optional<Eigen::Isometry3d> CameraPoseOf(const bridge::CameraClient::Frame& frame);

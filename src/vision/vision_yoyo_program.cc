@@ -13,20 +13,8 @@ using nlohmann::json;
 
 // what the yoyo device's describe reply says about its camera and tracker
 json DescribeExtra(const bridge::CameraClient& camera, const CameraModel& m, const YoyoVisionConfig& config) {
-  const json& cd = camera.describe();
   const BlobConfig& b = config.blob;
-  return {{"camera",
-           {{"name", camera.name()},
-            {"address", config.camera_address},
-            {"port", config.camera_port},
-            {"server", cd.value("server", json())},
-            {"width", m.width},
-            {"height", m.height},
-            {"fps", camera.fps()},
-            {"intrinsics",
-             {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
-            {"distortion", camera.calibration().distortion},
-            {"pose", cd.value("pose", json())}}},
+  return {{"camera", CameraDescribe(camera, m, config.camera_address, config.camera_port)},
           {"tracker",
            {{"method",
              "colour blob: HSV threshold, largest outer contour filled (holes ignored), its centroid's ray "
