@@ -7,7 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "render/render_context.h"
 
 namespace vlab::render {
@@ -26,7 +26,7 @@ std::atomic<bool> g_logged{false};
 Profile ProfileFromName(const std::string& name) {
   if (name == "fast") return Profile::kFast;
   if (name == "quality") return Profile::kQuality;
-  throw lab::InputError("unknown render profile '" + name + "' (known: fast, quality)");
+  throw vlab::InputError("unknown render profile '" + name + "' (known: fast, quality)");
 }
 
 const char* ProfileName(Profile profile) { return profile == Profile::kFast ? "fast" : "quality"; }
@@ -54,7 +54,7 @@ int CameraId(const mjModel* m, const std::string& name) {
     const char* n = mj_id2name(m, mjOBJ_CAMERA, i);
     known += (i ? ", " : "") + std::string(n ? n : "(unnamed #" + std::to_string(i) + ")");
   }
-  throw lab::InputError("no camera '" + name + "' in the scene (" +
+  throw vlab::InputError("no camera '" + name + "' in the scene (" +
                         (known.empty() ? std::string("it has no cameras") : "cameras: " + known) + ")");
 }
 
@@ -130,7 +130,7 @@ std::unique_ptr<Renderer> Renderer::Create(const mjModel* m, const Options& opti
   const int max_w = m->vis.global.offwidth, max_h = m->vis.global.offheight;
   if (options.width < 1 || options.height < 1 || options.width > max_w || options.height > max_h) {
     const std::string scene = options.scene.empty() ? "the scene" : "scene '" + options.scene + "'";
-    throw lab::InputError("image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+    throw vlab::InputError("image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
                           " does not fit the offscreen buffer " + std::to_string(max_w) + "x" +
                           std::to_string(max_h) + " of " + scene + " (raise <visual><global offwidth=\"...\" " +
                           "offheight=\"...\"/> in the scene)");

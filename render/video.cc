@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "render/image_io.h"
 
 namespace vlab::render {
@@ -16,10 +16,10 @@ std::unique_ptr<VideoFile> VideoFile::Create(const std::string& path, double fps
   const fs::path target(path);
   const std::string name = target.filename().string();
   if (name.size() < 5 || target.extension() != ".mp4") {
-    throw lab::InputError("video '" + path + "': the file name must end in .mp4");
+    throw vlab::InputError("video '" + path + "': the file name must end in .mp4");
   }
   const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  if (!fs::is_directory(folder)) throw lab::InputError("video '" + path + "': no folder '" + folder.string() + "'");
+  if (!fs::is_directory(folder)) throw vlab::InputError("video '" + path + "': no folder '" + folder.string() + "'");
   if (!(fps > 0) || width < 1 || height < 1) {
     throw std::invalid_argument("video '" + path + "': needs fps > 0 and a frame size");
   }

@@ -31,7 +31,7 @@ namespace {
 double BareReplay(const lab::Lab& lab, const std::vector<double>& controls, const std::vector<double>& final_qpos,
                   bool* same) {
   const mjModel* m = lab.model();
-  lab::DataPtr data = lab::MakeData(m);
+  vlab::DataPtr data = vlab::MakeData(m);
   mjData* d = data.get();
   lab.InitialState(d);
   const long steps = m->nu ? static_cast<long>(controls.size() / m->nu) : 0;

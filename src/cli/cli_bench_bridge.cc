@@ -24,7 +24,7 @@
 
 #include "bridge/bridge_udp.h"
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 #include "lab/lab_stats.h"
@@ -55,10 +55,10 @@ std::vector<double> EchoRoundTrips(int count) {
   std::vector<double> rtt;
   rtt.reserve(count);
   for (int i = 0; i < count + 100; ++i) {
-    const double t0 = lab::WallNow();
+    const double t0 = vlab::WallNow();
     client->SendTo(packet.data(), packet.size(), to);
     if (client->Receive(buf, sizeof(buf), nullptr, 1.0) < 0) continue;
-    if (i >= 100) rtt.push_back(lab::WallNow() - t0);  // the first 100 warm up
+    if (i >= 100) rtt.push_back(vlab::WallNow() - t0);  // the first 100 warm up
   }
   stop = true;
   server.join();
@@ -70,11 +70,11 @@ std::vector<double> EchoRoundTrips(int count) {
 double PhysicsStepSeconds(const lab::Scenario& scenario) {
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
   const mjModel* m = lab->model();
-  lab::DataPtr data = lab::MakeData(m);
+  vlab::DataPtr data = vlab::MakeData(m);
   mjData* d = data.get();
   lab->InitialState(d);
   const int steps = 5000;
-  const double t0 = lab::WallNow();
+  const double t0 = vlab::WallNow();
   for (int i = 0; i < steps; ++i) {
     mj_step1(m, d);
     for (int a = 0; a < m->nu; ++a) {
@@ -82,7 +82,7 @@ double PhysicsStepSeconds(const lab::Scenario& scenario) {
     }
     mj_step2(m, d);
   }
-  return (lab::WallNow() - t0) / steps;
+  return (vlab::WallNow() - t0) / steps;
 }
 
 // the example controller, started as a child process
@@ -112,11 +112,11 @@ class Controller {
 std::string ExampleBinary() {
   const fs::path self = fs::read_symlink("/proc/self/exe");
   const fs::path example = self.parent_path() / "examples" / "joint_control";
-  if (!fs::exists(example)) throw lab::InputError("bench bridge: no example controller at " + example.string());
+  if (!fs::exists(example)) throw vlab::InputError("bench bridge: no example controller at " + example.string());
   return example.string();
 }
 
-lab::RunResult ServeWithController(lab::Scenario scenario, const std::string& clock, double seconds,
+lab::RunResult ServeWithController(lab::Scenario scenario, ClockMode clock, double seconds,
                                    const std::string& example) {
   scenario.duration_s = seconds;
   scenario.control_period_s = 0.001;  // 1 kHz: one physics step per period
@@ -149,7 +149,7 @@ int BenchBridge(const BenchArgs& args) {
                 Percentile(rtt, 99) * 1e6);
 
     const double lockstep_s = args.duration_s > 0 ? args.duration_s : 5.0;
-    const lab::RunResult ls = ServeWithController(scenario, "lockstep", lockstep_s, example);
+    const lab::RunResult ls = ServeWithController(scenario, ClockMode::kLockstep, lockstep_s, example);
     const double rate = ls.periods / ls.loop_wall_s;
     std::printf("  lockstep: %ld periods in %.2f s = %.0f periods/s, %.1f us a period (incl. 1 physics step)\n",
                 ls.periods, ls.loop_wall_s, rate, 1e6 / rate);
@@ -161,7 +161,7 @@ int BenchBridge(const BenchArgs& args) {
     if (ls.exit_code != 0) std::printf("  (lockstep run: %s)\n", ls.failure.c_str());
 
     const double realtime_s = args.realtime_s;
-    const lab::RunResult rt = ServeWithController(scenario, "realtime", realtime_s, example);
+    const lab::RunResult rt = ServeWithController(scenario, ClockMode::kRealtime, realtime_s, example);
     const auto& st = rt.clock_stats;
     const double missed = st.periods ? 100.0 * static_cast<double>(st.missed_deadlines) / st.periods : 0.0;
     std::printf("  realtime %.0f s: %ld periods, missed deadlines %ld (%.3f %%, goal < 0.5 %%) -> %s\n", realtime_s,

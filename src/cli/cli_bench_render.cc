@@ -30,8 +30,8 @@
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_camera_server.h"
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 #include "render/image_io.h"
@@ -109,9 +109,9 @@ std::string PickCamera(const lab::Scenario& s, const mjModel* m) {
     if (d.kind == "camera") return d.camera.camera;
   }
   if (mj_name2id(m, mjOBJ_CAMERA, kCubeCamera) >= 0) return kCubeCamera;
-  if (m->ncam == 0) throw lab::InputError("scene '" + s.scene + "': no camera to render");
+  if (m->ncam == 0) throw vlab::InputError("scene '" + s.scene + "': no camera to render");
   const char* name = mj_id2name(m, mjOBJ_CAMERA, 0);
-  if (!name) throw lab::InputError("scene '" + s.scene + "': its first camera has no name");
+  if (!name) throw vlab::InputError("scene '" + s.scene + "': its first camera has no name");
   return name;
 }
 
@@ -139,7 +139,7 @@ double Best(int repeat, const std::function<double()>& measure) {
 
 int BenchRender(const BenchArgs& args) {
   return WithErrorReport([&args] {
-    lab::InstallMujocoHandlers();
+    vlab::InstallMujocoHandlers();
     std::string path = args.scenario;
     std::string camera;
     if (path.empty()) {
@@ -157,7 +157,7 @@ int BenchRender(const BenchArgs& args) {
     const mjModel* m = lab->model();
     if (camera.empty()) camera = PickCamera(scenario, m);
     const int cam = render::CameraId(m, camera);
-    lab::DataPtr data = lab::MakeData(m);
+    vlab::DataPtr data = vlab::MakeData(m);
     mjData* d = data.get();
     lab->InitialState(d);
     const double seconds = args.duration_s > 0 ? args.duration_s : 2.0;

@@ -16,7 +16,7 @@
 #include "bridge/bridge_camera_source.h"
 #include "bridge/bridge_errors.h"
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::cli {
 
@@ -60,37 +60,37 @@ std::vector<double> Numbers(const std::string& text, std::size_t n, const std::s
       used = 0;
     }
     if (used == 0 || used != item.size() || !std::isfinite(v)) {
-      throw lab::InputError(option + " '" + text + "': '" + item + "' is not a number");
+      throw vlab::InputError(option + " '" + text + "': '" + item + "' is not a number");
     }
     values.push_back(v);
   }
   if (values.size() != n) {
-    throw lab::InputError(option + " '" + text + "': expected " + std::to_string(n) + " comma-separated numbers");
+    throw vlab::InputError(option + " '" + text + "': expected " + std::to_string(n) + " comma-separated numbers");
   }
   return values;
 }
 
 void Validate(const CameraArgs& a) {
-  if (a.port < 0 || a.port > 65535) throw lab::InputError("--port must be 0 to 65535");
-  if (a.name.empty()) throw lab::InputError("--name must not be empty");
-  if (a.fps != 0 && !(a.fps > 0 && a.fps <= 1000)) throw lab::InputError("--fps must be > 0 and <= 1000 Hz");
-  if ((a.width == 0) != (a.height == 0)) throw lab::InputError("--width and --height go together");
+  if (a.port < 0 || a.port > 65535) throw vlab::InputError("--port must be 0 to 65535");
+  if (a.name.empty()) throw vlab::InputError("--name must not be empty");
+  if (a.fps != 0 && !(a.fps > 0 && a.fps <= 1000)) throw vlab::InputError("--fps must be > 0 and <= 1000 Hz");
+  if ((a.width == 0) != (a.height == 0)) throw vlab::InputError("--width and --height go together");
   if (a.width != 0 && (a.width < 1 || a.width > 8192 || a.height < 1 || a.height > 8192)) {
-    throw lab::InputError("--width and --height must be 1 to 8192 pixels");
+    throw vlab::InputError("--width and --height must be 1 to 8192 pixels");
   }
-  if (a.jpeg_quality < 1 || a.jpeg_quality > 100) throw lab::InputError("--jpeg-quality must be 1 to 100");
-  if (a.frames != -1 && a.frames < 1) throw lab::InputError("--frames must be >= 1");
+  if (a.jpeg_quality < 1 || a.jpeg_quality > 100) throw vlab::InputError("--jpeg-quality must be 1 to 100");
+  if (a.frames != -1 && a.frames < 1) throw vlab::InputError("--frames must be >= 1");
   if (a.fovy_deg != 0 && !(a.fovy_deg > 0 && a.fovy_deg < 180)) {
-    throw lab::InputError("--fovy must be > 0 and < 180 deg");
+    throw vlab::InputError("--fovy must be > 0 and < 180 deg");
   }
   const int calibration = (a.fx != 0) + (a.fy != 0) + (a.cx != 0) + (a.cy != 0);
-  if (calibration != 0 && calibration != 4) throw lab::InputError("--fx, --fy, --cx and --cy go together");
+  if (calibration != 0 && calibration != 4) throw vlab::InputError("--fx, --fy, --cx and --cy go together");
   if (calibration == 4 && !(a.fx > 0 && a.fy > 0 && std::isfinite(a.cx) && std::isfinite(a.cy))) {
-    throw lab::InputError("--fx and --fy must be > 0 pixels");
+    throw vlab::InputError("--fx and --fy must be > 0 pixels");
   }
-  if (calibration == 4 && a.fovy_deg != 0) throw lab::InputError("give either --fovy or --fx/--fy/--cx/--cy");
+  if (calibration == 4 && a.fovy_deg != 0) throw vlab::InputError("give either --fovy or --fx/--fy/--cx/--cy");
   if (a.chunk_bytes < 1 || a.chunk_bytes > static_cast<int>(bridge::kMaxChunkBytes)) {
-    throw lab::InputError("--chunk-bytes must be 1 to " + std::to_string(bridge::kMaxChunkBytes));
+    throw vlab::InputError("--chunk-bytes must be 1 to " + std::to_string(bridge::kMaxChunkBytes));
   }
 }
 
@@ -100,7 +100,7 @@ bridge::CameraPose ParsePose(const std::string& text) {
   const std::vector<double> v = Numbers(text, 7, "--pose");
   const Eigen::Quaterniond q(v[3], v[4], v[5], v[6]);
   if (std::abs(q.norm() - 1.0) > 1e-3) {
-    throw lab::InputError("--pose '" + text + "': the quaternion qw,qx,qy,qz must have unit length");
+    throw vlab::InputError("--pose '" + text + "': the quaternion qw,qx,qy,qz must have unit length");
   }
   pose.valid = true;
   pose.p_WC = Eigen::Vector3d(v[0], v[1], v[2]);
@@ -131,7 +131,7 @@ void SetIntrinsics(const CameraArgs& a, bridge::CameraDescription* d) {
 int RunCamera(const CameraArgs& a) {
   Validate(a);
   bridge::CameraDescription d;
-  if (!bridge::EncodingFromName(a.encoding, &d.encoding)) throw lab::InputError("--encoding must be jpeg or raw");
+  if (!bridge::EncodingFromName(a.encoding, &d.encoding)) throw vlab::InputError("--encoding must be jpeg or raw");
   const bridge::CameraPose pose = ParsePose(a.pose);
   if (!a.distortion.empty()) {
     const std::vector<double> k = Numbers(a.distortion, 4, "--distortion");
@@ -143,9 +143,9 @@ int RunCamera(const CameraArgs& a) {
   try {
     source = bridge::VideoSource::Open(a.source, {a.width, a.height, a.fps});
   } catch (const bridge::VideoSourceError& e) {
-    throw lab::InputError(std::string("--source: ") + e.what());
+    throw vlab::InputError(std::string("--source: ") + e.what());
   }
-  if (a.loop && source->is_device()) throw lab::InputError("--loop is for video files, not devices");
+  if (a.loop && source->is_device()) throw vlab::InputError("--loop is for video files, not devices");
   const double fps = a.fps > 0 ? a.fps : source->fps() > 0 ? source->fps() : 30.0;
 
   d.name = a.name;
@@ -168,9 +168,9 @@ int RunCamera(const CameraArgs& a) {
   try {
     server = bridge::CameraServer::Create(config);
   } catch (const bridge::NetworkError& e) {
-    throw lab::InputError(std::string("--bind/--port: ") + e.what());
+    throw vlab::InputError(std::string("--bind/--port: ") + e.what());
   } catch (const std::invalid_argument& e) {
-    throw lab::InputError(e.what());
+    throw vlab::InputError(e.what());
   }
 
   std::printf("vlab camera: '%s' from %s (%s, %dx%d, %g fps, %s) on udp %s:%d\n", d.name.c_str(), a.source.c_str(),

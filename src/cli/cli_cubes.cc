@@ -8,7 +8,7 @@
 
 #include "bridge/bridge_markers.h"
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "vision/vision_cubes.h"
 #include "vision/vision_scene.h"
 
@@ -43,7 +43,7 @@ int Cubes(const CubesArgs& a, const CLI::App& cmd) {
   if (dictionary == nullptr) {
     std::string known;
     for (const auto& d : bridge::MarkerDictionaries()) known += std::string(known.empty() ? "" : ", ") + d.name;
-    throw lab::InputError("cubes: --dictionary '" + a.dictionary + "' is not one of " + known);
+    throw vlab::InputError("cubes: --dictionary '" + a.dictionary + "' is not one of " + known);
   }
   cubes.letters = a.letters;
   cubes.size_m = a.size_m;
@@ -54,13 +54,13 @@ int Cubes(const CubesArgs& a, const CLI::App& cmd) {
   // everything is checked and generated before anything is written
   const bool with_scene = !a.scene.empty();
   if (!with_scene && (cmd.count("--count") > 0 || cmd.count("--seed") > 0)) {
-    throw lab::InputError("cubes: --count and --seed need --scene FILE");
+    throw vlab::InputError("cubes: --count and --seed need --scene FILE");
   }
   std::string scene_xml;
   if (with_scene) {
-    if (a.seed < 0) throw lab::InputError("cubes: --seed must be >= 0");
+    if (a.seed < 0) throw vlab::InputError("cubes: --seed must be >= 0");
     if (!fs::is_regular_file(fs::path(a.pa10_dir) / "pa10.xml")) {
-      throw lab::InputError("cubes: --pa10 '" + a.pa10_dir + "' has no pa10.xml (the PA10 model folder, mjcf/pa10)");
+      throw vlab::InputError("cubes: --pa10 '" + a.pa10_dir + "' has no pa10.xml (the PA10 model folder, mjcf/pa10)");
     }
     vision::CubeSceneConfig scene;
     scene.count = a.count;

@@ -17,9 +17,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_log.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_output.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
@@ -90,23 +90,23 @@ void ScenarioSize(const lab::Scenario& s, const std::string& camera, int* width,
 
 int Render(const RenderArgs& a, const CLI::App& cmd) {
   auto given = [&cmd](const char* name) { return cmd.get_option(name)->count() > 0; };
-  if (given("--fps") && given("--every")) throw lab::InputError("--fps and --every: give one of them, not both");
-  if (given("--fps") && !(a.fps > 0 && std::isfinite(a.fps))) throw lab::InputError("--fps must be > 0");
-  if (given("--every") && !(a.every_s > 0 && std::isfinite(a.every_s))) throw lab::InputError("--every must be > 0 s");
-  if (given("--frames") && a.frames < 1) throw lab::InputError("--frames must be >= 1");
-  if (given("--width") && a.width < 1) throw lab::InputError("--width must be >= 1 pixel");
-  if (given("--height") && a.height < 1) throw lab::InputError("--height must be >= 1 pixel");
+  if (given("--fps") && given("--every")) throw vlab::InputError("--fps and --every: give one of them, not both");
+  if (given("--fps") && !(a.fps > 0 && std::isfinite(a.fps))) throw vlab::InputError("--fps must be > 0");
+  if (given("--every") && !(a.every_s > 0 && std::isfinite(a.every_s))) throw vlab::InputError("--every must be > 0 s");
+  if (given("--frames") && a.frames < 1) throw vlab::InputError("--frames must be >= 1");
+  if (given("--width") && a.width < 1) throw vlab::InputError("--width must be >= 1 pixel");
+  if (given("--height") && a.height < 1) throw vlab::InputError("--height must be >= 1 pixel");
   const render::Profile profile = render::ProfileFromName(a.profile);
   if (!a.video.empty() && std::filesystem::path(a.video).extension() != ".mp4") {
-    throw lab::InputError("--video '" + a.video + "': the file name must end in .mp4");
+    throw vlab::InputError("--video '" + a.video + "': the file name must end in .mp4");
   }
-  lab::InstallMujocoHandlers();
+  vlab::InstallMujocoHandlers();
 
   lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(a.scenario));
   const double period = scenario.control_period_s;
   const double every = given("--fps") ? 1.0 / a.fps : given("--every") ? a.every_s : 0.1;
   if (every < period * (1 - 1e-9)) {
-    throw lab::InputError("frame interval " + lab::FormatDouble(every) + " s is shorter than the control period " +
+    throw vlab::InputError("frame interval " + lab::FormatDouble(every) + " s is shorter than the control period " +
                           lab::FormatDouble(period) + " s of " + scenario.file + " (frames are taken at period ends)");
   }
   // frames that fit the scenario; the run ends at the first period end at or after the last one
@@ -128,8 +128,8 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   int camera = -1;
   try {
     camera = render::CameraId(m, a.camera);
-  } catch (const lab::InputError& e) {
-    throw lab::InputError("--camera: scene '" + scenario.scene + "': " + e.what());
+  } catch (const vlab::InputError& e) {
+    throw vlab::InputError("--camera: scene '" + scenario.scene + "': " + e.what());
   }
   int width = 0, height = 0;
   ScenarioSize(scenario, a.camera, &width, &height);
@@ -165,7 +165,7 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   times.reserve(static_cast<std::size_t>(frames));
   double render_s = 0;
   lab::RunOptions run;
-  run.clock = "fast";  // offline: as fast as rendering allows, whatever the scenario's clock
+  run.clock = ClockMode::kFast;  // offline: as fast as rendering allows, whatever the scenario's clock
   run.interrupt = &g_interrupted;
   ProgressBar bar(!a.quiet);
   run.progress = [&bar](double f) { bar.Update(f); };
@@ -182,7 +182,7 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     if (video) video->Add(rgb);
     times.push_back(t);
   };
-  lab::SetMujocoErrorCleanup([staging = out->File("")] {  // a MuJoCo error ends the process: leave nothing
+  vlab::SetMujocoErrorCleanup([staging = out->File("")] {  // a MuJoCo error ends the process: leave nothing
     std::error_code ec;
     std::filesystem::remove_all(staging, ec);
   });
@@ -210,7 +210,7 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
         {"width", width}, {"height", height}, {"profile", render::ProfileName(profile)},
         {"every_s", every}, {"frames", times.size()}, {"files", files},
         {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
-        {"gl_renderer", renderer->gl_renderer()}, {"render_wall_s", render_s}, {"mujoco", lab::MujocoVersion()}};
+        {"gl_renderer", renderer->gl_renderer()}, {"render_wall_s", render_s}, {"mujoco", vlab::MujocoVersion()}};
     std::ofstream json(out->File("render.json"));
     json << meta.dump(2) << "\n";
     if (!csv || !json) throw std::runtime_error("output folder '" + out_dir + "': write failed");

@@ -8,7 +8,7 @@
 #include <unistd.h>
 
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_log.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
@@ -62,7 +62,7 @@ void PrintPlots(const lab::Scenario& scenario, const std::string& out_dir, const
 int WithErrorReport(const std::function<int()>& body) {
   try {
     return body();
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     std::fprintf(stderr, "vlab: error: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {

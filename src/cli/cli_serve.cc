@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 
@@ -30,7 +30,7 @@ lab::BridgeOptions MakeBridgeOptions(const ServeArgs& args) {
       port = -1;
     }
     if (eq == std::string::npos || eq == 0 || port < 0 || port > 65535) {
-      throw lab::InputError("--port '" + p + "': expected DEVICE=PORT with PORT 0..65535");
+      throw vlab::InputError("--port '" + p + "': expected DEVICE=PORT with PORT 0..65535");
     }
     options.ports[p.substr(0, eq)] = port;
   }
@@ -59,10 +59,10 @@ int ServeCommand(const ServeArgs& args) {
     options.out_dir = out_dir;
     options.interrupt = &g_stop;
     options.serve = &bridge;
-    options.clock = args.clock;
+    if (!args.clock.empty()) options.clock = ParseClockMode(args.clock, "--clock");
     options.on_serving = [&scenario, &options](const std::vector<lab::ServedDevice>& devices) {
       std::string line = "vlab serve: " + scenario.name + ", clock " +
-                         (options.clock.empty() ? scenario.clock : options.clock) + ";";
+                         ClockModeName(options.clock.value_or(scenario.clock)) + ";";
       for (const auto& d : devices) {
         line += " " + d.name + " (" + d.kind + ") " + d.address + ":" + std::to_string(d.port) + ";";
       }
@@ -80,7 +80,7 @@ int ServeCommand(const ServeArgs& args) {
                   c.refused_not_owner, c.stale, c.duplicate, c.watchdog_holds);
     }
     std::printf("%s: %s, %.2f s simulated in %.2f s, clock %s; output in %s/\n", scenario.name.c_str(),
-                r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, r.clock.c_str(), out_dir.c_str());
+                r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), out_dir.c_str());
     PrintPlots(scenario, out_dir, r);
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;
@@ -99,8 +99,10 @@ int DevicesCommand(const ServeArgs& args) {
       if (ports[d.name] > 0 || o != bridge.ports.end()) bridge.ports[d.name] = 0;
     }
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
-    const std::vector<lab::ServedDevice> devices = lab->Describe(bridge, args.clock);
-    std::printf("%s: clock %s\n", scenario.name.c_str(), (args.clock.empty() ? scenario.clock : args.clock).c_str());
+    std::optional<ClockMode> clock;
+    if (!args.clock.empty()) clock = ParseClockMode(args.clock, "--clock");
+    const std::vector<lab::ServedDevice> devices = lab->Describe(bridge, clock);
+    std::printf("%s: clock %s\n", scenario.name.c_str(), ClockModeName(clock.value_or(scenario.clock)));
     for (const auto& d : devices) {
       const nlohmann::json j = nlohmann::json::parse(d.describe_json);
       std::printf("  %-8s %-6s udp %s:%d\n", d.name.c_str(), d.kind.c_str(), bridge.bind.c_str(), ports[d.name]);

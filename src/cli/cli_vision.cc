@@ -13,7 +13,7 @@
 
 #include "bridge/bridge_errors.h"
 #include "cli/cli_commands.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "vision/vision_program.h"
 #include "vision/vision_yoyo_program.h"
 
@@ -53,7 +53,7 @@ void SplitHostPort(const std::string& text, std::string* host, int* port) {
     *port = ok ? std::stoi(digits) : 0;
     ok = ok && *port >= 1 && *port <= 65535;
   }
-  if (!ok) throw lab::InputError("--camera '" + text + "': expected HOST:PORT, e.g. 127.0.0.1:50013");
+  if (!ok) throw vlab::InputError("--camera '" + text + "': expected HOST:PORT, e.g. 127.0.0.1:50013");
 }
 
 void Report(const vision::VisionProgram& p, double elapsed_s) {
@@ -82,7 +82,7 @@ vision::YoyoLine ParseLine(const std::string& text) {
   }
   if (comma == std::string::npos || used_x != comma || used_x == 0 || used_y == 0 ||
       used_y != text.size() - comma - 1 || !std::isfinite(line.x) || !std::isfinite(line.y)) {
-    throw lab::InputError("--line '" + text + "': expected X,Y in m (world), e.g. 0.725,0");
+    throw vlab::InputError("--line '" + text + "': expected X,Y in m (world), e.g. 0.725,0");
   }
   return line;
 }
@@ -106,7 +106,7 @@ std::unique_ptr<Program> StartProgram(const Config& config) {
   try {
     program = Program::Create(config);
   } catch (const bridge::NetworkError& e) {
-    throw lab::InputError(e.what());
+    throw vlab::InputError(e.what());
   }
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
@@ -144,8 +144,8 @@ int RunUntilDone(Program& program, const VisionArgs& a, void (*report)(const Pro
 }
 
 int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
-  if (a.yoyo_port > 65535) throw lab::InputError("--yoyo-port " + std::to_string(a.yoyo_port) + " outside 0..65535");
-  if (!a.markers.empty()) throw lab::InputError("--marker and --yoyo-port exclude each other: run two vision programs");
+  if (a.yoyo_port > 65535) throw vlab::InputError("--yoyo-port " + std::to_string(a.yoyo_port) + " outside 0..65535");
+  if (!a.markers.empty()) throw vlab::InputError("--marker and --yoyo-port exclude each other: run two vision programs");
   config.blob = vision::BlobColor(a.blob_color);
   if (!a.line.empty()) config.line = ParseLine(a.line);
   config.connect_timeout_s = a.connect_timeout_s;
@@ -165,12 +165,12 @@ int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
 int Vision(const VisionArgs& a) {
   vision::VisionConfig config;
   SplitHostPort(a.camera, &config.camera_address, &config.camera_port);
-  if (a.port < 0 || a.port > 65535) throw lab::InputError("--port " + std::to_string(a.port) + " outside 0..65535");
-  if (a.frames < 0) throw lab::InputError("--frames must be >= 0");
-  if (a.duration_s < 0) throw lab::InputError("--duration must be >= 0 s");
-  if (!(a.connect_timeout_s > 0)) throw lab::InputError("--connect-timeout must be > 0 s");
-  if (!(a.max_error_px > 0)) throw lab::InputError("--max-error must be > 0 px");
-  if (!(a.ambiguity_margin_px >= 0)) throw lab::InputError("--ambiguity-margin must be >= 0 px");
+  if (a.port < 0 || a.port > 65535) throw vlab::InputError("--port " + std::to_string(a.port) + " outside 0..65535");
+  if (a.frames < 0) throw vlab::InputError("--frames must be >= 0");
+  if (a.duration_s < 0) throw vlab::InputError("--duration must be >= 0 s");
+  if (!(a.connect_timeout_s > 0)) throw vlab::InputError("--connect-timeout must be > 0 s");
+  if (!(a.max_error_px > 0)) throw vlab::InputError("--max-error must be > 0 px");
+  if (!(a.ambiguity_margin_px >= 0)) throw vlab::InputError("--ambiguity-margin must be >= 0 px");
   for (const std::string& m : a.markers) {
     const auto more = vision::ParseMarkerOption(m);
     config.markers.insert(config.markers.end(), more.begin(), more.end());

@@ -4,14 +4,14 @@
 #include <cmath>
 #include <set>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::kinsim {
 
 namespace {
 
 [[noreturn]] void Fail(const KinArmConfig& c, const std::string& what) {
-  throw lab::InputError("arm '" + c.name + "': " + what);
+  throw vlab::InputError("arm '" + c.name + "': " + what);
 }
 
 std::string Num(double v) {
@@ -23,7 +23,7 @@ std::string Num(double v) {
 }  // namespace
 
 std::unique_ptr<KinArm> KinArm::Create(const KinArmConfig& c) {
-  if (c.name.empty()) throw lab::InputError("arm: empty name");
+  if (c.name.empty()) throw vlab::InputError("arm: empty name");
   const std::size_t n = c.joints.size();
   if (n == 0) Fail(c, "no joints");
   if (n > static_cast<std::size_t>(bridge::kMaxPacketValues - bridge::kHeaderValues - 1) / 3) {

@@ -47,7 +47,7 @@ struct KinArmConfig {
 
 class KinArm {
  public:
-  /// Validates the config; throws lab::InputError naming the arm and the field
+  /// Validates the config; throws vlab::InputError naming the arm and the field
   /// (and the joint) that cannot be used.
   static std::unique_ptr<KinArm> Create(const KinArmConfig& config);
 

@@ -13,8 +13,8 @@
 #include "kinsim/kinsim.h"
 #include "kinsim/kinsim_scene.h"
 #include "kinsim/kinsim_server.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_signals.h"
+#include "core/core_errors.h"
+#include "core/core_signals.h"
 
 namespace {
 
@@ -73,11 +73,11 @@ int main(int argc, char** argv) {
   std::unique_ptr<vlab::kinsim::KinsimServer> server;
   try {
     const bool per_joint_default = app.count("--initial") == 0 && args.joints != vlab::kinsim::Pa10Joints();
-    if (per_joint_default) throw vlab::lab::InputError("--initial is required with --joints other than the PA10's");
+    if (per_joint_default) throw vlab::InputError("--initial is required with --joints other than the PA10's");
     auto arm = vlab::kinsim::KinArm::Create(
         vlab::kinsim::ArmFromScene(args.name, args.scene, args.joints, args.max_velocity, args.initial));
     server = vlab::kinsim::KinsimServer::Create(args.server, std::move(arm));
-  } catch (const vlab::lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     return Fail(e.what());
   } catch (const vlab::bridge::NetworkError& e) {
     return Fail(e.what());
@@ -86,10 +86,10 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  vlab::lab::InstallStopSignals();
+  vlab::InstallStopSignals();
   std::printf("%s\n", server->StartLine().c_str());
   std::fflush(stdout);
-  server->Run(&vlab::lab::g_stop_requested);
+  server->Run(&vlab::g_stop_requested);
   std::printf("%s\n", server->ReportText().c_str());
   std::fflush(stdout);
   return 0;

@@ -2,8 +2,8 @@
 
 #include <mujoco/mujoco.h>
 
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 
 namespace vlab::kinsim {
 
@@ -19,7 +19,7 @@ const std::vector<double>& Pa10ReadyPose() {
 
 KinArmConfig ArmFromScene(const std::string& name, const std::string& scene, const std::vector<std::string>& joints,
                           const std::vector<double>& velocity_max, const std::vector<double>& initial) {
-  const lab::ModelPtr model = lab::LoadModel(scene);
+  const vlab::ModelPtr model = vlab::LoadModel(scene);
   const mjModel* m = model.get();
   KinArmConfig c;
   c.name = name;
@@ -28,11 +28,11 @@ KinArmConfig ArmFromScene(const std::string& name, const std::string& scene, con
   for (const std::string& joint : joints) {
     const std::string where = "scene '" + scene + "': joint '" + joint + "'";
     const int j = mj_name2id(m, mjOBJ_JOINT, joint.c_str());
-    if (j < 0) throw lab::InputError("scene '" + scene + "': no joint '" + joint + "'");
+    if (j < 0) throw vlab::InputError("scene '" + scene + "': no joint '" + joint + "'");
     if (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE) {
-      throw lab::InputError(where + " is not a hinge or slide");
+      throw vlab::InputError(where + " is not a hinge or slide");
     }
-    if (!m->jnt_limited[j]) throw lab::InputError(where + " has no range (a kinematic arm needs its limits)");
+    if (!m->jnt_limited[j]) throw vlab::InputError(where + " has no range (a kinematic arm needs its limits)");
     c.position_min.push_back(m->jnt_range[2 * j]);
     c.position_max.push_back(m->jnt_range[2 * j + 1]);
   }

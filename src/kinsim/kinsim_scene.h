@@ -16,9 +16,9 @@ const std::vector<double>& Pa10ReadyPose();
 inline constexpr double kPa10VelocityMax = 3.14159265358979323846;
 
 /// Builds a KinArmConfig from the hinge or slide joints `joints` of the MJCF
-/// file `scene` (loaded with lab::LoadModel): their ranges become the position
+/// file `scene` (loaded with vlab::LoadModel): their ranges become the position
 /// limits (rad or m, as compiled). velocity_max holds one value for every joint
-/// or one per joint; initial one value per joint. Throws lab::InputError naming
+/// or one per joint; initial one value per joint. Throws vlab::InputError naming
 /// the scene and the joint when the file does not load, a joint is missing, is
 /// not a hinge or slide, or has no range. The result is validated by
 /// KinArm::Create, not here.

@@ -8,7 +8,7 @@
 #include <cstdio>
 
 #include "bridge/bridge_describe.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::kinsim {
 
@@ -28,15 +28,15 @@ long long NowNs() {
 }  // namespace
 
 std::unique_ptr<KinsimServer> KinsimServer::Create(const ServerConfig& c, std::unique_ptr<KinArm> arm) {
-  if (!arm) throw lab::InputError("kinsim: no arm");
-  if (!(c.rate_hz >= 1 && c.rate_hz <= 10000)) throw lab::InputError("--rate must be 1 to 10000 Hz");
-  if (!(c.duration_s >= 0) || !std::isfinite(c.duration_s)) throw lab::InputError("--duration must be >= 0 s");
-  if (c.watchdog_periods < 0) throw lab::InputError("--watchdog-periods must be >= 0");
+  if (!arm) throw vlab::InputError("kinsim: no arm");
+  if (!(c.rate_hz >= 1 && c.rate_hz <= 10000)) throw vlab::InputError("--rate must be 1 to 10000 Hz");
+  if (!(c.duration_s >= 0) || !std::isfinite(c.duration_s)) throw vlab::InputError("--duration must be >= 0 s");
+  if (c.watchdog_periods < 0) throw vlab::InputError("--watchdog-periods must be >= 0");
   if (!(c.owner_timeout_s > 0) || !std::isfinite(c.owner_timeout_s)) {
-    throw lab::InputError("--owner-timeout must be > 0 s");
+    throw vlab::InputError("--owner-timeout must be > 0 s");
   }
   if (!(c.subscriber_timeout_s > 0) || !std::isfinite(c.subscriber_timeout_s)) {
-    throw lab::InputError("subscriber timeout must be > 0 s");
+    throw vlab::InputError("subscriber timeout must be > 0 s");
   }
   std::unique_ptr<KinsimServer> s(new KinsimServer());
   s->config_ = c;

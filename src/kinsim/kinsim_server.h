@@ -47,7 +47,7 @@ struct ServerCounters {
 
 class KinsimServer {
  public:
-  /// Validates the config and binds the socket. Throws lab::InputError for a
+  /// Validates the config and binds the socket. Throws vlab::InputError for a
   /// bad config, bridge::NetworkError when the address cannot be bound.
   static std::unique_ptr<KinsimServer> Create(const ServerConfig& config, std::unique_ptr<KinArm> arm);
 

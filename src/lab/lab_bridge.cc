@@ -6,8 +6,8 @@
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_errors.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 
 namespace vlab::lab {
 

@@ -21,7 +21,7 @@
 #include "bridge/bridge_messages.h"
 #include "bridge/bridge_udp.h"
 #include "lab/lab_arm_device.h"
-#include "lab/lab_clock.h"
+#include "core/core_clock.h"
 #include "lab/lab_device.h"
 #include "lab/lab_scenario.h"
 #include "lab/lab_wrench_device.h"

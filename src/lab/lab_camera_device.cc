@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "bridge/bridge_errors.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_log.h"
 
 namespace vlab::lab {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

@@ -7,7 +7,7 @@
 #include "control/robot_model.h"
 #include "control/task_space.h"
 #include "control/trajectory.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

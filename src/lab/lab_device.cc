@@ -1,6 +1,6 @@
 #include "lab/lab_device.h"
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

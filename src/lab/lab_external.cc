@@ -15,7 +15,7 @@
 #include <fstream>
 #include <thread>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 
@@ -64,9 +64,9 @@ BridgeOptions ExternalBridgeOptions(const Scenario& scenario) {
   return options;
 }
 
-std::string ExternalClock(const Scenario& scenario, const std::string& requested) {
-  const std::string clock = requested.empty() ? scenario.clock : requested;
-  return clock == "fast" ? "lockstep" : clock;
+ClockMode ExternalClock(const Scenario& scenario, std::optional<ClockMode> requested) {
+  const ClockMode clock = requested.value_or(scenario.clock);
+  return clock == ClockMode::kFast ? ClockMode::kLockstep : clock;
 }
 
 std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served,

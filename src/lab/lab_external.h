@@ -40,7 +40,7 @@ bool StartsExternalController(const Scenario& scenario, bool serving);
 BridgeOptions ExternalBridgeOptions(const Scenario& scenario);
 /// Its clock: the one asked for, else the scenario's; `fast` becomes
 /// `lockstep` (an external controller is never in process).
-std::string ExternalClock(const Scenario& scenario, const std::string& requested);
+ClockMode ExternalClock(const Scenario& scenario, std::optional<ClockMode> requested);
 /// The placeholder values of the scenario's controller command: every served
 /// device (ADDRESS:PORT; port 0 before binding), bin, scenario_dir, duration,
 /// and out: the folder the program may write its own files into (the run's

@@ -22,7 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

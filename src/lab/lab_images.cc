@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_log.h"
 #include "render/image_io.h"
 #include "render/renderer.h"

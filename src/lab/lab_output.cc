@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

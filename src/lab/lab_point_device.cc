@@ -34,7 +34,7 @@
 #include "control/task_space.h"
 #include "lab/lab_arm_device.h"
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

@@ -1,7 +1,7 @@
 #include "lab/lab_run_watch.h"
 
 #include "lab/lab_log.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 
 namespace vlab::lab {
 

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_external.h"
 #include "lab/lab_images.h"
 #include "lab/lab_log.h"
@@ -165,8 +165,9 @@ bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, 
   bridge::SimStateMsg m;
   m.sim_time = t;
   m.mode = paused ? 1 : 0;
-  const std::string name = clock.name();
-  m.clock = name == "lockstep" ? 1 : name == "realtime" ? 2 : 0;
+  m.clock = static_cast<int>(clock.mode() == ClockMode::kLockstep   ? bridge::ClockCode::kLockstep
+                             : clock.mode() == ClockMode::kRealtime ? bridge::ClockCode::kRealtime
+                                                                    : bridge::ClockCode::kFast);
   m.periods = static_cast<double>(k);
   m.refused_packets = bridge ? static_cast<double>(bridge->refused_total()) : 0.0;
   m.missed_deadlines = static_cast<double>(clock.stats().missed_deadlines);
@@ -194,9 +195,9 @@ RunResult Lab::Run(const RunOptions& options) {
   const bool external = StartsExternalController(s.scenario, options.serve != nullptr);
   const BridgeOptions external_serve = external ? ExternalBridgeOptions(s.scenario) : BridgeOptions{};
   const BridgeOptions* serve = external ? &external_serve : options.serve;
-  std::unique_ptr<Clock> clock =
-      MakeClock(s.scenario, external ? ExternalClock(s.scenario, options.clock) : options.clock, periods);
-  result.clock = clock->name();
+  const ClockMode mode = external ? ExternalClock(s.scenario, options.clock) : options.clock.value_or(s.scenario.clock);
+  std::unique_ptr<Clock> clock = MakeClock(ScenarioClock(s.scenario, mode), periods);
+  result.clock = clock->mode();
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
   CheckSet checks(s.scenario.checks, s.columns);
@@ -388,8 +389,8 @@ RunResult Lab::Run(const RunOptions& options) {
   return result;
 }
 
-std::vector<ServedDevice> Lab::Describe(const BridgeOptions& options, const std::string& clock) const {
-  const std::string name = clock.empty() ? impl_->scenario.clock : clock;
+std::vector<ServedDevice> Lab::Describe(const BridgeOptions& options, std::optional<ClockMode> clock) const {
+  const std::string name = ClockModeName(clock.value_or(impl_->scenario.clock));
   std::unique_ptr<LabBridge> bridge = impl_->MakeBridge(options, name);
   std::vector<ServedDevice> out = impl_->ServedDevices(*bridge);
   for (auto& cam : impl_->cameras) cam->Unserve();

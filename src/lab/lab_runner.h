@@ -12,6 +12,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,8 +20,8 @@
 
 #include "lab/lab_bridge.h"
 #include "lab/lab_checks.h"
-#include "lab/lab_clock.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_clock.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_scenario.h"
 
 namespace vlab::lab {
@@ -39,8 +40,8 @@ struct RunOptions {
   const struct Recording* replay = nullptr;
   /// Serve the devices over UDP (vlab serve) with these options (nullptr: don't).
   const BridgeOptions* serve = nullptr;
-  /// Clock to use instead of the scenario's ("": the scenario's).
-  std::string clock;
+  /// Clock to use instead of the scenario's (none: the scenario's).
+  std::optional<ClockMode> clock;
   /// Called once the served devices are bound, before the first period.
   std::function<void(const std::vector<ServedDevice>&)> on_serving;
   /// Called with the state at t = 0 and at the end of every period, after the
@@ -75,7 +76,7 @@ struct RunResult {
   double loop_wall_s = 0.0;   ///< wall time of the step loop
   double total_wall_s = 0.0;  ///< wall time including writing outputs
   Recording recording;  ///< if RunOptions::record
-  std::string clock;     ///< the clock that ran
+  ClockMode clock = ClockMode::kFast;  ///< the clock that ran
   ClockStats clock_stats;
   std::vector<ServedDevice> served;  ///< served devices with their counters (vlab serve)
   std::vector<double> latencies_s;   ///< command arrival-to-apply latencies (vlab serve)
@@ -105,7 +106,7 @@ class Lab {
 
   /// Binds the served devices as `vlab serve` would and returns their
   /// endpoints and describe replies, then frees the ports.
-  std::vector<ServedDevice> Describe(const BridgeOptions& options, const std::string& clock) const;
+  std::vector<ServedDevice> Describe(const BridgeOptions& options, std::optional<ClockMode> clock) const;
 
   /// qpos at the end of the last Run().
   std::vector<double> FinalQpos() const;

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

@@ -11,10 +11,10 @@
 #include "lab/lab_arm_device.h"
 #include "lab/lab_bridge.h"
 #include "lab/lab_camera_device.h"
-#include "lab/lab_clock.h"
+#include "core/core_clock.h"
 #include "lab/lab_controller.h"
 #include "lab/lab_device.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_wrench_device.h"
 

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <filesystem>
 
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_scenario_devices.h"
 #include "lab/lab_yaml.h"
 
@@ -164,6 +164,15 @@ std::string ResolveScenarioPath(const std::string& arg) {
   return arg;
 }
 
+ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode) {
+  ClockConfig c;
+  c.mode = mode;
+  c.period_s = scenario.control_period_s;
+  c.lockstep = scenario.lockstep;
+  c.realtime = scenario.realtime;
+  return c;
+}
+
 Scenario LoadScenario(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) throw InputError(path + ": a scenario must be a YAML mapping");
@@ -184,20 +193,22 @@ Scenario LoadScenario(const std::string& path) {
   const double seed = r.Number("seed", 1);
   if (seed < 0 || seed != std::floor(seed) || seed > 9007199254740992.0) r.Fail("seed", "must be a non-negative integer");
   s.seed = static_cast<std::uint64_t>(seed);
-  s.clock = r.String("clock", s.clock);
-  if (s.clock != "fast" && s.clock != "lockstep" && s.clock != "realtime") {
-    r.Fail("clock", "unknown clock '" + s.clock + "' (known: fast, lockstep, realtime)");
+  if (r.Has("clock")) {
+    const std::string clock = r.String("clock");
+    if (clock != "fast" && clock != "lockstep" && clock != "realtime") {
+      r.Fail("clock", "unknown clock '" + clock + "' (known: fast, lockstep, realtime)");
+    }
+    s.clock = ParseClockMode(clock, "clock");
   }
   MapReader lockstep = r.Map("lockstep");
   s.lockstep.timeout_s = lockstep.Number("timeout", s.lockstep.timeout_s);
   s.lockstep.start_timeout_s = lockstep.Number("start_timeout", s.lockstep.start_timeout_s);
-  s.lockstep.on_timeout = lockstep.String("on_timeout", s.lockstep.on_timeout);
+  const std::string on_timeout = lockstep.String("on_timeout", "hold");
   s.lockstep.release_after = lockstep.Integer("release_after", s.lockstep.release_after);
   if (!(s.lockstep.timeout_s > 0)) lockstep.Fail("timeout", "must be > 0 s");
   if (!(s.lockstep.start_timeout_s > 0)) lockstep.Fail("start_timeout", "must be > 0 s");
-  if (s.lockstep.on_timeout != "hold" && s.lockstep.on_timeout != "fail") {
-    lockstep.Fail("on_timeout", "must be hold or fail");
-  }
+  if (on_timeout != "hold" && on_timeout != "fail") lockstep.Fail("on_timeout", "must be hold or fail");
+  s.lockstep.on_timeout = on_timeout == "fail" ? OnTimeout::kFail : OnTimeout::kHold;
   if (s.lockstep.release_after < 1) lockstep.Fail("release_after", "must be >= 1");
   lockstep.Finish();
   MapReader realtime = r.Map("realtime");

@@ -14,6 +14,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "core/core_clock.h"
+
 namespace vlab::lab {
 
 /// Joint servo of a simulated arm: the drive electronics between a command
@@ -246,19 +248,6 @@ struct OutputsConfig {
   std::vector<PlotConfig> plots;
 };
 
-/// Lockstep clock: the lab waits for the commands that answer each period.
-struct LockstepConfig {
-  double timeout_s = 1.0;        ///< wait per period (wall time)
-  double start_timeout_s = 30.0;  ///< wait for the first command (period 0)
-  std::string on_timeout = "hold";  ///< hold (arm holds, run continues) | fail (run stops, exit 1)
-  int release_after = 3;         ///< consecutive timeouts after which the silent owner is released
-};
-
-/// Realtime clock: periods paced to the wall clock.
-struct RealtimeConfig {
-  double factor = 1.0;  ///< simulated seconds per wall second
-};
-
 struct Scenario {
   std::string file;        ///< path as given
   std::string name;        ///< output folder name (default: file stem)
@@ -267,7 +256,7 @@ struct Scenario {
   double duration_s = 1.0;
   double control_period_s = 0.002;
   std::uint64_t seed = 1;
-  std::string clock = "fast";  ///< fast | lockstep | realtime
+  ClockMode clock = ClockMode::kFast;
   LockstepConfig lockstep;
   RealtimeConfig realtime;
   std::vector<std::string> allow_warnings;
@@ -281,6 +270,9 @@ struct Scenario {
 
 /// Resolves a scenario argument: PATH, or PATH.yaml when PATH does not exist.
 std::string ResolveScenarioPath(const std::string& arg);
+
+/// The scenario's clock, run in `mode`.
+ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode);
 
 /// Loads and validates a scenario file. Throws InputError naming the file, the
 /// line and the key.

@@ -19,7 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_support_polygon.h"
 #include "sensors/sensor_random.h"
 

@@ -47,15 +47,15 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                         {"message", w.message}, {"allowed", w.allowed}});
   }
   const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
-  json clock = {{"name", r.clock}, {"periods", r.clock_stats.periods}};
-  if (r.clock == "realtime") {
+  json clock = {{"name", ClockModeName(r.clock)}, {"periods", r.clock_stats.periods}};
+  if (r.clock == ClockMode::kRealtime) {
     clock["missed_deadlines"] = r.clock_stats.missed_deadlines;
     clock["missed_fraction"] = r.clock_stats.periods ? static_cast<double>(r.clock_stats.missed_deadlines) /
                                                            static_cast<double>(r.clock_stats.periods)
                                                      : 0.0;
     clock["lateness_s"] = Distribution(r.clock_stats.lateness_s);
   }
-  if (r.clock == "lockstep") clock["timeouts"] = r.clock_stats.timeouts;
+  if (r.clock == ClockMode::kLockstep) clock["timeouts"] = r.clock_stats.timeouts;
   json served = json::array();
   for (const auto& d : r.served) {
     const auto& c = d.counters;
@@ -74,7 +74,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"exit_code", r.exit_code},
       {"failure", r.failure},
       {"seed", sc.seed},
-      {"clock", r.clock},
+      {"clock", ClockModeName(r.clock)},
       {"duration_s", sc.duration_s},
       {"control_period_s", sc.control_period_s},
       {"timestep_s", m->opt.timestep},

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 

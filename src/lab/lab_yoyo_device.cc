@@ -24,7 +24,7 @@
 
 #include "bridge/bridge_yoyo.h"
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::lab {

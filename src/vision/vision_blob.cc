@@ -7,13 +7,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bridge/bridge_yoyo.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::vision {
 
 BlobConfig BlobColor(const std::string& name) {
   if (name == "red") return BlobConfig{};
-  throw lab::InputError("--blob-color '" + name + "': the colours known are: red");
+  throw vlab::InputError("--blob-color '" + name + "': the colours known are: red");
 }
 
 Blob FindBlob(const cv::Mat& rgb, const BlobConfig& config, cv::Mat* hsv, cv::Mat* mask) {

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "bridge/bridge_markers.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::vision {
 
@@ -145,21 +145,21 @@ const char* CubeFaceName(int face) { return face >= 0 && face < kCubeFaces ? kFa
 
 void CheckCubeSet(const CubeSetConfig& c) {
   const bridge::MarkerDictionary* d = bridge::FindMarkerDictionary(c.dictionary);
-  if (d == nullptr) throw lab::InputError("cubes: unknown marker dictionary code " + std::to_string(c.dictionary));
-  if (c.letters.empty()) throw lab::InputError("cubes: --letters is empty");
+  if (d == nullptr) throw vlab::InputError("cubes: unknown marker dictionary code " + std::to_string(c.dictionary));
+  if (c.letters.empty()) throw vlab::InputError("cubes: --letters is empty");
   std::set<char> seen;
   for (char l : c.letters) {
     const bool ok = (l >= 'A' && l <= 'Z') || (l >= '0' && l <= '9');
-    if (!ok) throw lab::InputError(std::string("cubes: --letters: '") + l + "' is not A-Z or 0-9");
-    if (!seen.insert(l).second) throw lab::InputError(std::string("cubes: --letters: '") + l + "' appears twice");
+    if (!ok) throw vlab::InputError(std::string("cubes: --letters: '") + l + "' is not A-Z or 0-9");
+    if (!seen.insert(l).second) throw vlab::InputError(std::string("cubes: --letters: '") + l + "' appears twice");
   }
   if (!(c.size_m >= 0.01 && c.size_m <= 0.5)) {
-    throw lab::InputError("cubes: --size " + MjcfNumber(c.size_m) + " m outside 0.01..0.5");
+    throw vlab::InputError("cubes: --size " + MjcfNumber(c.size_m) + " m outside 0.01..0.5");
   }
-  if (!(c.density_kg_m3 > 0 && std::isfinite(c.density_kg_m3))) throw lab::InputError("cubes: density must be > 0");
+  if (!(c.density_kg_m3 > 0 && std::isfinite(c.density_kg_m3))) throw vlab::InputError("cubes: density must be > 0");
   const long last = static_cast<long>(c.first_id) + kCubeFaces * static_cast<long>(c.letters.size()) - 1;
   if (c.first_id < 0 || last >= d->markers) {
-    throw lab::InputError("cubes: " + std::to_string(c.letters.size()) + " cubes need marker ids " +
+    throw vlab::InputError("cubes: " + std::to_string(c.letters.size()) + " cubes need marker ids " +
                           std::to_string(c.first_id) + ".." + std::to_string(last) + ", dictionary " + d->name +
                           " has 0.." + std::to_string(d->markers - 1));
   }
@@ -214,7 +214,7 @@ void WriteGeneratedFiles(const std::string& dir, const std::vector<GeneratedFile
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) throw lab::InputError("cannot create folder '" + dir + "': " + ec.message());
+  if (ec || !fs::is_directory(dir)) throw vlab::InputError("cannot create folder '" + dir + "': " + ec.message());
   const std::string suffix = ".tmp" + std::to_string(::getpid());
   for (const GeneratedFile& file : files) {
     const fs::path path = fs::path(dir) / file.name;
@@ -225,13 +225,13 @@ void WriteGeneratedFiles(const std::string& dir, const std::vector<GeneratedFile
       out.close();
       if (!out) {
         fs::remove(temp, ec);
-        throw lab::InputError("cannot write '" + path.string() + "'");
+        throw vlab::InputError("cannot write '" + path.string() + "'");
       }
     }
     fs::rename(temp, path, ec);
     if (ec) {
       fs::remove(temp, ec);
-      throw lab::InputError("cannot write '" + path.string() + "'");
+      throw vlab::InputError("cannot write '" + path.string() + "'");
     }
   }
 }

@@ -8,7 +8,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "bridge/bridge_markers.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "vision/vision_edges.h"
 
 namespace vlab::vision {
@@ -33,11 +33,11 @@ void CheckCameraModel(const CameraModel& c, const std::string& what) {
   const bool finite = std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) && std::isfinite(c.cy) &&
                       std::all_of(c.distortion.begin(), c.distortion.end(), [](double v) { return std::isfinite(v); });
   if (c.width < 1 || c.height < 1 || !(c.fx > 0) || !(c.fy > 0) || !finite) {
-    throw lab::InputError(what + ": camera intrinsics need a positive size and focal lengths and finite values");
+    throw vlab::InputError(what + ": camera intrinsics need a positive size and focal lengths and finite values");
   }
   const std::size_t n = c.distortion.size();
   if (n != 0 && n != 4 && n != 5) {
-    throw lab::InputError(what + ": distortion has " + std::to_string(n) + " values, expected 0, 4 or 5");
+    throw vlab::InputError(what + ": distortion has " + std::to_string(n) + " values, expected 0, 4 or 5");
   }
 }
 

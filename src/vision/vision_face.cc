@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bridge/bridge_markers.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::vision {
 
@@ -29,7 +29,7 @@ FacePixels Pixels(const FaceLayout& layout, int bits) {
   const int p = layout.image_px;
   if (p < 64 || p > 4096 || !(layout.marker_fraction > 0 && layout.marker_fraction < 1) ||
       !(layout.margin_fraction >= 0 && layout.margin_fraction < 0.25)) {
-    throw lab::InputError("face layout: image " + std::to_string(p) + " px (64..4096), marker fraction " +
+    throw vlab::InputError("face layout: image " + std::to_string(p) + " px (64..4096), marker fraction " +
                           std::to_string(layout.marker_fraction) + " (0..1), margin fraction " +
                           std::to_string(layout.margin_fraction) + " (0..0.25)");
   }
@@ -47,7 +47,7 @@ FacePixels Pixels(const FaceLayout& layout, int bits) {
   const int band_top = margin, band_bottom = white_top - margin;
   f.letter_box = cv::Rect(margin, band_top, p - 2 * margin, band_bottom - band_top);
   if (f.cell < 2 || white_top < margin || f.letter_box.height < p / 10) {
-    throw lab::InputError("face layout: marker fraction " + std::to_string(layout.marker_fraction) +
+    throw vlab::InputError("face layout: marker fraction " + std::to_string(layout.marker_fraction) +
                           " leaves no room for the letter on a " + std::to_string(p) + " px face");
   }
   return f;
@@ -95,13 +95,13 @@ FaceGeometry FaceGeometryOf(const FaceLayout& layout, int bits) {
 cv::Mat DrawFace(const FaceSpec& face, const FaceLayout& layout) {
   const bridge::MarkerDictionary* dictionary = bridge::FindMarkerDictionary(face.dictionary);
   if (dictionary == nullptr)
-    throw lab::InputError("face: unknown marker dictionary code " + std::to_string(face.dictionary));
+    throw vlab::InputError("face: unknown marker dictionary code " + std::to_string(face.dictionary));
   if (face.id < 0 || face.id >= dictionary->markers) {
-    throw lab::InputError("face: marker id " + std::to_string(face.id) + " outside dictionary " + dictionary->name +
+    throw vlab::InputError("face: marker id " + std::to_string(face.id) + " outside dictionary " + dictionary->name +
                           " (0.." + std::to_string(dictionary->markers - 1) + ")");
   }
   const bool letter_ok = (face.letter >= 'A' && face.letter <= 'Z') || (face.letter >= '0' && face.letter <= '9');
-  if (!letter_ok) throw lab::InputError(std::string("face: letter '") + face.letter + "' is not A-Z or 0-9");
+  if (!letter_ok) throw vlab::InputError(std::string("face: letter '") + face.letter + "' is not A-Z or 0-9");
   const FacePixels f = Pixels(layout, dictionary->bits);
   const int p = layout.image_px;
 

@@ -6,7 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::vision {
 
@@ -40,7 +40,7 @@ long WholeNumber(const std::string& text, const std::string& what) {
     used = 0;
   }
   if (used != text.size() || text.empty() || value < 0) {
-    throw lab::InputError("--marker '" + what + "': '" + text + "' is not a marker id");
+    throw vlab::InputError("--marker '" + what + "': '" + text + "' is not a marker id");
   }
   return value;
 }
@@ -106,17 +106,17 @@ CameraModel CameraModelOf(const bridge::CameraClient& camera) {
 std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& text) {
   const std::size_t a = text.find(':'), b = text.rfind(':');
   if (a == std::string::npos || a == b) {
-    throw lab::InputError("--marker '" + text +
+    throw vlab::InputError("--marker '" + text +
                           "': expected DICT:ID:SIDE or DICT:FIRST-LAST:SIDE, e.g. 4X4_50:0-35:0.03");
   }
   const bridge::MarkerDictionary* d = bridge::FindMarkerDictionary(text.substr(0, a));
-  if (d == nullptr) throw lab::InputError("--marker '" + text + "': unknown dictionary '" + text.substr(0, a) + "'");
+  if (d == nullptr) throw vlab::InputError("--marker '" + text + "': unknown dictionary '" + text.substr(0, a) + "'");
   const std::string ids = text.substr(a + 1, b - a - 1);
   const std::size_t dash = ids.find('-');
   const long first = WholeNumber(ids.substr(0, dash), text);
   const long last = dash == std::string::npos ? first : WholeNumber(ids.substr(dash + 1), text);
   if (last < first || last >= d->markers) {
-    throw lab::InputError("--marker '" + text + "': ids must lie in 0.." + std::to_string(d->markers - 1) + " of " +
+    throw vlab::InputError("--marker '" + text + "': ids must lie in 0.." + std::to_string(d->markers - 1) + " of " +
                           d->name + ", first <= last");
   }
   double side = 0;
@@ -127,7 +127,7 @@ std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& t
     used = 0;
   }
   if (used == 0 || used != text.size() - b - 1 || !(side > 0 && side <= bridge::kMaxMarkerSide_m)) {
-    throw lab::InputError("--marker '" + text + "': the side must be a length in m, 0 < side <= 10");
+    throw vlab::InputError("--marker '" + text + "': the side must be a length in m, 0 < side <= 10");
   }
   std::vector<bridge::MarkerDescriptionMsg> out;
   for (long id = first; id <= last; ++id) out.push_back({d->code, static_cast<int>(id), side});
@@ -149,7 +149,7 @@ VisionProgram::VisionProgram(bridge::CameraClient camera, const VisionConfig& co
       DescribeExtra(camera_, model_, config.detector, config.camera_address, config.camera_port), true);
   server_ = MarkersServer::Create(server);
   if (!server_->Describe(config.markers)) {
-    throw lab::InputError("--marker: " + std::to_string(config.markers.size()) + " markers exceed the table's " +
+    throw vlab::InputError("--marker: " + std::to_string(config.markers.size()) + " markers exceed the table's " +
                           std::to_string(server.max_markers));
   }
   state_.markers.reserve(bridge::kMaxMarkersPerState);

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::vision {
@@ -55,13 +55,13 @@ std::vector<CubePlacement> PlaceCubes(const CubeSetConfig& cubes, const CubeScen
   CheckCubeSet(cubes);
   const int available = static_cast<int>(cubes.letters.size());
   if (s.count < 1 || s.count > available) {
-    throw lab::InputError("cube scene: --count " + std::to_string(s.count) + " outside 1.." +
+    throw vlab::InputError("cube scene: --count " + std::to_string(s.count) + " outside 1.." +
                           std::to_string(available) + " (one cube per letter of --letters)");
   }
   const double radius = cubes.size_m * std::sqrt(0.5);  // circumscribed circle of the footprint
   const double x_lo = s.x_min + radius, x_hi = s.x_max - radius;
   const double y_lo = s.y_min + radius, y_hi = s.y_max - radius;
-  if (!(x_lo < x_hi && y_lo < y_hi)) throw lab::InputError("cube scene: the placement area is smaller than a cube");
+  if (!(x_lo < x_hi && y_lo < y_hi)) throw vlab::InputError("cube scene: the placement area is smaller than a cube");
 
   sensors::Xoshiro256pp rng(s.seed);
   std::vector<CubePlacement> placed;
@@ -78,7 +78,7 @@ std::vector<CubePlacement> PlaceCubes(const CubeSetConfig& cubes, const CubeScen
       p.position = Eigen::Vector3d(xy.x(), xy.y(), s.table_top_z + cubes.size_m / 2 + s.drop_m);
     }
     if (!found) {
-      throw lab::InputError("cube scene: " + std::to_string(s.count) + " cubes of " + MjcfNumber(cubes.size_m) +
+      throw vlab::InputError("cube scene: " + std::to_string(s.count) + " cubes of " + MjcfNumber(cubes.size_m) +
                             " m do not fit the table's free area (seed " + std::to_string(s.seed) + ")");
     }
     p.face_down = static_cast<int>(Uniform(rng) * kCubeFaces);

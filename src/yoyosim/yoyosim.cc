@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "bridge/bridge_protocol.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::yoyosim {
 
@@ -25,8 +25,8 @@ double TendonCoef(const mjModel* m, int tendon, int joint) {
 std::unique_ptr<YoyoSim> YoyoSim::Create(const SimConfig& config) {
   std::unique_ptr<YoyoSim> s(new YoyoSim());
   s->scene_ = config.scene;
-  s->model_ = lab::LoadModel(config.scene);  // throws InputError "scene 'PATH': ..."
-  s->data_ = lab::MakeData(s->model_.get());
+  s->model_ = vlab::LoadModel(config.scene);  // throws InputError "scene 'PATH': ..."
+  s->data_ = vlab::MakeData(s->model_.get());
   const double h = s->model_->opt.timestep;
   const double steps = config.period_s / h;
   if (!std::isfinite(steps) || !(config.period_s > 0) || std::abs(steps - std::round(steps)) > 1e-9 * steps ||
@@ -34,7 +34,7 @@ std::unique_ptr<YoyoSim> YoyoSim::Create(const SimConfig& config) {
     char text[160];
     std::snprintf(text, sizeof(text), "--period %g s is not a whole number (>= 1) of the scene's %g s timesteps",
                   config.period_s, h);
-    throw lab::InputError(text);
+    throw vlab::InputError(text);
   }
   s->period_s_ = config.period_s;
   s->steps_per_period_ = static_cast<int>(std::lround(steps));
@@ -47,7 +47,7 @@ std::unique_ptr<YoyoSim> YoyoSim::Create(const SimConfig& config) {
 void YoyoSim::CheckScene() {
   const mjModel* m = model_.get();
   const mjData* d = data_.get();
-  auto fail = [&](const std::string& what) { throw lab::InputError("scene '" + scene_ + "': " + what); };
+  auto fail = [&](const std::string& what) { throw vlab::InputError("scene '" + scene_ + "': " + what); };
   auto id = [&](mjtObj type, const char* name, const char* what) {
     const int i = mj_name2id(m, type, name);
     if (i < 0) fail(std::string("no ") + what + " '" + name + "'");
@@ -148,7 +148,7 @@ bool YoyoSim::Step() {
     }
     mj_step(model_.get(), data_.get());
     for (int w = 0; w < mjNWARNING; ++w) {
-      if (data_->warning[w].number > 0 && lab::IsDivergenceWarning(w)) {
+      if (data_->warning[w].number > 0 && vlab::IsDivergenceWarning(w)) {
         diverged_ = true;
         divergence_warning_ = w;
         return false;
@@ -162,7 +162,7 @@ bool YoyoSim::Step() {
 }
 
 const char* YoyoSim::divergence() const {
-  return divergence_warning_ >= 0 ? lab::WarningName(divergence_warning_) : "";
+  return divergence_warning_ >= 0 ? vlab::WarningName(divergence_warning_) : "";
 }
 
 void YoyoSim::SamplePoint(double* out) const {

@@ -30,7 +30,7 @@
 #include <memory>
 #include <string>
 
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 
 namespace vlab::yoyosim {
 
@@ -53,7 +53,7 @@ struct YoyoParams {
 
 class YoyoSim {
  public:
-  /// Loads the scene and checks its contract. Throws lab::InputError naming
+  /// Loads the scene and checks its contract. Throws vlab::InputError naming
   /// the scene and the missing or unusable element, or the period.
   static std::unique_ptr<YoyoSim> Create(const SimConfig& config);
 
@@ -98,8 +98,8 @@ class YoyoSim {
   void Refresh();
 
   std::string scene_;
-  lab::ModelPtr model_;
-  lab::DataPtr data_;
+  vlab::ModelPtr model_;
+  vlab::DataPtr data_;
   double period_s_ = 0;
   int steps_per_period_ = 0;
   long periods_ = 0;

@@ -12,8 +12,8 @@
 #include <CLI/CLI.hpp>
 
 #include "bridge/bridge_errors.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_signals.h"
+#include "core/core_errors.h"
+#include "core/core_signals.h"
 #include "yoyosim/yoyosim.h"
 #include "yoyosim/yoyosim_server.h"
 
@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<vlab::yoyosim::YoyoSimServer> server;
   try {
     server = vlab::yoyosim::YoyoSimServer::Create(server_config, vlab::yoyosim::YoyoSim::Create(sim_config));
-  } catch (const vlab::lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     return Fail(e.what());
   } catch (const vlab::bridge::NetworkError& e) {
     return Fail(e.what());
@@ -73,10 +73,10 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  vlab::lab::InstallStopSignals();
+  vlab::InstallStopSignals();
   std::printf("%s\n", server->StartLine().c_str());
   std::fflush(stdout);
-  const int result = server->Run(&vlab::lab::g_stop_requested);
+  const int result = server->Run(&vlab::g_stop_requested);
   if (!server_config.quiet) std::printf("%s\n", server->ReportText().c_str());
   std::fflush(stdout);
   return result;

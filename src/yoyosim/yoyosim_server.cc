@@ -5,7 +5,7 @@
 #include <cstdio>
 
 #include "bridge/bridge_describe.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "yoyosim/yoyosim_describe.h"
 
 namespace vlab::yoyosim {
@@ -20,7 +20,7 @@ constexpr double kPollSlice_s = 0.05;
 long Periods(double seconds, double period_s) { return std::max(1L, std::lround(seconds / period_s)); }
 
 void Require(bool ok, const std::string& what) {
-  if (!ok) throw lab::InputError(what);
+  if (!ok) throw vlab::InputError(what);
 }
 
 }  // namespace
@@ -44,7 +44,7 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
   const double period = sim->period_s();
 
   bridge::DeviceDescription d;
-  d.server = "vlab-yoyosim (MuJoCo " + lab::MujocoVersion() + ")";
+  d.server = "vlab-yoyosim (MuJoCo " + vlab::MujocoVersion() + ")";
   d.clock = c.clock;
   d.address = s->point_socket_->local_endpoint().address().to_string();
   d.control_hz = 1.0 / period;
@@ -71,17 +71,17 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
   yoyo.subscriber_timeout_periods = point.subscriber_timeout_periods;
   s->yoyo_ = std::make_unique<bridge::DeviceEndpoint>(std::move(yoyo));
 
-  // the lab's clock, configured as a scenario would
-  lab::Scenario scenario;
-  scenario.clock = c.clock;
-  scenario.control_period_s = period;
-  scenario.lockstep.timeout_s = c.timeout_s;
-  scenario.lockstep.start_timeout_s = c.start_timeout_s;
-  scenario.lockstep.on_timeout = "hold";
-  scenario.lockstep.release_after = c.release_after;
-  scenario.realtime.factor = 1.0;
+  // the lab's clock policy
+  ClockConfig clock;
+  clock.mode = ParseClockMode(c.clock, "--clock");
+  clock.period_s = period;
+  clock.lockstep.timeout_s = c.timeout_s;
+  clock.lockstep.start_timeout_s = c.start_timeout_s;
+  clock.lockstep.on_timeout = OnTimeout::kHold;
+  clock.lockstep.release_after = c.release_after;
+  clock.realtime.factor = 1.0;
   const long periods = c.duration_s > 0 ? std::lround(c.duration_s / period) : 0;
-  s->clock_ = lab::MakeClock(scenario, "", periods);
+  s->clock_ = MakeClock(clock, periods);
 
   // one byte more than the largest valid datagram, so that a longer one is seen as too long
   s->datagram_.resize((bridge::kMaxPacketValues + 1) * sizeof(double));
@@ -130,9 +130,9 @@ bool YoyoSimServer::Answered(std::int64_t k) const {
   return point_->last_accepted_seq() >= static_cast<double>(k);
 }
 
-void YoyoSimServer::BeginPeriod(long k, lab::PeriodStart start) {
+void YoyoSimServer::BeginPeriod(long k, vlab::PeriodStart start) {
   // lockstep: a silent owner costs a timeout per period, then loses the point
-  if (start == lab::PeriodStart::kTimedOut) {
+  if (start == vlab::PeriodStart::kTimedOut) {
     ++counters_.timeouts;
     if (++consecutive_timeouts_ >= config_.release_after && point_->has_owner()) {
       point_->ReleaseOwner();
@@ -193,7 +193,7 @@ int YoyoSimServer::Run(const volatile std::sig_atomic_t* stop) {
   Publish(0);
   for (long k = 0; (last < 0 || k < last) && !stopped(); ++k) {
     period_ = k;
-    const lab::PeriodStart start = clock_->BeginPeriod(k, this);
+    const vlab::PeriodStart start = clock_->BeginPeriod(k, this);
     if (stopped()) break;
     BeginPeriod(k, start);
     if (!sim_->Step()) {
@@ -205,7 +205,7 @@ int YoyoSimServer::Run(const volatile std::sig_atomic_t* stop) {
     counters_.periods = k + 1;
     Publish(k + 1);
   }
-  const lab::ClockStats& stats = clock_->stats();
+  const vlab::ClockStats& stats = clock_->stats();
   counters_.missed_deadlines = stats.missed_deadlines;
   counters_.max_lateness_s = stats.max_lateness_s;
   return result;

@@ -33,7 +33,7 @@
 
 #include "bridge/bridge_endpoint.h"
 #include "bridge/bridge_udp.h"
-#include "lab/lab_clock.h"
+#include "core/core_clock.h"
 #include "yoyosim/yoyosim.h"
 
 namespace vlab::yoyosim {
@@ -64,9 +64,9 @@ struct ServerCounters {
   double max_lateness_s = 0;  ///< realtime
 };
 
-class YoyoSimServer final : public lab::CommandSource {
+class YoyoSimServer final : public vlab::CommandSource {
  public:
-  /// Validates the config and binds both sockets. Throws lab::InputError for a
+  /// Validates the config and binds both sockets. Throws vlab::InputError for a
   /// bad value (naming the option), bridge::NetworkError for an address or
   /// port that cannot be bound.
   static std::unique_ptr<YoyoSimServer> Create(const ServerConfig& config, std::unique_ptr<YoyoSim> sim);
@@ -75,9 +75,9 @@ class YoyoSimServer final : public lab::CommandSource {
   /// from a signal handler). Returns 0, or 1 when the simulation diverged.
   int Run(const volatile std::sig_atomic_t* stop);
 
-  /// lab::CommandSource: receives on both sockets for up to timeout_s.
+  /// vlab::CommandSource: receives on both sockets for up to timeout_s.
   void Poll(double timeout_s) override;
-  /// lab::CommandSource: the point's owner has answered period k (period 0:
+  /// vlab::CommandSource: the point's owner has answered period k (period 0:
   /// some client owns the point; later: true while nobody owns it).
   bool Answered(std::int64_t k) const override;
 
@@ -96,14 +96,14 @@ class YoyoSimServer final : public lab::CommandSource {
   YoyoSimServer() = default;
   bridge::CommandCheck CheckSetPoint(const std::vector<double>& p) const;
   void Receive();
-  void BeginPeriod(long k, lab::PeriodStart start);
+  void BeginPeriod(long k, vlab::PeriodStart start);
   void Publish(long k);
 
   ServerConfig config_;
   std::unique_ptr<YoyoSim> sim_;
   std::unique_ptr<bridge::UdpSocket> point_socket_, yoyo_socket_;
   std::unique_ptr<bridge::DeviceEndpoint> point_, yoyo_;
-  std::unique_ptr<lab::Clock> clock_;
+  std::unique_ptr<vlab::Clock> clock_;
   ServerCounters counters_;
   const volatile std::sig_atomic_t* stop_ = nullptr;
   long period_ = 0;              // the period being waited for or run

@@ -13,8 +13,8 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 #include "test_util.h"
@@ -28,7 +28,7 @@ constexpr const char* kScenario = VLAB_SOURCE_DIR "/scenes/hoap3_stand.yaml";
 Scenario InProcess(double duration_s) {
   Scenario s = LoadScenario(kScenario);
   s.controller = ControllerConfig{};
-  s.clock = "fast";
+  s.clock = ClockMode::kFast;
   s.duration_s = duration_s;
   return s;
 }

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "kinsim/kinsim_scene.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::kinsim {
 namespace {
@@ -188,7 +188,7 @@ TEST(KinArmTest, CreateNamesTheBadField) {
     try {
       KinArm::Create(c);
       ADD_FAILURE() << "no error, expected '" << part << "'";
-    } catch (const lab::InputError& e) {
+    } catch (const vlab::InputError& e) {
       EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
     }
   };
@@ -228,13 +228,13 @@ TEST(KinsimSceneTest, ReadsThePa10JointsAndRanges) {
   try {
     ArmFromScene("pa10", scene, {"S1", "elbow"}, {1.0}, {0, 0});
     ADD_FAILURE() << "no error for an unknown joint";
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no joint 'elbow'"), std::string::npos) << e.what();
   }
   try {
     ArmFromScene("pa10", "no/such/scene.xml", Pa10Joints(), {1.0}, Pa10ReadyPose());
     ADD_FAILURE() << "no error for a missing scene";
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("scene 'no/such/scene.xml'"), std::string::npos) << e.what();
   }
 }

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 
 namespace vlab::lab {
 namespace {

@@ -13,8 +13,8 @@
 
 #include "bridge/bridge_client_device.h"
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
 

@@ -12,7 +12,7 @@
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
 

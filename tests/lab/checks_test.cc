@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
 namespace vlab::lab {
 namespace {

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_external.h"
 #include "test_util.h"
 
@@ -205,7 +205,7 @@ TEST(ExpandCommand, PlaceholdersAnywhereInAnArgument) {
   try {
     lab::ExpandCommand({"{bin"}, values, "s.yaml:3");
     FAIL() << "an unclosed brace must be refused";
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("s.yaml:3: controller.command: '{bin': a '{' without its '}'"),
               std::string::npos)
         << e.what();

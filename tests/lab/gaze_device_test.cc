@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
 
@@ -226,7 +226,7 @@ TEST(GazeScenarioTest, KeysAreReadAndCheckedAndTheProbeIsLoggedAndServed) {
   EXPECT_NE(std::find(columns.begin(), columns.end(), "g.visible"), columns.end());
   BridgeOptions bo;
   bo.ports = {{"g", 0}};
-  const std::vector<ServedDevice> served = lab->Describe(bo, "lockstep");
+  const std::vector<ServedDevice> served = lab->Describe(bo, ClockMode::kLockstep);
   ASSERT_EQ(served.size(), 1u);
   EXPECT_EQ(served[0].kind, "gaze");
   const nlohmann::json d = nlohmann::json::parse(served[0].describe_json);

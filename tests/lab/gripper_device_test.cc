@@ -16,8 +16,8 @@
 #include <gtest/gtest.h>
 
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "test_util.h"
 
 namespace vlab::lab {

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "lab/lab_plot.h"
 #include "test_util.h"
 

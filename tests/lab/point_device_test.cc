@@ -11,8 +11,8 @@
 #include "control/task_space.h"
 #include "lab/lab_arm_device.h"
 #include "lab/lab_device.h"
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
 

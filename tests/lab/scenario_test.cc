@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "test_util.h"
 
 namespace vlab::lab {

@@ -15,7 +15,7 @@
 #include "bridge/bridge_yoyo.h"
 #include "lab/lab_arm_device.h"
 #include "lab/lab_device.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
 

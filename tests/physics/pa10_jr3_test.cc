@@ -24,14 +24,14 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 #include "sensors/sensor_wrench.h"
 
 namespace vlab::sensors {
 namespace {
 
-using lab::DataPtr;
-using lab::ModelPtr;
+using vlab::DataPtr;
+using vlab::ModelPtr;
 
 constexpr int kDof = 7;
 constexpr double kStep = 0.001;       // physics step, s
@@ -62,8 +62,8 @@ struct AnalyticLoad {
 class Pa10Jr3 : public ::testing::Test {
  protected:
   void SetUp() override {
-    model_ = lab::LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
-    data_ = lab::MakeData(model_.get());
+    model_ = vlab::LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
+    data_ = vlab::MakeData(model_.get());
     const mjModel* m = model_.get();
     ASSERT_EQ(m->nq, kDof);
     ASSERT_EQ(m->nu, kDof);
@@ -94,7 +94,7 @@ class Pa10Jr3 : public ::testing::Test {
     ASSERT_EQ(Vec(m->opt.gravity), Eigen::Vector3d(0, 0, -9.81)) << "scenes/pa10.xml gravity";
   }
 
-  void TearDown() override { EXPECT_TRUE(lab::TakeMujocoWarningTexts().empty()); }
+  void TearDown() override { EXPECT_TRUE(vlab::TakeMujocoWarningTexts().empty()); }
 
   // Holds the arm at q (see the file comment) and returns the JR3 load from MuJoCo's sensors.
   // Fails (and returns false) if the pose is not a clean static case.

@@ -21,7 +21,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 
 namespace vlab::lab {
 namespace {

@@ -7,7 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "render/image_io.h"
 #include "render/video.h"
 #include "test_util.h"
@@ -137,8 +137,8 @@ TEST(Video, UnfinishedVideoLeavesNothing) {
 
 TEST(Video, BadNamesAreInputErrors) {
   TempDir dir;
-  EXPECT_THROW(VideoFile::Create(dir / "clip.avi", 30.0, 64, 48), lab::InputError);
-  EXPECT_THROW(VideoFile::Create(dir / "missing/clip.mp4", 30.0, 64, 48), lab::InputError);
+  EXPECT_THROW(VideoFile::Create(dir / "clip.avi", 30.0, 64, 48), vlab::InputError);
+  EXPECT_THROW(VideoFile::Create(dir / "missing/clip.mp4", 30.0, 64, 48), vlab::InputError);
   EXPECT_TRUE(Entries(dir.path()).empty());
 }
 

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "test_util.h"
 #include "vision/vision_cubes.h"
 
@@ -21,7 +21,7 @@ using testing::TempDir;
 std::string ErrorOf(const CubeSetConfig& c) {
   try {
     CheckCubeSet(c);
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     return e.what();
   }
   return "";

@@ -10,7 +10,7 @@
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "vision/vision_detector.h"
 #include "vision/vision_edges.h"
 
@@ -209,13 +209,13 @@ TEST_F(MarkerPoseTest, GrazingViewsAreNotValid) {
 
 TEST(CameraModelCheck, RefusesUnusableIntrinsics) {
   EXPECT_NO_THROW(CheckCameraModel({640, 480, 600, 600, 319.5, 239.5, {0.1, -0.2, 0, 0}}, "cam"));
-  EXPECT_THROW(CheckCameraModel({0, 480, 600, 600, 319.5, 239.5, {}}, "cam"), lab::InputError);
-  EXPECT_THROW(CheckCameraModel({640, 480, -1, 600, 319.5, 239.5, {}}, "cam"), lab::InputError);
-  EXPECT_THROW(CheckCameraModel({640, 480, 600, 600, NAN, 239.5, {}}, "cam"), lab::InputError);
+  EXPECT_THROW(CheckCameraModel({0, 480, 600, 600, 319.5, 239.5, {}}, "cam"), vlab::InputError);
+  EXPECT_THROW(CheckCameraModel({640, 480, -1, 600, 319.5, 239.5, {}}, "cam"), vlab::InputError);
+  EXPECT_THROW(CheckCameraModel({640, 480, 600, 600, NAN, 239.5, {}}, "cam"), vlab::InputError);
   try {
     CheckCameraModel({640, 480, 600, 600, 319.5, 239.5, {0.1, 0.2, 0.3}}, "camera 'webcam'");
     FAIL();
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("camera 'webcam': distortion has 3 values"), std::string::npos) << e.what();
   }
 }

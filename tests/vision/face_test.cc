@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bridge/bridge_markers.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "vision/vision_detector.h"
 #include "vision/vision_face.h"
 
@@ -28,7 +28,7 @@ FaceSpec Spec(char letter, int dictionary, int id) {
 std::string ErrorOf(const FaceSpec& spec, const FaceLayout& layout) {
   try {
     DrawFace(spec, layout);
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     return e.what();
   }
   return "";

@@ -12,7 +12,7 @@
 #include <mujoco/mujoco.h>
 #include <opencv2/imgproc.hpp>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "render/renderer.h"
 #include "vision/vision_locate.h"
 #include "vision/vision_scene.h"
@@ -85,13 +85,13 @@ TEST(CubeScene, RefusesWhatDoesNotFit) {
   CubeSetConfig cubes;
   CubeSceneConfig scene;
   scene.count = 7;
-  EXPECT_THROW(PlaceCubes(cubes, scene), lab::InputError);
+  EXPECT_THROW(PlaceCubes(cubes, scene), vlab::InputError);
   cubes.size_m = 0.2;
   scene.count = 6;
   try {
     PlaceCubes(cubes, scene);
     FAIL();
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("do not fit the table's free area"), std::string::npos) << e.what();
   }
 }

@@ -16,7 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bridge/bridge_yoyo.h"
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 #include "vision/vision_blob.h"
 #include "yoyo_test_scene.h"
 
@@ -142,7 +142,7 @@ TEST(YoyoBlob, HolesDoNotMoveTheCentroid) {
   const vision::Blob two = vision::FindBlob(image, red, &hsv, &mask);
   EXPECT_EQ(two.candidates, 2);
   EXPECT_NEAR(two.u, strung.u, 1e-9);
-  EXPECT_THROW(vision::BlobColor("green"), lab::InputError);
+  EXPECT_THROW(vision::BlobColor("green"), vlab::InputError);
 }
 
 TEST(YoyoBlob, RayMeetsTheVerticalPlaneThroughTheLine) {

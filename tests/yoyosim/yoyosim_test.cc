@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "lab/lab_errors.h"
-#include "lab/lab_mujoco.h"
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "yoyosim/yoyosim.h"
 
 namespace vlab::yoyosim {
@@ -55,8 +55,8 @@ class YoyoSimTest : public ::testing::Test {
              (y.mass * y.axle_radius * y.axle_radius + y.spin_inertia);  // a / g on a taut string
   }
   void TearDown() override {
-    for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(sim_->data()->warning[w].number, 0) << lab::WarningName(w);
-    const auto texts = lab::TakeMujocoWarningTexts();
+    for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(sim_->data()->warning[w].number, 0) << vlab::WarningName(w);
+    const auto texts = vlab::TakeMujocoWarningTexts();
     EXPECT_TRUE(texts.empty()) << texts.front();
   }
   /// Runs n periods, each with the set-point `at(t_end)` of the period's end (world).
@@ -100,14 +100,14 @@ TEST_F(YoyoSimTest, RefusesBadPeriodsScenesAndTargets) {
   try {
     YoyoSim::Create(config);
     ADD_FAILURE() << "a period of 1.5 timesteps was taken";
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--period 0.0015 s"), std::string::npos) << e.what();
   }
   config.scene = "no/such/scene.xml";
   try {
     YoyoSim::Create(config);
     ADD_FAILURE() << "a missing scene was loaded";
-  } catch (const lab::InputError& e) {
+  } catch (const vlab::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("scene 'no/such/scene.xml'"), std::string::npos) << e.what();
   }
   const double outside[3] = {0.0, 0.0, 2.0 + 1e-9}, nan[3] = {0.0, std::nan(""), 1.5};

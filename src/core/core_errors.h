@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace vlab::lab {
+namespace vlab {
 
 /// Bad user input: a file, key, field or option that cannot be used as given.
 /// The message names the file and, where known, the line and key.
@@ -17,4 +17,4 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-}  // namespace vlab::lab
+}  // namespace vlab

@@ -20,9 +20,42 @@
 #include <string>
 #include <vector>
 
-#include "lab/lab_scenario.h"
 
-namespace vlab::lab {
+namespace vlab {
+
+/// The clock modes (the scenario's `clock` key, `--clock`).
+enum class ClockMode { kFast, kLockstep, kRealtime };
+/// "fast", "lockstep" or "realtime".
+const char* ClockModeName(ClockMode mode);
+/// The mode of a name; throws InputError "WHAT: unknown clock 'NAME' (known: ...)".
+ClockMode ParseClockMode(const std::string& name, const std::string& what);
+
+/// What a lockstep run does when a period's commands do not come in time.
+enum class OnTimeout {
+  kHold,  ///< the devices hold, the run goes on
+  kFail,  ///< the run stops, exit 1
+};
+
+/// Lockstep clock: the lab waits for the commands that answer each period.
+struct LockstepConfig {
+  double timeout_s = 1.0;        ///< wait per period (wall time)
+  double start_timeout_s = 30.0;  ///< wait for the first command (period 0)
+  OnTimeout on_timeout = OnTimeout::kHold;
+  int release_after = 3;         ///< consecutive timeouts after which the silent owner is released
+};
+
+/// Realtime clock: periods paced to the wall clock.
+struct RealtimeConfig {
+  double factor = 1.0;  ///< simulated seconds per wall second
+};
+
+/// Everything a clock is made from.
+struct ClockConfig {
+  ClockMode mode = ClockMode::kFast;
+  double period_s = 0.002;  ///< control period, s
+  LockstepConfig lockstep;
+  RealtimeConfig realtime;  ///< (realtime also waits for period 0 up to lockstep.start_timeout_s)
+};
 
 /// What a clock waits on: the lab's bridge, or nothing (fast).
 class CommandSource {
@@ -48,8 +81,9 @@ enum class PeriodStart { kReady, kTimedOut, kFail };
 class Clock {
  public:
   virtual ~Clock() = default;
+  virtual ClockMode mode() const = 0;
   /// Mode name: "fast", "lockstep" or "realtime".
-  virtual const char* name() const = 0;
+  const char* name() const { return ClockModeName(mode()); }
   /// Blocks until period k may begin (see the file comment).
   virtual PeriodStart BeginPeriod(std::int64_t k, CommandSource* source) = 0;
   /// Simulated seconds per wall second (realtime); can change during a run.
@@ -58,11 +92,10 @@ class Clock {
   virtual const ClockStats& stats() const = 0;
 };
 
-/// Creates the scenario's clock (`mode` overrides scenario.clock when not
-/// empty); throws InputError for an unknown mode.
-std::unique_ptr<Clock> MakeClock(const Scenario& scenario, const std::string& mode, std::int64_t periods);
+/// Creates a clock for a run of `periods` periods.
+std::unique_ptr<Clock> MakeClock(const ClockConfig& config, std::int64_t periods);
 
 /// Monotonic wall time, s.
 double WallNow();
 
-}  // namespace vlab::lab
+}  // namespace vlab

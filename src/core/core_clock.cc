@@ -1,4 +1,4 @@
-#include "lab/lab_clock.h"
+#include "core/core_clock.h"
 
 #include <sys/prctl.h>
 
@@ -6,9 +6,9 @@
 #include <chrono>
 #include <thread>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
-namespace vlab::lab {
+namespace vlab {
 
 double WallNow() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -19,7 +19,7 @@ namespace {
 // fast: never waits.
 class FastClock final : public Clock {
  public:
-  const char* name() const override { return "fast"; }
+  ClockMode mode() const override { return ClockMode::kFast; }
   PeriodStart BeginPeriod(std::int64_t, CommandSource*) override {
     ++stats_.periods;
     return PeriodStart::kReady;
@@ -34,7 +34,7 @@ class FastClock final : public Clock {
 class LockstepClock final : public Clock {
  public:
   explicit LockstepClock(const LockstepConfig& c) : config_(c) {}
-  const char* name() const override { return "lockstep"; }
+  ClockMode mode() const override { return ClockMode::kLockstep; }
 
   PeriodStart BeginPeriod(std::int64_t k, CommandSource* source) override {
     ++stats_.periods;
@@ -45,7 +45,7 @@ class LockstepClock final : public Clock {
       const double left = deadline - WallNow();
       if (left <= 0) {
         ++stats_.timeouts;
-        return config_.on_timeout == "fail" ? PeriodStart::kFail : PeriodStart::kTimedOut;
+        return config_.on_timeout == OnTimeout::kFail ? PeriodStart::kFail : PeriodStart::kTimedOut;
       }
       source->Poll(left);
     }
@@ -68,7 +68,7 @@ class RealtimeClock final : public Clock {
     prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
     stats_.lateness_s.reserve(static_cast<std::size_t>(std::max<std::int64_t>(periods, 0)) + 1);
   }
-  const char* name() const override { return "realtime"; }
+  ClockMode mode() const override { return ClockMode::kRealtime; }
 
   PeriodStart BeginPeriod(std::int64_t k, CommandSource* source) override {
     ++stats_.periods;
@@ -123,15 +123,35 @@ class RealtimeClock final : public Clock {
 
 }  // namespace
 
-std::unique_ptr<Clock> MakeClock(const Scenario& scenario, const std::string& mode, std::int64_t periods) {
-  const std::string m = mode.empty() ? scenario.clock : mode;
-  if (m == "fast") return std::make_unique<FastClock>();
-  if (m == "lockstep") return std::make_unique<LockstepClock>(scenario.lockstep);
-  if (m == "realtime") {
-    return std::make_unique<RealtimeClock>(scenario.control_period_s, scenario.realtime.factor,
-                                           scenario.lockstep.start_timeout_s, periods);
+std::unique_ptr<Clock> MakeClock(const ClockConfig& c, std::int64_t periods) {
+  switch (c.mode) {
+    case ClockMode::kFast:
+      return std::make_unique<FastClock>();
+    case ClockMode::kLockstep:
+      return std::make_unique<LockstepClock>(c.lockstep);
+    case ClockMode::kRealtime:
+      return std::make_unique<RealtimeClock>(c.period_s, c.realtime.factor, c.lockstep.start_timeout_s, periods);
   }
-  throw InputError("unknown clock '" + m + "' (known: fast, lockstep, realtime)");
+  return nullptr;  // unreachable: every mode is handled above
 }
 
-}  // namespace vlab::lab
+const char* ClockModeName(ClockMode mode) {
+  switch (mode) {
+    case ClockMode::kFast:
+      return "fast";
+    case ClockMode::kLockstep:
+      return "lockstep";
+    case ClockMode::kRealtime:
+      return "realtime";
+  }
+  return "?";
+}
+
+ClockMode ParseClockMode(const std::string& name, const std::string& what) {
+  for (ClockMode m : {ClockMode::kFast, ClockMode::kLockstep, ClockMode::kRealtime}) {
+    if (name == ClockModeName(m)) return m;
+  }
+  throw InputError(what + ": unknown clock '" + name + "' (known: fast, lockstep, realtime)");
+}
+
+}  // namespace vlab

@@ -14,7 +14,7 @@
 
 #include <mujoco/mujoco.h>
 
-namespace vlab::lab {
+namespace vlab {
 
 struct ModelDeleter {
   void operator()(mjModel* m) const { mj_deleteModel(m); }
@@ -56,4 +56,4 @@ bool IsDivergenceWarning(int warning_index);
 /// MuJoCo's version string, e.g. "2.2.2".
 std::string MujocoVersion();
 
-}  // namespace vlab::lab
+}  // namespace vlab

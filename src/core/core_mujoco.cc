@@ -1,4 +1,4 @@
-#include "lab/lab_mujoco.h"
+#include "core/core_mujoco.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -6,9 +6,9 @@
 #include <fstream>
 #include <mutex>
 
-#include "lab/lab_errors.h"
+#include "core/core_errors.h"
 
-namespace vlab::lab {
+namespace vlab {
 
 namespace {
 
@@ -117,4 +117,4 @@ bool IsDivergenceWarning(int i) { return i == mjWARN_BADQPOS || i == mjWARN_BADQ
 
 std::string MujocoVersion() { return mj_versionString(); }
 
-}  // namespace vlab::lab
+}  // namespace vlab

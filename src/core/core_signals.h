@@ -6,7 +6,7 @@
 
 #include <csignal>
 
-namespace vlab::lab {
+namespace vlab {
 
 /// Set to 1 by SIGINT or SIGTERM once InstallStopSignals() ran.
 inline volatile std::sig_atomic_t g_stop_requested = 0;
@@ -22,4 +22,4 @@ inline void InstallStopSignals() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-}  // namespace vlab::lab
+}  // namespace vlab
