@@ -32,6 +32,7 @@
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "lab/devices/device_camera.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 #include "render/image_io.h"
@@ -106,7 +107,7 @@ class LoopbackWire {
 // the camera measured in a scenario: its first camera device's, else "webcam", else the scene's first
 std::string PickCamera(const lab::Scenario& s, const mjModel* m) {
   for (const auto& d : s.devices) {
-    if (d.kind == "camera") return d.camera.camera;
+    if (d.kind == bridge::DeviceKind::kCamera) return d.ParamsAs<lab::CameraParams>().camera;
   }
   if (mj_name2id(m, mjOBJ_CAMERA, kCubeCamera) >= 0) return kCubeCamera;
   if (m->ncam == 0) throw vlab::InputError("scene '" + s.scene + "': no camera to render");

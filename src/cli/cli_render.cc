@@ -18,6 +18,7 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "lab/devices/device_camera.h"
 #include "lab/lab_log.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_output.h"
@@ -73,9 +74,9 @@ void ScenarioSize(const lab::Scenario& s, const std::string& camera, int* width,
   *width = 640;
   *height = 480;
   for (const auto& d : s.devices) {
-    if (d.kind == "camera" && d.camera.camera == camera) {
-      *width = d.camera.width;
-      *height = d.camera.height;
+    if (d.kind == bridge::DeviceKind::kCamera && d.ParamsAs<lab::CameraParams>().camera == camera) {
+      *width = d.ParamsAs<lab::CameraParams>().width;
+      *height = d.ParamsAs<lab::CameraParams>().height;
       return;
     }
   }

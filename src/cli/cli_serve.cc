@@ -111,7 +111,7 @@ int DevicesCommand(const ServeArgs& args) {
       if (args.json) std::printf("           describe: %s\n", d.describe_json.c_str());
     }
     for (const auto& d : scenario.devices) {
-      if (ports[d.name] == 0) std::printf("  %-8s %-6s not served (no port)\n", d.name.c_str(), d.kind.c_str());
+      if (ports[d.name] == 0) std::printf("  %-8s %-6s not served (no port)\n", d.name.c_str(), bridge::KindName(static_cast<int>(d.kind)));
     }
     return 0;
   });

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_errors.h"
@@ -15,139 +14,78 @@ namespace {
 
 // how long Poll spins before it sleeps, s
 constexpr double kSpinSeconds = 200e-6;
+// at most this many devices are served on endpoints of their own
+constexpr std::size_t kMaxServed = 16;
 
-std::vector<double> ToVector(const Eigen::VectorXd& v, bool keep_infinite = false) {
-  std::vector<double> out;
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    if (!keep_infinite && !std::isfinite(v[i])) return {};  // unlimited: no limit of that kind
-    out.push_back(v[i]);
-  }
-  return out;
-}
-
-std::vector<double> TorqueMax(const SimArm& arm) {
-  std::vector<double> out;
-  for (int i = 0; i < arm.dof(); ++i) {
-    const double m = std::min(std::abs(arm.torque_min()[i]), std::abs(arm.torque_max()[i]));
-    if (!std::isfinite(m)) return {};
-    out.push_back(m);
-  }
-  return out;
+// the commands of this role go through ApplyCommands, and its owner is released on lockstep timeouts
+bool Applied(CommandRole role) {
+  return role == CommandRole::kWaited || role == CommandRole::kWaitedFromStart || role == CommandRole::kDriven;
 }
 
 }  // namespace
 
+LabBridge::~LabBridge() {
+  for (Served& d : devices_) {
+    if (OwnTransport* t = d.device->own_transport()) t->Unserve();
+  }
+}
+
 std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const BridgeOptions& options,
-                                             const std::vector<SimArm*>& arms, const std::vector<SimWrench*>& wrenches,
-                                             const std::vector<SimDevice*>& devices, const std::string& clock_name) {
+                                             const std::vector<Device*>& devices, const std::string& clock_name) {
   std::unique_ptr<LabBridge> b(new LabBridge());
   const double control_hz = 1.0 / scenario.control_period_s;
-  std::vector<std::string> names;
-  for (const DeviceConfig& c : scenario.devices) names.push_back(c.name);
   for (const auto& [name, port] : options.ports) {
-    if (std::find(names.begin(), names.end(), name) == names.end()) {
-      throw InputError("--port " + name + "=" + std::to_string(port) + ": the scenario has no device '" + name + "'");
-    }
+    const bool known = std::any_of(devices.begin(), devices.end(), [&](const Device* d) { return d->name() == name; });
+    if (!known) throw InputError("--port " + name + "=" + std::to_string(port) + ": the scenario has no device '" + name + "'");
   }
-  b->devices_.reserve(scenario.devices.size());
-  for (const DeviceConfig& c : scenario.devices) {
-    const auto override_port = options.ports.find(c.name);
-    const bool served = override_port != options.ports.end() || c.port > 0;
-    if (!served || c.kind == "camera") continue;  // cameras: their own server (chunked frames)
+  const std::string server = options.server + " (MuJoCo " + MujocoVersion() + ")";
+  b->devices_.reserve(devices.size());
+  std::size_t endpoints = 0;
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    Device* device = devices[i];
+    const DeviceConfig& c = scenario.devices[i];
+    const auto override_port = options.ports.find(device->name());
+    if (override_port == options.ports.end() && c.port == 0) continue;
     const int port = override_port != options.ports.end() ? override_port->second : c.port;
     Served d;
-    d.name = c.name;
+    d.device = device;
+    if (OwnTransport* t = device->own_transport()) {
+      t->Unserve();
+      t->Serve(options.bind, port, server, clock_name);
+      b->fds_.push_back(t->fd());
+      b->devices_.push_back(std::move(d));
+      continue;
+    }
     try {
       d.socket = bridge::UdpSocket::Bind(options.bind, port);
     } catch (const bridge::NetworkError& e) {
       throw InputError(c.where + ": device '" + c.name + "': " + e.what());
     }
     bridge::EndpointConfig ec;
-    ec.name = c.name;
-    const int owner_periods = static_cast<int>(std::lround(c.arm.owner_timeout_s * control_hz));
-    ec.owner_timeout_periods = std::max(1, owner_periods);
+    ec.name = device->name();
     ec.subscriber_timeout_periods = static_cast<int>(std::lround(10.0 * control_hz));
-    const bridge::DeviceDescription common{c.name, options.server + " (MuJoCo " + MujocoVersion() + ")", clock_name,
-                                           options.bind, d.socket->local_port(), control_hz};
-    if (c.kind == "arm") {
-      SimArm* arm = nullptr;
-      for (std::size_t i = 0; i < arms.size(); ++i) {
-        if (arms[i]->name() == c.name) {
-          arm = arms[i];
-          d.arm_index = static_cast<int>(i);
-        }
-      }
-      d.arm = arm;
-      for (const DeviceConfig& p : scenario.devices) d.driven = d.driven || (p.kind == "point" && p.point.arm == c.name);
-      d.kind = bridge::DeviceKind::kArm;
-      ec.kind = d.kind;
-      ec.joints = arm->dof();
-      ec.position_min = ToVector(arm->lower_limits(), true);
-      ec.position_max = ToVector(arm->upper_limits(), true);
-      ec.velocity_max = ToVector(arm->max_velocity());
-      ec.torque_max = TorqueMax(*arm);
-      ec.watchdog_periods = arm->watchdog_periods();
-      bridge::ArmDescription desc;
-      desc.joints = arm->joint_names();
-      desc.position_min = ToVector(arm->lower_limits());
-      desc.position_max = ToVector(arm->upper_limits());
-      desc.velocity_max = ec.velocity_max;
-      desc.torque_max = ec.torque_max;
-      desc.watchdog_periods = ec.watchdog_periods;
-      desc.owner_timeout_s = c.arm.owner_timeout_s;
-      static_cast<bridge::DeviceDescription&>(desc) = common;
-      ec.describe_json = bridge::DescribeJson(desc);
-    } else if (c.kind == "wrench") {
-      SimWrench* w = nullptr;
-      for (SimWrench* x : wrenches) w = x->name() == c.name ? x : w;
-      d.wrench = w;
-      d.kind = bridge::DeviceKind::kWrench;
-      ec.kind = d.kind;
-      bridge::WrenchDescription desc;
-      desc.sensor_model = w->sensor().model_name();
-      desc.full_scale.assign(w->sensor().full_scale().data(), w->sensor().full_scale().data() + 6);
-      desc.filter = w->sensor().filter();
-      desc.filter_cutoff_hz = desc.filter > 0 ? w->sensor().stage(desc.filter).cutoff_hz : 0.0;
-      desc.sample_hz = w->sensor().sample_rate_hz();
-      static_cast<bridge::DeviceDescription&>(desc) = common;
-      ec.describe_json = bridge::DescribeJson(desc);
-    } else if (IsSimDeviceKind(c.kind)) {
-      for (SimDevice* x : devices) d.device = x->name() == c.name ? x : d.device;
-      d.kind = d.device->kind();
-      ec.kind = d.kind;
-      ec.command_length = d.device->command_length();
-      if (ec.command_length > 0) {
-        SimDevice* device = d.device;
-        ec.check_command = [device](const std::vector<double>& p) { return device->CheckCommand(p); };
-        ec.status_first = true;
-        ec.watchdog_periods = device->watchdog_periods();
-        ec.owner_timeout_periods = std::max(1, static_cast<int>(std::lround(device->owner_timeout_s() * control_hz)));
-      }
-      ec.describe_json = bridge::DescribeJson(common, c.kind, d.device->DescribeFacts());
-    } else {
-      d.kind = bridge::DeviceKind::kSim;
-      ec.kind = d.kind;
-      bridge::SimDescription desc;
-      desc.devices = names;
-      static_cast<bridge::DeviceDescription&>(desc) = common;
-      ec.describe_json = bridge::DescribeJson(desc);
-    }
+    device->ConfigureEndpoint(control_hz, &ec);
+    const bridge::DeviceDescription common{device->name(), server, clock_name, options.bind, d.socket->local_port(),
+                                           control_hz};
+    ec.describe_json = device->DescribeJson(common);
     d.endpoint = std::make_unique<bridge::DeviceEndpoint>(ec);
     b->fds_.push_back(d.socket->fd());
     b->devices_.push_back(std::move(d));
+    ++endpoints;
   }
-  for (Served& d : b->devices_) {
-    if (d.kind == bridge::DeviceKind::kSim) b->sim_ = &d;
-  }
-  if (b->devices_.size() > 16) throw InputError(scenario.file + ": at most 16 devices can be served");
+  if (endpoints > kMaxServed) throw InputError(scenario.file + ": at most 16 devices can be served");
   b->buffer_.resize(65536);
   b->payload_.reserve(bridge::kMaxPacketValues);
-  b->packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
   b->latencies_.reserve(1 << 20);
+  for (Served& d : b->devices_) d.last_state.reserve(bridge::kMaxPacketValues * sizeof(double));
   return b;
 }
 
 void LabBridge::Receive(Served& d) {
+  if (OwnTransport* t = d.device->own_transport()) {
+    t->PollRequests();  // describe replies while lockstep waits
+    return;
+  }
   bridge::Endpoint from;
   for (;;) {
     const long n = d.socket->Receive(buffer_.data(), buffer_.size(), &from, 0.0);
@@ -162,14 +100,25 @@ void LabBridge::Receive(Served& d) {
   }
 }
 
+void LabBridge::ReceiveAll() {
+  for (Served& d : devices_) {
+    if (!d.device->own_transport()) Receive(d);
+  }
+  for (Served& d : devices_) {
+    if (d.device->own_transport()) Receive(d);
+  }
+}
+
+LabBridge::Served* LabBridge::Find(const Device& device) {
+  for (Served& d : devices_) {
+    if (d.device == &device) return &d;
+  }
+  return nullptr;
+}
+
 void LabBridge::WatchPeerExit(int fd) {
   peer_exit_fd_ = fd;
   fds_.push_back(fd);
-}
-
-void LabBridge::AddPollable(int fd, std::function<void()> on_readable) {
-  fds_.push_back(fd);
-  pollables_.push_back(std::move(on_readable));
 }
 
 void LabBridge::CheckPeerExit() {
@@ -185,121 +134,90 @@ void LabBridge::Poll(double timeout_s) {
   const double spin_until = WallNow() + std::min(timeout_s, kSpinSeconds);
   do {
     if (bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), 0.0)) {
-      for (Served& d : devices_) Receive(d);
-      for (auto& poll : pollables_) poll();
+      ReceiveAll();
       CheckPeerExit();
       return;
     }
   } while (WallNow() < spin_until);
   const double left = timeout_s - kSpinSeconds;
   if (left <= 0 || !bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), left)) return;
-  for (Served& d : devices_) Receive(d);
-  for (auto& poll : pollables_) poll();
+  ReceiveAll();
   CheckPeerExit();
 }
 
 bool LabBridge::Answered(std::int64_t k) const {
   if (peer_gone_) return true;  // the controller vlab run started has exited: nobody to wait for
-  // every commanded device that has an owner is waited for; period 0 also waits
+  // every waited-for device that has an owner is waited for; period 0 also waits
   // for a controller to start: one per served arm, or, where no arm is served,
   // one for any commanded device (one that left was released: the device holds)
-  bool any_arm = false, any_owner = false, any_commanded = false;
+  bool any_from_start = false, any_owner = false, any_waited = false;
   for (const Served& d : devices_) {
-    const bool arm = d.kind == bridge::DeviceKind::kArm && !d.driven;  // a driven arm: its point device is waited for
-    const bool commanded = arm || (d.device && d.device->command_length() > 0);
-    if (!commanded) continue;
-    any_arm = any_arm || arm;
-    any_commanded = true;
+    if (!d.endpoint) continue;
+    const CommandRole role = d.device->command_role();
+    const bool from_start = role == CommandRole::kWaitedFromStart;
+    if (!from_start && role != CommandRole::kWaited) continue;
+    any_from_start = any_from_start || from_start;
+    any_waited = true;
     any_owner = any_owner || d.endpoint->has_owner();
-    if (k == 0 && arm && !d.endpoint->has_owner()) return false;
+    if (k == 0 && from_start && !d.endpoint->has_owner()) return false;
     if (d.endpoint->has_owner() && d.endpoint->last_accepted_seq() < static_cast<double>(k)) return false;
   }
-  return !(k == 0 && !any_arm && any_commanded && !any_owner);
+  return !(k == 0 && !any_from_start && any_waited && !any_owner);
 }
 
-void LabBridge::ApplyArmCommands(std::int64_t k) {
+void LabBridge::ApplyCommands(std::int64_t k) {
   period_ = k;
-  for (Served& d : devices_) Receive(d);  // what came since the clock's last poll
+  ReceiveAll();  // what came since the clock's last poll
   const double now = WallNow();
   for (Served& d : devices_) {
-    if (d.device && d.device->command_length() > 0) {
-      if (d.endpoint->BeginPeriod(k)) d.device->Hold();
-      if (d.endpoint->TakeCommand(&payload_)) d.device->Command(payload_);
-    }
-    if (d.kind != bridge::DeviceKind::kArm) continue;
-    if (d.endpoint->BeginPeriod(k)) {
-      command_.mode = bridge::ArmMode::kHold;
-      d.arm->Command(command_);
-    }
-    if (d.endpoint->TakeArmCommand(&arm_command_)) {
-      command_.mode = static_cast<bridge::ArmMode>(arm_command_.mode);
-      command_.value = Eigen::Map<const Eigen::VectorXd>(arm_command_.value.data(),
-                                                         static_cast<Eigen::Index>(arm_command_.value.size()));
-      d.arm->Command(command_);
-      if (d.command_arrival >= 0 && latencies_.size() < latencies_.capacity()) {
-        latencies_.push_back(now - d.command_arrival);
-      }
+    if (!d.endpoint || !Applied(d.device->command_role())) continue;
+    if (d.endpoint->BeginPeriod(k)) d.device->Hold();
+    if (d.device->TakeCommand(*d.endpoint, &payload_) && d.command_arrival >= 0 &&
+        latencies_.size() < latencies_.capacity()) {
+      latencies_.push_back(now - d.command_arrival);
     }
   }
 }
 
-bool LabBridge::TakeSimCommand(bridge::SimCommandMsg* command) {
-  return sim_ && sim_->endpoint->TakeSimCommand(command);
+bool LabBridge::TakeCommand(Device& device) {
+  Served* d = Find(device);
+  return d && d->endpoint && device.TakeCommand(*d->endpoint, &payload_);
 }
 
 void LabBridge::NoteTimeout(int release_after) {
   if (++consecutive_timeouts_ < release_after) return;
   for (Served& d : devices_) {
-    if (d.kind == bridge::DeviceKind::kArm || (d.device && d.device->command_length() > 0)) d.endpoint->ReleaseOwner();
+    if (d.endpoint && Applied(d.device->command_role())) d.endpoint->ReleaseOwner();
   }
 }
 
-void LabBridge::Publish(std::int64_t k, double t, const std::vector<bridge::ArmState>& arm_states,
-                        const bridge::SimStateMsg& sim_state) {
+void LabBridge::Publish(std::int64_t k, double t) {
   const double seq = static_cast<double>(k);
   for (Served& d : devices_) {
-    if (d.kind == bridge::DeviceKind::kArm) {
-      const bridge::ArmState& st = arm_states[d.arm_index];
-      arm_msg_.status = st.status | d.endpoint->status_bits();
-      arm_msg_.q.assign(st.q.data(), st.q.data() + st.q.size());
-      arm_msg_.qd.assign(st.qd.data(), st.qd.data() + st.qd.size());
-      arm_msg_.tau.assign(st.tau.data(), st.tau.data() + st.tau.size());
-      bridge::EncodeArmState(seq, t, arm_msg_, &d.last_state);
-    } else if (d.kind == bridge::DeviceKind::kWrench) {
-      bridge::WrenchState w;
-      d.wrench->Sample(t, &w);
-      bridge::WrenchStateMsg m;
-      for (int i = 0; i < 6; ++i) m.wrench[i] = w.wrench[i];
-      m.filter = w.filter;
-      m.saturated = w.saturated;
-      bridge::EncodeWrenchState(seq, t, m, &d.last_state);
-    } else if (d.device) {
-      d.device->State(&payload_);
-      bridge::Header h;
-      h.kind = static_cast<int>(d.kind);
-      h.type = static_cast<int>(bridge::MessageType::kState);
-      h.seq = seq;
-      h.time = t;
-      h.length = static_cast<int>(payload_.size());
-      bridge::EncodePacket(h, payload_.data(), h.length, &d.last_state);
-    } else {
-      bridge::EncodeSimState(seq, t, sim_state, &d.last_state);
-    }
+    if (!d.endpoint) continue;
+    d.device->EncodeState(seq, t, d.endpoint->status_bits(), &payload_, &d.last_state);
     d.endpoint->Publish(d.last_state, *d.socket);
   }
 }
 
 long LabBridge::refused_total() const {
   long n = 0;
-  for (const Served& d : devices_) n += d.endpoint->counters().refused;
+  for (const Served& d : devices_) {
+    if (d.endpoint) n += d.endpoint->counters().refused;
+  }
   return n;
 }
 
 std::vector<ServedDevice> LabBridge::Devices() const {
   std::vector<ServedDevice> out;
   for (const Served& d : devices_) {
-    out.push_back({d.name, bridge::KindName(static_cast<int>(d.kind)), d.socket->local_endpoint().address().to_string(),
-                   d.socket->local_port(), d.endpoint->config().describe_json, d.endpoint->counters()});
+    const char* kind = bridge::KindName(static_cast<int>(d.device->kind()));
+    if (const OwnTransport* t = d.device->own_transport()) {
+      out.push_back({d.device->name(), kind, t->address(), t->port(), t->describe_json(), t->counters()});
+    } else {
+      out.push_back({d.device->name(), kind, d.socket->local_endpoint().address().to_string(), d.socket->local_port(),
+                     d.endpoint->config().describe_json, d.endpoint->counters()});
+    }
   }
   return out;
 }

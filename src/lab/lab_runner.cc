@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
+#include "lab/devices/device_kinds.h"
 #include "lab/lab_external.h"
 #include "lab/lab_images.h"
 #include "lab/lab_log.h"
@@ -71,67 +72,42 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
                      " s is not a whole multiple of the scene timestep " + FormatDouble(ts) + " s");
   }
 
+  // every device by its kind's factory, then bound to the others (a point device to its arm)
   for (const DeviceConfig& device : scenario.devices) {
-    if (device.kind == "arm") {
-      impl->arms.push_back(SimArm::Create(m, device));
-    } else if (device.kind == "wrench") {
-      impl->wrenches.push_back(SimWrench::Create(m, device, DeviceSeed(scenario.seed, device.name)));
-    } else if (device.kind == "camera") {
-      impl->cameras.push_back(SimCamera::Create(m, device, scenario.scene, DeviceSeed(scenario.seed, device.name)));
-    } else if (device.kind == "point") {
-      continue;  // made below, once its arm exists
-    } else if (IsSimDeviceKind(device.kind)) {
-      impl->devices.push_back(MakeSimDevice(m, device, DeviceSeed(scenario.seed, device.name)));
-    }  // sim: the run's own control device, served by the bridge
+    const DeviceContext context{m, scenario.control_period_s, DeviceSeed(scenario.seed, device.name), scenario.scene};
+    impl->devices.push_back(MakeDevice(context, device));
+    impl->device_ptrs.push_back(impl->devices.back().get());
+    if (auto* sim = dynamic_cast<SimControl*>(impl->devices.back().get())) impl->sim = sim;
   }
-  // point devices drive an arm device: one point device per arm, and no built-in controller on it
-  for (const DeviceConfig& device : scenario.devices) {
-    if (device.kind != "point") continue;
-    SimArm* arm = nullptr;
-    for (auto& a : impl->arms) arm = a->name() == device.point.arm ? a.get() : arm;
-    const std::string where = device.where + ": device '" + device.name + "': arm: ";
-    if (!arm) throw InputError(where + "the scenario has no arm device '" + device.point.arm + "'");
-    for (const DeviceConfig& other : scenario.devices) {
-      if (other.kind == "point" && other.point.arm == device.point.arm && other.name != device.name) {
-        throw InputError(where + "arm '" + arm->name() + "' is driven by point device '" + other.name + "' too");
-      }
-    }
-    if (scenario.controller.type != "none" && scenario.controller.arm == device.point.arm) {
-      throw InputError(where + "arm '" + arm->name() + "' is commanded by the built-in controller: one owner at a time");
-    }
-    impl->devices.push_back(MakePointDevice(m, device, arm, scenario.control_period_s));
-  }
-  if (!impl->arms.empty() && m->opt.integrator == mjINT_RK4) {
-    throw InputError("scene '" + scenario.scene + "': arm devices need the Euler or implicit integrator (RK4 "
-                     "cannot split the step for the servo)");
-  }
+  for (Device* device : impl->device_ptrs) device->Bind(impl->device_ptrs);
+  impl->log_order = impl->device_ptrs;
+  std::stable_sort(impl->log_order.begin(), impl->log_order.end(),
+                   [](const Device* a, const Device* b) { return a->log_rank() < b->log_rank(); });
 
   impl->columns.push_back("time");
-  for (const auto& arm : impl->arms) {
-    for (auto& c : arm->Columns()) impl->columns.push_back(c);
+  for (const Device* device : impl->log_order) {
+    for (auto& c : device->Columns()) impl->columns.push_back(c);
   }
-  for (const auto& w : impl->wrenches) {
-    for (auto& c : w->Columns()) impl->columns.push_back(c);
-  }
-  for (const auto& dev : impl->devices) {
-    for (auto& c : dev->Columns()) impl->columns.push_back(c);
-  }
-  impl->arm_states.resize(impl->arms.size());
-  impl->arm_commands.resize(impl->arms.size());
 
   impl->ResetState();
   const ControllerConfig& cc = scenario.controller;
   if (cc.type == "external") {
     ExpandCommand(cc.command, CommandValues(scenario, {}), cc.where);  // placeholders checked now
   } else if (cc.type != "none") {
-    for (std::size_t i = 0; i < impl->arms.size(); ++i) {
-      if (impl->arms[i]->name() == cc.arm) impl->controller_arm = static_cast<int>(i);
+    for (Device* device : impl->device_ptrs) {
+      if (device->name() == cc.arm) impl->controller_arm = dynamic_cast<SimArm*>(device);
     }
-    if (impl->controller_arm < 0) {
+    if (!impl->controller_arm) {
       throw InputError(cc.where + ": controller.arm: no arm device named '" + cc.arm + "'");
     }
-    SimArm& arm = *impl->arms[impl->controller_arm];
-    impl->controller = MakeController(m, cc, arm.joint_names(), impl->arm_states[impl->controller_arm]);
+    SimArm& arm = *impl->controller_arm;
+    if (!arm.driver().empty()) {
+      const Device& driver = **std::find_if(impl->device_ptrs.begin(), impl->device_ptrs.end(),
+                                           [&arm](const Device* d) { return d->name() == arm.driver(); });
+      throw InputError(driver.where() + ": device '" + driver.name() + "': arm: arm '" + arm.name() +
+                       "' is commanded by the built-in controller: one owner at a time");
+    }
+    impl->controller = MakeController(m, cc, arm.joint_names(), arm.state());
     impl->controller_columns = impl->controller->Columns().size();
     for (auto& c : impl->controller->Columns()) impl->columns.push_back(c);
   }
@@ -140,7 +116,7 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
 
 void Lab::InitialState(mjData* d) const {
   impl_->ResetData(d);
-  for (const auto& arm : impl_->arms) arm->SetInitialPositions(*d);
+  for (const auto& device : impl_->devices) device->SetInitialState(*d);
   mj_forward(impl_->model.get(), d);
 }
 
@@ -190,7 +166,9 @@ RunResult Lab::Run(const RunOptions& options) {
   InstallMujocoHandlers();
   TakeMujocoWarningTexts();
   s.ResetState();
-  for (auto& c : s.cameras) c->Unserve();  // MakeBridge serves them again when serving
+  for (auto& device : s.devices) {
+    if (OwnTransport* t = device->own_transport()) t->Unserve();  // MakeBridge serves them again when serving
+  }
   // a scenario's external controller: vlab run serves on loopback and starts it
   const bool external = StartsExternalController(s.scenario, options.serve != nullptr);
   const BridgeOptions external_serve = external ? ExternalBridgeOptions(s.scenario) : BridgeOptions{};
@@ -211,7 +189,7 @@ RunResult Lab::Run(const RunOptions& options) {
   std::unique_ptr<LabBridge> bridge;
   if (serve) {
     bridge = s.MakeBridge(*serve, clock->name());
-    if (options.on_serving && !external) options.on_serving(s.ServedDevices(*bridge));
+    if (options.on_serving && !external) options.on_serving(bridge->Devices());
   }
   // outputs: staging folder (removed on a MuJoCo error too), log
   std::unique_ptr<OutputDir> out;
@@ -231,7 +209,7 @@ RunResult Lab::Run(const RunOptions& options) {
     const std::string log_path = out ? out->File("controller.log") : "";
     controller = ExternalController::Start(
         ExpandCommand(s.scenario.controller.command,
-                      CommandValues(s.scenario, s.ServedDevices(*bridge), out ? out->File("") : ""),
+                      CommandValues(s.scenario, bridge->Devices(), out ? out->File("") : ""),
                       s.scenario.controller.where),
         log_path);
     bridge->WatchPeerExit(controller->exit_fd());
@@ -249,21 +227,23 @@ RunResult Lab::Run(const RunOptions& options) {
   bool paused = false;
   long steps_left = -1;  // periods to run before pausing again (sim "step N"); -1: not stepping
   auto publish = [&](long k) {
-    if (bridge) bridge->Publish(k, k * period, s.arm_states, SimState(k * period, paused, *clock, k, bridge.get()));
+    if (!bridge) return;
+    if (s.sim) s.sim->set_state(SimState(k * period, paused, *clock, k, bridge.get()));
+    bridge->Publish(k, k * period);
   };
   // what renders from the state at period end t without being part of the period's states:
   // the camera frames delivered later, the image outputs; after the states went out, so that
   // rendering does not delay them (the state is still that of t: the next period has not begun)
   auto render_after_publish = [&](double t) {
-    for (auto& c : s.cameras) c->RenderAhead(d);
+    for (auto& device : s.devices) device->AfterPublish(d);
     if (images) images->Observe(t, d);
   };
   // row 0: the initial state, with the controller's view of it
   if (s.controller) s.RunController(0.0, options, &replay_at, &result, controller_columns);
   emit_row(0.0);
   if (options.observe) options.observe(0.0, m, d);
-  for (auto& c : s.cameras) c->Prepare(d);
-  for (auto& c : s.cameras) c->Observe(0.0, d);
+  for (auto& device : s.devices) device->BeforeRun(d);
+  for (auto& device : s.devices) device->Deliver(0.0, d);
   publish(0);
   render_after_publish(0.0);
 
@@ -302,33 +282,30 @@ RunResult Lab::Run(const RunOptions& options) {
       } else {
         bridge->NoteAnswered();
       }
-      bridge->ApplyArmCommands(k);
+      bridge->ApplyCommands(k);
     }
     if (s.controller) {
       if (k > 0) s.RunController(t_k, options, &replay_at, &result, controller_columns);
-      s.arms[s.controller_arm]->Command(s.arm_commands[s.controller_arm]);
+      s.controller_arm->Command(s.controller_command);
     }
     for (auto& dev : s.devices) dev->BeginPeriod(*d, t_k);  // point devices command their arms
     // 2. physics: the servo acts between the two halves of every step
     for (int i = 0; i < s.steps_per_period && !diverged; ++i) {
       const double t_step = d->time;
       mj_step1(m, d);
-      for (auto& arm : s.arms) arm->Actuate(*d, m->opt.timestep);
       for (auto& dev : s.devices) dev->Actuate(*d, m->opt.timestep);
       if (options.record) result.recording.controls.insert(result.recording.controls.end(), d->ctrl, d->ctrl + m->nu);
       mj_step2(m, d);
-      for (auto& w : s.wrenches) w->Step(*d, m->opt.timestep);
+      for (auto& dev : s.devices) dev->AfterStep(*d, m->opt.timestep);
       ++result.steps;
       diverged = warnings.Update(*d, t_step);
     }
     if (diverged) break;
     // 3. sample devices, log, publish the state that closes the period
-    for (auto& w : s.wrenches) w->EndPeriod();
-    for (std::size_t i = 0; i < s.arms.size(); ++i) s.arms[i]->Sample(*d, t_next, &s.arm_states[i]);
     for (auto& dev : s.devices) dev->Sample(*d, t_next);
     emit_row(t_next);
     if (options.observe) options.observe(t_next, m, d);
-    for (auto& c : s.cameras) c->Observe(t_next, d);
+    for (auto& dev : s.devices) dev->Deliver(t_next, d);
     ++k;
     if (steps_left > 0 && --steps_left == 0) paused = true;
     publish(k);
@@ -353,7 +330,7 @@ RunResult Lab::Run(const RunOptions& options) {
   result.exit_code = result.failure.empty() ? 0 : 1;
   result.clock_stats = clock->stats();
   if (bridge) {
-    result.served = s.ServedDevices(*bridge);
+    result.served = bridge->Devices();
     result.latencies_s = bridge->latencies();
   }
 
@@ -392,9 +369,7 @@ RunResult Lab::Run(const RunOptions& options) {
 std::vector<ServedDevice> Lab::Describe(const BridgeOptions& options, std::optional<ClockMode> clock) const {
   const std::string name = ClockModeName(clock.value_or(impl_->scenario.clock));
   std::unique_ptr<LabBridge> bridge = impl_->MakeBridge(options, name);
-  std::vector<ServedDevice> out = impl_->ServedDevices(*bridge);
-  for (auto& cam : impl_->cameras) cam->Unserve();
-  return out;
+  return bridge->Devices();  // the bridge's end frees the ports
 }
 
 }  // namespace vlab::lab

@@ -18,41 +18,29 @@ void Lab::Impl::ResetData(mjData* d) const {
 void Lab::Impl::ResetState() {
   mjData* d = data.get();
   ResetData(d);
-  for (const auto& arm : arms) arm->SetInitialPositions(*d);
+  for (const auto& dev : devices) dev->SetInitialState(*d);
   mj_forward(model.get(), d);
-  for (auto& arm : arms) arm->Start(*d, scenario.control_period_s);
   // the servos hold from the first instant: recompute forces with their torques,
   // so the sensors start settled on the load of an arm at rest
-  for (auto& arm : arms) arm->Actuate(*d, 0.0);
+  for (auto& dev : devices) dev->Start(*d);
   mj_forward(model.get(), d);
-  for (auto& w : wrenches) w->Reset(*d);
   for (auto& dev : devices) dev->Reset(*d);
-  for (std::size_t i = 0; i < arms.size(); ++i) arms[i]->Sample(*d, d->time, &arm_states[i]);
 }
 
 void Lab::Impl::WriteRow(double time_s, std::vector<double>& row) const {
   double* out = row.data();
   *out++ = time_s;
-  for (const auto& arm : arms) {
-    arm->Row(*data, out);
-    out += arm->ColumnCount();
-  }
-  for (const auto& w : wrenches) {
-    w->Row(out);
-    out += w->ColumnCount();
-  }
-  for (const auto& dev : devices) {
-    dev->Row(out);
+  for (const Device* dev : log_order) {
+    dev->Row(*data, out);
     out += dev->ColumnCount();
   }
 }
 
 void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
                               double* columns) {
-  const int a = controller_arm;
-  const int n = arms[a]->dof();
+  const int n = controller_arm->dof();
   const std::size_t width = 1 + n + controller_columns;
-  bridge::ArmCommand& cmd = arm_commands[a];
+  bridge::ArmCommand& cmd = controller_command;
   if (options.replay) {
     // the recorded command and columns instead of the controller's work
     if (*replay_at + width > options.replay->controller.size()) {
@@ -65,7 +53,7 @@ void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* 
     *replay_at += width;
     return;
   }
-  controller->Update(t, arm_states[a], &cmd, columns);
+  controller->Update(t, controller_arm->state(), &cmd, columns);
   if (options.record) {
     std::vector<double>& rec = result->recording.controller;
     rec.push_back(static_cast<double>(static_cast<int>(cmd.mode)));
@@ -75,25 +63,7 @@ void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* 
 }
 
 std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, const std::string& clock_name) {
-  std::vector<SimArm*> arm_ptrs;
-  for (auto& a : arms) arm_ptrs.push_back(a.get());
-  std::vector<SimWrench*> wrench_ptrs;
-  for (auto& w : wrenches) wrench_ptrs.push_back(w.get());
-  std::vector<SimDevice*> device_ptrs;
-  for (auto& dev : devices) device_ptrs.push_back(dev.get());
-  std::unique_ptr<LabBridge> bridge =
-      LabBridge::Create(scenario, options, arm_ptrs, wrench_ptrs, device_ptrs, clock_name);
-  const std::string server = options.server + " (MuJoCo " + MujocoVersion() + ")";
-  for (auto& cam : cameras) {
-    cam->Unserve();
-    int port = 0;
-    for (const DeviceConfig& c : scenario.devices) port = c.name == cam->name() ? c.port : port;
-    const auto override_port = options.ports.find(cam->name());
-    if (override_port == options.ports.end() && port == 0) continue;
-    cam->Serve(options.bind, override_port != options.ports.end() ? override_port->second : port, server, clock_name);
-    SimCamera* c = cam.get();
-    bridge->AddPollable(c->fd(), [c] { c->PollRequests(); });  // describe replies while lockstep waits
-  }
+  std::unique_ptr<LabBridge> bridge = LabBridge::Create(scenario, options, device_ptrs, clock_name);
   if (controller) {
     for (const ServedDevice& sd : bridge->Devices()) {
       if (sd.name == scenario.controller.arm) {
@@ -106,20 +76,10 @@ std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, c
   return bridge;
 }
 
-std::vector<ServedDevice> Lab::Impl::ServedDevices(const LabBridge& bridge) const {
-  std::vector<ServedDevice> out = bridge.Devices();
-  for (const auto& cam : cameras) {
-    if (!cam->served()) continue;
-    const bridge::CameraServer& s = *cam->server();
-    out.push_back({cam->name(), "camera", s.config().bind_address, s.port(), s.describe_json(), s.counters().endpoint});
-  }
-  return out;
-}
-
 bool Lab::Impl::HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left) {
   bool changed = false;
   bridge::SimCommandMsg c;
-  while (bridge.TakeSimCommand(&c)) {
+  while (sim && bridge.TakeCommand(*sim) && sim->TakeOp(&c)) {
     changed = true;
     switch (static_cast<bridge::SimOp>(c.op)) {
       case bridge::SimOp::kReset:

@@ -8,15 +8,14 @@
 #include <vector>
 
 #include "bridge/bridge_messages.h"
-#include "lab/lab_arm_device.h"
-#include "lab/lab_bridge.h"
-#include "lab/lab_camera_device.h"
 #include "core/core_clock.h"
-#include "lab/lab_controller.h"
-#include "lab/lab_device.h"
 #include "core/core_mujoco.h"
+#include "lab/devices/device.h"
+#include "lab/devices/device_arm.h"
+#include "lab/devices/device_sim.h"
+#include "lab/lab_bridge.h"
+#include "lab/lab_controller.h"
 #include "lab/lab_runner.h"
-#include "lab/lab_wrench_device.h"
 
 namespace vlab::lab {
 
@@ -25,17 +24,16 @@ struct Lab::Impl {
   ModelPtr model;
   DataPtr data;
   int steps_per_period = 1;
-  std::vector<std::unique_ptr<SimArm>> arms;
-  std::vector<std::unique_ptr<SimWrench>> wrenches;
-  std::vector<std::unique_ptr<SimDevice>> devices;  // base, feet, imu, ...
-  std::vector<std::unique_ptr<SimCamera>> cameras;
+  std::vector<std::unique_ptr<Device>> devices;  // every device, in scenario order
+  std::vector<Device*> device_ptrs;               // the same, as the bridge and Bind take them
+  std::vector<Device*> log_order;                 // by log rank, then scenario order
+  SimControl* sim = nullptr;                      // the sim device, if the scenario has one
   std::unique_ptr<Controller> controller;
-  int controller_arm = -1;
+  SimArm* controller_arm = nullptr;
   int keyframe = -1;  // scene keyframe of every reset (-1: qpos0)
   std::size_t controller_columns = 0;  // log columns the controller writes
   std::vector<std::string> columns;
-  std::vector<bridge::ArmState> arm_states;
-  std::vector<bridge::ArmCommand> arm_commands;
+  bridge::ArmCommand controller_command;  // the built-in controller's command of the period
 
   void ResetState();
   /// mj_resetData, or mj_resetDataKeyframe of the scenario's keyframe (at time 0).
@@ -43,8 +41,6 @@ struct Lab::Impl {
   void WriteRow(double time_s, std::vector<double>& row) const;
   /// Binds every served device (cameras too); throws InputError.
   std::unique_ptr<LabBridge> MakeBridge(const BridgeOptions& options, const std::string& clock_name);
-  /// The bridge's devices and the served cameras.
-  std::vector<ServedDevice> ServedDevices(const LabBridge& bridge) const;
   // applies the sim device's commands; true when something changed
   bool HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left);
   // one controller period: computed (and recorded), or replayed from a recording

@@ -5,7 +5,7 @@
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/lab_scenario_devices.h"
+#include "lab/devices/device_kinds.h"
 #include "lab/lab_yaml.h"
 
 namespace vlab::lab {

@@ -1,7 +1,7 @@
 // SimArm on the PA10 scene: holds, refuses bad commands and keeps the last
 // good one, tracks velocity and position commands, applies torques exactly,
 // clips and flags saturation; binding errors name the device and the element.
-#include "lab/lab_arm_device.h"
+#include "lab/devices/device_arm.h"
 
 #include <gtest/gtest.h>
 
@@ -28,11 +28,11 @@ const std::vector<double> kReady = {0, 0.523599, 0, 1.047198, 0, 1.570796, 0};
 DeviceConfig ArmConfig() {
   DeviceConfig c;
   c.name = "pa10";
-  c.kind = "arm";
+  c.kind = bridge::DeviceKind::kArm;
   c.where = "arm.yaml:9";
-  c.arm.joints = kJoints;
-  c.arm.actuators = kJoints;
-  c.arm.initial = kReady;
+  c.EditParams<ArmParams>().joints = kJoints;
+  c.EditParams<ArmParams>().actuators = kJoints;
+  c.EditParams<ArmParams>().initial = kReady;
   return c;
 }
 
@@ -50,11 +50,11 @@ class ArmDeviceTest : public ::testing::Test {
   void SetUp() override {
     model_ = LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
     data_ = MakeData(model_.get());
-    arm_ = SimArm::Create(model_.get(), ArmConfig());
+    arm_ = SimArm::Create({model_.get(), kPeriod, 1, "pa10.xml"}, ArmConfig());
     mj_resetData(m(), d());
-    arm_->SetInitialPositions(*d());
+    arm_->SetInitialState(*d());
     mj_forward(m(), d());
-    arm_->Start(*d(), kPeriod);
+    arm_->Start(*d());
   }
   void TearDown() override {
     for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(d()->warning[w].number, 0) << "MuJoCo warning " << WarningName(w);
@@ -219,7 +219,7 @@ TEST_F(ArmDeviceTest, GainsFollowBandwidthRule) {
 
 std::string CreateError(const mjModel* m, const DeviceConfig& c) {
   try {
-    SimArm::Create(m, c);
+    SimArm::Create({m, 0.002, 1, "scene"}, c);
   } catch (const InputError& e) {
     return e.what();
   }
@@ -229,25 +229,25 @@ std::string CreateError(const mjModel* m, const DeviceConfig& c) {
 TEST(ArmDeviceCreateTest, ErrorsNameDeviceAndElement) {
   ModelPtr model = LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
   DeviceConfig c = ArmConfig();
-  c.arm.joints[3] = "E9";
+  c.EditParams<ArmParams>().joints[3] = "E9";
   std::string e = CreateError(model.get(), c);
   EXPECT_NE(e.find("arm.yaml:9"), std::string::npos) << e;
   EXPECT_NE(e.find("device 'pa10'"), std::string::npos) << e;
   EXPECT_NE(e.find("no joint 'E9'"), std::string::npos) << e;
 
   c = ArmConfig();
-  c.arm.actuators[6] = "W2_motor";
+  c.EditParams<ArmParams>().actuators[6] = "W2_motor";
   e = CreateError(model.get(), c);
   EXPECT_NE(e.find("device 'pa10'"), std::string::npos) << e;
   EXPECT_NE(e.find("no actuator 'W2_motor'"), std::string::npos) << e;
 
   c = ArmConfig();
-  std::swap(c.arm.actuators[0], c.arm.actuators[1]);  // motors exist, but on the wrong joints
+  std::swap(c.EditParams<ArmParams>().actuators[0], c.EditParams<ArmParams>().actuators[1]);  // motors exist, but on the wrong joints
   e = CreateError(model.get(), c);
   EXPECT_NE(e.find("actuator 'S2' is not a motor on joint 'S1'"), std::string::npos) << e;
 
   c = ArmConfig();
-  c.arm.initial[1] = 2.0;  // S2 range is +-94 deg = +-1.64 rad
+  c.EditParams<ArmParams>().initial[1] = 2.0;  // S2 range is +-94 deg = +-1.64 rad
   e = CreateError(model.get(), c);
   EXPECT_NE(e.find("initial position of joint 'S2'"), std::string::npos) << e;
 }
@@ -273,19 +273,19 @@ TEST(ArmDeviceCreateTest, RejectsNonMotorActuators) {
 </mujoco>)");
   DeviceConfig c;
   c.name = "toy";
-  c.kind = "arm";
+  c.kind = bridge::DeviceKind::kArm;
   c.where = "toy.yaml:3";
-  c.arm.joints = {"a"};
-  c.arm.actuators = {"pos_a"};
+  c.EditParams<ArmParams>().joints = {"a"};
+  c.EditParams<ArmParams>().actuators = {"pos_a"};
   std::string e = CreateError(model.get(), c);
   EXPECT_NE(e.find("device 'toy'"), std::string::npos) << e;
   EXPECT_NE(e.find("actuator 'pos_a' is not a motor on joint 'a'"), std::string::npos) << e;
-  c.arm.joints = {"b"};
-  c.arm.actuators = {"geared_b"};
+  c.EditParams<ArmParams>().joints = {"b"};
+  c.EditParams<ArmParams>().actuators = {"geared_b"};
   e = CreateError(model.get(), c);
   EXPECT_NE(e.find("actuator 'geared_b' must have gear 1"), std::string::npos) << e;
-  c.arm.joints = {"a"};
-  c.arm.actuators = {"motor_a"};
+  c.EditParams<ArmParams>().joints = {"a"};
+  c.EditParams<ArmParams>().actuators = {"motor_a"};
   EXPECT_EQ(CreateError(model.get(), c), "");  // the control: a plain motor binds
 }
 

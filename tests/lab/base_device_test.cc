@@ -12,7 +12,9 @@
 #include <gtest/gtest.h>
 
 #include "bridge/bridge_client_device.h"
-#include "lab/lab_device.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_base.h"
+#include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
@@ -62,24 +64,24 @@ constexpr const char* kBaseXml = R"(
 DeviceConfig BaseConfig(bool drift) {
   DeviceConfig c;
   c.name = "nomad";
-  c.kind = "base";
+  c.kind = bridge::DeviceKind::kBase;
   c.where = "test.yaml:1";
-  c.base.joints = {"bx", "by", "byaw"};
-  c.base.actuators = {"vx", "vy", "wz"};
-  c.base.max_velocity = {1.0, 1.0, 2.0};
-  c.base.max_acceleration = {1.0, 1.0, 2.0};
-  c.base.odometry_drift = drift;
-  c.base.drift_scale = 0.02;
-  c.base.drift_yaw_rate = 0.01;
+  c.EditParams<BaseParams>().joints = {"bx", "by", "byaw"};
+  c.EditParams<BaseParams>().actuators = {"vx", "vy", "wz"};
+  c.EditParams<BaseParams>().max_velocity = {1.0, 1.0, 2.0};
+  c.EditParams<BaseParams>().max_acceleration = {1.0, 1.0, 2.0};
+  c.EditParams<BaseParams>().odometry_drift = drift;
+  c.EditParams<BaseParams>().drift_scale = 0.02;
+  c.EditParams<BaseParams>().drift_yaw_rate = 0.01;
   return c;
 }
 
 struct Rig {
   ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
   DataPtr data = MakeData(model.get());
-  std::unique_ptr<SimDevice> base;
+  std::unique_ptr<Device> base;
   explicit Rig(bool drift = false, std::uint64_t seed = 7) {
-    base = MakeSimDevice(model.get(), BaseConfig(drift), seed);
+    base = MakeDevice({model.get(), 0.002, seed, ""}, BaseConfig(drift));
     mj_forward(model.get(), data.get());
     base->Reset(*data);
   }
@@ -172,11 +174,11 @@ TEST(BaseDeviceTest, ChecksCommands) {
 TEST(BaseDeviceTest, BadBindingsNameTheElement) {
   ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
   DeviceConfig c = BaseConfig(false);
-  c.base.joints[2] = "nope";
+  c.EditParams<BaseParams>().joints[2] = "nope";
   EXPECT_THROW(
       {
         try {
-          MakeSimDevice(model.get(), c, 1);
+          MakeDevice({model.get(), 0.002, 1, ""}, c);
         } catch (const InputError& e) {
           EXPECT_NE(std::string(e.what()).find("no joint 'nope'"), std::string::npos) << e.what();
           throw;
@@ -184,16 +186,16 @@ TEST(BaseDeviceTest, BadBindingsNameTheElement) {
       },
       InputError);
   c = BaseConfig(false);
-  c.base.joints = {"by", "bx", "bx"};  // yaw must be a hinge
-  EXPECT_THROW(MakeSimDevice(model.get(), c, 1), InputError);
+  c.EditParams<BaseParams>().joints = {"by", "bx", "bx"};  // yaw must be a hinge
+  EXPECT_THROW(MakeDevice({model.get(), 0.002, 1, ""}, c), InputError);
   c = BaseConfig(false);
-  c.base.actuators = {"vy", "vx", "wz"};  // actuators of the wrong joints
-  EXPECT_THROW(MakeSimDevice(model.get(), c, 1), InputError);
+  c.EditParams<BaseParams>().actuators = {"vy", "vx", "wz"};  // actuators of the wrong joints
+  EXPECT_THROW(MakeDevice({model.get(), 0.002, 1, ""}, c), InputError);
   DeviceConfig feet;
   feet.name = "feet";
-  feet.kind = "feet";
-  feet.sensors.sensors = {"t1", "gyro"};  // a gyro is no foot sensor
-  EXPECT_THROW(MakeSimDevice(model.get(), feet, 1), InputError);
+  feet.kind = bridge::DeviceKind::kFeet;
+  feet.EditParams<SensorParams>().sensors = {"t1", "gyro"};  // a gyro is no foot sensor
+  EXPECT_THROW(MakeDevice({model.get(), 0.002, 1, ""}, feet), InputError);
 }
 
 TEST(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
@@ -201,14 +203,14 @@ TEST(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
   DataPtr data = MakeData(model.get());
   DeviceConfig feet;
   feet.name = "feet";
-  feet.kind = "feet";
-  feet.sensors.sensors = {"t1", "t2", "t3", "t4"};
+  feet.kind = bridge::DeviceKind::kFeet;
+  feet.EditParams<SensorParams>().sensors = {"t1", "t2", "t3", "t4"};
   DeviceConfig imu;
   imu.name = "imu";
-  imu.kind = "imu";
-  imu.sensors.sensors = {"gyro", "acc"};
-  auto f = MakeSimDevice(model.get(), feet, 1);
-  auto i = MakeSimDevice(model.get(), imu, 1);
+  imu.kind = bridge::DeviceKind::kImu;
+  imu.EditParams<SensorParams>().sensors = {"gyro", "acc"};
+  auto f = MakeDevice({model.get(), 0.002, 1, ""}, feet);
+  auto i = MakeDevice({model.get(), 0.002, 1, ""}, imu);
   EXPECT_EQ(f->Columns().size(), 4u);
   EXPECT_EQ(i->Columns(), (std::vector<std::string>{"imu.gyro.x", "imu.gyro.y", "imu.gyro.z", "imu.acc.x",
                                                      "imu.acc.y", "imu.acc.z"}));

@@ -1,4 +1,4 @@
-// Tests the lab's simulated webcam (src/lab/lab_camera_device.cc) end to end:
+// Tests the lab's simulated webcam (src/lab/devices/device_camera.cc) end to end:
 // a scenario's camera device served by the lab in realtime, received by the
 // C++ camera client. Frames come at the camera's rate with consecutive ids,
 // stamped with the simulated time they show, carrying the camera's pose; the

@@ -17,7 +17,8 @@
 
 #include <gtest/gtest.h>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
@@ -60,11 +61,11 @@ std::string BlockXml(double cx, double cy, double raise = 0.0, double height = 0
 DeviceConfig FeetConfig() {
   DeviceConfig c;
   c.name = "feet";
-  c.kind = "feet";
+  c.kind = bridge::DeviceKind::kFeet;
   c.where = "feet.yaml:3";
-  c.sensors.sensors = {"t1", "t2", "t3", "t4"};
-  c.sensors.pads = {"p1", "p2", "p3", "p4"};
-  c.sensors.weight_of = "block";
+  c.EditParams<SensorParams>().sensors = {"t1", "t2", "t3", "t4"};
+  c.EditParams<SensorParams>().pads = {"p1", "p2", "p3", "p4"};
+  c.EditParams<SensorParams>().weight_of = "block";
   return c;
 }
 
@@ -72,29 +73,29 @@ DeviceConfig FeetConfig() {
 std::vector<double> SettledRow(const std::string& xml, double seconds = 2.0, std::vector<double>* state = nullptr) {
   ModelPtr model = LoadModelFromString("block.xml", xml);
   DataPtr data = MakeData(model.get());
-  std::unique_ptr<SimDevice> feet = MakeSimDevice(model.get(), FeetConfig(), 1);
+  std::unique_ptr<Device> feet = MakeDevice({model.get(), 0.002, 1, ""}, FeetConfig());
   for (int k = 0; k < std::lround(seconds / 0.001); ++k) mj_step(model.get(), data.get());
   feet->Sample(*data, data->time);
   std::vector<double> row(feet->ColumnCount());
-  feet->Row(row.data());
+  feet->Row(*data, row.data());
   if (state) feet->State(state);
   return row;
 }
 
 TEST(FeetDeviceTest, ColumnsAreLogOnlyAndTheWireKeepsTheSensorValues) {
   ModelPtr model = LoadModelFromString("block.xml", BlockXml(0, 0));
-  std::unique_ptr<SimDevice> feet = MakeSimDevice(model.get(), FeetConfig(), 1);
+  std::unique_ptr<Device> feet = MakeDevice({model.get(), 0.002, 1, ""}, FeetConfig());
   EXPECT_EQ(feet->Columns(), (std::vector<std::string>{"feet.t1", "feet.t2", "feet.t3", "feet.t4", "feet.sum",
                                                         "feet.sum_error", "feet.cop_x", "feet.cop_y",
                                                         "feet.cop_margin"}));
   EXPECT_EQ(feet->ColumnCount(), 9);
   DeviceConfig weight_only = FeetConfig();
-  weight_only.sensors.pads.clear();
-  EXPECT_EQ(MakeSimDevice(model.get(), weight_only, 1)->ColumnCount(), 6);  // values, sum, sum_error
+  weight_only.EditParams<SensorParams>().pads.clear();
+  EXPECT_EQ(MakeDevice({model.get(), 0.002, 1, ""}, weight_only)->ColumnCount(), 6);  // values, sum, sum_error
   DeviceConfig plain = FeetConfig();
-  plain.sensors.pads.clear();
-  plain.sensors.weight_of.clear();
-  EXPECT_EQ(MakeSimDevice(model.get(), plain, 1)->ColumnCount(), 4);
+  plain.EditParams<SensorParams>().pads.clear();
+  plain.EditParams<SensorParams>().weight_of.clear();
+  EXPECT_EQ(MakeDevice({model.get(), 0.002, 1, ""}, plain)->ColumnCount(), 4);
   std::vector<double> state;
   SettledRow(BlockXml(0, 0), 0.5, &state);
   EXPECT_EQ(state.size(), 4u);

@@ -9,7 +9,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
@@ -50,12 +51,12 @@ constexpr const char* kXml = R"(
 DeviceConfig Gaze(const std::string& camera, const std::string& target, int width = 320, int height = 240) {
   DeviceConfig c;
   c.name = "gaze";
-  c.kind = "gaze";
+  c.kind = bridge::DeviceKind::kGaze;
   c.where = "test.yaml:1";
-  c.gaze.camera = camera;
-  c.gaze.target = target;
-  c.gaze.width = width;
-  c.gaze.height = height;
+  c.EditParams<GazeParams>().camera = camera;
+  c.EditParams<GazeParams>().target = target;
+  c.EditParams<GazeParams>().width = width;
+  c.EditParams<GazeParams>().height = height;
   return c;
 }
 
@@ -71,13 +72,13 @@ struct Rig {
   Sample Probe(const DeviceConfig& c, double pan = 0.0) {
     data->qpos[0] = pan;
     mj_forward(model.get(), data.get());
-    auto device = MakeSimDevice(model.get(), c, 1);
+    auto device = MakeDevice({model.get(), 0.002, 1, ""}, c);
     device->Sample(*data, 0.0);
     std::vector<double> state;
     device->State(&state);
     EXPECT_EQ(state.size(), 4u);
     std::vector<double> row(4);
-    device->Row(row.data());
+    device->Row(*data, row.data());
     EXPECT_EQ(row, state);
     return {state[0], state[1], state[2], state[3]};
   }
@@ -166,13 +167,13 @@ TEST(GazeDeviceTest, ResetSamplesTheInitialStateAndDescribeGivesTheLayout) {
   Rig rig;
   rig.data->qpos[0] = 0.1;
   mj_forward(rig.model.get(), rig.data.get());
-  auto device = MakeSimDevice(rig.model.get(), Gaze("eye", "ball"), 1);
+  auto device = MakeDevice({rig.model.get(), 0.002, 1, ""}, Gaze("eye", "ball"));
   EXPECT_EQ(device->kind(), bridge::DeviceKind::kGaze);
   EXPECT_EQ(device->command_length(), 0);
   EXPECT_EQ(device->Columns(), (std::vector<std::string>{"gaze.error_deg", "gaze.u", "gaze.v", "gaze.visible"}));
   device->Reset(*rig.data);
   std::vector<double> row(4);
-  device->Row(row.data());
+  device->Row(*rig.data, row.data());
   EXPECT_NEAR(row[0], std::atan2(2 * std::sin(0.1), 2 * std::cos(0.1) - 0.1) / kDeg, 1e-9);
   const nlohmann::json j = nlohmann::json::parse(device->DescribeFacts());
   EXPECT_EQ(j["layout"]["state"], nlohmann::json({"error_deg", "u", "v", "visible"}));
@@ -185,7 +186,7 @@ TEST(GazeDeviceTest, UnknownCameraOrTargetIsNamed) {
   Rig rig;
   auto message = [&](const DeviceConfig& c) {
     try {
-      MakeSimDevice(rig.model.get(), c, 1);
+      MakeDevice({rig.model.get(), 0.002, 1, ""}, c);
     } catch (const InputError& e) {
       return std::string(e.what());
     }
@@ -204,10 +205,10 @@ TEST(GazeScenarioTest, KeysAreReadAndCheckedAndTheProbeIsLoggedAndServed) {
     return LoadScenario(dir / "s.yaml");
   };
   const Scenario s = load("{name: g, kind: gaze, camera: eye, target: ball, width: 320, height: 240, port: 0}");
-  EXPECT_EQ(s.devices[0].gaze.camera, "eye");
-  EXPECT_EQ(s.devices[0].gaze.target, "ball");
-  EXPECT_EQ(s.devices[0].gaze.width, 320);
-  EXPECT_EQ(load("{name: g, kind: gaze, camera: eye, target: ball}").devices[0].gaze.height, 480);
+  EXPECT_EQ(s.devices[0].ParamsAs<GazeParams>().camera, "eye");
+  EXPECT_EQ(s.devices[0].ParamsAs<GazeParams>().target, "ball");
+  EXPECT_EQ(s.devices[0].ParamsAs<GazeParams>().width, 320);
+  EXPECT_EQ(load("{name: g, kind: gaze, camera: eye, target: ball}").devices[0].ParamsAs<GazeParams>().height, 480);
   auto error = [&](const std::string& device) {
     try {
       load(device);

@@ -15,7 +15,9 @@
 
 #include <gtest/gtest.h>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_gripper.h"
+#include "lab/devices/device_pose.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "test_util.h"
@@ -64,17 +66,17 @@ class GripperDeviceTest : public ::testing::Test {
     mj_forward(m_, d_);
     DeviceConfig c;
     c.name = "gripper";
-    c.kind = "gripper";
+    c.kind = bridge::DeviceKind::kGripper;
     c.where = "test.yaml:1";
-    gripper_ = MakeSimDevice(m_, c, 1);
+    gripper_ = MakeDevice({m_, 0.002, 1, ""}, c);
     gripper_->Reset(*d_);
     DeviceConfig p;
     p.name = "cube";
-    p.kind = "pose";
-    p.pose.site = "cube_centre";
-    p.pose.relative_to = "gripper";
-    p.pose.target = "below";
-    pose_ = MakeSimDevice(m_, p, 1);
+    p.kind = bridge::DeviceKind::kPose;
+    p.EditParams<PoseParams>().site = "cube_centre";
+    p.EditParams<PoseParams>().relative_to = "gripper";
+    p.EditParams<PoseParams>().target = "below";
+    pose_ = MakeDevice({m_, 0.002, 1, ""}, p);
     pose_->Reset(*d_);
   }
 
@@ -96,7 +98,7 @@ class GripperDeviceTest : public ::testing::Test {
   }
   std::vector<double> PoseRow() const {
     std::vector<double> row(pose_->ColumnCount());
-    pose_->Row(row.data());
+    pose_->Row(*d_, row.data());
     return row;
   }
 
@@ -105,7 +107,7 @@ class GripperDeviceTest : public ::testing::Test {
   DataPtr data_;
   mjModel* m_ = nullptr;
   mjData* d_ = nullptr;
-  std::unique_ptr<SimDevice> gripper_, pose_;
+  std::unique_ptr<Device> gripper_, pose_;
 };
 
 TEST_F(GripperDeviceTest, OpensAtItsSpeedAndRefusesWhatItCannotDo) {
@@ -119,7 +121,7 @@ TEST_F(GripperDeviceTest, OpensAtItsSpeedAndRefusesWhatItCannotDo) {
   gripper_->Command({0, 0.052});    // close to 1 mm from the cube on each side
   Run(0.1);                         // 0.1 s at 83 mm/s: 8.3 mm of set-point travel
   std::vector<double> row(gripper_->ColumnCount());
-  gripper_->Row(row.data());
+  gripper_->Row(*d_, row.data());
   EXPECT_NEAR(start - row[4], 0.083 * 0.1, 1e-9);  // the servo's set-point (log column setpoint)
   EXPECT_LT(start - State()[1], start - row[4]);    // the jaws follow it, behind
   EXPECT_EQ(State()[0], 0.0);                       // commanded: not holding
@@ -184,27 +186,27 @@ TEST_F(GripperDeviceTest, PoseDeviceReportsTheFrameAndTheTarget) {
 TEST_F(GripperDeviceTest, BadBindingsNameTheElement) {
   DeviceConfig c;
   c.name = "hand";
-  c.kind = "gripper";
+  c.kind = bridge::DeviceKind::kGripper;
   c.where = "s.yaml:7";
-  c.gripper.touch = {"gripper_touch_left", "no_such_sensor"};
+  c.EditParams<GripperParams>().touch = {"gripper_touch_left", "no_such_sensor"};
   try {
-    MakeSimDevice(m_, c, 1);
+    MakeDevice({m_, 0.002, 1, ""}, c);
     FAIL() << "an unknown sensor must be refused";
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(), "s.yaml:7: device 'hand': the scene has no touch sensor 'no_such_sensor'");
   }
-  c.gripper = GripperDeviceConfig{};
-  c.gripper.force_actuator = "gripper";
-  c.gripper.servo = "nope";
-  EXPECT_THROW(MakeSimDevice(m_, c, 1), InputError);
+  c.params.reset();
+  c.EditParams<GripperParams>().force_actuator = "gripper";
+  c.EditParams<GripperParams>().servo = "nope";
+  EXPECT_THROW(MakeDevice({m_, 0.002, 1, ""}, c), InputError);
   DeviceConfig p;
   p.name = "tcp";
-  p.kind = "pose";
+  p.kind = bridge::DeviceKind::kPose;
   p.where = "s.yaml:9";
-  p.pose.site = "gripper_tcp";
-  p.pose.relative_to = "no_body";
+  p.EditParams<PoseParams>().site = "gripper_tcp";
+  p.EditParams<PoseParams>().relative_to = "no_body";
   try {
-    MakeSimDevice(m_, p, 1);
+    MakeDevice({m_, 0.002, 1, ""}, p);
     FAIL() << "an unknown body must be refused";
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(), "s.yaml:9: device 'tcp': the scene has no body 'no_body'");

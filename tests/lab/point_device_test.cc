@@ -9,8 +9,9 @@
 #include <gtest/gtest.h>
 
 #include "control/task_space.h"
-#include "lab/lab_arm_device.h"
-#include "lab/lab_device.h"
+#include "lab/devices/device_arm.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_point.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
@@ -24,24 +25,24 @@ constexpr double kPeriod = 0.01;  // s: 10 physics steps of 1 ms
 DeviceConfig ArmConfig() {
   DeviceConfig c;
   c.name = "pa10";
-  c.kind = "arm";
+  c.kind = bridge::DeviceKind::kArm;
   c.where = "test.yaml:1";
-  c.arm.joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
-  c.arm.actuators = c.arm.joints;  // the motors have the joints' names
-  c.arm.initial = {0, 0.523599, 0, 1.047198, 0, 1.570796, 0};  // ready: tool down
-  c.arm.max_velocity = std::vector<double>(7, 3.1416);
+  c.EditParams<ArmParams>().joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
+  c.EditParams<ArmParams>().actuators = c.EditParams<ArmParams>().joints;  // the motors have the joints' names
+  c.EditParams<ArmParams>().initial = {0, 0.523599, 0, 1.047198, 0, 1.570796, 0};  // ready: tool down
+  c.EditParams<ArmParams>().max_velocity = std::vector<double>(7, 3.1416);
   return c;
 }
 
 DeviceConfig PointConfig(double max_speed = 0.2) {
   DeviceConfig c;
   c.name = "hand";
-  c.kind = "point";
+  c.kind = bridge::DeviceKind::kPoint;
   c.where = "test.yaml:9";
-  c.point.arm = "pa10";
-  c.point.max_speed = max_speed;
-  c.point.workspace_min = {0.5, -0.3, 0.2};
-  c.point.workspace_max = {0.9, 0.3, 0.8};
+  c.EditParams<PointParams>().arm = "pa10";
+  c.EditParams<PointParams>().max_speed = max_speed;
+  c.EditParams<PointParams>().workspace_min = {0.5, -0.3, 0.2};
+  c.EditParams<PointParams>().workspace_max = {0.9, 0.3, 0.8};
   return c;
 }
 
@@ -49,16 +50,17 @@ DeviceConfig PointConfig(double max_speed = 0.2) {
 struct Rig {
   ModelPtr model = LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
   DataPtr data = MakeData(model.get());
-  std::unique_ptr<SimArm> arm = SimArm::Create(model.get(), ArmConfig());
-  std::unique_ptr<SimDevice> point;
+  std::unique_ptr<SimArm> arm = SimArm::Create({model.get(), kPeriod, 1, "pa10.xml"}, ArmConfig());
+  std::unique_ptr<Device> point;
   int tool = mj_name2id(model.get(), mjOBJ_SITE, "tool");
 
   explicit Rig(double max_speed = 0.2) {
-    point = MakePointDevice(model.get(), PointConfig(max_speed), arm.get(), kPeriod);
+    point = MakeDevice({model.get(), kPeriod, 1, "pa10.xml"}, PointConfig(max_speed));
+    point->Bind({arm.get(), point.get()});
     mj_resetData(model.get(), data.get());
-    arm->SetInitialPositions(*data);
+    arm->SetInitialState(*data);
     mj_forward(model.get(), data.get());
-    arm->Start(*data, kPeriod);
+    arm->Start(*data);
     point->Reset(*data);
   }
   void Period() {
@@ -105,7 +107,7 @@ TEST(PointDeviceTest, MovesTheToolToTheCommandKeepingItsOrientation) {
   // the set-point ramps at 0.2 m/s: after 0.25 s it is 0.05 m along the line (closed form)
   std::vector<double> row(rig.point->ColumnCount());
   for (int k = 0; k < 25; ++k) rig.Period();
-  rig.point->Row(row.data());
+  rig.point->Row(*rig.data, row.data());
   const Eigen::Vector3d setpoint(row[6], row[7], row[8]);
   const Eigen::Vector3d along = start + 0.05 * (goal - start).normalized();
   EXPECT_LT((setpoint - along).norm(), 1e-12);
@@ -147,7 +149,7 @@ TEST(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
   rig.point->Command({held.x(), held.y(), held.z()});
   rig.Period();
   std::vector<double> row(rig.point->ColumnCount());
-  rig.point->Row(row.data());
+  rig.point->Row(*rig.data, row.data());
   EXPECT_LT((Eigen::Vector3d(row[6], row[7], row[8]) - held).norm(), 1e-6);
 }
 

@@ -1,6 +1,8 @@
 // Scenario loading: valid files parse into the right values; every kind of bad
 // input is an InputError naming the file, the line and the key.
 #include "lab/lab_scenario.h"
+#include "lab/devices/device_arm.h"
+#include "lab/devices/device_wrench.h"
 
 #include <gtest/gtest.h>
 
@@ -64,12 +66,12 @@ TEST(ScenarioTest, ParsesValidFile) {
   EXPECT_DOUBLE_EQ(s.control_period_s, 0.004);
   EXPECT_EQ(s.seed, 42u);
   ASSERT_EQ(s.devices.size(), 2u);
-  EXPECT_EQ(s.devices[0].arm.joints, (std::vector<std::string>{"a", "b"}));
-  EXPECT_EQ(s.devices[0].arm.actuators, s.devices[0].arm.joints);  // default
-  EXPECT_DOUBLE_EQ(s.devices[0].arm.servo.bandwidth_hz, 8);
-  EXPECT_DOUBLE_EQ(s.devices[0].arm.servo.damping_ratio, 1.0);
-  EXPECT_EQ(s.devices[1].wrench.filter, 2);
-  EXPECT_FALSE(s.devices[1].wrench.noise);
+  EXPECT_EQ(s.devices[0].ParamsAs<ArmParams>().joints, (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(s.devices[0].ParamsAs<ArmParams>().actuators, s.devices[0].ParamsAs<ArmParams>().joints);  // default
+  EXPECT_DOUBLE_EQ(s.devices[0].ParamsAs<ArmParams>().servo.bandwidth_hz, 8);
+  EXPECT_DOUBLE_EQ(s.devices[0].ParamsAs<ArmParams>().servo.damping_ratio, 1.0);
+  EXPECT_EQ(s.devices[1].ParamsAs<WrenchParams>().filter, 2);
+  EXPECT_FALSE(s.devices[1].ParamsAs<WrenchParams>().noise);
   ASSERT_EQ(s.controller.cartesian.size(), 1u);
   // rpy (180, 0, 90): x axis of the frame -> world y, z axis -> world -z
   const Eigen::Matrix3d R = s.controller.cartesian[0].orientation_W.toRotationMatrix();

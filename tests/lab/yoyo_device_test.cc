@@ -13,8 +13,9 @@
 
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_yoyo.h"
-#include "lab/lab_arm_device.h"
-#include "lab/lab_device.h"
+#include "lab/devices/device_arm.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_yoyo.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
@@ -27,10 +28,10 @@ constexpr const char* kScene = VLAB_SOURCE_DIR "/scenes/pa10_yoyo.xml";
 DeviceConfig YoyoConfig(double rate_hz = 0, double noise = 0) {
   DeviceConfig c;
   c.name = "yoyo";
-  c.kind = "yoyo";
+  c.kind = bridge::DeviceKind::kYoyo;
   c.where = "test.yaml:1";
-  c.yoyo.rate_hz = rate_hz;
-  c.yoyo.noise = noise;
+  c.EditParams<YoyoParams>().rate_hz = rate_hz;
+  c.EditParams<YoyoParams>().noise = noise;
   return c;
 }
 
@@ -39,19 +40,19 @@ struct Rig {
   ModelPtr model = LoadModel(kScene);
   DataPtr data = MakeData(model.get());
   std::unique_ptr<SimArm> arm;
-  std::unique_ptr<SimDevice> yoyo;
+  std::unique_ptr<Device> yoyo;
 
   explicit Rig(const char* keyframe, double rate_hz = 0, double noise = 0, std::uint64_t seed = 3) {
     DeviceConfig a;
     a.name = "pa10";
-    a.kind = "arm";
-    a.arm.joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
-    a.arm.actuators = a.arm.joints;
-    arm = SimArm::Create(model.get(), a);
-    yoyo = MakeSimDevice(model.get(), YoyoConfig(rate_hz, noise), seed);
+    a.kind = bridge::DeviceKind::kArm;
+    a.EditParams<ArmParams>().joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
+    a.EditParams<ArmParams>().actuators = a.EditParams<ArmParams>().joints;
+    arm = SimArm::Create({model.get(), 0.01, 1, kScene}, a);
+    yoyo = MakeDevice({model.get(), 0.002, seed, ""}, YoyoConfig(rate_hz, noise));
     mj_resetDataKeyframe(model.get(), data.get(), mj_name2id(model.get(), mjOBJ_KEY, keyframe));
     mj_forward(model.get(), data.get());
-    arm->Start(*data, 0.01);
+    arm->Start(*data);
     yoyo->Reset(*data);
   }
   void Run(double seconds) {
@@ -100,7 +101,7 @@ TEST(YoyoDeviceTest, ValuesAreTheModelsStateAndTheDescentsClosedForms) {
   EXPECT_DOUBLE_EQ(s[5], rig.Sensor("yoyo_string_plus_force") + rig.Sensor("yoyo_string_minus_force"));
   EXPECT_DOUBLE_EQ(s[6], rig.data->qvel[m->jnt_dofadr[rig.Id(mjOBJ_JOINT, "yoyo_spin")]]);
   std::vector<double> row(rig.yoyo->ColumnCount());
-  rig.yoyo->Row(row.data());
+  rig.yoyo->Row(*rig.data, row.data());
   EXPECT_EQ(rig.yoyo->Columns(), (std::vector<std::string>{"yoyo.z", "yoyo.vz", "yoyo.string_force", "yoyo.spin",
                                                             "yoyo.depth"}));
   EXPECT_EQ(row[0], s[3]);

@@ -23,18 +23,19 @@
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_yoyo.h"
-#include "lab/lab_device.h"
+#include "lab/devices/device_yoyo.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::lab {
 
 namespace {
 
-class SimYoyo final : public SimDevice {
+class SimYoyo final : public Device {
  public:
   SimYoyo(const mjModel* m, const DeviceConfig& c, std::uint64_t seed)
-      : SimDevice(c.name), model_(m), config_(c.yoyo), seed_(seed), rng_(seed) {
+      : Device(c), model_(m), config_(c.ParamsAs<YoyoParams>()), seed_(seed), rng_(seed) {
     const std::string who = c.where + ": device '" + c.name + "': ";
     const int slide = mj_name2id(m, mjOBJ_JOINT, config_.slide.c_str());
     const int spin = mj_name2id(m, mjOBJ_JOINT, config_.spin.c_str());
@@ -53,7 +54,6 @@ class SimYoyo final : public SimDevice {
     }
   }
 
-  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kYoyo; }
 
   void Reset(const mjData& d) override {
     rng_.Seed(seed_);  // every run from a reset draws the same noise
@@ -91,7 +91,7 @@ class SimYoyo final : public SimDevice {
     return out;
   }
   int ColumnCount() const override { return 5; }
-  void Row(double* out) const override {
+  void Row(const mjData&, double* out) const override {
     for (double v : {p_[2], vz_, force_, spin_, depth_}) *out++ = v;
   }
 
@@ -111,7 +111,7 @@ class SimYoyo final : public SimDevice {
 
  private:
   const mjModel* model_;
-  YoyoDeviceConfig config_;
+  YoyoParams config_;
   std::uint64_t seed_;
   sensors::Xoshiro256pp rng_;
   sensors::ZigguratNormal normal_;
@@ -125,8 +125,23 @@ class SimYoyo final : public SimDevice {
 
 }  // namespace
 
-std::unique_ptr<SimDevice> MakeYoyoDevice(const mjModel* m, const DeviceConfig& config, std::uint64_t seed) {
-  return std::make_unique<SimYoyo>(m, config, seed);
+std::shared_ptr<const DeviceParams> ReadYoyoParams(MapReader& r) {
+  auto p = std::make_shared<YoyoParams>();
+
+  p->slide = r.String("slide", p->slide);
+  p->spin = r.String("spin", p->spin);
+  p->centre = r.String("centre", p->centre);
+  p->tension = r.Strings("tension", p->tension);
+  if (p->tension.empty()) r.Fail("tension", "needs at least one tendonlimitfrc sensor");
+  p->rate_hz = r.Number("rate", p->rate_hz);
+  if (!(p->rate_hz >= 0)) r.Fail("rate", "must be >= 0 Hz (0: every control period)");
+  p->noise = r.Number("noise", p->noise);
+  if (!(p->noise >= 0)) r.Fail("noise", "must be >= 0 m");
+  return p;
+}
+
+std::unique_ptr<Device> MakeYoyo(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimYoyo>(context.model, config, context.seed);
 }
 
 }  // namespace vlab::lab

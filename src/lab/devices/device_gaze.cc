@@ -24,8 +24,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 
 namespace vlab::lab {
 
@@ -33,9 +34,9 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-class SimGaze final : public SimDevice {
+class SimGaze final : public Device {
  public:
-  SimGaze(const mjModel* m, const DeviceConfig& c) : SimDevice(c.name), config_(c.gaze) {
+  SimGaze(const mjModel* m, const DeviceConfig& c) : Device(c), config_(c.ParamsAs<GazeParams>()) {
     const std::string who = c.where + ": device '" + c.name + "'";
     camera_ = mj_name2id(m, mjOBJ_CAMERA, config_.camera.c_str());
     if (camera_ < 0) throw InputError(who + ": the scene has no camera '" + config_.camera + "'");
@@ -51,7 +52,6 @@ class SimGaze final : public SimDevice {
     cy_ = 0.5 * config_.height - 0.5;
   }
 
-  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kGaze; }
 
   /// The initial row and state: the pose after the lab's reset.
   void Reset(const mjData& d) override { Sample(d, d.time); }
@@ -84,7 +84,7 @@ class SimGaze final : public SimDevice {
     return {name() + ".error_deg", name() + ".u", name() + ".v", name() + ".visible"};
   }
   int ColumnCount() const override { return 4; }
-  void Row(double* out) const override {
+  void Row(const mjData&, double* out) const override {
     out[0] = error_deg_;
     out[1] = u_;
     out[2] = v_;
@@ -109,7 +109,7 @@ class SimGaze final : public SimDevice {
   }
 
  private:
-  GazeDeviceConfig config_;
+  GazeParams config_;
   int camera_ = -1;
   int site_ = -1;
   int body_ = -1;
@@ -122,8 +122,20 @@ class SimGaze final : public SimDevice {
 
 }  // namespace
 
-std::unique_ptr<SimDevice> MakeGazeDevice(const mjModel* m, const DeviceConfig& config) {
-  return std::make_unique<SimGaze>(m, config);
+std::shared_ptr<const DeviceParams> ReadGazeParams(MapReader& r) {
+  auto p = std::make_shared<GazeParams>();
+
+  p->camera = r.String("camera");
+  p->target = r.String("target");
+  p->width = r.Integer("width", p->width);
+  p->height = r.Integer("height", p->height);
+  if (p->width < 1 || p->width > 8192) r.Fail("width", "must be 1 to 8192 pixels");
+  if (p->height < 1 || p->height > 8192) r.Fail("height", "must be 1 to 8192 pixels");
+  return p;
+}
+
+std::unique_ptr<Device> MakeGaze(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimGaze>(context.model, config);
 }
 
 }  // namespace vlab::lab

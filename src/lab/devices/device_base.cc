@@ -18,17 +18,18 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_base.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::lab {
 
 namespace {
 
-class SimBase final : public SimDevice {
+class SimBase final : public Device {
  public:
-  SimBase(const mjModel* m, const DeviceConfig& c, std::uint64_t seed) : SimDevice(c.name), config_(c.base) {
+  SimBase(const mjModel* m, const DeviceConfig& c, std::uint64_t seed) : Device(c), config_(c.ParamsAs<BaseParams>()) {
     const int want[3] = {mjJNT_SLIDE, mjJNT_SLIDE, mjJNT_HINGE};
     for (int i = 0; i < 3; ++i) {
       const std::string& j = config_.joints[i];
@@ -58,7 +59,6 @@ class SimBase final : public SimDevice {
     }
   }
 
-  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kBase; }
 
   void Reset(const mjData& d) override {
     for (int i = 0; i < 3; ++i) {
@@ -87,8 +87,8 @@ class SimBase final : public SimDevice {
     target_[0] = target_[1] = target_[2] = 0.0;
     holding_ = true;
   }
-  int watchdog_periods() const override { return config_.watchdog_periods; }
-  double owner_timeout_s() const override { return config_.owner_timeout_s; }
+  int watchdog_periods() const override { return config_.input.watchdog_periods; }
+  double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
 
   void Actuate(mjData& d, double dt) override {
     // the target in the world frame, then the reference ramps toward it
@@ -142,7 +142,7 @@ class SimBase final : public SimDevice {
     return out;
   }
   int ColumnCount() const override { return 9; }
-  void Row(double* out) const override {
+  void Row(const mjData&, double* out) const override {
     for (double v : {odometry_[0], odometry_[1], odometry_[2], last_pose_[0], last_pose_[1], last_pose_[2],
                      velocity_[0], velocity_[1], velocity_[2]}) {
       *out++ = v;
@@ -159,12 +159,12 @@ class SimBase final : public SimDevice {
     j["joints"] = config_.joints;
     j["limits"] = {{"velocity_max", config_.max_velocity}, {"acceleration_max", config_.max_acceleration}};
     j["odometry_drift"] = config_.odometry_drift;
-    j["watchdog_periods"] = config_.watchdog_periods;
+    j["watchdog_periods"] = config_.input.watchdog_periods;
     return j.dump();
   }
 
  private:
-  BaseDeviceConfig config_;
+  BaseParams config_;
   int qpos_[3] = {}, qvel_[3] = {}, ctrl_[3] = {};
   double target_[3] = {}, reference_[3] = {};
   bool world_frame_ = false, holding_ = true;
@@ -175,8 +175,32 @@ class SimBase final : public SimDevice {
 
 }  // namespace
 
-std::unique_ptr<SimDevice> MakeBaseDevice(const mjModel* m, const DeviceConfig& config, std::uint64_t seed) {
-  return std::make_unique<SimBase>(m, config, seed);
+std::shared_ptr<const DeviceParams> ReadBaseParams(MapReader& r) {
+  auto p = std::make_shared<BaseParams>();
+
+  p->joints = r.Strings("joints", {});
+  if (p->joints.size() != 3) r.Fail("joints", "a base needs 3 joints: x, y (slide) and yaw (hinge)");
+  p->actuators = r.Strings("actuators", p->joints);
+  if (p->actuators.size() != 3) r.Fail("actuators", "needs one velocity actuator per joint (3)");
+  p->max_velocity = r.Numbers("max_velocity", p->max_velocity);
+  p->max_acceleration = r.Numbers("max_acceleration", p->max_acceleration);
+  for (const char* key : {"max_velocity", "max_acceleration"}) {
+    const auto& v = std::string(key) == "max_velocity" ? p->max_velocity : p->max_acceleration;
+    if (v.size() != 3 || !(v[0] > 0 && v[1] > 0 && v[2] > 0)) r.Fail(key, "expected 3 numbers > 0 (x, y, yaw)");
+  }
+  MapReader odometry = r.Map("odometry");
+  p->odometry_drift = odometry.Bool("drift", p->odometry_drift);
+  p->drift_scale = odometry.Number("scale_std", p->drift_scale);
+  p->drift_yaw_rate = odometry.Number("yaw_rate_std", p->drift_yaw_rate);
+  if (!(p->drift_scale >= 0 && p->drift_scale < 0.5)) odometry.Fail("scale_std", "must be 0 to 0.5");
+  if (!(p->drift_yaw_rate >= 0)) odometry.Fail("yaw_rate_std", "must be >= 0 rad/s");
+  odometry.Finish();
+  ReadCommandInput(r, &p->input);
+  return p;
+}
+
+std::unique_ptr<Device> MakeBase(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimBase>(context.model, config, context.seed);
 }
 
 }  // namespace vlab::lab

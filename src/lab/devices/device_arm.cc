@@ -1,9 +1,12 @@
-#include "lab/lab_arm_device.h"
+#include "lab/devices/device_arm.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "bridge/bridge_describe.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 
 namespace vlab::lab {
 
@@ -16,21 +19,80 @@ constexpr double kMaxFollowingError = 0.2;
   throw InputError(c.where + ": device '" + c.name + "': " + what);
 }
 
+// limits for the wire: one value per joint, or none where a joint is unlimited
+std::vector<double> Limits(const Eigen::VectorXd& v, bool keep_infinite) {
+  std::vector<double> out;
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (!keep_infinite && !std::isfinite(v[i])) return {};  // unlimited: no limit of that kind
+    out.push_back(v[i]);
+  }
+  return out;
+}
+
+// |tau| limits: the smaller side of each motor's range
+std::vector<double> TorqueMax(const Eigen::VectorXd& tau_min, const Eigen::VectorXd& tau_max) {
+  std::vector<double> out;
+  for (Eigen::Index i = 0; i < tau_min.size(); ++i) {
+    const double m = std::min(std::abs(tau_min[i]), std::abs(tau_max[i]));
+    if (!std::isfinite(m)) return {};
+    out.push_back(m);
+  }
+  return out;
+}
+
 }  // namespace
 
-std::unique_ptr<SimArm> SimArm::Create(const mjModel* m, const DeviceConfig& c) {
-  std::unique_ptr<SimArm> arm(new SimArm());
+std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r) {
+  auto arm = std::make_shared<ArmParams>();
+  arm->joints = r.Strings("joints", {});
+  if (arm->joints.empty()) r.Fail("joints", "an arm needs at least one joint");
+  arm->actuators = r.Strings("actuators", arm->joints);
+  if (arm->actuators.size() != arm->joints.size()) r.Fail("actuators", "needs one actuator per joint");
+  arm->initial = r.Numbers("initial", {});
+  if (!arm->initial.empty() && arm->initial.size() != arm->joints.size()) {
+    r.Fail("initial", "needs one value per joint (" + std::to_string(arm->joints.size()) + ")");
+  }
+  MapReader servo = r.Map("servo");
+  arm->max_velocity = r.Numbers("max_velocity", {});
+  if (!arm->max_velocity.empty() && arm->max_velocity.size() != arm->joints.size()) {
+    r.Fail("max_velocity", "needs one value per joint (" + std::to_string(arm->joints.size()) + ")");
+  }
+  for (double v : arm->max_velocity) {
+    if (!(v > 0)) r.Fail("max_velocity", "values must be > 0 rad/s");
+  }
+  ReadCommandInput(r, &arm->input);
+  arm->log_following_error = r.Bool("log_following_error", arm->log_following_error);
+  arm->servo.bandwidth_hz = servo.Number("bandwidth_hz", arm->servo.bandwidth_hz);
+  arm->servo.damping_ratio = servo.Number("damping_ratio", arm->servo.damping_ratio);
+  if (!(arm->servo.bandwidth_hz > 0)) servo.Fail("bandwidth_hz", "must be > 0 Hz");
+  if (!(arm->servo.damping_ratio > 0)) servo.Fail("damping_ratio", "must be > 0");
+  servo.Finish();
+  return arm;
+}
+
+std::unique_ptr<Device> MakeArm(const DeviceContext& context, const DeviceConfig& config) {
+  return SimArm::Create(context, config);
+}
+
+std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const DeviceConfig& c) {
+  const mjModel* m = context.model;
+  const ArmParams& p = c.ParamsAs<ArmParams>();
+  if (m->opt.integrator == mjINT_RK4) {
+    throw InputError("scene '" + context.scene + "': arm devices need the Euler or implicit integrator (RK4 "
+                     "cannot split the step for the servo)");
+  }
+  std::unique_ptr<SimArm> arm(new SimArm(c));
   arm->model_ = m;
-  arm->name_ = c.name;
-  arm->joint_names_ = c.arm.joints;
-  const int n = static_cast<int>(c.arm.joints.size());
+  arm->command_period_s_ = context.control_period_s;
+  arm->joint_names_ = p.joints;
+  const int n = static_cast<int>(p.joints.size());
   const double inf = std::numeric_limits<double>::infinity();
   arm->lower_.resize(n);
   arm->upper_.resize(n);
   arm->tau_min_.resize(n);
   arm->tau_max_.resize(n);
   for (int i = 0; i < n; ++i) {
-    const std::string& joint = c.arm.joints[i];
+    const std::string& joint = p.joints[i];
     const int j = mj_name2id(m, mjOBJ_JOINT, joint.c_str());
     if (j < 0) Fail(c, "no joint '" + joint + "' in the scene");
     if (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE) {
@@ -41,7 +103,7 @@ std::unique_ptr<SimArm> SimArm::Create(const mjModel* m, const DeviceConfig& c) 
     arm->lower_[i] = m->jnt_limited[j] ? m->jnt_range[2 * j] : -inf;
     arm->upper_[i] = m->jnt_limited[j] ? m->jnt_range[2 * j + 1] : inf;
 
-    const std::string& actuator = c.arm.actuators[i];
+    const std::string& actuator = p.actuators[i];
     const int a = mj_name2id(m, mjOBJ_ACTUATOR, actuator.c_str());
     if (a < 0) Fail(c, "no actuator '" + actuator + "' in the scene");
     // a torque motor on this very joint: direct transmission, unit-free gain, no bias
@@ -60,39 +122,44 @@ std::unique_ptr<SimArm> SimArm::Create(const mjModel* m, const DeviceConfig& c) 
       arm->tau_max_[i] = std::min(arm->tau_max_[i], m->actuator_forcerange[2 * a + 1]);
     }
   }
-  if (!c.arm.initial.empty()) {
+  if (!p.initial.empty()) {
     arm->has_initial_ = true;
-    arm->initial_ = Eigen::Map<const Eigen::VectorXd>(c.arm.initial.data(), n);
+    arm->initial_ = Eigen::Map<const Eigen::VectorXd>(p.initial.data(), n);
     for (int i = 0; i < n; ++i) {
       if (arm->initial_[i] < arm->lower_[i] || arm->initial_[i] > arm->upper_[i]) {
-        Fail(c, "initial position of joint '" + c.arm.joints[i] + "' is outside its range");
+        Fail(c, "initial position of joint '" + p.joints[i] + "' is outside its range");
       }
     }
   }
-  if (!c.arm.max_velocity.empty()) {
-    arm->max_velocity_ = Eigen::Map<const Eigen::VectorXd>(c.arm.max_velocity.data(), n);
+  if (!p.max_velocity.empty()) {
+    arm->max_velocity_ = Eigen::Map<const Eigen::VectorXd>(p.max_velocity.data(), n);
   }
-  arm->watchdog_periods_ = c.arm.watchdog_periods;
-  arm->owner_timeout_s_ = c.arm.owner_timeout_s;
-  arm->log_following_error_ = c.arm.log_following_error;
-  arm->bandwidth_hz_ = c.arm.servo.bandwidth_hz;
-  arm->damping_ratio_ = c.arm.servo.damping_ratio;
+  arm->watchdog_periods_ = p.input.watchdog_periods;
+  arm->owner_timeout_s_ = p.input.owner_timeout_s;
+  arm->log_following_error_ = p.log_following_error;
+  arm->bandwidth_hz_ = p.servo.bandwidth_hz;
+  arm->damping_ratio_ = p.servo.damping_ratio;
   arm->value_ = Eigen::VectorXd::Zero(n);
   arm->q_ref_ = Eigen::VectorXd::Zero(n);
   arm->qd_ref_ = Eigen::VectorXd::Zero(n);
   arm->last_position_command_ = Eigen::VectorXd::Zero(n);
   arm->tau_ = Eigen::VectorXd::Zero(n);
+  arm->state_.q = arm->state_.qd = arm->state_.tau = Eigen::VectorXd::Zero(n);
+  arm->message_.q.reserve(n);
+  arm->message_.qd.reserve(n);
+  arm->message_.tau.reserve(n);
+  arm->wire_command_.value.reserve(bridge::kMaxPacketValues);
+  arm->command_.value.resize(n);
   return arm;
 }
 
-void SimArm::SetInitialPositions(mjData& d) const {
+void SimArm::SetInitialState(mjData& d) const {
   if (!has_initial_) return;
   for (int i = 0; i < dof(); ++i) d.qpos[qpos_adr_[i]] = initial_[i];
 }
 
-void SimArm::Start(const mjData& d, double control_period_s) {
+void SimArm::Start(mjData& d) {
   const mjModel* m = model_;
-  command_period_s_ = control_period_s;
   // joint inertia H_ii from the factored-free sparse mass matrix: qM diagonal
   const double w = 2.0 * M_PI * bandwidth_hz_;
   kp_.resize(dof());
@@ -106,7 +173,13 @@ void SimArm::Start(const mjData& d, double control_period_s) {
   qd_ref_.setZero();
   mode_ = bridge::ArmMode::kHold;
   have_position_command_ = false;
+  // the servo holds from the first instant: its torques for the forces the lab recomputes next
+  Actuate(d, 0.0);
 }
+
+void SimArm::Reset(const mjData& d) { Sample(d, d.time, &state_); }
+
+void SimArm::Sample(const mjData& d, double t) { Sample(d, t, &state_); }
 
 bool SimArm::Command(const bridge::ArmCommand& cmd) {
   bool ok = cmd.value.size() == dof() || cmd.mode == bridge::ArmMode::kHold;
@@ -196,10 +269,10 @@ void SimArm::Sample(const mjData& d, double time_s, bridge::ArmState* s) const {
 std::vector<std::string> SimArm::Columns() const {
   std::vector<std::string> columns;
   for (const char* quantity : {"q", "qd", "tau"}) {
-    for (const auto& joint : joint_names_) columns.push_back(name_ + "." + quantity + "." + joint);
+    for (const auto& joint : joint_names_) columns.push_back(name() + "." + quantity + "." + joint);
   }
-  columns.push_back(name_ + ".limit_violation");
-  if (log_following_error_) columns.push_back(name_ + ".following_error");
+  columns.push_back(name() + ".limit_violation");
+  if (log_following_error_) columns.push_back(name() + ".following_error");
   return columns;
 }
 
@@ -218,6 +291,64 @@ void SimArm::Row(const mjData& d, double* out) const {
   double following = 0.0;  // (torque mode: q_ref follows q, one step behind)
   for (int i = 0; i < n; ++i) following = std::max(following, std::abs(q_ref_[i] - d.qpos[qpos_adr_[i]]));
   out[3 * n + 1] = following;
+}
+
+
+
+void SimArm::SetDriver(const std::string& driver, const std::string& where) {
+  if (!driver_.empty() && driver_ != driver) {
+    throw InputError(where + "arm '" + name() + "' is driven by point device '" + driver_ + "' too");
+  }
+  driver_ = driver;
+}
+
+void SimArm::Hold() {
+  command_.mode = bridge::ArmMode::kHold;
+  Command(command_);
+}
+
+bool SimArm::TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) {
+  (void)scratch;
+  if (!endpoint.TakeArmCommand(&wire_command_)) return false;
+  command_.mode = static_cast<bridge::ArmMode>(wire_command_.mode);
+  command_.value = Eigen::Map<const Eigen::VectorXd>(wire_command_.value.data(),
+                                                     static_cast<Eigen::Index>(wire_command_.value.size()));
+  Command(command_);
+  return true;
+}
+
+void SimArm::EncodeState(double seq, double t, std::uint32_t endpoint_bits, std::vector<double>* scratch,
+                         std::vector<unsigned char>* out) const {
+  (void)scratch;
+  message_.status = state_.status | endpoint_bits;
+  message_.q.assign(state_.q.data(), state_.q.data() + state_.q.size());
+  message_.qd.assign(state_.qd.data(), state_.qd.data() + state_.qd.size());
+  message_.tau.assign(state_.tau.data(), state_.tau.data() + state_.tau.size());
+  bridge::EncodeArmState(seq, t, message_, out);
+}
+
+void SimArm::ConfigureEndpoint(double control_hz, bridge::EndpointConfig* ec) const {
+  ec->kind = bridge::DeviceKind::kArm;
+  ec->owner_timeout_periods = std::max(1, static_cast<int>(std::lround(owner_timeout_s_ * control_hz)));
+  ec->joints = dof();
+  ec->position_min = Limits(lower_, true);
+  ec->position_max = Limits(upper_, true);
+  ec->velocity_max = Limits(max_velocity_, false);
+  ec->torque_max = TorqueMax(tau_min_, tau_max_);
+  ec->watchdog_periods = watchdog_periods_;
+}
+
+std::string SimArm::DescribeJson(const bridge::DeviceDescription& common) const {
+  bridge::ArmDescription desc;
+  desc.joints = joint_names_;
+  desc.position_min = Limits(lower_, false);
+  desc.position_max = Limits(upper_, false);
+  desc.velocity_max = Limits(max_velocity_, false);
+  desc.torque_max = TorqueMax(tau_min_, tau_max_);
+  desc.watchdog_periods = watchdog_periods_;
+  desc.owner_timeout_s = owner_timeout_s_;
+  static_cast<bridge::DeviceDescription&>(desc) = common;
+  return bridge::DescribeJson(desc);
 }
 
 }  // namespace vlab::lab

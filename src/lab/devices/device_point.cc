@@ -32,9 +32,10 @@
 #include "bridge/bridge_yoyo.h"
 #include "control/robot_model.h"
 #include "control/task_space.h"
-#include "lab/lab_arm_device.h"
-#include "lab/lab_device.h"
+#include "lab/devices/device_arm.h"
+#include "lab/devices/device_point.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 
 namespace vlab::lab {
 
@@ -42,24 +43,14 @@ namespace {
 
 using Matrix3RowMajor = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
-class SimPoint final : public SimDevice {
+class SimPoint final : public Device {
  public:
-  SimPoint(const mjModel* m, const DeviceConfig& c, SimArm* arm, double control_period_s)
-      : SimDevice(c.name), model_(m), config_(c.point), arm_(arm), period_s_(control_period_s) {
-    const std::string who = c.where + ": device '" + c.name + "': ";
+  SimPoint(const DeviceContext& context, const DeviceConfig& c)
+      : Device(c), model_(context.model), config_(c.ParamsAs<PointParams>()), period_s_(context.control_period_s) {
     try {
-      chain_ = control::RobotModel::Create(m, {config_.base_body, config_.site});
+      chain_ = control::RobotModel::Create(model_, {config_.base_body, config_.site});
     } catch (const std::invalid_argument& e) {
-      throw InputError(who + e.what());
-    }
-    const std::vector<std::string>& joints = arm_->joint_names();
-    for (const std::string& joint : chain_->joint_names()) {
-      const auto it = std::find(joints.begin(), joints.end(), joint);
-      if (it == joints.end()) {
-        throw InputError(who + "chain joint '" + joint + "' (from '" + config_.base_body + "' to site '" +
-                         config_.site + "') is not a joint of arm '" + arm_->name() + "'");
-      }
-      arm_index_.push_back(static_cast<int>(it - joints.begin()));
+      throw InputError(who() + ": " + e.what());
     }
     site_ = chain_->tip_site_id();
     for (int i = 0; i < 3; ++i) {
@@ -69,11 +60,33 @@ class SimPoint final : public SimDevice {
     q_.setZero(chain_->dof());
     qd_.setZero(chain_->dof());
     velocity_.mode = bridge::ArmMode::kVelocity;
-    velocity_.value.setZero(arm_->dof());
     hold_.mode = bridge::ArmMode::kHold;
   }
 
-  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kPoint; }
+  // its arm: an arm device of the scenario, driven by this device alone
+  void Bind(const std::vector<Device*>& devices) override {
+    const std::string who = this->who() + ": arm: ";
+    arm_ = nullptr;
+    for (Device* d : devices) {
+      if (d->name() == config_.arm) arm_ = dynamic_cast<SimArm*>(d);
+    }
+    if (!arm_) throw InputError(who + "the scenario has no arm device '" + config_.arm + "'");
+    arm_->SetDriver(name(), who);
+    arm_index_.clear();
+    const std::vector<std::string>& joints = arm_->joint_names();
+    for (const std::string& joint : chain_->joint_names()) {
+      const auto it = std::find(joints.begin(), joints.end(), joint);
+      if (it == joints.end()) {
+        throw InputError(this->who() + ": chain joint '" + joint + "' (from '" + config_.base_body + "' to site '" +
+                         config_.site + "') is not a joint of arm '" + arm_->name() + "'");
+      }
+      arm_index_.push_back(static_cast<int>(it - joints.begin()));
+    }
+    velocity_.value.setZero(arm_->dof());
+  }
+  std::string drives() const override { return config_.arm; }
+  int log_rank() const override { return 3; }  // after the other devices, as in every log written so far
+
 
   void Reset(const mjData& d) override {
     ReadChain(d);
@@ -113,8 +126,8 @@ class SimPoint final : public SimDevice {
     holding_ = false;
   }
   void Hold() override { holding_ = true; }
-  int watchdog_periods() const override { return config_.watchdog_periods; }
-  double owner_timeout_s() const override { return config_.owner_timeout_s; }
+  int watchdog_periods() const override { return config_.input.watchdog_periods; }
+  double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
 
   void BeginPeriod(const mjData& d, double) override {
     if (holding_) {
@@ -162,7 +175,7 @@ class SimPoint final : public SimDevice {
     return out;
   }
   int ColumnCount() const override { return 11; }
-  void Row(double* out) const override {
+  void Row(const mjData&, double* out) const override {
     for (double v : {p_.x(), p_.y(), p_.z(), v_.x(), v_.y(), v_.z(), setpoint_.x(), setpoint_.y(), setpoint_.z(),
                      (setpoint_ - p_).norm(), rot_error_}) {
       *out++ = v;
@@ -182,7 +195,7 @@ class SimPoint final : public SimDevice {
                    {"speed_max", config_.max_speed}};  // an unbounded side reads null
     j["gains"] = {{"position", config_.k_position}, {"orientation", config_.k_orientation},
                   {"null_space", config_.k_null}, {"damping", config_.damping}};
-    j["watchdog_periods"] = config_.watchdog_periods;
+    j["watchdog_periods"] = config_.input.watchdog_periods;
     return j.dump();
   }
 
@@ -196,8 +209,8 @@ class SimPoint final : public SimDevice {
   }
 
   const mjModel* model_;
-  PointDeviceConfig config_;
-  SimArm* arm_;
+  PointParams config_;
+  SimArm* arm_ = nullptr;  // bound by Bind
   double period_s_;
   std::unique_ptr<control::RobotModel> chain_;
   std::unique_ptr<control::TaskSpaceController> controller_;
@@ -215,9 +228,37 @@ class SimPoint final : public SimDevice {
 
 }  // namespace
 
-std::unique_ptr<SimDevice> MakePointDevice(const mjModel* m, const DeviceConfig& config, SimArm* arm,
-                                           double control_period_s) {
-  return std::make_unique<SimPoint>(m, config, arm, control_period_s);
+std::shared_ptr<const DeviceParams> ReadPointParams(MapReader& r) {
+  auto p = std::make_shared<PointParams>();
+
+  p->arm = r.String("arm");
+  p->site = r.String("site", p->site);
+  p->base_body = r.String("base_body", p->base_body);
+  MapReader gains = r.Map("gains");
+  p->k_position = gains.Number("position", p->k_position);
+  p->k_orientation = gains.Number("orientation", p->k_orientation);
+  p->k_null = gains.Number("null_space", p->k_null);
+  p->damping = gains.Number("damping", p->damping);
+  if (!(p->k_position > 0 && p->k_orientation >= 0 && p->k_null >= 0 && p->damping >= 0)) {
+    gains.Fail("position", "position must be > 0, the other gains >= 0");
+  }
+  gains.Finish();
+  p->max_speed = r.Number("max_speed", p->max_speed);
+  if (!(p->max_speed > 0)) r.Fail("max_speed", "must be > 0 m/s");
+  MapReader box = r.Map("workspace");
+  p->workspace_min = box.Numbers("min", p->workspace_min);
+  p->workspace_max = box.Numbers("max", p->workspace_max);
+  for (int i = 0; i < 3 && p->workspace_min.size() == 3 && p->workspace_max.size() == 3; ++i) {
+    if (!(p->workspace_min[i] < p->workspace_max[i])) box.Fail("max", "must be > min in x, y and z");
+  }
+  if (p->workspace_min.size() != 3 || p->workspace_max.size() != 3) box.Fail("min", "min and max need 3 numbers (x, y, z), m, world frame");
+  box.Finish();
+  ReadCommandInput(r, &p->input);
+  return p;
+}
+
+std::unique_ptr<Device> MakePoint(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimPoint>(context, config);
 }
 
 }  // namespace vlab::lab

@@ -21,8 +21,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_gripper.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 
 namespace vlab::lab {
 
@@ -30,9 +31,9 @@ namespace {
 
 constexpr double kAtRest_m_per_s = 0.005;  // jaw speed below which a grasp can be reported
 
-class SimGripper final : public SimDevice {
+class SimGripper final : public Device {
  public:
-  SimGripper(const mjModel* m, const DeviceConfig& c) : SimDevice(c.name), config_(c.gripper) {
+  SimGripper(const mjModel* m, const DeviceConfig& c) : Device(c), config_(c.ParamsAs<GripperParams>()) {
     servo_ = Actuator(m, c, config_.servo);
     drive_ = Actuator(m, c, config_.force_actuator);
     if (m->actuator_trntype[servo_] != mjTRN_TENDON || m->actuator_trntype[drive_] != mjTRN_TENDON ||
@@ -55,7 +56,6 @@ class SimGripper final : public SimDevice {
     }
   }
 
-  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kGripper; }
 
   void Reset(const mjData& d) override {
     force_mode_ = false;
@@ -86,8 +86,8 @@ class SimGripper final : public SimDevice {
     target_ = reference_;
     holding_ = true;
   }
-  int watchdog_periods() const override { return config_.watchdog_periods; }
-  double owner_timeout_s() const override { return config_.owner_timeout_s; }
+  int watchdog_periods() const override { return config_.input.watchdog_periods; }
+  double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
 
   void Actuate(mjData& d, double dt) override {
     if (force_mode_) {
@@ -126,7 +126,7 @@ class SimGripper final : public SimDevice {
     return out;
   }
   int ColumnCount() const override { return 6; }
-  void Row(double* out) const override {
+  void Row(const mjData&, double* out) const override {
     for (double v : {opening_, velocity_, force_, grasped_ ? 1.0 : 0.0, reference_, force_mode_ ? grip_force_ : 0.0}) {
       *out++ = v;
     }
@@ -143,7 +143,7 @@ class SimGripper final : public SimDevice {
     j["limits"] = {{"opening_min", opening_min_}, {"opening_max", opening_max_}, {"force_max", force_max_},
                    {"speed_max", config_.max_speed}};
     j["grasp_force"] = config_.grasp_force;
-    j["watchdog_periods"] = config_.watchdog_periods;
+    j["watchdog_periods"] = config_.input.watchdog_periods;
     return j.dump();
   }
 
@@ -154,7 +154,7 @@ class SimGripper final : public SimDevice {
     return id;
   }
 
-  GripperDeviceConfig config_;
+  GripperParams config_;
   int servo_ = -1, drive_ = -1;
   std::vector<int> touch_;
   double opening_min_ = 0, opening_max_ = 0, force_max_ = 0;
@@ -165,8 +165,23 @@ class SimGripper final : public SimDevice {
 
 }  // namespace
 
-std::unique_ptr<SimDevice> MakeGripperDevice(const mjModel* m, const DeviceConfig& config) {
-  return std::make_unique<SimGripper>(m, config);
+std::shared_ptr<const DeviceParams> ReadGripperParams(MapReader& r) {
+  auto p = std::make_shared<GripperParams>();
+
+  p->servo = r.String("servo", p->servo);
+  p->force_actuator = r.String("force_actuator", p->force_actuator);
+  p->touch = r.Strings("touch", p->touch);
+  if (p->touch.empty()) r.Fail("touch", "needs at least one pad touch sensor");
+  p->max_speed = r.Number("max_speed", p->max_speed);
+  if (!(p->max_speed > 0)) r.Fail("max_speed", "must be > 0 m/s");
+  p->grasp_force = r.Number("grasp_force", p->grasp_force);
+  if (!(p->grasp_force > 0)) r.Fail("grasp_force", "must be > 0 N");
+  ReadCommandInput(r, &p->input);
+  return p;
+}
+
+std::unique_ptr<Device> MakeGripper(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimGripper>(context.model, config);
 }
 
 }  // namespace vlab::lab

@@ -18,8 +18,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 #include "lab/lab_support_polygon.h"
 #include "sensors/sensor_random.h"
 
@@ -27,12 +28,11 @@ namespace vlab::lab {
 
 namespace {
 
-class SimSensorDevice final : public SimDevice {
+class SimSensorDevice final : public Device {
  public:
   SimSensorDevice(const mjModel* m, const DeviceConfig& c, std::uint64_t seed)
-      : SimDevice(c.name), kind_(c.kind == "feet" ? bridge::DeviceKind::kFeet : bridge::DeviceKind::kImu),
-        noise_(c.sensors.noise), rng_(seed) {
-    for (const std::string& s : c.sensors.sensors) {
+      : Device(c), kind_(c.kind), noise_(c.ParamsAs<SensorParams>().noise), rng_(seed) {
+    for (const std::string& s : c.ParamsAs<SensorParams>().sensors) {
       const int id = mj_name2id(m, mjOBJ_SENSOR, s.c_str());
       if (id < 0) throw InputError(c.where + ": device '" + c.name + "': the scene has no sensor '" + s + "'");
       const int type = m->sensor_type[id];
@@ -56,7 +56,6 @@ class SimSensorDevice final : public SimDevice {
     if (kind_ == bridge::DeviceKind::kFeet) BindSupport(m, c);
   }
 
-  bridge::DeviceKind kind() const override { return kind_; }
 
   void Sample(const mjData& d, double) override {
     for (std::size_t i = 0; i < address_.size(); ++i) {
@@ -79,7 +78,7 @@ class SimSensorDevice final : public SimDevice {
     return static_cast<int>(names_.size()) + (sum_column_ ? 1 : 0) + (weight_N_ > 0 ? 1 : 0) +
            (pad_sites_.empty() ? 0 : 3);
   }
-  void Row(double* out) const override {
+  void Row(const mjData&, double* out) const override {
     for (double v : values_) *out++ = v;
     if (sum_column_) *out++ = sum_N_;
     if (weight_N_ > 0) *out++ = sum_N_ / weight_N_ - 1.0;
@@ -110,7 +109,7 @@ class SimSensorDevice final : public SimDevice {
  private:
   // feet: the pad sites, the reference weight, and buffers sized once
   void BindSupport(const mjModel* m, const DeviceConfig& c) {
-    const SensorDeviceConfig& f = c.sensors;
+    const SensorParams& f = c.ParamsAs<SensorParams>();
     if (!f.pads.empty() && f.pads.size() != sensors_.size()) {
       throw InputError(c.where + ": device '" + c.name + "': pads: needs one site per sensor (" +
                        std::to_string(sensors_.size()) + ")");
@@ -180,10 +179,34 @@ class SimSensorDevice final : public SimDevice {
   sensors::ZigguratNormal normal_;
 };
 
+// the keys of both kinds
+std::shared_ptr<SensorParams> ReadSensorParams(MapReader& r) {
+  auto p = std::make_shared<SensorParams>();
+  p->sensors = r.Strings("sensors", {});
+  if (p->sensors.empty()) r.Fail("sensors", "needs at least one MJCF sensor");
+  p->noise = r.Number("noise", 0.0);
+  if (!(p->noise >= 0)) r.Fail("noise", "must be >= 0");
+  return p;
+}
+
 }  // namespace
 
-std::unique_ptr<SimDevice> MakeSensorDevice(const mjModel* m, const DeviceConfig& config, std::uint64_t seed) {
-  return std::make_unique<SimSensorDevice>(m, config, seed);
+std::shared_ptr<const DeviceParams> ReadFeetParams(MapReader& r) {
+  std::shared_ptr<SensorParams> p = ReadSensorParams(r);
+  p->pads = r.Strings("pads", {});
+  if (!p->pads.empty() && p->pads.size() != p->sensors.size()) {
+    r.Fail("pads", "needs one site per sensor (" + std::to_string(p->sensors.size()) + ")");
+  }
+  p->weight_of = r.String("weight_of", "");
+  p->contact_threshold = r.Number("contact_threshold", p->contact_threshold);
+  if (!(p->contact_threshold >= 0)) r.Fail("contact_threshold", "must be >= 0 N");
+  return p;
+}
+
+std::shared_ptr<const DeviceParams> ReadImuParams(MapReader& r) { return ReadSensorParams(r); }
+
+std::unique_ptr<Device> MakeSensors(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimSensorDevice>(context.model, config, context.seed);
 }
 
 }  // namespace vlab::lab

@@ -1,4 +1,4 @@
-#include "lab/lab_camera_device.h"
+#include "lab/devices/device_camera.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -6,6 +6,7 @@
 #include "bridge/bridge_errors.h"
 #include "core/core_errors.h"
 #include "lab/lab_log.h"
+#include "lab/lab_yaml.h"
 
 namespace vlab::lab {
 
@@ -13,41 +14,73 @@ namespace {
 constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 }  // namespace
 
-std::unique_ptr<SimCamera> SimCamera::Create(const mjModel* m, const DeviceConfig& c, const std::string& scene,
-                                             std::uint64_t seed) {
-  std::unique_ptr<SimCamera> cam(new SimCamera());
-  cam->name_ = c.name;
-  cam->where_ = c.where;
+std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r) {
+  auto c = std::make_shared<CameraParams>();
+  c->camera = r.String("camera");
+  c->width = r.Integer("width", c->width);
+  c->height = r.Integer("height", c->height);
+  if (c->width < 1 || c->width > 8192) r.Fail("width", "must be 1 to 8192 pixels");
+  if (c->height < 1 || c->height > 8192) r.Fail("height", "must be 1 to 8192 pixels");
+  c->fps = r.Number("fps", c->fps);
+  if (!(c->fps > 0 && c->fps <= 1000)) r.Fail("fps", "must be > 0 and <= 1000 Hz");
+  c->exposure_s = r.Number("exposure", c->exposure_s);
+  if (!(c->exposure_s >= 0 && c->exposure_s < 1 / c->fps)) r.Fail("exposure", "must be >= 0 s and shorter than a frame");
+  c->latency_s = r.Number("latency", c->latency_s);
+  if (!(c->latency_s >= 0 && c->latency_s <= 1)) r.Fail("latency", "must be 0 to 1 s");
+  c->distortion = r.Numbers("distortion", {});
+  if (!c->distortion.empty() && c->distortion.size() != 4) r.Fail("distortion", "expected 4 numbers: k1, k2, p1, p2");
+  c->noise = r.Number("noise", c->noise);
+  if (!(c->noise >= 0 && c->noise <= 64)) r.Fail("noise", "must be 0 to 64 grey levels");
+  const std::string encoding = r.String("encoding", "jpeg");
+  if ((encoding != "jpeg" && encoding != "raw") || !bridge::EncodingFromName(encoding, &c->encoding)) {
+    r.Fail("encoding", "must be jpeg or raw");
+  }
+  c->jpeg_quality = r.Integer("jpeg_quality", c->jpeg_quality);
+  if (c->jpeg_quality < 1 || c->jpeg_quality > 100) r.Fail("jpeg_quality", "must be 1 to 100");
+  const std::string profile = r.String("profile", "fast");
+  if (profile != "fast" && profile != "quality") r.Fail("profile", "must be fast or quality");
+  c->profile = render::ProfileFromName(profile);
+  return c;
+}
+
+std::unique_ptr<Device> MakeCamera(const DeviceContext& context, const DeviceConfig& config) {
+  return SimCamera::Create(context, config);
+}
+
+std::unique_ptr<SimCamera> SimCamera::Create(const DeviceContext& context, const DeviceConfig& c) {
+  const mjModel* m = context.model;
+  const std::string& scene = context.scene;
+  std::unique_ptr<SimCamera> cam(new SimCamera(c));
   cam->scene_ = scene;
   cam->m_ = m;
-  cam->config_ = c.camera;
-  const std::string who = c.where + ": device '" + c.name + "'";
+  cam->config_ = c.ParamsAs<CameraParams>();
+  const std::string who = cam->who();
   try {
-    cam->camera_ = render::CameraId(m, c.camera.camera);
+    cam->camera_ = render::CameraId(m, cam->config_.camera);
   } catch (const InputError& e) {
     throw InputError(who + ": " + e.what());
   }
-  if (c.camera.width > m->vis.global.offwidth || c.camera.height > m->vis.global.offheight) {
-    throw InputError(who + ": " + std::to_string(c.camera.width) + "x" + std::to_string(c.camera.height) +
+  if (cam->config_.width > m->vis.global.offwidth || cam->config_.height > m->vis.global.offheight) {
+    throw InputError(who + ": " + std::to_string(cam->config_.width) + "x" + std::to_string(cam->config_.height) +
                      " is larger than the offscreen buffer of scene '" + scene + "' (" +
                      std::to_string(m->vis.global.offwidth) + "x" + std::to_string(m->vis.global.offheight) +
                      ", <visual><global offwidth offheight>)");
   }
   sensors::CameraModelConfig mc;
-  mc.width = c.camera.width;
-  mc.height = c.camera.height;
-  mc.fps = c.camera.fps;
+  mc.width = cam->config_.width;
+  mc.height = cam->config_.height;
+  mc.fps = cam->config_.fps;
   mc.fovy_rad = m->cam_fovy[cam->camera_] * M_PI / 180.0;
-  mc.exposure_s = c.camera.exposure_s;
-  mc.latency_s = c.camera.latency_s;
-  for (std::size_t i = 0; i < c.camera.distortion.size() && i < 4; ++i) mc.distortion[i] = c.camera.distortion[i];
-  mc.noise = c.camera.noise;
+  mc.exposure_s = cam->config_.exposure_s;
+  mc.latency_s = cam->config_.latency_s;
+  for (std::size_t i = 0; i < cam->config_.distortion.size() && i < 4; ++i) mc.distortion[i] = cam->config_.distortion[i];
+  mc.noise = cam->config_.noise;
   try {
     cam->model_ = sensors::CameraModel::Create(mc);
   } catch (const std::invalid_argument& e) {
     throw InputError(who + ": " + e.what());
   }
-  cam->noise_ = sensors::CameraNoiseState(seed);
+  cam->noise_ = sensors::CameraNoiseState(context.seed);
   cam->queue_.resize(static_cast<std::size_t>(cam->model_->FramesInFlight()) + 2);
   for (Pending& p : cam->queue_) p.rgb.resize(static_cast<std::size_t>(mc.width) * mc.height * 3);
   return cam;
@@ -60,14 +93,14 @@ void SimCamera::Serve(const std::string& address, int port, const std::string& s
   sc.bind_address = address;
   sc.port = port;
   bridge::CameraDescription& d = sc.description;
-  d.name = name_;
+  d.name = name();
   d.server = server;
   d.source = "MJCF camera '" + config_.camera + "'";
   d.clock = clock;
   d.width = config_.width;
   d.height = config_.height;
   d.fps = config_.fps;
-  bridge::EncodingFromName(config_.encoding, &d.encoding);
+  d.encoding = config_.encoding;
   d.jpeg_quality = config_.jpeg_quality;
   const sensors::PinholeIntrinsics& k = model_->intrinsics();
   d.fx = k.fx;
@@ -83,9 +116,9 @@ void SimCamera::Serve(const std::string& address, int port, const std::string& s
   try {
     server_ = bridge::CameraServer::Create(sc);
   } catch (const bridge::NetworkError& e) {
-    throw InputError(where_ + ": device '" + name_ + "': " + e.what());
+    throw InputError(who() + ": " + e.what());
   } catch (const std::invalid_argument& e) {
-    throw InputError(where_ + ": device '" + name_ + "': " + e.what());
+    throw InputError(who() + ": " + e.what());
   }
 }
 
@@ -93,14 +126,14 @@ void SimCamera::MakeRenderer() {
   render::Renderer::Options o;
   o.width = config_.width;
   o.height = config_.height;
-  o.profile = render::ProfileFromName(config_.profile);
+  o.profile = config_.profile;
   o.scene = scene_;
   renderer_ = render::Renderer::Create(m_, o);
   ideal_.width = config_.width;
   ideal_.height = config_.height;
 }
 
-void SimCamera::Prepare(mjData* d) {
+void SimCamera::BeforeRun(mjData* d) {
   if (!server_ || renderer_) return;
   MakeRenderer();
   renderer_->Render(d, camera_, &ideal_);
@@ -130,7 +163,7 @@ void SimCamera::Unserve() {
   id_base_ = next_id_ = 0;
 }
 
-void SimCamera::Observe(double t, mjData* d) {
+void SimCamera::Deliver(double t, mjData* d) {
   if (!server_) return;
   server_->Poll(0.0);
   if (t < t_prev_) {  // the sim device reset the time: a new schedule, ids go on increasing
@@ -153,7 +186,7 @@ void SimCamera::Observe(double t, mjData* d) {
   }
 }
 
-void SimCamera::RenderAhead(mjData* d) {
+void SimCamera::AfterPublish(mjData* d) {
   if (server_) RenderDue(d);
 }
 

@@ -17,22 +17,22 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_device.h"
+#include "lab/devices/device_pose.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 
 namespace vlab::lab {
 
 namespace {
 
-class SimPose final : public SimDevice {
+class SimPose final : public Device {
  public:
-  SimPose(const mjModel* m, const DeviceConfig& c) : SimDevice(c.name), config_(c.pose) {
+  SimPose(const mjModel* m, const DeviceConfig& c) : Device(c), config_(c.ParamsAs<PoseParams>()) {
     site_ = Id(m, c, mjOBJ_SITE, "site", config_.site);
     body_ = Id(m, c, mjOBJ_BODY, "body", config_.relative_to);
     if (!config_.target.empty()) target_ = Id(m, c, mjOBJ_SITE, "site", config_.target);
   }
 
-  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kPose; }
 
   void Reset(const mjData& d) override {
     Measure(d, &p_start_, &q_start_);
@@ -57,7 +57,7 @@ class SimPose final : public SimDevice {
     return out;
   }
   int ColumnCount() const override { return target_ >= 0 ? 6 : 5; }
-  void Row(double* out) const override {
+  void Row(const mjData&, double* out) const override {
     for (double v : {p_.x(), p_.y(), p_.z(), drift_, rot_drift_}) *out++ = v;
     if (target_ >= 0) *out = error_;
   }
@@ -92,7 +92,7 @@ class SimPose final : public SimDevice {
     *q = Eigen::Quaterniond(R_WB.transpose() * R_WS).normalized();
   }
 
-  PoseDeviceConfig config_;
+  PoseParams config_;
   int site_ = -1, body_ = -1, target_ = -1;
   Eigen::Vector3d p_ = Eigen::Vector3d::Zero(), p_start_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity(), q_start_ = Eigen::Quaterniond::Identity();
@@ -101,8 +101,16 @@ class SimPose final : public SimDevice {
 
 }  // namespace
 
-std::unique_ptr<SimDevice> MakePoseDevice(const mjModel* m, const DeviceConfig& config) {
-  return std::make_unique<SimPose>(m, config);
+std::shared_ptr<const DeviceParams> ReadPoseParams(MapReader& r) {
+  auto p = std::make_shared<PoseParams>();
+  p->site = r.String("site");
+  p->relative_to = r.String("relative_to", p->relative_to);
+  p->target = r.String("target", "");
+  return p;
+}
+
+std::unique_ptr<Device> MakePose(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimPose>(context.model, config);
 }
 
 }  // namespace vlab::lab

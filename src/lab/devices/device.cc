@@ -1,0 +1,52 @@
+#include "lab/devices/device.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "bridge/bridge_describe.h"
+#include "lab/lab_yaml.h"
+
+namespace vlab::lab {
+
+void ReadCommandInput(MapReader& r, CommandInputConfig* input) {
+  input->watchdog_periods = r.Integer("watchdog_periods", input->watchdog_periods);
+  if (input->watchdog_periods < 0) r.Fail("watchdog_periods", "must be >= 0 (0: off)");
+  input->owner_timeout_s = r.Number("owner_timeout", input->owner_timeout_s);
+  if (!(input->owner_timeout_s > 0)) r.Fail("owner_timeout", "must be > 0 s");
+}
+
+void Device::EncodeState(double seq, double t, std::uint32_t endpoint_bits, std::vector<double>* scratch,
+                         std::vector<unsigned char>* out) const {
+  (void)endpoint_bits;  // the arm's status word carries them; the other kinds' status words do not (yet)
+  State(scratch);
+  bridge::Header h;
+  h.kind = static_cast<int>(kind());
+  h.type = static_cast<int>(bridge::MessageType::kState);
+  h.seq = seq;
+  h.time = t;
+  h.length = static_cast<int>(scratch->size());
+  bridge::EncodePacket(h, scratch->data(), h.length, out);
+}
+
+void Device::ConfigureEndpoint(double control_hz, bridge::EndpointConfig* ec) const {
+  ec->kind = kind();
+  ec->owner_timeout_periods = std::max(1, static_cast<int>(std::lround(owner_timeout_s() * control_hz)));
+  ec->command_length = command_length();
+  if (ec->command_length > 0) {
+    ec->check_command = [this](const std::vector<double>& p) { return CheckCommand(p); };
+    ec->status_first = true;
+    ec->watchdog_periods = watchdog_periods();
+  }
+}
+
+std::string Device::DescribeJson(const bridge::DeviceDescription& common) const {
+  return bridge::DescribeJson(common, bridge::KindName(static_cast<int>(kind())), DescribeFacts());
+}
+
+bool Device::TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) {
+  if (!endpoint.TakeCommand(scratch)) return false;
+  Command(*scratch);
+  return true;
+}
+
+}  // namespace vlab::lab

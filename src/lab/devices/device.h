@@ -1,0 +1,188 @@
+// The lab's device seam: one interface for every simulated device (arm,
+// wrench, camera, base, gripper, feet, imu, gaze, pose, point, yoyo, sim), so
+// that the step loop, the log and the bridge treat them alike. A kind is one
+// file pair under src/lab/devices/ and one row of the kinds table
+// (device_kinds.cc).
+//
+// Order of calls (src/lab/lab_runner.cc):
+//   creation  the kind's factory with the DeviceContext; then Bind() once
+//             every device exists (a device that drives another finds it)
+//   reset     SetInitialState() before the first mj_forward; Start() after
+//             it; after a second mj_forward, Reset()
+//   period    TakeCommand()/Hold() from the bridge (or commands of the lab's
+//             own controller); BeginPeriod(); every physics step Actuate()
+//             between mj_step1 and mj_step2 and AfterStep() after mj_step2;
+//             Sample() at the period's end; Row() for the log; Deliver()
+//             before the period's states go out, AfterPublish() after
+// A device reads mjData and writes only the controls of its own actuators.
+// Nothing on the period path throws or allocates.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "bridge/bridge_describe.h"
+#include "bridge/bridge_endpoint.h"
+#include "bridge/bridge_protocol.h"
+#include "lab/devices/device_config.h"
+
+namespace vlab::lab {
+
+/// What every factory gets, the same way for every kind.
+struct DeviceContext {
+  const mjModel* model = nullptr;
+  double control_period_s = 0.002;
+  std::uint64_t seed = 1;  ///< the device's own seed (scenario seed mixed with the device name)
+  std::string scene;       ///< the scene's MJCF path, for messages and for reloading it (cameras)
+};
+
+/// How the lab treats a device's command input.
+enum class CommandRole {
+  kNone,             ///< output only
+  kRun,              ///< the run's own control (sim): taken by the lab's loop, never waited for
+  kWaited,           ///< lockstep waits for its owner's command once it has an owner
+  kWaitedFromStart,  ///< ... and period 0 waits for an owner (arms: the controllers must be there)
+  kDriven,           ///< commands taken, but another device drives it (an arm under a point device)
+};
+
+/// A device that serves itself on its own socket (a camera's chunked frames).
+class OwnTransport {
+ public:
+  virtual ~OwnTransport() = default;
+  /// Binds (address, port) and makes the describe reply; throws InputError
+  /// naming the device when the port cannot be bound.
+  virtual void Serve(const std::string& address, int port, const std::string& server, const std::string& clock) = 0;
+  virtual bool served() const = 0;
+  /// Closes its socket (a run without serving).
+  virtual void Unserve() = 0;
+  /// Its socket, and a non-blocking pass over what arrived on it.
+  virtual int fd() const = 0;
+  virtual void PollRequests() = 0;
+  virtual int port() const = 0;
+  virtual std::string address() const = 0;
+  virtual std::string describe_json() const = 0;
+  virtual bridge::EndpointCounters counters() const = 0;
+};
+
+class Device {
+ public:
+  virtual ~Device() = default;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  const std::string& name() const { return name_; }
+  bridge::DeviceKind kind() const { return kind_; }
+  /// "FILE:LINE" of its scenario entry.
+  const std::string& where() const { return where_; }
+
+  // ---- creation and reset
+  /// Once every device of the scenario exists. Throws InputError.
+  virtual void Bind(const std::vector<Device*>& devices) { (void)devices; }
+  /// The device it commands ("": none), e.g. a point device's arm.
+  virtual std::string drives() const { return ""; }
+  /// Before the first mj_forward of a reset: initial joint positions.
+  virtual void SetInitialState(mjData& d) const { (void)d; }
+  /// After mj_forward: start servos, write the controls of the first instant.
+  virtual void Start(mjData& d) { (void)d; }
+  /// After the second mj_forward: restart from the state in `d`.
+  virtual void Reset(const mjData& d) { (void)d; }
+
+  // ---- the control period
+  /// Start of a period at time t, after the period's commands (and holds).
+  virtual void BeginPeriod(const mjData& d, double t) {
+    (void)d;
+    (void)t;
+  }
+  /// Every physics step, between mj_step1 and mj_step2: write own controls.
+  virtual void Actuate(mjData& d, double dt) {
+    (void)d;
+    (void)dt;
+  }
+  /// Every physics step, after mj_step2.
+  virtual void AfterStep(const mjData& d, double dt) {
+    (void)d;
+    (void)dt;
+  }
+  /// End of a period at time t.
+  virtual void Sample(const mjData& d, double t) {
+    (void)d;
+    (void)t;
+  }
+  /// Before the run, on the thread that runs the lab (a camera makes its renderer).
+  virtual void BeforeRun(mjData* d) { (void)d; }
+  /// At every period end t (and t = 0), after the log row, before the states go out.
+  virtual void Deliver(double t, mjData* d) {
+    (void)t;
+    (void)d;
+  }
+  /// After the states of a period end went out, the state still that of the period end.
+  virtual void AfterPublish(mjData* d) { (void)d; }
+
+  // ---- the log
+  /// Log columns, prefixed "NAME.".
+  virtual std::vector<std::string> Columns() const { return {}; }
+  virtual int ColumnCount() const { return 0; }
+  /// ColumnCount() values of the last Sample().
+  virtual void Row(const mjData& d, double* out) const {
+    (void)d;
+    (void)out;
+  }
+  /// Log order: columns go by rank, then scenario order (arms 0, wrenches 1,
+  /// point devices 3, the others 2: the order of every log vlab has written).
+  virtual int log_rank() const { return 2; }
+
+  // ---- the wire
+  /// The state payload of the last Sample() (status word first for commanded kinds).
+  virtual void State(std::vector<double>* payload) const { payload->clear(); }
+  /// The state datagram of period `seq` at time t. `endpoint_bits`: the status
+  /// bits of its endpoint (refused, watchdog). Default: header + State().
+  virtual void EncodeState(double seq, double t, std::uint32_t endpoint_bits, std::vector<double>* scratch,
+                           std::vector<unsigned char>* out) const;
+  /// The endpoint's rules for this device (kind, command length and check,
+  /// watchdog, owner timeout). `control_hz` converts seconds to periods.
+  virtual void ConfigureEndpoint(double control_hz, bridge::EndpointConfig* config) const;
+  /// The describe reply, from the facts every device shares.
+  virtual std::string DescribeJson(const bridge::DeviceDescription& common) const;
+  /// The kind's facts for the default describe reply: a JSON object with
+  /// "layout", "units" and the kind's own fields.
+  virtual std::string DescribeFacts() const { return "{}"; }
+  /// A device with its own transport (cameras), or null.
+  virtual OwnTransport* own_transport() { return nullptr; }
+
+  // ---- commands
+  /// Default: waited for once owned when it takes commands, else output only.
+  virtual CommandRole command_role() const {
+    return command_length() > 0 ? CommandRole::kWaited : CommandRole::kNone;
+  }
+  /// Payload length of a command (0: an output-only device).
+  virtual int command_length() const { return 0; }
+  /// Checks a command payload of command_length() finite values.
+  virtual bridge::CommandCheck CheckCommand(const std::vector<double>& payload) const {
+    (void)payload;
+    return bridge::CommandCheck::kAccept;
+  }
+  /// Applies an accepted command payload.
+  virtual void Command(const std::vector<double>& payload) { (void)payload; }
+  /// Takes the endpoint's newest accepted command, if any, and applies it.
+  /// True when there was one.
+  virtual bool TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch);
+  /// The watchdog fired, or a hold was asked for: stop safely.
+  virtual void Hold() {}
+  virtual int watchdog_periods() const { return 0; }
+  virtual double owner_timeout_s() const { return 1.0; }
+
+ protected:
+  explicit Device(const DeviceConfig& config) : name_(config.name), kind_(config.kind), where_(config.where) {}
+  /// "FILE:LINE: device 'NAME'", the start of every message about it.
+  std::string who() const { return where_ + ": device '" + name_ + "'"; }
+
+ private:
+  std::string name_;
+  bridge::DeviceKind kind_;
+  std::string where_;
+};
+
+}  // namespace vlab::lab

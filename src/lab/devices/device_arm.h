@@ -1,0 +1,148 @@
+// Simulated arm device (kind arm): a joint servo interface over MuJoCo motors.
+//
+// Ports
+//   input   ArmCommand (mode hold | position | velocity | torque, one value per
+//           joint), taken at the start of a control period
+//   output  ArmState (q, qd, applied tau, status bits), sampled at the end of
+//           every control period
+//   rate    the servo runs at every physics step (model timestep); commands and
+//           outputs at the control rate
+// Behaviour, like a real servo drive:
+//   - holds the initial position until the first command arrives;
+//   - position and velocity modes run a PD servo per joint with bias (gravity
+//     and Coriolis) feed-forward from the model: tau = kp (q_ref - q) +
+//     kd (qd_ref - qd) + h(q, qd); velocity mode integrates q_ref from the
+//     commanded velocity, position mode feeds forward the command's rate;
+//   - gains follow from the requested bandwidth and damping ratio and each
+//     joint's inertia H_ii at the initial pose: kp = H_ii w^2, kd = 2 zeta H_ii w;
+//   - the servo reference stays within 0.2 rad of the measured position (a
+//     following-error window: a joint blocked by contact does not wind up);
+//   - torque mode applies the commanded torque as is;
+//   - every torque is clipped to the motor's range (status bit when it is);
+//   - a command with the wrong size, a non-finite value, a position outside the
+//     joint range, a velocity beyond max_velocity or a torque outside the motor
+//     range is refused and counted; the arm keeps its previous command.
+// An arm may be driven by another device (a point device): its commands then
+// come from that device, and lockstep does not wait for its own.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <mujoco/mujoco.h>
+
+#include "bridge/bridge_messages.h"
+#include "lab/devices/device.h"
+
+namespace vlab::lab {
+
+/// Joint servo of a simulated arm: the drive electronics between a command
+/// and the motor torque (position and velocity modes).
+struct ServoConfig {
+  double bandwidth_hz = 10.0;  ///< closed-loop natural frequency of each joint servo
+  double damping_ratio = 1.0;  ///< its damping ratio
+};
+
+struct ArmParams : DeviceParams {
+  std::vector<std::string> joints;     ///< MJCF joint names, in device order
+  std::vector<std::string> actuators;  ///< MJCF motor actuators (torque), default: joint names
+  std::vector<double> initial;         ///< initial joint positions, rad (default: qpos0)
+  std::vector<double> max_velocity;    ///< |qd| limits of velocity commands, rad/s (empty: none)
+  ServoConfig servo;
+  CommandInputConfig input;
+  bool log_following_error = false;    ///< log NAME.following_error: max |q_ref - q| of the servo, rad
+};
+
+/// Reads an arm entry's keys (joints, actuators, initial, max_velocity, servo,
+/// watchdog_periods, owner_timeout, log_following_error).
+std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r);
+/// Makes a SimArm.
+std::unique_ptr<Device> MakeArm(const DeviceContext& context, const DeviceConfig& config);
+
+class SimArm final : public Device {
+ public:
+  /// Binds the device to the model's joints and motors. Throws InputError
+  /// naming the device, its scenario line and the missing or unsuitable element.
+  static std::unique_ptr<SimArm> Create(const DeviceContext& context, const DeviceConfig& config);
+
+  int dof() const { return static_cast<int>(qpos_adr_.size()); }
+  const std::vector<std::string>& joint_names() const { return joint_names_; }
+  const Eigen::VectorXd& lower_limits() const { return lower_; }
+  const Eigen::VectorXd& upper_limits() const { return upper_; }
+  /// Motor torque ranges, N m (−inf / +inf where unlimited).
+  const Eigen::VectorXd& torque_min() const { return tau_min_; }
+  const Eigen::VectorXd& torque_max() const { return tau_max_; }
+  /// |qd| limits of velocity commands, rad/s (empty: none).
+  const Eigen::VectorXd& max_velocity() const { return max_velocity_; }
+
+  /// Takes a command. Returns false (and counts it) when refused.
+  bool Command(const bridge::ArmCommand& command);
+  /// The state of the last Sample() (or of the reset).
+  const bridge::ArmState& state() const { return state_; }
+  /// Samples the device output into `state`.
+  void Sample(const mjData& data, double time_s, bridge::ArmState* state) const;
+  /// Marks the arm as driven by the device `driver` (one driver at most).
+  /// Throws InputError naming `where` when another device drives it already.
+  void SetDriver(const std::string& driver, const std::string& where);
+  const std::string& driver() const { return driver_; }
+
+  long refused_commands() const { return refused_; }
+  const Eigen::VectorXd& kp() const { return kp_; }
+  const Eigen::VectorXd& kd() const { return kd_; }
+
+  // Device
+  void SetInitialState(mjData& d) const override;
+  void Start(mjData& d) override;
+  void Reset(const mjData& d) override;
+  void Actuate(mjData& d, double dt) override;
+  void Sample(const mjData& d, double t) override;
+  /// Log columns: NAME.q.JOINT, NAME.qd.JOINT, NAME.tau.JOINT, NAME.limit_violation,
+  /// and NAME.following_error (largest |q_ref - q| of the servo, rad) when configured.
+  std::vector<std::string> Columns() const override;
+  int ColumnCount() const override { return 3 * dof() + 1 + (log_following_error_ ? 1 : 0); }
+  void Row(const mjData& d, double* out) const override;
+  int log_rank() const override { return 0; }
+  void EncodeState(double seq, double t, std::uint32_t endpoint_bits, std::vector<double>* scratch,
+                   std::vector<unsigned char>* out) const override;
+  void ConfigureEndpoint(double control_hz, bridge::EndpointConfig* config) const override;
+  std::string DescribeJson(const bridge::DeviceDescription& common) const override;
+  CommandRole command_role() const override {
+    return driver_.empty() ? CommandRole::kWaitedFromStart : CommandRole::kDriven;
+  }
+  bool TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) override;
+  void Hold() override;
+  int watchdog_periods() const override { return watchdog_periods_; }
+  double owner_timeout_s() const override { return owner_timeout_s_; }
+
+ private:
+  explicit SimArm(const DeviceConfig& config) : Device(config) {}
+
+  const mjModel* model_ = nullptr;
+  std::vector<std::string> joint_names_;
+  std::vector<int> qpos_adr_, dof_adr_, actuator_ids_;
+  Eigen::VectorXd lower_, upper_, tau_min_, tau_max_, initial_, max_velocity_;
+  int watchdog_periods_ = 3;
+  double owner_timeout_s_ = 1.0;
+  bool has_initial_ = false;
+  bool log_following_error_ = false;
+  double bandwidth_hz_ = 10.0, damping_ratio_ = 1.0;
+  Eigen::VectorXd kp_, kd_;
+  std::string driver_;  // the device that drives it ("": none)
+  // servo state
+  bridge::ArmMode mode_ = bridge::ArmMode::kHold;
+  Eigen::VectorXd value_, q_ref_, qd_ref_, last_position_command_, tau_;
+  bool have_position_command_ = false;
+  bool saturated_ = false;
+  double command_period_s_ = 0.0;
+  long refused_ = 0;
+  bool last_refused_ = false;
+  bridge::ArmState state_;
+  // wire scratch, sized at creation
+  mutable bridge::ArmStateMsg message_;
+  bridge::ArmCommandMsg wire_command_;
+  bridge::ArmCommand command_;
+};
+
+}  // namespace vlab::lab

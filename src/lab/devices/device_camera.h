@@ -1,0 +1,130 @@
+// Simulated webcam (kind camera): an MJCF camera rendered offscreen at the
+// camera's own frame rate, through the webcam model (sensors/sensor_camera.h),
+// delivered after its latency as chunked frames (bridge/bridge_camera_server.h).
+//
+// Ports
+//   input   describe requests and subscriptions (any datagram) on its port
+//   output  frames to every subscriber: id, exposure stamp (the simulated time
+//           of the state rendered), width, height, encoding, the camera's pose
+//           in the world (OpenCV frame: x right, y down, z forward)
+//   rate    fps, independent of the control rate: a frame whose stamp falls
+//           in a control period is rendered from the state that closes the
+//           period (within one control period of its nominal stamp) and sent
+//           at the first period end at or after stamp + latency
+// Rendering reads the state and never changes it; nothing is rendered while
+// nobody subscribes. Under `vlab run` (nothing served) the device is idle.
+// It serves itself (OwnTransport): its frames travel in chunks on its own
+// socket, which the lab's bridge binds with the other devices' sockets.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "bridge/bridge_camera.h"
+#include "bridge/bridge_camera_server.h"
+#include "lab/devices/device.h"
+#include "render/renderer.h"
+#include "sensors/sensor_camera.h"
+
+namespace vlab::lab {
+
+/// A simulated webcam: an MJCF camera rendered offscreen at the camera's own
+/// frame rate, through a lens and sensor model (sensors/sensor_camera.h).
+struct CameraParams : DeviceParams {
+  std::string camera;            ///< MJCF camera name
+  int width = 640;               ///< pixels (at most the scene's offscreen buffer)
+  int height = 480;
+  double fps = 30.0;             ///< frame rate, independent of the control rate
+  double exposure_s = 0.0;       ///< exposure time (0: instantaneous); the frame is stamped at its middle
+  double latency_s = 0.03;       ///< from the exposure stamp to delivery
+  std::vector<double> distortion;  ///< k1, k2, p1, p2 (Brown-Conrady); empty: none
+  double noise = 0.0;            ///< pixel noise standard deviation, 8-bit grey levels
+  bridge::CameraEncoding encoding = bridge::CameraEncoding::kJpeg;  ///< frames on the wire (jpeg | raw)
+  int jpeg_quality = 90;         ///< 1-100
+  render::Profile profile = render::Profile::kFast;  ///< fast | quality
+};
+
+/// Reads a camera entry's keys (camera, width, height, fps, exposure, latency,
+/// distortion, noise, encoding, jpeg_quality, profile).
+std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r);
+/// Makes a SimCamera.
+std::unique_ptr<Device> MakeCamera(const DeviceContext& context, const DeviceConfig& config);
+
+class SimCamera final : public Device, public OwnTransport {
+ public:
+  /// Binds the MJCF camera and builds the webcam model. Throws InputError
+  /// naming the device: unknown camera, size above the offscreen buffer, a
+  /// bad model setting.
+  static std::unique_ptr<SimCamera> Create(const DeviceContext& context, const DeviceConfig& config);
+  ~SimCamera() override;
+
+  const sensors::CameraModel& model() const { return *model_; }
+  const bridge::CameraServer* server() const { return server_.get(); }
+  long frames_rendered() const { return rendered_; }
+
+  // OwnTransport: binds its socket (address, port) and makes the describe reply;
+  // the renderer is made by BeforeRun (or the first frame), on the thread that runs the lab
+  void Serve(const std::string& address, int port, const std::string& server, const std::string& clock) override;
+  bool served() const override { return server_ != nullptr; }
+  /// Closes its socket and restarts its schedule (a run without serving).
+  void Unserve() override;
+  int fd() const override { return server_->fd(); }
+  /// A non-blocking pass over what arrived (describe requests subscribe their senders).
+  void PollRequests() override { server_->Poll(0.0); }
+  int port() const override { return server_->port(); }
+  std::string address() const override { return server_->config().bind_address; }
+  std::string describe_json() const override { return server_->describe_json(); }
+  bridge::EndpointCounters counters() const override { return server_->counters().endpoint; }
+
+  // Device
+  OwnTransport* own_transport() override { return this; }
+  /// Before the run: makes the renderer and renders once from `d` (nothing is
+  /// sent), so that the first frame does not pay for the GL context and the
+  /// first draw (a realtime run's first periods). Nothing when not served.
+  void BeforeRun(mjData* d) override;
+  /// At every period end t (and t = 0), before the period's states go out:
+  /// answers datagrams, sends the frames whose delivery time has come. The
+  /// frames due at t are rendered here when they are delivered at t (no
+  /// latency); otherwise AfterPublish renders them, once the states are out.
+  void Deliver(double t, mjData* d) override;
+  /// After the states of period end t went out, with the state still that of
+  /// t: renders the frames due at t that are delivered later, so their
+  /// rendering does not delay the states (a realtime controller's period).
+  void AfterPublish(mjData* d) override;
+
+ private:
+  struct Pending {
+    std::int64_t id = -1;
+    double stamp = 0;
+    bridge::CameraPose pose;
+    std::vector<std::uint8_t> rgb;  // the webcam image (after the lens and noise)
+  };
+  explicit SimCamera(const DeviceConfig& config) : Device(config) {}
+  void RenderFrame(std::int64_t id, double t, mjData* d, Pending* slot);
+  void MakeRenderer();
+  void RenderDue(mjData* d);  // the frames of due_, from the state at due_t_
+
+  std::string scene_;
+  const mjModel* m_ = nullptr;
+  int camera_ = -1;
+  CameraParams config_;
+  std::unique_ptr<sensors::CameraModel> model_;
+  sensors::CameraNoiseState noise_;
+  std::unique_ptr<render::Renderer> renderer_;
+  render::RgbImage ideal_;
+  std::unique_ptr<bridge::CameraServer> server_;
+  std::vector<Pending> queue_;  // ring of frames rendered, not yet delivered
+  std::size_t head_ = 0, count_ = 0;
+  double t_prev_ = -1;
+  sensors::FrameRange due_{0, 0};  // frames due at due_t_, not rendered yet
+  double due_t_ = 0;
+  std::int64_t id_base_ = 0;  // frame ids keep increasing across a reset of the simulated time
+  std::int64_t next_id_ = 0;
+  long rendered_ = 0;
+};
+
+}  // namespace vlab::lab
