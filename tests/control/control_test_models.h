@@ -1,24 +1,8 @@
-// Inline MJCF test models for the control tests, loaded through a virtual file
-// system (MuJoCo 2.2.2 has no mj_loadXMLString).
+// Inline MJCF test models for the control tests (loaded with the MuJoCo fixture's
+// LoadModelFromString, tests/mujoco_fixture.h).
 #pragma once
 
-#include <cstring>
-#include <memory>
-#include <string>
-
-#include <gtest/gtest.h>
-#include <mujoco/mujoco.h>
-
 namespace vlab::control::testing {
-
-struct ModelDeleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-};
-struct DataDeleter {
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-using ModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
-using DataPtr = std::unique_ptr<mjData, DataDeleter>;
 
 // A free-floating box first (so the arm's qpos and dof addresses differ and a
 // free joint exists for error tests), then a 7-DOF spatial arm with hinges
@@ -73,29 +57,5 @@ inline constexpr char kArm7Xml[] = R"(
   </worldbody>
 </mujoco>
 )";
-
-// Loads an MJCF string; fails the current test (and returns null) on error.
-inline ModelPtr LoadModelFromString(const std::string& xml, const char* name = "model.xml") {
-  auto vfs = std::make_unique<mjVFS>();  // ~2 MB: keep it off the stack
-  mj_defaultVFS(vfs.get());
-  if (mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(xml.size())) != 0) {
-    ADD_FAILURE() << "mj_makeEmptyFileVFS failed";
-    return nullptr;
-  }
-  const int i = mj_findFileVFS(vfs.get(), name);
-  std::memcpy(vfs->filedata[i], xml.data(), xml.size());
-  char error[1000] = "";
-  ModelPtr m(mj_loadXML(name, vfs.get(), error, sizeof(error)));
-  mj_deleteVFS(vfs.get());
-  if (!m) ADD_FAILURE() << "mj_loadXML: " << error;
-  return m;
-}
-
-// Number of MuJoCo warnings raised on `d` so far.
-inline int WarningCount(const mjData& d) {
-  int count = 0;
-  for (int i = 0; i < mjNWARNING; ++i) count += d.warning[i].number;
-  return count;
-}
 
 }  // namespace vlab::control::testing

@@ -9,40 +9,34 @@
 
 #include "control/trajectory.h"
 #include "control_test_models.h"
+#include "mujoco_fixture.h"
 
 namespace vlab::control {
 namespace {
 
-using testing::DataPtr;
 using testing::kArm7Xml;
-using testing::LoadModelFromString;
-using testing::ModelPtr;
 
-class RobotModelTest : public ::testing::Test {
+class RobotModelTest : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = LoadModelFromString(kArm7Xml);
-    ASSERT_TRUE(model_);
+    model_ = LoadModelFromString("arm7.xml", kArm7Xml);
     RobotModel::Config config;
     config.tip_site = "tool";
-    robot_ = RobotModel::Create(model_.get(), config);
+    robot_ = RobotModel::Create(model_, config);
+    WatchData(&robot_->data());
     q_.resize(7);
     q_ << 0.3, 0.5, -0.2, -1.2, 0.4, 0.8, 0.1;
     qd_.resize(7);
     qd_ << 0.7, -0.4, 1.1, 0.5, -0.9, 0.3, 1.4;
   }
-  void TearDown() override {
-    EXPECT_EQ(testing::WarningCount(robot_->data()), 0) << "MuJoCo warning raised";
-  }
-
   // a full simulation state with the chain at (q, qd), computed by mj_forward
-  DataPtr SimData(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) const {
-    DataPtr d(mj_makeData(model_.get()));
+  mjData* SimData(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    mjData* d = MakeData(model_);
     for (int i = 0; i < 7; ++i) {
       d->qpos[robot_->qpos_addresses()[i]] = q[i];
       d->qvel[robot_->dof_addresses()[i]] = qd[i];
     }
-    mj_forward(model_.get(), d.get());
+    mj_forward(model_, d);
     return d;
   }
 
@@ -66,7 +60,7 @@ class RobotModelTest : public ::testing::Test {
     return v;
   }
 
-  ModelPtr model_;
+  const mjModel* model_ = nullptr;
   std::unique_ptr<RobotModel> robot_;
   Eigen::VectorXd q_, qd_;
 };
@@ -85,7 +79,7 @@ TEST_F(RobotModelTest, ChainStructure) {
   RobotModel::Config sub;
   sub.base_body = "l2";
   sub.tip_site = "tool";
-  auto sub_chain = RobotModel::Create(model_.get(), sub);
+  auto sub_chain = RobotModel::Create(model_, sub);
   EXPECT_EQ(sub_chain->joint_names(), std::vector<std::string>(names.begin() + 2, names.end()));
 }
 
@@ -114,7 +108,7 @@ TEST_F(RobotModelTest, JacobianMatchesFiniteDifferencesOfTipPose) {
 }
 
 TEST_F(RobotModelTest, TipPoseMatchesSimulation) {
-  DataPtr d = SimData(q_, qd_);
+  mjData* d = SimData(q_, qd_);
   robot_->SetState(q_, qd_);
   const Pose pose = robot_->TipPose();
   const int s = robot_->tip_site_id();
@@ -125,9 +119,9 @@ TEST_F(RobotModelTest, TipPoseMatchesSimulation) {
 }
 
 TEST_F(RobotModelTest, MassMatrixEqualsFullMSubBlock) {
-  DataPtr d = SimData(q_, qd_);
+  mjData* d = SimData(q_, qd_);
   std::vector<mjtNum> full(model_->nv * model_->nv);
-  mj_fullM(model_.get(), full.data(), d->qM);
+  mj_fullM(model_, full.data(), d->qM);
   robot_->SetState(q_, qd_);
   const Eigen::MatrixXd H = robot_->MassMatrix();
   for (int i = 0; i < 7; ++i) {
@@ -182,9 +176,9 @@ TEST_F(RobotModelTest, BiasEqualsCoriolisFromLagrangianPlusGravity) {
 }
 
 TEST_F(RobotModelTest, BiasEqualsInverseDynamicsAtZeroAcceleration) {
-  DataPtr d = SimData(q_, qd_);
+  mjData* d = SimData(q_, qd_);
   mju_zero(d->qacc, model_->nv);
-  mj_inverse(model_.get(), d.get());
+  mj_inverse(model_, d);
   robot_->SetState(q_, qd_);
   const Eigen::VectorXd bias = robot_->Bias();
   for (int i = 0; i < 7; ++i) {
@@ -193,7 +187,7 @@ TEST_F(RobotModelTest, BiasEqualsInverseDynamicsAtZeroAcceleration) {
 }
 
 TEST_F(RobotModelTest, SetStateLeavesCallerDataUntouched) {
-  DataPtr d = SimData(q_, qd_);
+  mjData* d = SimData(q_, qd_);
   const std::vector<mjtNum> qpos(d->qpos, d->qpos + model_->nq);
   const std::vector<mjtNum> qvel(d->qvel, d->qvel + model_->nv);
   const std::vector<mjtNum> xpos(d->xpos, d->xpos + 3 * model_->nbody);
@@ -240,7 +234,7 @@ TEST_F(RobotModelTest, CreateErrorsNameTheEntity) {
     config.base_body = c.base;
     config.tip_site = c.tip;
     try {
-      RobotModel::Create(model_.get(), config);
+      RobotModel::Create(model_, config);
       ADD_FAILURE() << "no throw for " << c.base << " -> " << c.tip;
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();

@@ -12,6 +12,7 @@
 
 #include "control/trajectory.h"
 #include "control_test_models.h"
+#include "mujoco_fixture.h"
 
 // Counts heap allocations (malloc is what Eigen and operator new end in) while
 // g_count_allocations is set; forwards to glibc's allocator.
@@ -35,14 +36,14 @@ Eigen::Matrix3d Rot(double angle, const Eigen::Vector3d& axis) {
   return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
 }
 
-class TaskSpaceTest : public ::testing::Test {
+class TaskSpaceTest : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = testing::LoadModelFromString(testing::kArm7Xml);
-    ASSERT_TRUE(model_);
+    model_ = LoadModelFromString("arm7.xml", testing::kArm7Xml);
     RobotModel::Config config;
     config.tip_site = "tool";
-    robot_ = RobotModel::Create(model_.get(), config);
+    robot_ = RobotModel::Create(model_, config);
+    WatchData(&robot_->data());
     q_start_.resize(7);
     q_start_ << 0.3, 0.5, -0.2, -1.2, 0.4, 0.8, 0.1;
     q_goal_.resize(7);
@@ -83,7 +84,7 @@ class TaskSpaceTest : public ::testing::Test {
     return worst;
   }
 
-  testing::ModelPtr model_;
+  const mjModel* model_ = nullptr;
   std::unique_ptr<RobotModel> robot_;
   Eigen::VectorXd q_start_, q_goal_;
 };
@@ -266,7 +267,7 @@ TEST_F(TaskSpaceTest, LargeOrientationErrorDoesNotFlip) {
   const Pose start = PoseAt(q_start_);
   // about the last joint's axis through the tip: reachable without passing a
   // singularity, but the controller is not told so
-  const int l7 = mj_name2id(model_.get(), mjOBJ_BODY, "l7");
+  const int l7 = mj_name2id(model_, mjOBJ_BODY, "l7");
   const Eigen::Vector3d axis(robot_->data().xmat[9 * l7 + 2], robot_->data().xmat[9 * l7 + 5],
                              robot_->data().xmat[9 * l7 + 8]);
   const double angle = 179.0 * kPi / 180.0;

@@ -44,17 +44,13 @@ struct CarryResult {
   Eigen::Vector3d tcp_end = Eigen::Vector3d::Zero();
   double touch_left_end = 0, touch_right_end = 0, grip_force_end = 0;
   Eigen::Vector3d jr3_force_end = Eigen::Vector3d::Zero();
-  bool warnings = false;
 };
 
-class MobileGripperTest : public ::testing::Test {
+class MobileGripperTest : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = LoadScene("scenes/pa10_gripper.xml");
-    ASSERT_NE(model_, nullptr);
-    m_ = model_.get();
-    data_ = MakeData(m_);
-    d_ = data_.get();
+    m_ = LoadModel("scenes/pa10_gripper.xml");
+    d_ = MakeData(m_);
     act_servo_ = RequireId(m_, mjOBJ_ACTUATOR, "gripper");
     act_force_ = RequireId(m_, mjOBJ_ACTUATOR, "gripper_force");
     touch_left_ = m_->sensor_adr[RequireId(m_, mjOBJ_SENSOR, "gripper_touch_left")];
@@ -144,17 +140,9 @@ class MobileGripperTest : public ::testing::Test {
   double OpeningNow() const { return d_->qpos[q_left_] + d_->qpos[q_right_]; }
   Eigen::Vector3d BodyPos(int b) const { return Vec3(d_->xpos + 3 * b); }
   Eigen::Matrix3d BodyRot(int b) const { return Mat3(d_->xmat + 9 * b); }
-  bool AnyWarning() const {
-    for (int w = 0; w < mjNWARNING; ++w) {
-      if (d_->warning[w].number > 0) return true;
-    }
-    return false;
-  }
 
   CarryResult PickAndCarry(GripMode mode, double grip);
 
-  ModelPtr model_;
-  DataPtr data_;
   const mjModel* m_ = nullptr;
   mjData* d_ = nullptr;
   std::unique_ptr<ArmServo> servo_;
@@ -217,7 +205,6 @@ inline CarryResult MobileGripperTest::PickAndCarry(GripMode mode, double grip) {
   r.touch_right_end = d_->sensordata[touch_right_];
   r.grip_force_end = -(d_->actuator_force[act_servo_] + d_->actuator_force[act_force_]);
   r.jr3_force_end = Vec3(d_->sensordata + jr3_force_);
-  r.warnings = AnyWarning();
   return r;
 }
 

@@ -1,5 +1,5 @@
-// Scenes of the mobile-manipulation tests and the small helpers the tests share:
-// loading with no compiler warning allowed, placing weld-mounted bodies, element ids
+// The small helpers the mobile-manipulation tests share (their scenes load with the
+// MuJoCo fixture, tests/mujoco_fixture.h): placing weld-mounted bodies, element ids
 // that must exist, and a joint-space hold/track servo for the PA10 built from
 // src/control (RobotModel + JointPdGravityTorque).
 #pragma once
@@ -18,35 +18,11 @@
 #include "control/joint_pd.h"
 #include "control/robot_model.h"
 #include "control/task_space.h"
+#include "mujoco_fixture.h"
 
 namespace vlab::testing {
 
-struct ModelDeleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-};
-struct DataDeleter {
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-using ModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
-using DataPtr = std::unique_ptr<mjData, DataDeleter>;
-
-/// Fresh mjData for a model.
-inline DataPtr MakeData(const mjModel* m) { return DataPtr(mj_makeData(m)); }
-
 inline constexpr double kPi = 3.14159265358979323846;
-
-/// Absolute path of a file of the source tree.
-inline std::string SourcePath(const std::string& relative) { return std::string(VLAB_SOURCE_DIR) + "/" + relative; }
-
-/// Loads an MJCF file of the source tree; the test fails on a load error or a
-/// compiler warning (both arrive in the error text).
-inline ModelPtr LoadScene(const std::string& relative) {
-  char error[1000] = "";
-  mjModel* m = mj_loadXML(SourcePath(relative).c_str(), nullptr, error, sizeof(error));
-  EXPECT_NE(m, nullptr) << relative << ": " << error;
-  EXPECT_STREQ(error, "") << relative << ": load error or compiler warning";
-  return ModelPtr(m);
-}
 
 /// Id of a named element; the test fails (and -1 comes back) when it is missing.
 inline int RequireId(const mjModel* m, mjtObj type, const std::string& name) {
@@ -115,15 +91,6 @@ inline void PlaceWeldedBodies(const mjModel* m, mjData* d) {
     mju_mulMatTVec(qvel + 3, R2, vel, 3, 3);
   }
   mj_forward(m, d);
-}
-
-/// Steps `steps` times with no control change; returns false on a MuJoCo warning.
-inline bool StepQuietly(const mjModel* m, mjData* d, int steps) {
-  for (int i = 0; i < steps; ++i) mj_step(m, d);
-  for (int w = 0; w < mjNWARNING; ++w) {
-    if (d->warning[w].number > 0) return false;
-  }
-  return true;
 }
 
 /// Inverse kinematics by integrating the task-space controller's joint velocity

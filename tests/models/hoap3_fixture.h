@@ -14,6 +14,7 @@
 
 #include "models/hoap3_reference.h"
 #include "models/model_test_util.h"
+#include "mujoco_fixture.h"
 
 namespace vlab::models::testing {
 
@@ -66,18 +67,17 @@ struct MassProps {
 };
 
 /// scenes/hoap3.xml at its zero keyframe, positions relative to the pelvis origin.
-class Hoap3Model : public ::testing::Test {
+class Hoap3Model : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = LoadScene("scenes/hoap3.xml");
-    ASSERT_NE(model_, nullptr);
+    model_ = LoadModel("scenes/hoap3.xml");
     data_ = MakeData(m());
     ResetToKey(m(), d(), "zero");
     pelvis_ = Vec3(d()->xpos + 3 * Id(m(), mjOBJ_BODY, "hoap3_pelvis"));
     frames_ = UrdfFrames();
   }
-  const mjModel* m() const { return model_.get(); }
-  mjData* d() const { return data_.get(); }
+  const mjModel* m() const { return model_; }
+  mjData* d() const { return data_; }
   Eigen::Vector3d BodyPos(const std::string& body) const {
     return Vec3(d()->xpos + 3 * Id(m(), mjOBJ_BODY, body)) - pelvis_;
   }
@@ -106,8 +106,8 @@ class Hoap3Model : public ::testing::Test {
     return total;
   }
 
-  ModelPtr model_;
-  DataPtr data_;
+  const mjModel* model_ = nullptr;
+  mjData* data_ = nullptr;
   Eigen::Vector3d pelvis_;
   std::map<std::string, Frame> frames_;
 };

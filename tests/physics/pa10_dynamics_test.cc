@@ -25,14 +25,12 @@
 #include <mujoco/mujoco.h>
 
 #include "control/robot_model.h"
-#include "physics/pa10_scene.h"
+#include "mujoco_fixture.h"
 
 namespace vlab::control {
 namespace {
 
 constexpr int kDof = 7;
-using ModelPtr = testing::Pa10ModelPtr;
-using testing::LoadPa10Scene;
 
 Eigen::Vector3d Vec(const mjtNum* v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
 Eigen::Matrix3d Rot(const mjtNum* q) {
@@ -138,15 +136,15 @@ class OwnDynamics {
   std::vector<Eigen::Vector3d> p_, anchor_, axis_;
 };
 
-class Pa10Dynamics : public ::testing::Test {
+class Pa10Dynamics : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = LoadPa10Scene();
-    ASSERT_NE(model_, nullptr);
-    robot_ = RobotModel::Create(model_.get(), {"world", "flange"});
+    model_ = LoadModel("scenes/pa10.xml");
+    robot_ = RobotModel::Create(model_, {"world", "flange"});
+    WatchData(&robot_->data());
     ASSERT_EQ(robot_->dof(), kDof);
     ASSERT_EQ(model_->njnt, kDof) << "the scene holds the arm's hinges only";
-    own_ = std::make_unique<OwnDynamics>(model_.get(), robot_->joint_ids());
+    own_ = std::make_unique<OwnDynamics>(model_, robot_->joint_ids());
   }
 
   Eigen::VectorXd RandomQ() {
@@ -163,7 +161,7 @@ class Pa10Dynamics : public ::testing::Test {
     return qd;
   }
 
-  ModelPtr model_{nullptr, mj_deleteModel};
+  const mjModel* model_ = nullptr;
   std::unique_ptr<RobotModel> robot_;
   std::unique_ptr<OwnDynamics> own_;
   std::mt19937 rng_{424242};
@@ -179,7 +177,7 @@ TEST_F(Pa10Dynamics, MassesAndComHeightsAreTheDatasheetValues) {
   own_->Forward(Eigen::VectorXd::Zero(kDof));
   double total = 0;
   for (const Row& row : rows) {
-    const int b = mj_name2id(model_.get(), mjOBJ_BODY, row.body);
+    const int b = mj_name2id(model_, mjOBJ_BODY, row.body);
     ASSERT_GE(b, 0) << row.body;
     std::cout << row.body << ": model " << model_->body_mass[b] << " kg, datasheet " << row.mass << " kg\n";
     EXPECT_NEAR(model_->body_mass[b], row.mass, 1e-12) << row.body;
@@ -190,9 +188,9 @@ TEST_F(Pa10Dynamics, MassesAndComHeightsAreTheDatasheetValues) {
 
   // JR3 67M25A 0.17 kg [EST]; tool = aluminium adapter D67x15 + pointer D25x150 mm
   // (the JR3 is split at its measuring plane into two halves)
-  const int jr3 = mj_name2id(model_.get(), mjOBJ_BODY, "jr3_body");
-  const int jr3_tool_side = mj_name2id(model_.get(), mjOBJ_BODY, "jr3_tool_side");
-  const int tool = mj_name2id(model_.get(), mjOBJ_BODY, "tool_body");
+  const int jr3 = mj_name2id(model_, mjOBJ_BODY, "jr3_body");
+  const int jr3_tool_side = mj_name2id(model_, mjOBJ_BODY, "jr3_tool_side");
+  const int tool = mj_name2id(model_, mjOBJ_BODY, "tool_body");
   ASSERT_GE(jr3, 0);
   ASSERT_GE(jr3_tool_side, 0);
   ASSERT_GE(tool, 0);
@@ -265,31 +263,21 @@ TEST_F(Pa10Dynamics, CoriolisEqualsChristoffelTermOfIndependentH) {
   std::cout << "c: worst relative error " << worst << "\n";
 }
 
-int warnings = 0;
-void CountWarning(const char* message) {
-  ++warnings;
-  ADD_FAILURE() << "MuJoCo warning: " << message;
-}
+using Pa10Scene = vlab::test::MujocoTest;
 
-TEST(Pa10Scene, SimulatesFiveSecondsWithZeroTorqueQuietly) {
-  void (*previous)(const char*) = mju_user_warning;
-  mju_user_warning = CountWarning;
-  ModelPtr model = LoadPa10Scene();
-  ASSERT_NE(model, nullptr);
+TEST_F(Pa10Scene, SimulatesFiveSecondsWithZeroTorqueQuietly) {
+  const mjModel* model = LoadModel("scenes/pa10.xml");
   EXPECT_DOUBLE_EQ(model->opt.timestep, 0.001);
   for (const char* key : {"zero", "ready"}) {
-    const int k = mj_name2id(model.get(), mjOBJ_KEY, key);
+    const int k = mj_name2id(model, mjOBJ_KEY, key);
     ASSERT_GE(k, 0) << key;
-    std::unique_ptr<mjData, decltype(&mj_deleteData)> data(mj_makeData(model.get()), mj_deleteData);
-    mj_resetDataKeyframe(model.get(), data.get(), k);
+    mjData* data = MakeData(model);
+    mj_resetDataKeyframe(model, data, k);
     if (std::string(key) == "zero") data->qpos[1] = 1e-3;  // tip it off the upright equilibrium
-    for (int step = 0; step < 5000; ++step) mj_step(model.get(), data.get());
-    for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(data->warning[w].number, 0) << key << ": warning " << w;
+    for (int step = 0; step < 5000; ++step) mj_step(model, data);
     for (int i = 0; i < model->nq; ++i) EXPECT_TRUE(std::isfinite(data->qpos[i])) << key;
     EXPECT_NEAR(data->time, 5.0, 1e-9);
   }
-  mju_user_warning = previous;
-  EXPECT_EQ(warnings, 0);
 }
 
 }  // namespace

@@ -24,14 +24,11 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
-#include "core/core_mujoco.h"
+#include "mujoco_fixture.h"
 #include "sensors/sensor_wrench.h"
 
 namespace vlab::sensors {
 namespace {
-
-using vlab::DataPtr;
-using vlab::ModelPtr;
 
 constexpr int kDof = 7;
 constexpr double kStep = 0.001;       // physics step, s
@@ -59,12 +56,12 @@ struct AnalyticLoad {
   double mass = 0;
 };
 
-class Pa10Jr3 : public ::testing::Test {
+class Pa10Jr3 : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = vlab::LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
-    data_ = vlab::MakeData(model_.get());
-    const mjModel* m = model_.get();
+    model_ = LoadModel("scenes/pa10.xml");
+    data_ = MakeData(model_);
+    const mjModel* m = model_;
     ASSERT_EQ(m->nq, kDof);
     ASSERT_EQ(m->nu, kDof);
     site_ = mj_name2id(m, mjOBJ_SITE, "jr3");
@@ -94,13 +91,11 @@ class Pa10Jr3 : public ::testing::Test {
     ASSERT_EQ(Vec(m->opt.gravity), Eigen::Vector3d(0, 0, -9.81)) << "scenes/pa10.xml gravity";
   }
 
-  void TearDown() override { EXPECT_TRUE(vlab::TakeMujocoWarningTexts().empty()); }
-
   // Holds the arm at q (see the file comment) and returns the JR3 load from MuJoCo's sensors.
   // Fails (and returns false) if the pose is not a clean static case.
   bool HoldStatic(const Eigen::VectorXd& q, Wrench& mujoco_load) {
-    const mjModel* m = model_.get();
-    mjData* d = data_.get();
+    const mjModel* m = model_;
+    mjData* d = data_;
     mj_resetData(m, d);
     for (int i = 0; i < kDof; ++i) d->qpos[i] = q[i];
     mj_forward(m, d);
@@ -120,7 +115,7 @@ class Pa10Jr3 : public ::testing::Test {
   // rotations about their body-local axes (body_pos and jnt_pos do not affect orientation),
   // and the subtree COM from body_pos/body_quat/body_ipos in the jr3_tool_side frame.
   AnalyticLoad Analytic(const Eigen::VectorXd& q) const {
-    const mjModel* m = model_.get();
+    const mjModel* m = model_;
     AnalyticLoad out;
     std::vector<int> chain;
     for (int b = m->site_bodyid[site_]; b > 0; b = m->body_parentid[b]) chain.push_back(b);
@@ -150,7 +145,7 @@ class Pa10Jr3 : public ::testing::Test {
   // configurations: the two keyframes and seeded random ones within the joint limits that
   // have no contact (4.7 % of random poses touch, mjcf/pa10/README.md)
   std::vector<Eigen::VectorXd> Configurations(int random_count) {
-    const mjModel* m = model_.get();
+    const mjModel* m = model_;
     std::vector<Eigen::VectorXd> out;
     for (const char* key : {"zero", "ready"}) {
       const int k = mj_name2id(m, mjOBJ_KEY, key);
@@ -165,9 +160,9 @@ class Pa10Jr3 : public ::testing::Test {
         const double lo = m->jnt_range[2 * i], hi = m->jnt_range[2 * i + 1], pad = 0.02 * (hi - lo);
         q[i] = std::uniform_real_distribution<double>(lo + pad, hi - pad)(rng);
       }
-      mj_resetData(m, data_.get());
+      mj_resetData(m, data_);
       for (int i = 0; i < kDof; ++i) data_->qpos[i] = q[i];
-      mj_forward(m, data_.get());
+      mj_forward(m, data_);
       if (data_->ncon == 0) out.push_back(q);
     }
     return out;
@@ -194,13 +189,13 @@ class Pa10Jr3 : public ::testing::Test {
     return worst;
   }
 
-  ModelPtr model_;
-  DataPtr data_;
+  const mjModel* model_ = nullptr;
+  mjData* data_ = nullptr;
   int site_ = -1, tool_side_ = -1, tool_ = -1, force_adr_ = 0, torque_adr_ = 0;
 };
 
 TEST_F(Pa10Jr3, SubtreeBeyondTheMeasuringPlaneIsTheToolSideHalfAndTheTool) {
-  const mjModel* m = model_.get();
+  const mjModel* m = model_;
   EXPECT_EQ(m->site_bodyid[site_], tool_side_);
   EXPECT_EQ(m->body_parentid[tool_], tool_side_);
   EXPECT_EQ(m->body_parentid[tool_side_], mj_name2id(m, mjOBJ_BODY, "jr3_body"));
@@ -223,7 +218,7 @@ TEST_F(Pa10Jr3, SubtreeBeyondTheMeasuringPlaneIsTheToolSideHalfAndTheTool) {
   ASSERT_GE(flange, 0);
   for (const Eigen::VectorXd& q : Configurations(3)) {
     for (int i = 0; i < kDof; ++i) data_->qpos[i] = q[i];
-    mj_forward(m, data_.get());
+    mj_forward(m, data_);
     const Eigen::Matrix3d R_WF = RotFromXmat(data_->site_xmat + 9 * flange);
     const Eigen::Matrix3d R_WS = RotFromXmat(data_->site_xmat + 9 * site_);
     EXPECT_LT((R_WS - R_WF).norm(), 1e-12);
@@ -233,12 +228,12 @@ TEST_F(Pa10Jr3, SubtreeBeyondTheMeasuringPlaneIsTheToolSideHalfAndTheTool) {
 }
 
 TEST_F(Pa10Jr3, OwnKinematicsAgreeWithMujoco) {
-  const mjModel* m = model_.get();
+  const mjModel* m = model_;
   for (const Eigen::VectorXd& q : Configurations(6)) {
     const AnalyticLoad a = Analytic(q);
     Wrench unused;
     ASSERT_TRUE(HoldStatic(q, unused));
-    const mjData* d = data_.get();
+    const mjData* d = data_;
     const Eigen::Matrix3d R_WS = RotFromXmat(d->site_xmat + 9 * site_);
     EXPECT_LT((a.R_WS - R_WS).norm(), 1e-12) << q.transpose();
     const Eigen::Vector3d com_W = (m->body_mass[tool_side_] * Vec(d->xipos + 3 * tool_side_) +

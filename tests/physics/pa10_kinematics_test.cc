@@ -29,7 +29,7 @@
 #include <mujoco/mujoco.h>
 
 #include "control/robot_model.h"
-#include "physics/pa10_scene.h"
+#include "mujoco_fixture.h"
 
 namespace vlab::control {
 namespace {
@@ -48,9 +48,6 @@ constexpr double kSign[kDof] = {1, 1, 1, 1, 1, 1, 1};
 constexpr double kOffset[kDof] = {0, 0, 0, 0, 0, 0, 0};
 // MHI joint limits, deg (DATASHEET 1.4)
 constexpr double kLimitDeg[kDof] = {177, 94, 174, 137, 255, 165, 255};
-
-using ModelPtr = testing::Pa10ModelPtr;
-using testing::LoadPa10Scene;
 
 // A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha)
 Eigen::Isometry3d DhStep(double theta, double d, double a, double alpha) {
@@ -93,15 +90,15 @@ Eigen::VectorXd RandomConfiguration(const RobotModel& rm, std::mt19937& rng) {
   return q;
 }
 
-class Pa10Kinematics : public ::testing::Test {
+class Pa10Kinematics : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = LoadPa10Scene();
-    ASSERT_NE(model_, nullptr);
-    robot_ = RobotModel::Create(model_.get(), {"world", "flange"});
+    model_ = LoadModel("scenes/pa10.xml");
+    robot_ = RobotModel::Create(model_, {"world", "flange"});
+    WatchData(&robot_->data());
     ASSERT_EQ(robot_->dof(), kDof);
     // base frame in the world, from the scene's placement of pa10_base (fixed body)
-    const int base = mj_name2id(model_.get(), mjOBJ_BODY, "pa10_base");
+    const int base = mj_name2id(model_, mjOBJ_BODY, "pa10_base");
     ASSERT_GE(base, 0);
     ASSERT_EQ(model_->body_parentid[base], 0) << "scene mounts pa10_base on the world";
     const double* p = model_->body_pos + 3 * base;
@@ -114,7 +111,7 @@ class Pa10Kinematics : public ::testing::Test {
     return robot_->TipPose();
   }
 
-  ModelPtr model_{nullptr, mj_deleteModel};
+  const mjModel* model_ = nullptr;
   std::unique_ptr<RobotModel> robot_;
   Eigen::Isometry3d X_W_base_;
 };

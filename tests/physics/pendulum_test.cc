@@ -21,7 +21,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
-#include "core/core_mujoco.h"
+#include "mujoco_fixture.h"
 
 namespace vlab::lab {
 namespace {
@@ -140,9 +140,11 @@ double MeasurePeriod(const mjModel* model, mjData* data, double theta0, int peri
   return (crossings.back() - crossings.front()) / periods;
 }
 
-TEST(SimplePendulum, PeriodEqualsEllipticIntegralClosedForm) {
-  ModelPtr model = LoadModelFromString("simple_pendulum.xml", SimplePendulumXml("RK4", kPendulumStep));
-  DataPtr data = MakeData(model.get());
+using SimplePendulum = vlab::test::MujocoTest;
+
+TEST_F(SimplePendulum, PeriodEqualsEllipticIntegralClosedForm) {
+  const mjModel* model = LoadModelFromString("simple_pendulum.xml", SimplePendulumXml("RK4", kPendulumStep));
+  mjData* data = MakeData(model);
   ASSERT_EQ(model->nv, 1);
   ASSERT_EQ(model->opt.integrator, mjINT_RK4);
   // the body is what we wrote: no inertia from geoms, no armature, damping or friction
@@ -157,14 +159,12 @@ TEST(SimplePendulum, PeriodEqualsEllipticIntegralClosedForm) {
     const double theta0 = theta0_deg * kDeg;
     const double exact = 4.0 * std::sqrt(kInertiaPivot / (kMass * kG * kLength)) *
                          EllipticK(std::sin(0.5 * theta0));
-    const double measured = MeasurePeriod(model.get(), data.get(), theta0, 6, exact);
+    const double measured = MeasurePeriod(model, data, theta0, 6, exact);
     const double relative_error = (measured - exact) / exact;
     std::cout << "theta0 " << theta0_deg << " deg: T exact " << exact << " s (" << exact / small_angle_period
               << " x small-angle), measured " << measured << " s, relative error " << relative_error << "\n";
     EXPECT_LT(std::abs(relative_error), 1e-8) << "theta0 " << theta0_deg << " deg";
   }
-  for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(data->warning[w].number, 0) << WarningName(w);
-  EXPECT_TRUE(TakeMujocoWarningTexts().empty());
 }
 
 // ---------------------------------------------------------------------------------------
@@ -232,12 +232,17 @@ struct EnergyRecord {
   double max_own_mismatch = 0;   // max |MuJoCo - own| / (|T| + |V|) at the sample instants
 };
 
-// `duration` s from theta = (120, -150) deg at rest; MuJoCo's energy is read after mj_forward at the
-// start of each step (RK4's stage evaluations overwrite d->energy inside mj_step)
-EnergyRecord RunDoublePendulum(const char* integrator, double timestep, double duration) {
+class DoublePendulum : public vlab::test::MujocoTest {
+ protected:
+  // `duration` s from theta = (120, -150) deg at rest; MuJoCo's energy is read after mj_forward at the
+  // start of each step (RK4's stage evaluations overwrite d->energy inside mj_step)
+  EnergyRecord RunDoublePendulum(const char* integrator, double timestep, double duration);
+};
+
+EnergyRecord DoublePendulum::RunDoublePendulum(const char* integrator, double timestep, double duration) {
   EnergyRecord record;
-  ModelPtr model = LoadModelFromString("double_pendulum.xml", DoublePendulumXml(integrator, timestep));
-  DataPtr data = MakeData(model.get());
+  const mjModel* model = LoadModelFromString("double_pendulum.xml", DoublePendulumXml(integrator, timestep));
+  mjData* data = MakeData(model);
   const bool energy_enabled = model->opt.enableflags & mjENBL_ENERGY;
   if (model->nv != 2 || !energy_enabled) {
     ADD_FAILURE() << "model: nv " << model->nv << ", energy flag " << energy_enabled;
@@ -248,7 +253,7 @@ EnergyRecord RunDoublePendulum(const char* integrator, double timestep, double d
   const long steps = std::lround(duration / timestep);
   const long sample_every = std::max(1L, steps / 7);
   for (long step = 0; step <= steps; ++step) {
-    mj_forward(model.get(), data.get());
+    mj_forward(model, data);
     record.total.push_back(data->energy[0] + data->energy[1]);
     const double *q = data->qpos, *v = data->qvel;
     // dV/dt = g (m1 dz1/dt + m2 dz2/dt)
@@ -266,10 +271,8 @@ EnergyRecord RunDoublePendulum(const char* integrator, double timestep, double d
                                  << data->energy[1] << " V " << data->energy[0] << ", own T "
                                  << own.kinetic << " V " << own.potential;
     }
-    if (step < steps) mj_step(model.get(), data.get());
+    if (step < steps) mj_step(model, data);
   }
-  for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(data->warning[w].number, 0) << WarningName(w);
-  EXPECT_TRUE(TakeMujocoWarningTexts().empty());
   return record;
 }
 
@@ -285,7 +288,7 @@ double MaxDeviation(const std::vector<double>& e, size_t begin, size_t end) {
 // ~20 rad/s (w h = 0.02 at 1 ms): 9e-13 per step, 2e-8 over 20 000 steps if every step lost
 // at that worst rate. The 1e-6 bound leaves a factor 50 for the nonlinearity; a wrong
 // integrator (Euler loses 5 % here) or a non-conservative force fails it by orders.
-TEST(DoublePendulum, Rk4ConservesEnergyToFourthOrder) {
+TEST_F(DoublePendulum, Rk4ConservesEnergyToFourthOrder) {
   const double h = 1e-3;
   const EnergyRecord run = RunDoublePendulum("RK4", h, 20.0);
   ASSERT_EQ(run.total.size(), 20001u);
@@ -316,17 +319,17 @@ TEST(DoublePendulum, Rk4ConservesEnergyToFourthOrder) {
 // for a harmonic oscillator E~ = (q^2 + p^2)/2 - (h/2) p q is conserved exactly). Hence
 //   E(t) - E(0) = (h/2) (P(t) - P(0)) + O(h^2):
 // a bounded oscillation of amplitude (h/2) max|P|, the same in the first and last 5 s.
-TEST(SimplePendulum, SemiImplicitEulerOscillatesAroundModifiedEnergy) {
+TEST_F(SimplePendulum, SemiImplicitEulerOscillatesAroundModifiedEnergy) {
   const double h = 1e-3;
-  ModelPtr model = LoadModelFromString("simple_pendulum_euler.xml", SimplePendulumXml("Euler", h));
-  DataPtr data = MakeData(model.get());
+  const mjModel* model = LoadModelFromString("simple_pendulum_euler.xml", SimplePendulumXml("Euler", h));
+  mjData* data = MakeData(model);
   ASSERT_EQ(model->opt.integrator, mjINT_EULER);
   data->qpos[0] = 120 * kDeg;
   const long steps = 20000;
   std::vector<double> deviation, power;
   double e0 = 0, p0 = 0;
   for (long step = 0; step <= steps; ++step) {
-    mj_forward(model.get(), data.get());
+    mj_forward(model, data);
     const double theta = data->qpos[0], omega = data->qvel[0];
     // own energy and power: COM height -L cos(theta) below the pivot
     const double e = 0.5 * kInertiaPivot * omega * omega - kMass * kG * kLength * std::cos(theta);
@@ -334,7 +337,7 @@ TEST(SimplePendulum, SemiImplicitEulerOscillatesAroundModifiedEnergy) {
     if (step == 0) e0 = e, p0 = p;
     deviation.push_back(e - e0);
     power.push_back(p);
-    if (step < steps) mj_step(model.get(), data.get());
+    if (step < steps) mj_step(model, data);
   }
   double max_power = 0, max_residual = 0, first = 0, last = 0;
   for (size_t i = 0; i < deviation.size(); ++i) {
@@ -354,7 +357,6 @@ TEST(SimplePendulum, SemiImplicitEulerOscillatesAroundModifiedEnergy) {
   EXPECT_LT(last, 1.1 * amplitude);
   // no secular change: the envelope is the same at the start and after 15 s
   EXPECT_NEAR(last, first, 0.01 * first);
-  EXPECT_TRUE(TakeMujocoWarningTexts().empty());
 }
 
 // With a configuration-dependent mass matrix (two hinges) the velocity-form semi-implicit
@@ -364,7 +366,7 @@ TEST(SimplePendulum, SemiImplicitEulerOscillatesAroundModifiedEnergy) {
 // it over the first second, before the chaotic runs separate), and it grows at most linearly
 // in time: a constant loss rate gives a last-5-s deviation (window ending at 20 s) at most 4x
 // the first-5-s one; an unstable or energy-pumping integrator exceeds that.
-TEST(DoublePendulum, SemiImplicitEulerNeverGainsAndLosesAtFirstOrder) {
+TEST_F(DoublePendulum, SemiImplicitEulerNeverGainsAndLosesAtFirstOrder) {
   const double h = 1e-3;
   const EnergyRecord run = RunDoublePendulum("Euler", h, 20.0);
   ASSERT_EQ(run.total.size(), 20001u);

@@ -1,42 +1,26 @@
-// Shared by the renderer tests: the pixel-facts scene (tests/data/render_pixels.xml),
-// a fixture that fails a test on any MuJoCo warning, and the pinhole
-// projection of world points into a camera, written from the camera frame
+// Shared by the renderer tests: the pixel-facts scene (tests/data/render_pixels.xml)
+// on the MuJoCo fixture (any undeclared MuJoCo warning fails the test), and the
+// pinhole projection of world points into a camera, written from the camera frame
 // conventions (MuJoCo: looks along -z, +y up; OpenCV: along +z, +y down).
 #pragma once
 
 #include <cmath>
-#include <string>
-#include <vector>
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include "mujoco_fixture.h"
 #include "render/renderer.h"
 
 namespace vlab::testing {
 
-inline std::vector<std::string>& MujocoWarnings() {
-  static std::vector<std::string> warnings;
-  return warnings;
-}
-
-/// Loads tests/data/render_pixels.xml; any MuJoCo warning fails the test.
-class RenderScene : public ::testing::Test {
+/// tests/data/render_pixels.xml loaded, its data after mj_forward.
+class RenderScene : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    MujocoWarnings().clear();
-    mju_user_warning = [](const char* msg) { MujocoWarnings().push_back(msg); };
-    char error[1000] = "";
-    m_ = mj_loadXML(VLAB_SOURCE_DIR "/tests/data/render_pixels.xml", nullptr, error, sizeof(error));
-    ASSERT_NE(m_, nullptr) << error;
-    d_ = mj_makeData(m_);
+    m_ = LoadModel("tests/data/render_pixels.xml");
+    d_ = MakeData(m_);
     mj_forward(m_, d_);
-  }
-  void TearDown() override {
-    EXPECT_TRUE(MujocoWarnings().empty()) << MujocoWarnings().front();
-    mju_user_warning = nullptr;
-    if (d_) mj_deleteData(d_);
-    if (m_) mj_deleteModel(m_);
   }
 
   int Id(mjtObj type, const char* name) const {

@@ -133,7 +133,7 @@ TEST_F(PixelTest, RenderingLeavesTheStateUnchanged) {
   auto r = Renderer::Create(m_, options);
   d_->qpos[0] = 0.1;
   mj_forward(m_, d_);
-  mjData* copy = mj_makeData(m_);
+  mjData* copy = MakeData(m_);
   mj_copyData(copy, m_, d_);
   RgbImage img;
   DepthImage depth;
@@ -144,7 +144,6 @@ TEST_F(PixelTest, RenderingLeavesTheStateUnchanged) {
   for (int i = 0; i < 3 * m_->nbody; ++i) EXPECT_EQ(copy->xpos[i], d_->xpos[i]);
   for (int i = 0; i < mjNWARNING; ++i) EXPECT_EQ(copy->warning[i].number, d_->warning[i].number);
   EXPECT_EQ(copy->time, d_->time);
-  mj_deleteData(copy);
 }
 
 }  // namespace

@@ -1,7 +1,5 @@
 // JR3 model fed by MuJoCo force/torque sensors: a known tool at rest must read m g and r x m g.
 #include <cmath>
-#include <cstring>
-#include <memory>
 #include <sstream>
 #include <string>
 
@@ -9,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include "mujoco_fixture.h"
 #include "sensors/sensor_wrench.h"
 
 namespace vlab::sensors {
@@ -17,19 +16,6 @@ namespace {
 constexpr double kGravity = 9.81;
 constexpr double kToolMass = 1.5;  // kg
 const Eigen::Vector3d kToolCom(0.02, 0.01, -0.03);  // m, in the sensor (site) frame
-
-struct ModelDeleter {
-  void operator()(mjModel* model) const { mj_deleteModel(model); }
-};
-struct DataDeleter {
-  void operator()(mjData* data) const { mj_deleteData(data); }
-};
-struct VfsDeleter {
-  void operator()(mjVFS* vfs) const {
-    mj_deleteVFS(vfs);
-    delete vfs;
-  }
-};
 
 // sensor body welded to the world with orientation axis-angle (axis, degrees); the tool is
 // welded below it, its frame = the site frame, so its inertial pos is the COM offset r
@@ -56,32 +42,21 @@ std::string SceneXml(const Eigen::Vector3d& axis, double angle_deg) {
   return xml.str();
 }
 
-std::unique_ptr<mjModel, ModelDeleter> LoadFromString(const std::string& xml) {
-  std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
-  mj_defaultVFS(vfs.get());
-  const char* name = "jr3_at_rest.xml";
-  if (mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(xml.size())) != 0) return nullptr;
-  const int index = mj_findFileVFS(vfs.get(), name);
-  if (index < 0) return nullptr;
-  std::memcpy(vfs->filedata[index], xml.data(), xml.size());
-  char error[1000] = "";
-  std::unique_ptr<mjModel, ModelDeleter> model(
-      mj_loadXML(name, vfs.get(), error, sizeof(error)));
-  EXPECT_TRUE(model) << "mj_loadXML: " << error;
-  return model;
-}
+class WrenchSensorAtRestTest : public vlab::test::MujocoTest {
+ protected:
+  void CheckAtRest(const Eigen::Vector3d& axis, double angle_deg);
+};
 
 // Steps the scene 1 s at 1 ms, feeding the negated MuJoCo sensor values to the JR3 model with
 // the default noise, bias and quantisation, and compares filter4 with the analytic load.
-void CheckAtRest(const Eigen::Vector3d& axis, double angle_deg) {
+void WrenchSensorAtRestTest::CheckAtRest(const Eigen::Vector3d& axis, double angle_deg) {
   SCOPED_TRACE("sensor orientation: axis (" + std::to_string(axis.x()) + ", " +
                std::to_string(axis.y()) + ", " + std::to_string(axis.z()) + ") angle " +
                std::to_string(angle_deg) + " deg");
-  auto model = LoadFromString(SceneXml(axis, angle_deg));
-  ASSERT_TRUE(model);
-  std::unique_ptr<mjData, DataDeleter> data(mj_makeData(model.get()));
-  const int force_adr = model->sensor_adr[mj_name2id(model.get(), mjOBJ_SENSOR, "jr3_force")];
-  const int torque_adr = model->sensor_adr[mj_name2id(model.get(), mjOBJ_SENSOR, "jr3_torque")];
+  const mjModel* model = LoadModelFromString("jr3_at_rest.xml", SceneXml(axis, angle_deg));
+  mjData* data = MakeData(model);
+  const int force_adr = model->sensor_adr[mj_name2id(model, mjOBJ_SENSOR, "jr3_force")];
+  const int torque_adr = model->sensor_adr[mj_name2id(model, mjOBJ_SENSOR, "jr3_torque")];
 
   WrenchSensorConfig config;  // 67M25A, filter 4, noise + bias + quantisation on
   config.seed = 7;
@@ -90,14 +65,11 @@ void CheckAtRest(const Eigen::Vector3d& axis, double angle_deg) {
   Reset(*sensor, state);
   WrenchReading reading;
   for (int step = 0; step < 1000; ++step) {
-    mj_step(model.get(), data.get());
+    mj_step(model, data);
     const Wrench load = LoadFromMujocoSensor(data->sensordata + force_adr,
                                              data->sensordata + torque_adr);
     reading = Update(*sensor, state, load, model->opt.timestep);
     ASSERT_EQ(reading.status, WrenchStatus::kOk);
-  }
-  for (int i = 0; i < mjNWARNING; ++i) {
-    EXPECT_EQ(data->warning[i].number, 0) << "MuJoCo warning " << i;
   }
   EXPECT_FALSE(state.saturated_latched);
 
@@ -123,15 +95,15 @@ void CheckAtRest(const Eigen::Vector3d& axis, double angle_deg) {
   EXPECT_EQ(reading.filter, 4);
 }
 
-TEST(WrenchSensorAtRestTest, ReadsToolWeightSensorZUp) {
+TEST_F(WrenchSensorAtRestTest, ReadsToolWeightSensorZUp) {
   CheckAtRest(Eigen::Vector3d::UnitZ(), 0.0);
 }
 
-TEST(WrenchSensorAtRestTest, ReadsToolWeightSensorRotated90AboutX) {
+TEST_F(WrenchSensorAtRestTest, ReadsToolWeightSensorRotated90AboutX) {
   CheckAtRest(Eigen::Vector3d::UnitX(), 90.0);
 }
 
-TEST(WrenchSensorAtRestTest, ReadsToolWeightSensorTilted) {
+TEST_F(WrenchSensorAtRestTest, ReadsToolWeightSensorTilted) {
   CheckAtRest(Eigen::Vector3d(1.0, 2.0, 0.5), 130.0);
 }
 

@@ -13,17 +13,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
+#include "mujoco_fixture.h"
 #include "render/renderer.h"
 #include "vision/vision_locate.h"
 #include "vision/vision_scene.h"
 
 namespace vlab::vision {
 namespace {
-
-std::vector<std::string>& Warnings() {
-  static std::vector<std::string> w;
-  return w;
-}
 
 TEST(CubeScene, PlacementsRespectTableKeepOutAndEachOther) {
   const CubeSetConfig cubes;
@@ -96,22 +92,12 @@ TEST(CubeScene, RefusesWhatDoesNotFit) {
   }
 }
 
-class CommittedCubeScene : public ::testing::Test {
+class CommittedCubeScene : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    Warnings().clear();
-    mju_user_warning = [](const char* msg) { Warnings().push_back(msg); };
-    char error[1000] = "";
-    m_ = mj_loadXML(VLAB_SOURCE_DIR "/scenes/pa10_cubes.xml", nullptr, error, sizeof(error));
-    ASSERT_NE(m_, nullptr) << error;
-    d_ = mj_makeData(m_);
+    m_ = LoadModel("scenes/pa10_cubes.xml");
+    d_ = MakeData(m_);
     mj_forward(m_, d_);
-  }
-  void TearDown() override {
-    EXPECT_TRUE(Warnings().empty()) << Warnings().front();
-    mju_user_warning = nullptr;
-    if (d_) mj_deleteData(d_);
-    if (m_) mj_deleteModel(m_);
   }
   Eigen::Isometry3d BodyPose(const std::string& name) const {
     const int b = mj_name2id(m_, mjOBJ_BODY, name.c_str());

@@ -1,36 +1,28 @@
 // Shared by the vision tests: a lettered cube (generated into a temporary
-// folder) in front of a 640 x 480 webcam, its ground truth from MuJoCo, and a
-// fixture that fails a test on any MuJoCo warning.
+// folder) in front of a 640 x 480 webcam and its ground truth from MuJoCo, on
+// the MuJoCo fixture (any undeclared MuJoCo warning fails the test).
 #pragma once
 
 #include <cmath>
-#include <memory>
 #include <string>
-#include <vector>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include "mujoco_fixture.h"
 #include "test_util.h"
 #include "vision/vision_cubes.h"
 #include "vision/vision_scene.h"
 
 namespace vlab::testing {
 
-inline std::vector<std::string>& VisionWarnings() {
-  static std::vector<std::string> warnings;
-  return warnings;
-}
-
 /// One cube of the default set (cube_A) on a free joint, a camera "cam" at
 /// the origin looking along -z (MuJoCo's camera frame = the world frame), a
 /// grey backdrop behind the cube, the cube scene's lights and webcam fovy.
-class CubeCameraScene : public ::testing::Test {
+class CubeCameraScene : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    VisionWarnings().clear();
-    mju_user_warning = [](const char* msg) { VisionWarnings().push_back(msg); };
     vision::WriteGeneratedFiles(dir_.path(), vision::CubeSetFiles(cubes_));
     const vision::CubeSceneConfig scene;
     const std::string xml =
@@ -51,18 +43,10 @@ class CubeCameraScene : public ::testing::Test {
         "  </worldbody>\n"
         "</mujoco>\n";
     WriteFile(dir_ / "cube_camera.xml", xml);
-    char error[1000] = "";
-    m_ = mj_loadXML((dir_ / "cube_camera.xml").c_str(), nullptr, error, sizeof(error));
-    ASSERT_NE(m_, nullptr) << error;
-    d_ = mj_makeData(m_);
+    m_ = LoadModel(dir_ / "cube_camera.xml");
+    d_ = MakeData(m_);
     camera_ = mj_name2id(m_, mjOBJ_CAMERA, "cam");
     mj_forward(m_, d_);
-  }
-  void TearDown() override {
-    EXPECT_TRUE(VisionWarnings().empty()) << VisionWarnings().front();
-    mju_user_warning = nullptr;
-    if (d_) mj_deleteData(d_);
-    if (m_) mj_deleteModel(m_);
   }
 
   /// Puts the cube's centre at p (world = MuJoCo camera frame) with orientation q.
@@ -100,7 +84,7 @@ class CubeCameraScene : public ::testing::Test {
 
   TempDir dir_;
   vision::CubeSetConfig cubes_;  // the default set: the committed mjcf/cubes
-  mjModel* m_ = nullptr;
+  mjModel* m_ = nullptr;  // owned by the MuJoCo fixture
   mjData* d_ = nullptr;
   int camera_ = -1;
 };

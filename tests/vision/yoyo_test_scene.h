@@ -1,7 +1,8 @@
 // Shared by the yo-yo tracker tests: the committed scenes/pa10_yoyo.xml (the
 // PA10 in its ready pose, the red yo-yo under its tool, the side webcam),
 // the yo-yo placed at a chosen depth below the hand, rendered at 640 x 480
-// with vlab_render's fast profile; ground truth from MuJoCo.
+// with vlab_render's fast profile; ground truth from MuJoCo. On the MuJoCo
+// fixture: any undeclared MuJoCo warning fails the test.
 #pragma once
 
 #include <memory>
@@ -11,19 +12,18 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include "mujoco_fixture.h"
 #include "render/renderer.h"
 #include "test_util.h"
 #include "vision/vision_detector.h"
 
 namespace vlab::testing {
 
-class YoyoCameraScene : public ::testing::Test {
+class YoyoCameraScene : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    char error[1000] = "";
-    m_ = mj_loadXML(VLAB_SOURCE_DIR "/scenes/pa10_yoyo.xml", nullptr, error, sizeof(error));
-    ASSERT_NE(m_, nullptr) << error;
-    d_ = mj_makeData(m_);
+    m_ = LoadModel("scenes/pa10_yoyo.xml");
+    d_ = MakeData(m_);
     camera_ = mj_name2id(m_, mjOBJ_CAMERA, "webcam");
     centre_ = mj_name2id(m_, mjOBJ_SITE, "yoyo_centre");
     drop_ = m_->jnt_qposadr[mj_name2id(m_, mjOBJ_JOINT, "yoyo_drop")];
@@ -41,12 +41,6 @@ class YoyoCameraScene : public ::testing::Test {
     const render::Intrinsics k = render::CameraIntrinsics(m_, camera_, 640, 480);
     model_ = vision::CameraModel{640, 480, k.fx, k.fy, k.cx, k.cy, {}};
   }
-  void TearDown() override {
-    renderer_.reset();
-    if (d_) mj_deleteData(d_);
-    if (m_) mj_deleteModel(m_);
-  }
-
   /// The yo-yo's centre `depth` (m) below the hand, turned `spin` (rad), the arm still.
   void PlaceYoyo(double depth, double spin) {
     d_->qpos[drop_] = depth;
@@ -72,10 +66,10 @@ class YoyoCameraScene : public ::testing::Test {
     return X;
   }
 
-  mjModel* m_ = nullptr;
+  mjModel* m_ = nullptr;  // owned by the MuJoCo fixture
   mjData* d_ = nullptr;
   int camera_ = -1, centre_ = -1, drop_ = -1, spin_ = -1;
-  std::unique_ptr<render::Renderer> renderer_;
+  std::unique_ptr<render::Renderer> renderer_;  // freed before the model and data
   render::RgbImage rgb_;
   vision::CameraModel model_;
 };

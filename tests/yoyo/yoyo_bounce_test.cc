@@ -69,7 +69,7 @@ constexpr int kAfter = 100;        // samples after it: climbing, the string's j
 // energy) misses it by far more: e = 0.81 vs 0.82 is 4e-3 J.
 TEST_F(YoyoTest, EnergyLostAtTheBottomIsTheEquivalentRestitution) {
   const Yoyo& y = yoyo_;
-  const std::vector<Sample> run = RunFromWound(model_.get(), data_.get(), y, kDuration);
+  const std::vector<Sample> run = RunFromWound(model_, data_, y, kDuration);
   const std::vector<Bounce> bounces = FindBounces(run);
   ASSERT_GE(bounces.size(), 3u);
   const double e = y.Restitution();
@@ -91,7 +91,7 @@ TEST_F(YoyoTest, EnergyLostAtTheBottomIsTheEquivalentRestitution) {
 
 TEST_F(YoyoTest, ReboundsAndClimbsWithTheOtherWinding) {
   const Yoyo& y = yoyo_;
-  const std::vector<Sample> run = RunFromWound(model_.get(), data_.get(), y, kDuration);
+  const std::vector<Sample> run = RunFromWound(model_, data_, y, kDuration);
   const std::vector<Bounce> bounces = FindBounces(run);
   ASSERT_GE(bounces.size(), 3u);
   const double e2 = y.Restitution() * y.Restitution();
@@ -119,7 +119,7 @@ TEST_F(YoyoTest, ReboundsAndClimbsWithTheOtherWinding) {
     // apex: kinetic energy e^2 of what the fall from `start` gave
     const double expected = y.length - e2 * (y.length - start);
     // the energy test's tolerance 2 m g v h, as a height
-    const double tolerance = 2 * FirstBottomSpeed(model_.get(), y) * y.timestep;
+    const double tolerance = 2 * FirstBottomSpeed(model_, y) * y.timestep;
     std::printf("bottom %zu: fell from %.5f m, climbs to %.5f m below the hand, closed form %.5f (error %+.2e m)\n",
                 k + 1, start, run[apex].drop, expected, run[apex].drop - expected);
     EXPECT_NEAR(run[apex].drop, expected, tolerance);
@@ -135,13 +135,13 @@ TEST_F(YoyoTest, ReboundsAndClimbsWithTheOtherWinding) {
 // with v the fastest bottom speed (the first), 2.7 mm for the DS yo-yo at h = 1 ms.
 TEST_F(YoyoTest, StringLengthHoldsWithinTheSolverSoftness) {
   const Yoyo& y = yoyo_;
-  const std::vector<Sample> run = RunFromWound(model_.get(), data_.get(), y, kDuration);
+  const std::vector<Sample> run = RunFromWound(model_, data_, y, kDuration);
   double worst = -1, worst_time = 0, min_tension = 0;
   for (const Sample& s : run) {
     if (s.stretch > worst) worst = s.stretch, worst_time = s.time;
     min_tension = std::min(min_tension, s.tension);
   }
-  const double v = FirstBottomSpeed(model_.get(), y), h = y.timestep;
+  const double v = FirstBottomSpeed(model_, y), h = y.timestep;
   const double bound = 2 * (v + y.gravity * h) * h + y.steady_stretch;
   double taut_stretch = 0;  // during the first fall, long after the start
   for (const Sample& s : run) {

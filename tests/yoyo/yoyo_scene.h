@@ -1,58 +1,16 @@
-// The fixed-hand yo-yo scene (mjcf/yoyo/yoyo_fixed_hand.xml) for tests: loading with every
-// MuJoCo warning a test failure, the yo-yo's parameters read back from the compiled model,
-// and the closed forms of DATASHEET §6.3 computed from them.
+// The fixed-hand yo-yo scene (mjcf/yoyo/yoyo_fixed_hand.xml) for tests: a fixture on the
+// MuJoCo fixture (any undeclared MuJoCo warning fails the test), the yo-yo's parameters
+// read back from the compiled model, and the closed forms of DATASHEET §6.3 computed from them.
 #pragma once
 
 #include <cmath>
-#include <memory>
-#include <string>
-#include <vector>
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include "mujoco_fixture.h"
+
 namespace vlab::yoyo::testing {
-
-struct ModelDeleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-};
-struct DataDeleter {
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-using ModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
-using DataPtr = std::unique_ptr<mjData, DataDeleter>;
-
-/// Collects MuJoCo's runtime warning texts while alive (the handler is process-global;
-/// gtest runs the tests of one executable on one thread).
-class WarningCatcher {
- public:
-  WarningCatcher() : previous_(mju_user_warning) {
-    Texts().clear();
-    mju_user_warning = [](const char* text) { Texts().emplace_back(text); };
-  }
-  ~WarningCatcher() { mju_user_warning = previous_; }
-  WarningCatcher(const WarningCatcher&) = delete;
-  WarningCatcher& operator=(const WarningCatcher&) = delete;
-
-  /// Warning texts reported since construction, oldest first.
-  static std::vector<std::string>& Texts() {
-    static std::vector<std::string> texts;
-    return texts;
-  }
-
- private:
-  void (*previous_)(const char*);
-};
-
-/// Loads the fixed-hand scene; a load error or a compiler warning (both come back in
-/// mj_loadXML's error buffer) fails the calling test.
-inline ModelPtr LoadYoyoScene() {
-  const char* path = VLAB_SOURCE_DIR "/mjcf/yoyo/yoyo_fixed_hand.xml";
-  char error[1000] = "";
-  mjModel* m = mj_loadXML(path, nullptr, error, sizeof(error));
-  EXPECT_STREQ(error, "") << path << ": load error or compiler warning";
-  return ModelPtr(m);
-}
 
 /// The yo-yo as the compiled model has it (SI units), with the closed forms of DS §6.3.
 struct Yoyo {
@@ -149,58 +107,41 @@ inline double Energy(const Yoyo& y, const mjData* d) {
   return 0.5 * y.mass * v * v + 0.5 * y.spin_inertia * w * w + y.mass * y.gravity * height;
 }
 
-/// True once MuJoCo has counted a warning in `d`. On divergence MuJoCo also resets the
-/// data (time included), so every simulation loop stops on this rather than on d->time.
-inline bool Warned(const mjData* d) {
-  for (int w = 0; w < mjNWARNING; ++w) {
-    if (d->warning[w].number > 0) return true;
-  }
-  return false;
-}
-
-/// Steps `d` until `duration` s have passed since the call or MuJoCo warns; `observe(d)`
-/// runs after every step. Returns the number of steps taken.
+/// Steps `d` until `duration` s have passed since the call or MuJoCo warns (on divergence
+/// MuJoCo also resets the data, time included, so loops stop on the warning rather than on
+/// d->time); `observe(d)` runs after every step. Returns the number of steps taken.
 template <typename Observe>
 long StepFor(const mjModel* m, mjData* d, double duration, Observe observe) {
   const long steps = std::lround(duration / m->opt.timestep);
   long step = 0;
-  for (; step < steps && !Warned(d); ++step) {
+  for (; step < steps && !vlab::test::AnyWarning(*d); ++step) {
     mj_step(m, d);
     observe(d);
   }
   return step;
 }
 
-/// Test fixture: the scene loaded, data at qpos0 after mj_forward, the yo-yo read back;
-/// any MuJoCo warning (text or mjData counter) fails the test at tear-down.
-class YoyoTest : public ::testing::Test {
+/// Test fixture: the scene loaded, data at qpos0 after mj_forward, the yo-yo read back.
+class YoyoTest : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = LoadYoyoScene();
-    ASSERT_NE(model_, nullptr);
-    data_.reset(mj_makeData(model_.get()));
-    mj_forward(model_.get(), data_.get());
-    yoyo_ = ReadYoyo(model_.get(), data_.get());
-  }
-  void TearDown() override {
-    if (data_) {
-      for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(data_->warning[w].number, 0) << "MuJoCo warning " << w;
-    }
-    EXPECT_TRUE(WarningCatcher::Texts().empty()) << WarningCatcher::Texts().front();
+    model_ = LoadModel("mjcf/yoyo/yoyo_fixed_hand.xml");
+    data_ = MakeData(model_);
+    mj_forward(model_, data_);
+    yoyo_ = ReadYoyo(model_, data_);
   }
   /// Sets d, theta and their rates and runs mj_forward.
   void SetState(double drop, double spin, double drop_rate, double spin_rate) {
-    mj_resetData(model_.get(), data_.get());
+    mj_resetData(model_, data_);
     data_->qpos[yoyo_.drop_qpos] = drop;
     data_->qpos[yoyo_.spin_qpos] = spin;
     data_->qvel[yoyo_.drop_dof] = drop_rate;
     data_->qvel[yoyo_.spin_dof] = spin_rate;
-    mj_forward(model_.get(), data_.get());
+    mj_forward(model_, data_);
   }
 
-  WarningCatcher warnings_;
-  ModelPtr model_;
-  DataPtr data_;
+  const mjModel* model_ = nullptr;
+  mjData* data_ = nullptr;
   Yoyo yoyo_;
 };
 

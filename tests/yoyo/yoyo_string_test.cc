@@ -24,7 +24,7 @@ namespace {
 using YoyoModel = YoyoTest;
 
 TEST_F(YoyoModel, LoadsQuietlyWithTheDatasheetYoyo) {
-  const mjModel* m = model_.get();
+  const mjModel* m = model_;
   EXPECT_EQ(m->nq, 2);
   EXPECT_EQ(m->nv, 2);
   // DS §6.1 textbook yo-yo: m = 50 g, J = m R^2 / 2 with R = 35 mm, r_min = 8 mm, L = 1 m
@@ -49,7 +49,7 @@ TEST_F(YoyoModel, LoadsQuietlyWithTheDatasheetYoyo) {
   EXPECT_EQ(m->tendon_range[2 * minus + 1], yoyo_.length);
   EXPECT_EQ(m->tendon_range[2 * minus], -yoyo_.length);
   // qpos0 is wound up and taut, and the centre site hangs d below the string attachment
-  const mjData* d = data_.get();
+  const mjData* d = data_;
   EXPECT_NEAR(Stretch(yoyo_, d), 0.0, 1e-9);
   const int attach = mj_name2id(m, mjOBJ_SITE, "yoyo_string_attach");
   const int centre = mj_name2id(m, mjOBJ_SITE, "yoyo_centre");
@@ -71,8 +71,8 @@ TEST_F(YoyoModel, LoadsQuietlyWithTheDatasheetYoyo) {
   }
   // one second from each keyframe without a runtime warning (checked at tear-down)
   for (int key = 0; key < m->nkey; ++key) {
-    mj_resetDataKeyframe(m, data_.get(), key);
-    StepFor(m, data_.get(), 1.0, [](const mjData*) {});
+    mj_resetDataKeyframe(m, data_, key);
+    StepFor(m, data_, 1.0, [](const mjData*) {});
   }
 }
 
@@ -113,7 +113,7 @@ double FitAcceleration(const Descent& run) {
 }
 
 TEST_F(YoyoTest, DescentAccelerationIsTheClosedForm) {
-  const Descent run = RunDescent(model_.get(), data_.get(), yoyo_);
+  const Descent run = RunDescent(model_, data_, yoyo_);
   ASSERT_GT(run.time.size(), 1000u);
   const double measured = FitAcceleration(run), expected = yoyo_.Descent();
   const double error = (measured - expected) / expected;
@@ -126,7 +126,7 @@ TEST_F(YoyoTest, DescentAccelerationIsTheClosedForm) {
 }
 
 TEST_F(YoyoTest, StringTensionIsTheClosedForm) {
-  const Descent run = RunDescent(model_.get(), data_.get(), yoyo_);
+  const Descent run = RunDescent(model_, data_, yoyo_);
   ASSERT_GT(run.tension.size(), 1000u);
   const double expected = yoyo_.Tension();
   double worst = 0, sum = 0;
@@ -153,7 +153,7 @@ TEST_F(YoyoTest, SlackStringExertsNoForceAndTakesUpPlastically) {
   const double h = y.timestep;
   double taut_again = -1, worst_free_fall = 0;
   int slack_steps = 0;
-  StepFor(model_.get(), data_.get(), slack_time + 0.3, [&](const mjData* d) {
+  StepFor(model_, data_, slack_time + 0.3, [&](const mjData* d) {
     const double t = d->time - h;  // sensors, qacc and nefc belong to the step's start
     const double force = Tension(y, d);
     EXPECT_GE(force, 0.0) << "the string pushes at t " << t;
@@ -176,13 +176,13 @@ TEST_F(YoyoTest, SlackStringExertsNoForceAndTakesUpPlastically) {
   const double expected = y.Descent() / y.gravity * (up + y.gravity * t);
   const double measured = data_->qvel[y.drop_dof];
   std::printf("after take-up: d' %.6f m/s at %.3f s, closed form %.6f, relative error %.2e; tension %.6f N "
-              "(closed form %.6f)\n", measured, t, expected, (measured - expected) / expected, Tension(y, data_.get()),
+              "(closed form %.6f)\n", measured, t, expected, (measured - expected) / expected, Tension(y, data_),
               y.Tension());
   // the momentum argument holds step by step (constraint impulses along (1, r), gravity
   // exactly h m g per step), so the timing of the jerk does not matter; what is left is
   // the string's stretch rate d' + r theta', which the overdamped limit has removed
   EXPECT_NEAR(measured, expected, 1e-4 * std::abs(expected));
-  EXPECT_NEAR(Tension(y, data_.get()), y.Tension(), 0.01 * y.Tension());
+  EXPECT_NEAR(Tension(y, data_), y.Tension(), 0.01 * y.Tension());
 }
 
 }  // namespace

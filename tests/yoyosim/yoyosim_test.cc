@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "core/core_errors.h"
-#include "core/core_mujoco.h"
+#include "mujoco_fixture.h"
 #include "yoyosim/yoyosim.h"
 
 namespace vlab::yoyosim {
@@ -40,12 +40,13 @@ struct Servo {
   }
 };
 
-class YoyoSimTest : public ::testing::Test {
+class YoyoSimTest : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
     SimConfig config;
     config.scene = kScene;
     sim_ = YoyoSim::Create(config);
+    WatchData(sim_->data());
     const mjModel* m = sim_->model();
     const int drop = mj_name2id(m, mjOBJ_JOINT, "yoyo_drop");
     drop_dof_ = m->jnt_dofadr[drop];
@@ -53,11 +54,6 @@ class YoyoSimTest : public ::testing::Test {
     const YoyoParams& y = sim_->yoyo();
     share_ = y.mass * y.axle_radius * y.axle_radius /
              (y.mass * y.axle_radius * y.axle_radius + y.spin_inertia);  // a / g on a taut string
-  }
-  void TearDown() override {
-    for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(sim_->data()->warning[w].number, 0) << vlab::WarningName(w);
-    const auto texts = vlab::TakeMujocoWarningTexts();
-    EXPECT_TRUE(texts.empty()) << texts.front();
   }
   /// Runs n periods, each with the set-point `at(t_end)` of the period's end (world).
   template <typename At>
