@@ -47,18 +47,27 @@ std::vector<CheckResult> CheckSet::Results() const {
     r.samples = a.count;
     if (a.count == 0) {
       r.value = std::numeric_limits<double>::quiet_NaN();
-    } else if (c.reduce == "max") {
-      r.value = a.max;
-    } else if (c.reduce == "min") {
-      r.value = a.min;
-    } else if (c.reduce == "mean") {
-      r.value = a.sum / a.count;
-    } else if (c.reduce == "rms") {
-      r.value = std::sqrt(a.sum_sq / a.count);
-    } else if (c.reduce == "final") {
-      r.value = a.last;
     } else {
-      r.value = a.max_abs;
+      switch (c.reduce) {
+        case Reduce::kMax:
+          r.value = a.max;
+          break;
+        case Reduce::kMin:
+          r.value = a.min;
+          break;
+        case Reduce::kMean:
+          r.value = a.sum / a.count;
+          break;
+        case Reduce::kRms:
+          r.value = std::sqrt(a.sum_sq / a.count);
+          break;
+        case Reduce::kFinal:
+          r.value = a.last;
+          break;
+        case Reduce::kMaxAbs:
+          r.value = a.max_abs;
+          break;
+      }
     }
     r.pass = std::isfinite(r.value) && r.value >= c.min && r.value <= c.max;
     results.push_back(r);

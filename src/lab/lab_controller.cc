@@ -21,7 +21,7 @@ using control::RobotModel;
 
 control::TimeScaling Timing(const ControllerConfig& c) {
   control::TimeScaling t;
-  t.type = c.timing == "trapezoidal" ? control::TimeScalingType::kTrapezoidal : control::TimeScalingType::kQuintic;
+  t.type = c.timing;
   return t;
 }
 
@@ -210,9 +210,9 @@ class JointPdBuiltin final : public Controller {
 
 std::unique_ptr<Controller> MakeController(const mjModel* m, const ControllerConfig& c,
                                            const std::vector<std::string>& joints, const bridge::ArmState& initial) {
-  if (c.type == "task_space") return std::make_unique<TaskSpaceBuiltin>(m, c, joints, initial);
-  if (c.type == "joint_pd") return std::make_unique<JointPdBuiltin>(m, c, joints, initial);
-  Fail(c, "unknown type '" + c.type + "'");
+  if (c.type == ControllerType::kTaskSpace) return std::make_unique<TaskSpaceBuiltin>(m, c, joints, initial);
+  if (c.type == ControllerType::kJointPd) return std::make_unique<JointPdBuiltin>(m, c, joints, initial);
+  Fail(c, std::string("no built-in controller of type '") + ControllerTypeName(c.type) + "'");
 }
 
 }  // namespace vlab::lab

@@ -52,7 +52,7 @@ std::vector<std::string> ExpandCommand(const std::vector<std::string>& command,
 }
 
 bool StartsExternalController(const Scenario& scenario, bool serving) {
-  return scenario.controller.type == "external" && !serving;
+  return scenario.controller.type == ControllerType::kExternal && !serving;
 }
 
 BridgeOptions ExternalBridgeOptions(const Scenario& scenario) {

@@ -87,7 +87,7 @@ std::unique_ptr<ImageOutputs> ImageOutputs::Create(const mjModel* m, const std::
         throw InputError(key + "video: '" + c.video + "' is written by another output too");
       }
     }
-    const render::Profile profile = render::ProfileFromName(c.profile);
+    const render::Profile profile = c.profile;
     auto& size = sizes[profile];
     size = {std::max(size.first, c.width), std::max(size.second, c.height)};
     impl->outputs.push_back(std::move(o));
@@ -101,7 +101,7 @@ std::unique_ptr<ImageOutputs> ImageOutputs::Create(const mjModel* m, const std::
     impl->renderers[profile] = render::Renderer::Create(m, options);
   }
   for (Impl::Output& o : impl->outputs) {
-    o.renderer = impl->renderers.at(render::ProfileFromName(o.config.profile)).get();
+    o.renderer = impl->renderers.at(o.config.profile).get();
     o.rgb.width = o.depth.width = o.seg.width = o.config.width;
     o.rgb.height = o.depth.height = o.seg.height = o.config.height;
   }
@@ -168,7 +168,7 @@ nlohmann::json ImageOutputs::Summary() const {
     outputs.push_back({{"camera", c.camera},
                        {"width", c.width},
                        {"height", c.height},
-                       {"profile", c.profile},
+                       {"profile", render::ProfileName(c.profile)},
                        {"every_s", c.every_s},
                        {"frames", o.frames},
                        {"files", files},

@@ -19,7 +19,7 @@ std::string Verdict(const RunResult& r, bool diverged) {
   }
   for (const auto& c : r.checks) {
     if (!c.pass) {
-      return "check '" + c.config.name + "' failed: " + c.config.reduce + "(" + c.config.signal +
+      return "check '" + c.config.name + "' failed: " + ReduceName(c.config.reduce) + std::string("(") + c.config.signal +
              ") = " + FormatDouble(c.value);
     }
   }

@@ -91,9 +91,9 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
 
   impl->ResetState();
   const ControllerConfig& cc = scenario.controller;
-  if (cc.type == "external") {
+  if (cc.type == ControllerType::kExternal) {
     ExpandCommand(cc.command, CommandValues(scenario, {}), cc.where);  // placeholders checked now
-  } else if (cc.type != "none") {
+  } else if (cc.type != ControllerType::kNone) {
     for (Device* device : impl->device_ptrs) {
       if (device->name() == cc.arm) impl->controller_arm = dynamic_cast<SimArm*>(device);
     }

@@ -59,8 +59,9 @@ ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& nod
                            o.video.compare(o.video.size() - 4, 4, ".mp4") != 0)) {
     r.Fail("video", "must be a file name ending in .mp4, written in the output folder");
   }
-  o.profile = r.String("profile", o.profile);
-  if (o.profile != "fast" && o.profile != "quality") r.Fail("profile", "must be fast or quality");
+  const std::string profile = r.String("profile", "quality");
+  if (profile != "fast" && profile != "quality") r.Fail("profile", "must be fast or quality");
+  o.profile = render::ProfileFromName(profile);
   if (!o.png && !o.depth && !o.segmentation && o.video.empty()) r.Fail("png", "nothing to write: png, depth, segmentation and video are all off");
   r.Finish();
   return o;
@@ -69,27 +70,30 @@ ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& nod
 ControllerConfig ReadController(MapReader r) {
   ControllerConfig c;
   c.where = YamlWhere(r.file(), r.node());
-  c.type = r.String("type", c.type);
-  if (c.type == "none") {
+  const std::string type = r.String("type", "none");
+  if (type == "none") {
     r.Finish();
     return c;
   }
-  if (c.type == "external") {
+  if (type == "external") {
+    c.type = ControllerType::kExternal;
     c.command = r.Strings("command", {});
     if (c.command.empty() || c.command[0].empty()) r.Fail("command", "expected [PROGRAM, ARGUMENT, ...]");
     r.Finish();
     return c;
   }
   c.arm = r.String("arm");
-  c.timing = r.String("timing", c.timing);
-  if (c.timing != "quintic" && c.timing != "trapezoidal") r.Fail("timing", "must be quintic or trapezoidal");
+  const std::string timing = r.String("timing", "quintic");
+  if (timing != "quintic" && timing != "trapezoidal") r.Fail("timing", "must be quintic or trapezoidal");
+  c.timing = timing == "trapezoidal" ? control::TimeScalingType::kTrapezoidal : control::TimeScalingType::kQuintic;
   c.start_s = r.Number("start", c.start_s);
   if (c.start_s < 0) r.Fail("start", "must be >= 0 s");
   c.base_body = r.String("base_body", c.base_body);
   c.tip_site = r.String("tip_site");
   const YAML::Node waypoints = r.Sequence("waypoints");
   if (waypoints.size() == 0) r.Fail("waypoints", "needs at least one waypoint");
-  if (c.type == "task_space") {
+  if (type == "task_space") {
+    c.type = ControllerType::kTaskSpace;
     MapReader gains = r.Map("gains");
     c.k_position = gains.Number("position", c.k_position);
     c.k_orientation = gains.Number("orientation", c.k_orientation);
@@ -110,7 +114,8 @@ ControllerConfig ReadController(MapReader r) {
       w.Finish();
       c.cartesian.push_back(wp);
     }
-  } else if (c.type == "joint_pd") {
+  } else if (type == "joint_pd") {
+    c.type = ControllerType::kJointPd;
     MapReader gains = r.Map("gains");
     c.kp = gains.Numbers("kp", {});
     c.kd = gains.Numbers("kd", {});
@@ -127,7 +132,7 @@ ControllerConfig ReadController(MapReader r) {
       c.joint.push_back(wp);
     }
   } else {
-    r.Fail("type", "unknown controller type '" + c.type + "' (known: none, joint_pd, task_space, external)");
+    r.Fail("type", "unknown controller type '" + type + "' (known: none, joint_pd, task_space, external)");
   }
   r.Finish();
   return c;
@@ -139,11 +144,8 @@ CheckConfig ReadCheck(const std::string& file, const YAML::Node& node, const std
   c.where = YamlWhere(file, node);
   c.name = r.String("name");
   c.signal = r.String("signal");
-  c.reduce = r.String("reduce", c.reduce);
-  static const char* kReductions[] = {"max", "min", "mean", "rms", "final", "max_abs"};
-  bool known = false;
-  for (const char* k : kReductions) known = known || c.reduce == k;
-  if (!known) r.Fail("reduce", "unknown reduction '" + c.reduce + "' (known: max, min, mean, rms, final, max_abs)");
+  const std::string reduce = r.String("reduce", "max");
+  if (!ReduceFromName(reduce, &c.reduce)) r.Fail("reduce", "unknown reduction '" + reduce + "' (known: max, min, mean, rms, final, max_abs)");
   c.min = r.Number("min", c.min);
   c.max = r.Number("max", c.max);
   if (!r.Has("min") && !r.Has("max")) r.Fail("max", "a check needs a bound: min, max or both");
@@ -162,6 +164,48 @@ std::string ResolveScenarioPath(const std::string& arg) {
     if (fs::is_regular_file(arg + ext)) return arg + ext;
   }
   return arg;
+}
+
+const char* ReduceName(Reduce reduce) {
+  switch (reduce) {
+    case Reduce::kMax:
+      return "max";
+    case Reduce::kMin:
+      return "min";
+    case Reduce::kMean:
+      return "mean";
+    case Reduce::kRms:
+      return "rms";
+    case Reduce::kFinal:
+      return "final";
+    case Reduce::kMaxAbs:
+      return "max_abs";
+  }
+  return "?";
+}
+
+bool ReduceFromName(const std::string& name, Reduce* reduce) {
+  for (Reduce k : {Reduce::kMax, Reduce::kMin, Reduce::kMean, Reduce::kRms, Reduce::kFinal, Reduce::kMaxAbs}) {
+    if (name == ReduceName(k)) {
+      *reduce = k;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* ControllerTypeName(ControllerType type) {
+  switch (type) {
+    case ControllerType::kNone:
+      return "none";
+    case ControllerType::kJointPd:
+      return "joint_pd";
+    case ControllerType::kTaskSpace:
+      return "task_space";
+    case ControllerType::kExternal:
+      return "external";
+  }
+  return "?";
 }
 
 ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode) {

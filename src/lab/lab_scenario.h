@@ -14,10 +14,22 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "control/time_scaling.h"
 #include "core/core_clock.h"
 #include "lab/devices/device_config.h"
+#include "render/renderer.h"
 
 namespace vlab::lab {
+
+/// The built-in controllers (the `controller.type` key).
+enum class ControllerType { kNone, kJointPd, kTaskSpace, kExternal };
+/// How a check reduces its signal to one value (the `reduce` key).
+enum class Reduce { kMax, kMin, kMean, kRms, kFinal, kMaxAbs };
+/// "max", "min", "mean", "rms", "final", "max_abs"; and back (false for anything else).
+const char* ReduceName(Reduce reduce);
+bool ReduceFromName(const std::string& name, Reduce* reduce);
+/// "none", "joint_pd", "task_space", "external".
+const char* ControllerTypeName(ControllerType type);
 
 struct CartesianWaypoint {
   Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< m
@@ -31,7 +43,7 @@ struct JointWaypoint {
 };
 
 struct ControllerConfig {
-  std::string type = "none";  ///< none | joint_pd | task_space | external
+  ControllerType type = ControllerType::kNone;
   std::string arm;            ///< arm device it commands
   std::string where;
   std::string base_body = "world";  ///< chain from this body ...
@@ -50,7 +62,7 @@ struct ControllerConfig {
   // and {duration} expanded (lab_external.h); `vlab serve` does not start it
   std::vector<std::string> command;
   // joint_pd and task_space
-  std::string timing = "quintic";  ///< quintic | trapezoidal
+  control::TimeScalingType timing = control::TimeScalingType::kQuintic;  ///< quintic | trapezoidal
   double start_s = 0.0;            ///< hold until this time, then follow the path
 };
 
@@ -58,7 +70,7 @@ struct ControllerConfig {
 struct CheckConfig {
   std::string name;
   std::string signal;          ///< a log column name
-  std::string reduce = "max";  ///< max | min | mean | rms | final | max_abs
+  Reduce reduce = Reduce::kMax;
   double min = -std::numeric_limits<double>::infinity();  ///< value must be >= min
   double max = std::numeric_limits<double>::infinity();   ///< value must be <= max
   double from_s = 0.0;
@@ -76,7 +88,7 @@ struct ImageOutputConfig {
   bool depth = false;            ///< CAMERA/depth_NNNNNN.png: 16-bit, millimetres
   bool segmentation = false;     ///< CAMERA/seg_NNNNNN.png: 16-bit, geom id + 1 (0: background)
   std::string video;             ///< MP4 file name in the output folder ("": none)
-  std::string profile = "quality";  ///< fast | quality
+  render::Profile profile = render::Profile::kQuality;
   std::string where;
 };
 

@@ -37,7 +37,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
     if (std::isfinite(c.config.min)) bound["min"] = c.config.min;
     if (std::isfinite(c.config.max)) bound["max"] = c.config.max;
     json window = {{"from", c.config.from_s}, {"to", number(c.config.to_s)}};
-    checks.push_back({{"name", c.config.name}, {"signal", c.config.signal}, {"reduce", c.config.reduce},
+    checks.push_back({{"name", c.config.name}, {"signal", c.config.signal}, {"reduce", ReduceName(c.config.reduce)},
                       {"value", number(c.value)}, {"bound", bound}, {"window_s", window},
                       {"samples", c.samples}, {"pass", c.pass}});
   }
@@ -81,7 +81,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"checks", checks},
       {"clock_stats", clock},
       {"bridge", {{"devices", served}, {"command_latency_s", Distribution(r.latencies_s)}}},
-      {"controller", {{"type", sc.controller.type},
+      {"controller", {{"type", ControllerTypeName(sc.controller.type)},
                       {"program", r.controller.program},
                       {"outcome", r.controller.outcome}}},
       {"warnings", warnings},

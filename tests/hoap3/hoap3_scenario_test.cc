@@ -97,7 +97,7 @@ TEST(Hoap3ScenarioTest, TheArmServoHoldsTheStandOnTheFsrs) {
   ASSERT_FALSE(r.checks.empty());
   for (const CheckResult& c : r.checks) {
     EXPECT_TRUE(c.pass) << c.config.name << " = " << c.value;
-    std::cout << "  " << c.config.name << " (" << c.config.reduce << " " << c.config.signal << ") = " << c.value
+    std::cout << "  " << c.config.name << " (" << ReduceName(c.config.reduce) << " " << c.config.signal << ") = " << c.value
               << "\n";
   }
   EXPECT_TRUE(r.warnings.empty());

@@ -28,7 +28,7 @@ CheckConfig Check(const std::string& name, const std::string& reduce, double fro
   CheckConfig c;
   c.name = name;
   c.signal = "x";
-  c.reduce = reduce;
+  EXPECT_TRUE(ReduceFromName(reduce, &c.reduce)) << reduce;
   c.from_s = from_s;
   c.to_s = to_s;
   c.where = "case.yaml:12";
@@ -61,7 +61,7 @@ TEST(CheckSetTest, ReductionsEqualClosedForms) {
     EXPECT_TRUE(c.pass) << c.config.name;  // no bounds: any finite value passes
     EXPECT_EQ(c.config.name.size(), 1u);   // the config travels with its result
   }
-  EXPECT_EQ(r[3].config.reduce, "rms");
+  EXPECT_EQ(r[3].config.reduce, Reduce::kRms);
 }
 
 TEST(CheckSetTest, WindowIsInclusiveAndRespected) {

@@ -78,7 +78,7 @@ TEST(ScenarioTest, ParsesValidFile) {
   EXPECT_NEAR((R.col(0) - Eigen::Vector3d::UnitY()).norm(), 0, 1e-12);
   EXPECT_NEAR((R.col(2) + Eigen::Vector3d::UnitZ()).norm(), 0, 1e-12);
   ASSERT_EQ(s.checks.size(), 1u);
-  EXPECT_EQ(s.checks[0].reduce, "final");
+  EXPECT_EQ(s.checks[0].reduce, Reduce::kFinal);
   EXPECT_DOUBLE_EQ(s.checks[0].from_s, 1.0);
 }
 
