@@ -118,6 +118,7 @@ class Lab {
 
  private:
   struct Impl;
+  friend class RunSession;  // one run of the lab (lab_run_session.h)
   explicit Lab(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

@@ -1,0 +1,264 @@
+#include "lab/lab_run_session.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "core/core_mujoco.h"
+#include "lab/lab_plot.h"
+
+namespace vlab::lab {
+
+namespace {
+
+// how long an external controller gets to exit after SIGTERM at the end of a run
+constexpr double kControllerGrace_s = 2.0;
+
+double Seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+std::string ControllerFailure(ExternalController& c, double t) {
+  const std::string last = c.LastLogLine();
+  return "controller '" + c.program() + "' ended with " + c.Outcome() + " (t = " + FormatDouble(t) + " s)" +
+         (last.empty() ? "" : ": " + last);
+}
+
+// The sim device's state at period k.
+bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, const LabBridge* bridge) {
+  bridge::SimStateMsg m;
+  m.sim_time = t;
+  m.mode = paused ? 1 : 0;
+  m.clock = static_cast<int>(clock.mode() == ClockMode::kLockstep   ? bridge::ClockCode::kLockstep
+                             : clock.mode() == ClockMode::kRealtime ? bridge::ClockCode::kRealtime
+                                                                    : bridge::ClockCode::kFast);
+  m.periods = static_cast<double>(k);
+  m.refused_packets = bridge ? static_cast<double>(bridge->refused_total()) : 0.0;
+  m.missed_deadlines = static_cast<double>(clock.stats().missed_deadlines);
+  m.realtime_factor = clock.factor();
+  m.max_lateness = clock.stats().max_lateness_s;
+  return m;
+}
+
+}  // namespace
+
+RunSession::RunSession(Lab::Impl& lab, const RunOptions& options)
+    : s_(lab), options_(options), m_(lab.model.get()), d_(lab.data.get()),
+      period_(lab.scenario.control_period_s), periods_(std::lround(lab.scenario.duration_s / period_)),
+      t_start_(WallClock::now()) {}
+
+// the MuJoCo error cleanup (the staging folder's removal) ends with the run, however it ends
+RunSession::~RunSession() { SetMujocoErrorCleanup(nullptr); }
+
+void RunSession::Prepare() {
+  InstallMujocoHandlers();
+  TakeMujocoWarningTexts();
+  s_.ResetState();
+  for (auto& device : s_.devices) {
+    if (OwnTransport* t = device->own_transport()) t->Unserve();  // MakeBridge serves them again when serving
+  }
+  // a scenario's external controller: vlab run serves on loopback and starts it
+  const Scenario& sc = s_.scenario;
+  external_ = StartsExternalController(sc, options_.serve != nullptr);
+  if (external_) external_serve_ = ExternalBridgeOptions(sc);
+  const BridgeOptions* serve = external_ ? &external_serve_ : options_.serve;
+  const ClockMode mode = external_ ? ExternalClock(sc, options_.clock) : options_.clock.value_or(sc.clock);
+  clock_ = MakeClock(ScenarioClock(sc, mode), periods_);
+  result_.clock = clock_->mode();
+
+  // checks first: a bad signal name is bad input, and must leave nothing behind
+  checks_ = std::make_unique<CheckSet>(sc.checks, s_.columns);
+  for (const PlotConfig& plot : sc.outputs.plots) CheckPlotColumns(plot, s_.columns);
+  // image outputs: cameras and sizes checked against the scene before anything is written
+  if (!options_.out_dir.empty() && !sc.outputs.images.empty()) {
+    images_ = ImageOutputs::Create(m_, sc.outputs.images, sc.scene, period_);
+  }
+  // the wire: bind every served device before anything is written
+  if (serve) {
+    bridge_ = s_.MakeBridge(*serve, clock_->name());
+    if (options_.on_serving && !external_) options_.on_serving(bridge_->Devices());
+  }
+  // outputs: staging folder (removed on a MuJoCo error too), log
+  if (!options_.out_dir.empty()) {
+    out_ = OutputDir::Create(options_.out_dir);
+    SetMujocoErrorCleanup([staging = out_->File("")] {
+      std::error_code ec;
+      std::filesystem::remove_all(staging, ec);
+    });
+    if (sc.outputs.log) log_ = CsvLog::Open(out_->File("log.csv"), s_.columns);
+    if (images_) images_->Open(*out_);
+  }
+  if (external_) {
+    const std::string log_path = out_ ? out_->File("controller.log") : "";
+    controller_ = ExternalController::Start(
+        ExpandCommand(sc.controller.command, CommandValues(sc, bridge_->Devices(), out_ ? out_->File("") : ""),
+                      sc.controller.where),
+        log_path);
+    bridge_->WatchPeerExit(controller_->exit_fd());
+  }
+  if (options_.record) {
+    result_.recording.controls.reserve(static_cast<std::size_t>(periods_) * s_.steps_per_period * m_->nu);
+  }
+  row_.assign(s_.columns.size(), 0.0);
+  controller_columns_ = row_.data() + s_.columns.size() - s_.controller_columns;
+}
+
+void RunSession::EmitRow(double t) {
+  s_.WriteRow(t, row_);
+  if (log_) log_->Append(row_.data());
+  checks_->Add(t, row_.data());
+}
+
+void RunSession::Publish(long k) {
+  if (!bridge_) return;
+  if (s_.sim) s_.sim->set_state(SimState(k * period_, paused_, *clock_, k, bridge_.get()));
+  bridge_->Publish(k, k * period_);
+}
+
+void RunSession::RenderAfterPublish(double t) {
+  for (auto& device : s_.devices) device->AfterPublish(d_);
+  if (images_) images_->Observe(t, d_);
+}
+
+void RunSession::Start() {
+  // row 0: the initial state, with the controller's view of it
+  if (s_.controller) s_.RunController(0.0, options_, &replay_at_, &result_, controller_columns_);
+  EmitRow(0.0);
+  if (options_.observe) options_.observe(0.0, m_, d_);
+  for (auto& device : s_.devices) device->BeforeRun(d_);
+  for (auto& device : s_.devices) device->Deliver(0.0, d_);
+  Publish(0);
+  RenderAfterPublish(0.0);
+  t_loop_ = t_progress_ = WallClock::now();
+}
+
+bool RunSession::Commands(long k, double t_k) {
+  // the clock lets the period begin; commands: the newest of each device
+  const PeriodStart start = clock_->BeginPeriod(k, bridge_.get());
+  if (controller_ && bridge_->peer_gone() && controller_->Exited() && !controller_->Succeeded()) {
+    result_.failure = ControllerFailure(*controller_, t_k);
+    return false;
+  }
+  if (start == PeriodStart::kFail) {
+    result_.failure = "lockstep: no command answering period " + std::to_string(k) + " (t = " + FormatDouble(t_k) +
+                      " s) within " + FormatDouble(s_.scenario.lockstep.timeout_s) + " s";
+    return false;
+  }
+  if (bridge_) {
+    if (start == PeriodStart::kTimedOut) {
+      bridge_->NoteTimeout(s_.scenario.lockstep.release_after);
+    } else {
+      bridge_->NoteAnswered();
+    }
+    bridge_->ApplyCommands(k);
+  }
+  if (s_.controller) {
+    if (k > 0) s_.RunController(t_k, options_, &replay_at_, &result_, controller_columns_);
+    s_.controller_arm->Command(s_.controller_command);
+  }
+  for (auto& dev : s_.devices) dev->BeginPeriod(*d_, t_k);  // point devices command their arms
+  return true;
+}
+
+bool RunSession::Period() {
+  // period k runs from t_k = k T to t_k+1; times are exact multiples of T
+  const double t_k = k_ * period_;
+  const double t_next = (k_ + 1) * period_;
+  if (options_.interrupt && *options_.interrupt) {
+    throw std::runtime_error("interrupted at t = " + FormatDouble(t_k) + " s; nothing written");
+  }
+  // 0. the sim device: pause, resume, step, reset, pace
+  if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
+  if (paused_) {
+    bridge_->Poll(0.02);
+    return true;
+  }
+  // 1. the clock, the commands
+  if (!Commands(k_, t_k)) return false;
+  // 2. physics: the servo acts between the two halves of every step
+  for (int i = 0; i < s_.steps_per_period && !diverged_; ++i) {
+    const double t_step = d_->time;
+    mj_step1(m_, d_);
+    for (auto& dev : s_.devices) dev->Actuate(*d_, m_->opt.timestep);
+    if (options_.record) result_.recording.controls.insert(result_.recording.controls.end(), d_->ctrl, d_->ctrl + m_->nu);
+    mj_step2(m_, d_);
+    for (auto& dev : s_.devices) dev->AfterStep(*d_, m_->opt.timestep);
+    ++result_.steps;
+    diverged_ = warnings_.Update(*d_, t_step);
+  }
+  if (diverged_) return false;
+  // 3. sample devices, log, publish the state that closes the period
+  for (auto& dev : s_.devices) dev->Sample(*d_, t_next);
+  EmitRow(t_next);
+  if (options_.observe) options_.observe(t_next, m_, d_);
+  for (auto& dev : s_.devices) dev->Deliver(t_next, d_);
+  ++k_;
+  if (steps_left_ > 0 && --steps_left_ == 0) paused_ = true;
+  Publish(k_);
+  RenderAfterPublish(t_next);
+  if (options_.progress && (k_ & 63) == 0 && Seconds(t_progress_, WallClock::now()) > 0.1) {
+    options_.progress(static_cast<double>(k_) / periods_);
+    t_progress_ = WallClock::now();
+  }
+  return true;
+}
+
+RunResult RunSession::Finish() {
+  result_.loop_wall_s = Seconds(t_loop_, WallClock::now());
+  if (controller_) {
+    controller_->Stop(kControllerGrace_s);
+    if (!controller_->Succeeded() && result_.failure.empty()) {
+      result_.failure = ControllerFailure(*controller_, k_ * period_);
+    }
+    result_.controller = {controller_->program(), controller_->Outcome()};
+  }
+  result_.periods = k_;
+  result_.sim_time_s = k_ * period_;
+  TakeMujocoWarningTexts();  // their content is in the reports: mju_warningText
+  result_.warnings = warnings_.Reports(s_.scenario.allow_warnings);
+  result_.checks = checks_->Results();
+  if (result_.failure.empty()) result_.failure = Verdict(result_, diverged_);
+  result_.exit_code = result_.failure.empty() ? 0 : 1;
+  result_.clock_stats = clock_->stats();
+  if (bridge_) {
+    result_.served = bridge_->Devices();
+    result_.latencies_s = bridge_->latencies();
+  }
+  if (out_) WriteOutputs();
+  result_.total_wall_s = Seconds(t_start_, WallClock::now());
+  return result_;
+}
+
+void RunSession::WriteOutputs() {
+  if (log_) log_->Close();
+  if (images_) images_->Finish();
+  // a plot that cannot be drawn fails the run, and the rest is written; a plot of a CSV
+  // that an external controller writes into {out} is skipped where the lab did not start
+  // the controller (vlab serve: one started by hand has no {out}) and the file is not there
+  for (const PlotConfig& plot : s_.scenario.outputs.plots) {
+    if (!controller_ && plot.csv != "log.csv" && !std::filesystem::exists(out_->File(plot.csv))) {
+      result_.plots_skipped.push_back(plot.file + ": no " + plot.csv +
+                                      " (written by an external controller that vlab run starts)");
+      continue;
+    }
+    try {
+      WritePlot(out_->File(""), plot);
+    } catch (const std::runtime_error& e) {
+      if (result_.failure.empty()) result_.failure = e.what();
+      result_.exit_code = 1;
+    }
+  }
+  result_.total_wall_s = Seconds(t_start_, WallClock::now());
+  nlohmann::json summary_json = SummaryJson(s_.scenario, m_, result_);
+  if (images_) summary_json["images"] = images_->Summary();
+  std::ofstream summary(out_->File("summary.json"));
+  summary << summary_json.dump(2) << "\n";
+  summary.close();
+  if (!summary) throw std::runtime_error("summary '" + out_->File("summary.json") + "': write failed");
+  out_->Commit();
+}
+
+}  // namespace vlab::lab

@@ -1,0 +1,85 @@
+// One run of a lab (Lab::Run), in three parts that each fit on a screen:
+// Prepare (clock, checks, image outputs, the wire, the output folder, an
+// external controller; nothing is written before all of it is valid), Period
+// (one control period: the sim device, the clock, commands, physics, samples,
+// log row, publish) and Finish (the controller's verdict, checks, plots,
+// summary, the output folder committed). Not a public header.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "core/core_clock.h"
+#include "lab/lab_bridge.h"
+#include "lab/lab_checks.h"
+#include "lab/lab_external.h"
+#include "lab/lab_images.h"
+#include "lab/lab_log.h"
+#include "lab/lab_output.h"
+#include "lab/lab_run_watch.h"
+#include "lab/lab_runner.h"
+#include "lab/lab_runner_impl.h"
+
+namespace vlab::lab {
+
+class RunSession {
+ public:
+  RunSession(Lab::Impl& lab, const RunOptions& options);
+  ~RunSession();
+
+  /// Resets the lab and makes everything the run needs; throws InputError
+  /// (nothing written) for bad input.
+  void Prepare();
+  /// Row 0 and the states of t = 0.
+  void Start();
+  /// Runs period k (or waits while paused). False when the run must stop
+  /// early: a failure (result().failure) or a divergence.
+  bool Period();
+  /// Ends the run: the controller's verdict, the result, and the output folder.
+  RunResult Finish();
+
+  long periods() const { return periods_; }
+  long period_index() const { return k_; }
+
+ private:
+  using WallClock = std::chrono::steady_clock;
+  void EmitRow(double t);
+  void Publish(long k);
+  // what renders from the state at period end t without being part of the period's states:
+  // the camera frames delivered later, the image outputs; after the states went out, so that
+  // rendering does not delay them (the state is still that of t: the next period has not begun)
+  void RenderAfterPublish(double t);
+  // the commands of period k: the wire's, the built-in controller's; false on a failure
+  bool Commands(long k, double t_k);
+  void WriteOutputs();
+
+  Lab::Impl& s_;
+  const RunOptions& options_;
+  const mjModel* m_;
+  mjData* d_;
+  double period_;
+  long periods_;
+  RunResult result_;
+  WallClock::time_point t_start_, t_loop_, t_progress_;
+  bool external_ = false;
+  BridgeOptions external_serve_;
+  std::unique_ptr<Clock> clock_;
+  std::unique_ptr<CheckSet> checks_;
+  std::unique_ptr<ImageOutputs> images_;
+  std::unique_ptr<LabBridge> bridge_;
+  std::unique_ptr<OutputDir> out_;
+  std::unique_ptr<CsvLog> log_;
+  std::unique_ptr<ExternalController> controller_;
+  std::vector<double> row_;
+  double* controller_columns_ = nullptr;
+  std::size_t replay_at_ = 0;
+  WarningWatch warnings_;
+  bool paused_ = false;
+  long steps_left_ = -1;  // periods to run before pausing again (sim "step N"); -1: not stepping
+  bool diverged_ = false;
+  long k_ = 0;
+};
+
+}  // namespace vlab::lab
