@@ -1,11 +1,13 @@
 #include "bridge/bridge_client_device.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_errors.h"
+#include "bridge/bridge_layouts.h"
 
 namespace vlab::bridge {
 
@@ -36,18 +38,53 @@ std::vector<std::string> Expand(const nlohmann::json& fields, const std::string&
   return out;
 }
 
+// the index of `name` in `names`, or -1
+int IndexOf(const std::vector<std::string>& names, std::string_view name) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+// a kind that is not a float64 array per period cannot be read by layout
+DeviceKind Float64Kind(DeviceKind kind) {
+  const KindLayout* k = FindKindLayout(static_cast<int>(kind));
+  if (k == nullptr) {
+    throw std::invalid_argument("device kind " + std::to_string(static_cast<int>(kind)) + " is unknown");
+  }
+  if (!k->float64) {
+    throw std::invalid_argument(std::string(k->name) + " devices are not float64 arrays (" + k->note +
+                                "): use their own client");
+  }
+  return kind;
+}
+
 }  // namespace
 
 Device::Device(DeviceKind kind, const std::string& address, int port, double timeout_s,
                const std::string& bind_address)
-    : DeviceClient(kind, address, port, timeout_s, bind_address) {
+    : DeviceClient(Float64Kind(kind), address, port, timeout_s, bind_address) {
   const nlohmann::json& layout = describe().contains("layout") ? describe()["layout"] : nlohmann::json();
   if (!layout.is_object()) throw ProtocolError(Label() + ": describe reply has no layout");
   state_names_ = Expand(layout.value("state", nlohmann::json()), Label());
   command_names_ = Expand(layout.value("command", nlohmann::json::array()), Label());
+  // a fixed layout must be the table's: its compile-time indices are then right
+  const KindLayout& table = LayoutOf(kind);
+  if (IsFixed(table.state) && IsFixed(table.command)) {
+    const nlohmann::json want = LayoutJson(kind);
+    for (const char* part : {"state", "command"}) {
+      const nlohmann::json have = layout.value(part, nlohmann::json::array());
+      if (have != want[part]) {
+        throw ProtocolError(Label() + ": describe layout." + part + " is " + have.dump() + ", the protocol's " +
+                            table.name + " layout is " + want[part].dump());
+      }
+    }
+  }
   state_length_ = static_cast<int>(state_names_.size());
   command_length_ = static_cast<int>(command_names_.size());
   values_.reserve(static_cast<std::size_t>(state_length_));
+  command_.assign(static_cast<std::size_t>(command_length_), 0.0);
+  given_.assign(static_cast<std::size_t>(command_length_), 0);
 }
 
 Device Device::Connect(DeviceKind kind, const std::string& address, int port, double timeout_s,
@@ -55,11 +92,18 @@ Device Device::Connect(DeviceKind kind, const std::string& address, int port, do
   return Device(kind, address, port, timeout_s, bind_address);
 }
 
-int Device::StateIndex(const std::string& name) const {
-  for (std::size_t i = 0; i < state_names_.size(); ++i) {
-    if (state_names_[i] == name) return static_cast<int>(i);
+int Device::StateIndex(std::string_view name) const { return IndexOf(state_names_, name); }
+int Device::CommandIndex(std::string_view name) const { return IndexOf(command_names_, name); }
+
+double Device::Field(const State& state, std::string_view name) const {
+  const int i = StateIndex(name);
+  if (i < 0) throw std::invalid_argument(Label() + ": no state field '" + std::string(name) + "'");
+  if (static_cast<int>(state.values.size()) != state_length_) {
+    throw std::invalid_argument(Label() + ": field '" + std::string(name) + "' of a state with " +
+                                std::to_string(state.values.size()) + " values, not " +
+                                std::to_string(state_length_));
   }
-  return -1;
+  return state.values[static_cast<std::size_t>(i)];
 }
 
 DecodeError Device::ParseState(const Header& header, const std::vector<double>& payload) {
@@ -78,6 +122,22 @@ Device::State Device::Copy(const Header& header) const {
 
 Device::State Device::Read(double timeout_s) { return Copy(ReceiveState(timeout_s, false)); }
 Device::State Device::ReadLatest(double timeout_s) { return Copy(ReceiveState(timeout_s, true)); }
+
+bool Device::WriteFields(std::initializer_list<FieldValue> values, std::int64_t seq) {
+  if (command_length_ == 0) throw std::invalid_argument(Label() + ": this device takes no commands");
+  std::fill(given_.begin(), given_.end(), 0);
+  for (const FieldValue& v : values) {
+    const int i = CommandIndex(v.name);
+    if (i < 0) throw std::invalid_argument(Label() + ": no command field '" + std::string(v.name) + "'");
+    if (given_[i]) throw std::invalid_argument(Label() + ": command field '" + std::string(v.name) + "' given twice");
+    given_[i] = 1;
+    command_[i] = v.value;
+  }
+  for (int i = 0; i < command_length_; ++i) {
+    if (!given_[i]) throw std::invalid_argument(Label() + ": command field '" + command_names_[i] + "' not given");
+  }
+  return Write(command_, seq);
+}
 
 bool Device::Write(const std::vector<double>& values, std::int64_t seq) {
   if (command_length_ == 0) throw std::invalid_argument(Label() + ": this device takes no commands");

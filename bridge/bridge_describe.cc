@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_protocol.h"
 
 namespace vlab::bridge {
@@ -21,15 +22,12 @@ json Common(const DeviceDescription& d, const std::string& kind) {
           {"header", {"magic", "version", "kind", "type", "seq", "time", "length"}}};
 }
 
-std::string Sized(const char* field, std::size_t n) { return std::string(field) + "[" + std::to_string(n) + "]"; }
-
 }  // namespace
 
 std::string DescribeJson(const ArmDescription& d) {
   const std::size_t n = d.joints.size();
   json j = Common(d, "arm");
-  j["layout"] = {{"state", {"status", Sized("q", n), Sized("qd", n), Sized("tau", n)}},
-                 {"command", {"mode", Sized("value", n)}}};
+  j["layout"] = LayoutJson(DeviceKind::kArm, static_cast<int>(n));
   j["units"] = {{"q", "rad"}, {"qd", "rad/s"}, {"tau", "N m"}, {"value", "rad (mode 1), rad/s (mode 2), N m (mode 3)"}};
   j["modes"] = {{"hold", 0}, {"position", 1}, {"velocity", 2}, {"torque", 3}};
   j["status_bits"] = {{"holding", kStatusHolding},     {"refused", kStatusRefused},   {"saturated", kStatusSaturated},
@@ -46,7 +44,7 @@ std::string DescribeJson(const ArmDescription& d) {
 
 std::string DescribeJson(const WrenchDescription& d) {
   json j = Common(d, "wrench");
-  j["layout"] = {{"state", {"Fx", "Fy", "Fz", "Mx", "My", "Mz", "filter", "saturated"}}, {"command", json::array()}};
+  j["layout"] = LayoutJson(DeviceKind::kWrench);
   j["units"] = {{"force", "N"}, {"torque", "N m"}, {"frame", "sensor"}};
   j["sensor_model"] = d.sensor_model;
   j["full_scale"] = d.full_scale;
@@ -58,10 +56,7 @@ std::string DescribeJson(const WrenchDescription& d) {
 
 std::string DescribeJson(const SimDescription& d) {
   json j = Common(d, "sim");
-  j["layout"] = {{"state",
-                  {"sim_time", "mode", "clock", "periods", "refused_packets", "missed_deadlines", "realtime_factor",
-                   "max_lateness"}},
-                 {"command", {"op", "arg"}}};
+  j["layout"] = LayoutJson(DeviceKind::kSim);
   j["units"] = {{"sim_time", "s"}, {"max_lateness", "s"}};
   j["ops"] = {{"reset", 1}, {"pause", 2}, {"resume", 3}, {"step", 4}, {"set_realtime_factor", 5}};
   j["modes"] = {{"running", 0}, {"paused", 1}};

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "bridge/bridge_layouts.h"
+
 namespace vlab::bridge {
 
 void PutDouble(double v, unsigned char* out) {
@@ -23,6 +25,26 @@ namespace {
 
 bool IsWhole(double v, double lo, double hi) { return v >= lo && v <= hi && v == std::floor(v); }
 
+// payload positions of the wrench and sim fields (bridge_layouts.h), compile-time constants
+constexpr int kWrenchFx = StateIndex(DeviceKind::kWrench, "Fx");
+constexpr int kWrenchMz = StateIndex(DeviceKind::kWrench, "Mz");
+constexpr int kWrenchFilter = StateIndex(DeviceKind::kWrench, "filter");
+constexpr int kWrenchSaturated = StateIndex(DeviceKind::kWrench, "saturated");
+constexpr int kSimSimTime = StateIndex(DeviceKind::kSim, "sim_time");
+constexpr int kSimMode = StateIndex(DeviceKind::kSim, "mode");
+constexpr int kSimClock = StateIndex(DeviceKind::kSim, "clock");
+constexpr int kSimPeriods = StateIndex(DeviceKind::kSim, "periods");
+constexpr int kSimRefusedPackets = StateIndex(DeviceKind::kSim, "refused_packets");
+constexpr int kSimMissedDeadlines = StateIndex(DeviceKind::kSim, "missed_deadlines");
+constexpr int kSimRealtimeFactor = StateIndex(DeviceKind::kSim, "realtime_factor");
+constexpr int kSimMaxLateness = StateIndex(DeviceKind::kSim, "max_lateness");
+constexpr int kSimCommandOp = CommandIndex(DeviceKind::kSim, "op");
+constexpr int kSimCommandArg = CommandIndex(DeviceKind::kSim, "arg");
+constexpr int kWrenchValues = ValueCount(LayoutOf(DeviceKind::kWrench).state);
+constexpr int kSimValues = ValueCount(LayoutOf(DeviceKind::kSim).state);
+constexpr int kSimCommandValues = ValueCount(LayoutOf(DeviceKind::kSim).command);
+constexpr int kWrenchAxes = 6;  // Fx Fy Fz Mx My Mz, the first six values
+static_assert(kWrenchFx == 0 && kWrenchMz == kWrenchAxes - 1, "wrench axes first");
 
 DecodeError Expect(const Header& h, DeviceKind kind, MessageType type) {
   if (h.kind != static_cast<int>(kind)) return DecodeError::kBadKind;
@@ -129,24 +151,34 @@ void EncodeArmCommand(double seq, double time, const ArmCommandMsg& m, std::vect
 }
 
 void EncodeWrenchState(double seq, double time, const WrenchStateMsg& m, std::vector<unsigned char>* out) {
-  PacketWriter w(DeviceKind::kWrench, MessageType::kState, seq, time, 8, out);
-  for (double v : m.wrench) w.Put(v);
-  w.Put(m.filter);
-  w.Put(m.saturated ? 1.0 : 0.0);
+  double v[kWrenchValues];
+  for (int i = 0; i < kWrenchAxes; ++i) v[kWrenchFx + i] = m.wrench[i];
+  v[kWrenchFilter] = m.filter;
+  v[kWrenchSaturated] = m.saturated ? 1.0 : 0.0;
+  PacketWriter w(DeviceKind::kWrench, MessageType::kState, seq, time, kWrenchValues, out);
+  for (double x : v) w.Put(x);
 }
 
 void EncodeSimState(double seq, double time, const SimStateMsg& m, std::vector<unsigned char>* out) {
-  PacketWriter w(DeviceKind::kSim, MessageType::kState, seq, time, 8, out);
-  for (double v : {m.sim_time, static_cast<double>(m.mode), static_cast<double>(m.clock), m.periods, m.refused_packets,
-                   m.missed_deadlines, m.realtime_factor, m.max_lateness}) {
-    w.Put(v);
-  }
+  double v[kSimValues];
+  v[kSimSimTime] = m.sim_time;
+  v[kSimMode] = m.mode;
+  v[kSimClock] = m.clock;
+  v[kSimPeriods] = m.periods;
+  v[kSimRefusedPackets] = m.refused_packets;
+  v[kSimMissedDeadlines] = m.missed_deadlines;
+  v[kSimRealtimeFactor] = m.realtime_factor;
+  v[kSimMaxLateness] = m.max_lateness;
+  PacketWriter w(DeviceKind::kSim, MessageType::kState, seq, time, kSimValues, out);
+  for (double x : v) w.Put(x);
 }
 
 void EncodeSimCommand(double seq, double time, const SimCommandMsg& m, std::vector<unsigned char>* out) {
-  PacketWriter w(DeviceKind::kSim, MessageType::kCommand, seq, time, 2, out);
-  w.Put(m.op);
-  w.Put(m.arg);
+  double v[kSimCommandValues];
+  v[kSimCommandOp] = m.op;
+  v[kSimCommandArg] = m.arg;
+  PacketWriter w(DeviceKind::kSim, MessageType::kCommand, seq, time, kSimCommandValues, out);
+  for (double x : v) w.Put(x);
 }
 
 void EncodeDescribeRequest(DeviceKind kind, std::vector<unsigned char>* out) {
@@ -177,55 +209,53 @@ DecodeError ParseArmCommand(const Header& h, const std::vector<double>& p, int j
 
 DecodeError ParseWrenchState(const Header& h, const std::vector<double>& p, WrenchStateMsg* m) {
   if (DecodeError e = Expect(h, DeviceKind::kWrench, MessageType::kState); e != DecodeError::kNone) return e;
-  if (h.length != 8) return DecodeError::kBadLength;
-  if (!IsWhole(p[6], 0, 6) || !IsWhole(p[7], 0, 1)) return DecodeError::kBadValue;
-  for (int i = 0; i < 6; ++i) m->wrench[i] = p[i];
-  m->filter = static_cast<int>(p[6]);
-  m->saturated = p[7] != 0.0;
+  if (h.length != kWrenchValues) return DecodeError::kBadLength;
+  const double filter = p[kWrenchFilter], saturated = p[kWrenchSaturated];
+  if (!IsWhole(filter, 0, 6) || !IsWhole(saturated, 0, 1)) return DecodeError::kBadValue;
+  for (int i = 0; i < kWrenchAxes; ++i) m->wrench[i] = p[kWrenchFx + i];
+  m->filter = static_cast<int>(filter);
+  m->saturated = saturated != 0.0;
   return DecodeError::kNone;
 }
 
 DecodeError ParseSimState(const Header& h, const std::vector<double>& p, SimStateMsg* m) {
   if (DecodeError e = Expect(h, DeviceKind::kSim, MessageType::kState); e != DecodeError::kNone) return e;
-  if (h.length != 8) return DecodeError::kBadLength;
-  if (!IsWhole(p[1], 0, 1) || !IsWhole(p[2], 0, 2)) return DecodeError::kBadValue;
-  m->sim_time = p[0];
-  m->mode = static_cast<int>(p[1]);
-  m->clock = static_cast<int>(p[2]);
-  m->periods = p[3];
-  m->refused_packets = p[4];
-  m->missed_deadlines = p[5];
-  m->realtime_factor = p[6];
-  m->max_lateness = p[7];
+  if (h.length != kSimValues) return DecodeError::kBadLength;
+  const double mode = p[kSimMode], clock = p[kSimClock];
+  if (!IsWhole(mode, 0, 1) || !IsWhole(clock, 0, 2)) return DecodeError::kBadValue;
+  m->sim_time = p[kSimSimTime];
+  m->mode = static_cast<int>(mode);
+  m->clock = static_cast<int>(clock);
+  m->periods = p[kSimPeriods];
+  m->refused_packets = p[kSimRefusedPackets];
+  m->missed_deadlines = p[kSimMissedDeadlines];
+  m->realtime_factor = p[kSimRealtimeFactor];
+  m->max_lateness = p[kSimMaxLateness];
   return DecodeError::kNone;
 }
 
 DecodeError ParseSimCommand(const Header& h, const std::vector<double>& p, SimCommandMsg* m) {
   if (DecodeError e = Expect(h, DeviceKind::kSim, MessageType::kCommand); e != DecodeError::kNone) return e;
-  if (h.length != 2) return DecodeError::kBadLength;
+  if (h.length != kSimCommandValues) return DecodeError::kBadLength;
   // check everything before writing: *m is untouched on error
-  if (!IsWhole(p[0], 1, 5)) return DecodeError::kBadValue;
-  const int op = static_cast<int>(p[0]);
-  if (op == static_cast<int>(SimOp::kStep) && !IsWhole(p[1], 1, 1e9)) return DecodeError::kBadValue;
-  if (op == static_cast<int>(SimOp::kSetRealtimeFactor) && !(p[1] > 0 && p[1] <= 1000)) return DecodeError::kBadValue;
+  const double op_value = p[kSimCommandOp], arg = p[kSimCommandArg];
+  if (!IsWhole(op_value, 1, 5)) return DecodeError::kBadValue;
+  const int op = static_cast<int>(op_value);
+  if (op == static_cast<int>(SimOp::kStep) && !IsWhole(arg, 1, 1e9)) return DecodeError::kBadValue;
+  if (op == static_cast<int>(SimOp::kSetRealtimeFactor) && !(arg > 0 && arg <= 1000)) return DecodeError::kBadValue;
   m->op = op;
-  m->arg = p[1];
+  m->arg = arg;
   return DecodeError::kNone;
 }
 
-namespace {
-constexpr const char* kKindNames[kMaxDeviceKind + 1] = {"unknown", "arm",     "wrench", "sim",  "camera", "markers",
-                                                        "base",    "gripper", "feet",   "imu",  "point",  "yoyo",
-                                                        "gaze",    "pose"};
-}  // namespace
-
-const char* KindName(int kind) { return kind >= 1 && kind <= kMaxDeviceKind ? kKindNames[kind] : kKindNames[0]; }
+const char* KindName(int kind) {
+  const KindLayout* k = FindKindLayout(kind);
+  return k != nullptr ? k->name : "unknown";
+}
 
 int KindFromName(const std::string& name) {
-  for (int kind = 1; kind <= kMaxDeviceKind; ++kind) {
-    if (name == kKindNames[kind]) return kind;
-  }
-  return 0;
+  const KindLayout* k = FindKindLayout(std::string_view(name));
+  return k != nullptr ? static_cast<int>(k->kind) : 0;
 }
 
 }  // namespace vlab::bridge

@@ -24,16 +24,10 @@
 // both are ignored and counted. In lockstep the lab waits for the command
 // whose seq equals the period it published.
 //
-// Payloads (n = number of joints, from describe or from the length):
-//   arm state      [status, q_1..q_n (rad), qd_1..qd_n (rad/s), tau_1..tau_n (N m)]   1 + 3n
-//   arm command    [mode, v_1..v_n]   mode 0 hold, 1 position (rad), 2 velocity (rad/s),
-//                  3 torque (N m)                                                       1 + n
-//   wrench state   [Fx, Fy, Fz (N), Mx, My, Mz (N m), filter, saturated]                8
-//   sim state      [sim_time (s), mode, clock, periods, refused_packets,
-//                   missed_deadlines, realtime_factor, max_lateness (s)]                8
-//   sim command    [op, arg]  op 1 reset, 2 pause, 3 resume, 4 step arg periods,
-//                  5 set realtime factor to arg                                         2
-//   describe req.  no payload
+// Payloads: the fields of every kind's state and command, in order, with
+// their units, are the table of bridge_layouts.h (arm: [status, q_1..q_n,
+// qd_1..qd_n, tau_1..tau_n] and [mode, value_1..value_n], n joints; wrench,
+// sim and the others: fixed lists). A describe request has no payload.
 //
 // Decoding never trusts the datagram: sizes, magic, version, kind, type,
 // length and finiteness are checked before any value is used.
@@ -170,7 +164,8 @@ DecodeError ParseWrenchState(const Header& h, const std::vector<double>& payload
 DecodeError ParseSimState(const Header& h, const std::vector<double>& payload, SimStateMsg* m);
 DecodeError ParseSimCommand(const Header& h, const std::vector<double>& payload, SimCommandMsg* m);
 
-/// Device kind name ("arm", "wrench", "sim") and back (0 if unknown).
+/// Device kind name ("arm" .. "pose", from the table of bridge_layouts.h;
+/// "unknown" outside 1..kMaxDeviceKind) and back (0 if unknown).
 const char* KindName(int kind);
 int KindFromName(const std::string& name);
 

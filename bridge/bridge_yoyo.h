@@ -1,6 +1,7 @@
-// Layouts of the yo-yo case study's device kinds (docs/protocol.md), shared by
-// every server of them (the lab, vlab-yoyosim, the vision program) and their
-// clients, so that they send the same values in the same order.
+// The yo-yo case study's device kinds (docs/protocol.md), shared by every
+// server of them (the lab, vlab-yoyosim, the vision program) and their
+// clients. Their layouts are rows of the table in bridge_layouts.h; the name
+// arrays below are taken from it, for the code that wants them as arrays.
 //
 //   point (kind 10): a point that is commanded and measured, e.g. the robot's
 //     hand. Command [x, y, z]: where the point should go (m, world frame).
@@ -17,14 +18,16 @@
 
 #include <array>
 
+#include "bridge/bridge_layouts.h"
+
 namespace vlab::bridge {
 
-/// Value names of the point kind's command and state.
-inline constexpr std::array<const char*, 3> kPointCommandLayout = {"x", "y", "z"};
-inline constexpr std::array<const char*, 7> kPointStateLayout = {"status", "x", "y", "z", "vx", "vy", "vz"};
+/// Value names of the point kind's command and state (the table's).
+inline constexpr std::array<const char*, 3> kPointCommandLayout = FieldNames<3>(LayoutOf(DeviceKind::kPoint).command);
+inline constexpr std::array<const char*, 7> kPointStateLayout = FieldNames<7>(LayoutOf(DeviceKind::kPoint).state);
 
 /// Value names of the yoyo kind's state (it takes no commands).
-inline constexpr std::array<const char*, 7> kYoyoStateLayout = {"status", "x", "y", "z", "vz", "string_force", "spin"};
+inline constexpr std::array<const char*, 7> kYoyoStateLayout = FieldNames<7>(LayoutOf(DeviceKind::kYoyo).state);
 
 /// Yoyo status bit: no fresh measurement of the position in this state.
 inline constexpr unsigned kYoyoNotSeen = 1u << 6;  // after the arm bits (bridge_protocol.h)

@@ -36,6 +36,7 @@
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_errors.h"
+#include "bridge/bridge_layouts.h"
 #include "control/robot_model.h"
 #include "control/task_space.h"
 #include "control/time_scaling.h"
@@ -55,6 +56,11 @@ void OnSignal(int) { g_stop = 1; }
 constexpr double kDrive_s = 6.0, kStand_s = 1.0, kReach_s = 4.0;
 constexpr double kOdometryGain = 5.0;  // 1/s on the base's position error
 constexpr double kPoll_s = 0.05;       // read slices, so that a signal is seen soon
+// the base's odometry in its state (bridge/bridge_layouts.h)
+constexpr int kBaseX = vlab::bridge::StateIndex(DeviceKind::kBase, "x");
+constexpr int kBaseY = vlab::bridge::StateIndex(DeviceKind::kBase, "y");
+constexpr int kBaseYaw = vlab::bridge::StateIndex(DeviceKind::kBase, "yaw");
+constexpr double kWorldFrame = 1;      // the base command's frame: world
 
 struct Options {
   std::string scene;
@@ -145,7 +151,7 @@ int Run(const Options& o) {
   if (!ReadAfter(base, s.seq - 1, o.timeout_s, &b)) return 0;
   const double t0 = s.time;
   const VectorXd q_hold = s.q;
-  const double x0 = b.values[1];
+  const double x0 = b.values[kBaseX];
   ArmModel model = LoadArm(o.scene, q_hold);
 
   Vector3d p_start = Vector3d::Zero();  // tool at the start of the reach, world
@@ -153,7 +159,7 @@ int Run(const Options& o) {
   double error = 0;
   for (;;) {
     const double t = s.time - t0;
-    const double x = b.values[1], y = b.values[2], yaw = b.values[3];
+    const double x = b.values[kBaseX], y = b.values[kBaseY], yaw = b.values[kBaseYaw];
     // the base: a quintic drive along x with odometry feedback, then stand
     double vx = 0, vy = 0, wz = 0;
     if (t < kDrive_s) {
@@ -165,7 +171,11 @@ int Run(const Options& o) {
     vy = -kOdometryGain * y;
     wz = -kOdometryGain * yaw;
     if (t >= kDrive_s + kStand_s) vx = vy = wz = 0;  // parked: the arm reaches from a still base
-    base.Write({1, std::clamp(vx, -0.9, 0.9), std::clamp(vy, -0.9, 0.9), std::clamp(wz, -1.8, 1.8)}, b.seq);
+    base.WriteFields({{"frame", kWorldFrame},
+                      {"vx", std::clamp(vx, -0.9, 0.9)},
+                      {"vy", std::clamp(vy, -0.9, 0.9)},
+                      {"wz", std::clamp(wz, -1.8, 1.8)}},
+                     b.seq);
 
     // the arm: hold, then reach in the base's frame
     model.chain->SetState(s.q, VectorXd::Zero(7));

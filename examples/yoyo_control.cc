@@ -60,6 +60,7 @@
 
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_yoyo.h"
 
 namespace {
@@ -72,6 +73,12 @@ volatile std::sig_atomic_t g_stop = 0;
 void OnSignal(int) { g_stop = 1; }
 
 constexpr double kPoll_s = 0.05, kConnect_s = 5.0;
+// positions in the point's and the yo-yo's states (bridge/bridge_layouts.h)
+constexpr int Hand(const char* field) { return vlab::bridge::StateIndex(DeviceKind::kPoint, field); }
+constexpr int Yoyo(const char* field) { return vlab::bridge::StateIndex(DeviceKind::kYoyo, field); }
+constexpr int kHandX = Hand("x"), kHandY = Hand("y"), kHandZ = Hand("z"), kHandVz = Hand("vz");
+constexpr int kYoyoStatus = Yoyo("status"), kYoyoZ = Yoyo("z"), kYoyoVz = Yoyo("vz");
+constexpr int kYoyoForce = Yoyo("string_force");
 constexpr double kDescent = 0.928;   // m/s^2, g m r^2 / (m r^2 + J) (mjcf/yoyo/README.md)
 constexpr double kE2 = 0.657;        // e^2: a free yo-yo keeps this share of its fall height per bottom
 constexpr double kUp_s = 0.30, kLead = 0.03, kPre_s = 0.4, kRet_s = 0.6, kMaxStroke = 0.19, kLowFrac = 0.5;
@@ -157,7 +164,7 @@ struct HandAt { double t, z, vz; };
 // or a signal (per_period only).
 bool ReadYoyo(Device& yoyo, bool per_period, std::int64_t seq, double timeout_s, Device::State* y, bool* seen) {
   const auto sighted = [](const Device::State& s) {
-    return !(static_cast<unsigned>(s.values[0]) & vlab::bridge::kYoyoNotSeen);
+    return !(static_cast<unsigned>(s.values[kYoyoStatus]) & vlab::bridge::kYoyoNotSeen);
   };
   if (per_period) {
     if (!ReadUntil(yoyo, seq, timeout_s, y)) return false;
@@ -193,7 +200,7 @@ int Run(const Options& o) {
   Device::State h, y, mr;
   Wrench::State w;
   if (!ReadUntil(hand, 0, o.timeout_s + kConnect_s, &h)) return g_stop ? 0 : 2;
-  const double t0 = h.time, x0 = h.values[1], y0 = h.values[2], z0 = h.values[3];
+  const double t0 = h.time, x0 = h.values[kHandX], y0 = h.values[kHandY], z0 = h.values[kHandZ];
   const double z_ref = z0 - o.string;
   double offset[3] = {0, 0, 0}, fz0 = 0;  // mirror start - hand start; static load
   std::FILE* log = o.log.empty() ? nullptr : std::fopen(o.log.c_str(), "w");
@@ -215,13 +222,16 @@ int Run(const Options& o) {
     if (!ReadYoyo(yoyo, per_period, h.seq, o.timeout_s, &y, &fresh)) break;
     if (force && !ReadUntil(*force, h.seq, o.timeout_s, &w)) break;
     if (mirror && !ReadUntil(*mirror, h.seq, o.timeout_s, &mr)) break;
-    if (first && mirror) for (int i = 0; i < 3; ++i) offset[i] = mr.values[1 + i] - h.values[1 + i];
+    if (first && mirror) {
+      const int xyz[3] = {kHandX, kHandY, kHandZ};
+      for (int i = 0; i < 3; ++i) offset[i] = mr.values[xyz[i]] - h.values[xyz[i]];
+    }
     if (first && force) fz0 = w.wrench(2);
     first = false;
-    const double hz = h.values[3], hvz = h.values[6];
+    const double hz = h.values[kHandZ], hvz = h.values[kHandVz];
     const bool have_y = !y.values.empty();  // not yet: a camera's first frame still to come
-    const double yz = have_y ? y.values[3] - offset[2] : NAN, yvz = have_y ? y.values[4] : 0.0;
-    const double f = force ? std::abs(w.wrench(2) - fz0) : have_y ? y.values[5] : NAN;
+    const double yz = have_y ? y.values[kYoyoZ] - offset[2] : NAN, yvz = have_y ? y.values[kYoyoVz] : 0.0;
+    const double f = force ? std::abs(w.wrench(2) - fz0) : have_y ? y.values[kYoyoForce] : NAN;
     past.push_back({t, hz, hvz});
     if (past.size() > kPast) past.pop_front();
     if (fresh) {  // the sample's depth and rate: against the hand at the sample's time
@@ -274,8 +284,11 @@ int Run(const Options& o) {
       z_cmd = Cosine(z_low + stroke, z0, t - t_pulse - kUp_s, kRet_s);
     }
     z_cmd = std::clamp(z_cmd, z0 - 0.15, z0 + 0.15);
-    hand.Write({x0, y0, z_cmd}, h.seq);
-    if (mirror) mirror->Write({h.values[1] + offset[0], h.values[2] + offset[1], hz + offset[2]}, mr.seq);
+    hand.WriteFields({{"x", x0}, {"y", y0}, {"z", z_cmd}}, h.seq);
+    if (mirror) {
+      mirror->WriteFields(
+          {{"x", h.values[kHandX] + offset[0]}, {"y", h.values[kHandY] + offset[1]}, {"z", hz + offset[2]}}, mr.seq);
+    }
     if (t >= next_keepalive) {
       yoyo.KeepAlive();
       if (force) force->KeepAlive();

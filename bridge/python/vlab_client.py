@@ -13,10 +13,16 @@ put its folder on sys.path.
 
 Devices: Arm (commands: hold, position, velocity, torque), Wrench (output only),
 Sim (pause, resume, step, reset, realtime factor), Camera (whole frames, reassembled
-from chunks; docs/protocol_camera.md). Connecting sends a describe request, which also
-subscribes the client: the device then sends it one state per control period (a
-camera: every frame). The seq of a command must be the seq of the state it answers.
+from chunks; docs/protocol_camera.md), and LayoutDevice for any float64 kind (base,
+gripper, feet, imu, point, yoyo, gaze, pose, ...): states decoded into fields by the
+names of the device's describe layout, commands written by field name. Connecting
+sends a describe request, which also subscribes the client: the device then sends it
+one state per control period (a camera: every frame). The seq of a command must be the seq of the state it answers.
 read/read_latest wait up to their timeout; write never blocks.
+
+    with LayoutDevice("point", "127.0.0.1", 50060) as hand:
+        state = hand.read(timeout=1.0)             # state["z"], state.fields, state.values
+        hand.write({"x": 0.0, "y": 0.0, "z": state["z"] + 0.01}, state.seq)
 
     with Camera("127.0.0.1", 50013) as camera:     # raw frames: standard library only
         frame = camera.read_latest(timeout=1.0)    # id, time, width, height, rgb, pose
@@ -41,8 +47,16 @@ HEADER_VALUES = 7
 MAX_PACKET_VALUES = 1024
 MAX_SEQ = 2 ** 53
 
-KIND_ARM, KIND_WRENCH, KIND_SIM, KIND_CAMERA = 1, 2, 3, 4
-KIND_NAMES = {KIND_ARM: "arm", KIND_WRENCH: "wrench", KIND_SIM: "sim", KIND_CAMERA: "camera"}
+# device kinds (docs/protocol.md, "Devices and ports")
+KIND_ARM, KIND_WRENCH, KIND_SIM, KIND_CAMERA, KIND_MARKERS = 1, 2, 3, 4, 5
+KIND_BASE, KIND_GRIPPER, KIND_FEET, KIND_IMU, KIND_POINT = 6, 7, 8, 9, 10
+KIND_YOYO, KIND_GAZE, KIND_POSE = 11, 12, 13
+KIND_NAMES = {KIND_ARM: "arm", KIND_WRENCH: "wrench", KIND_SIM: "sim", KIND_CAMERA: "camera",
+              KIND_MARKERS: "markers", KIND_BASE: "base", KIND_GRIPPER: "gripper", KIND_FEET: "feet",
+              KIND_IMU: "imu", KIND_POINT: "point", KIND_YOYO: "yoyo", KIND_GAZE: "gaze", KIND_POSE: "pose"}
+KIND_CODES = {name: code for code, name in KIND_NAMES.items()}
+# kinds whose payload is not one float64 array per period: their own clients
+_NOT_FLOAT64 = {KIND_CAMERA: "docs/protocol_camera.md, class Camera", KIND_MARKERS: "docs/protocol_markers.md"}
 TYPE_STATE, TYPE_COMMAND, TYPE_DESCRIBE = 1, 2, 3
 
 # arm command modes
@@ -433,6 +447,155 @@ class Sim(Device):
             raise ValueError("%s: sim command arg is not finite" % self._label)
         self._check_seq(seq)
         return self._send(encode(KIND_SIM, TYPE_COMMAND, seq, self._time(), [op, float(arg)]))
+
+
+# ---- any float64 kind, by the layout of its describe reply -----------------------------------
+
+
+class LayoutState:
+    """One state of a LayoutDevice: seq (period k), time (s), values (the payload, a tuple, in the
+    order of the describe reply's layout.state) and fields (a dict: field name -> value, or a
+    tuple of values for a group such as "q[7]"). state["grasped"] is state.fields["grasped"]."""
+
+    __slots__ = ("seq", "time", "values", "fields")
+
+    def __init__(self, seq, t, values, fields):
+        self.seq, self.time, self.values, self.fields = seq, t, values, fields
+
+    def __getitem__(self, name):
+        try:
+            return self.fields[name]
+        except KeyError:
+            raise KeyError("no state field %r (the fields are %s)" % (name, ", ".join(self.fields))) from None
+
+    def __contains__(self, name):
+        return name in self.fields
+
+    def __repr__(self):
+        return "LayoutState(seq=%d, time=%g, %s)" % (
+            self.seq, self.time, ", ".join("%s=%r" % item for item in self.fields.items()))
+
+
+def _layout_fields(fields, label, part):
+    """[(name, count or None)] of a describe layout list: "x" is one value, "q[7]" a group of 7."""
+    if not isinstance(fields, list):
+        raise ProtocolError("%s: describe reply has no layout.%s list" % (label, part))
+    out = []
+    for f in fields:
+        if not isinstance(f, str) or not f:
+            raise ProtocolError("%s: describe layout.%s holds %s, not a field name" % (label, part, json.dumps(f)))
+        name, count = f, None
+        if f.endswith("]") and "[" in f:
+            name, _, size = f[:-1].partition("[")
+            if not size.isdigit() or not 0 < int(size) <= MAX_PACKET_VALUES:
+                raise ProtocolError("%s: describe layout.%s field '%s' has no whole count" % (label, part, f))
+            count = int(size)
+        if any(name == other for other, _ in out):
+            raise ProtocolError("%s: describe layout.%s names '%s' twice" % (label, part, name))
+        out.append((name, count))
+    return out
+
+
+def _value_count(fields):
+    return sum(1 if count is None else count for _, count in fields)
+
+
+class LayoutDevice(Device):
+    """A device of any float64 kind (base, gripper, feet, imu, point, yoyo, gaze, pose; arm, wrench
+    and sim too), read and written by field name. The fields are the describe reply's layout, the
+    names of the tables of docs/protocol.md ("q[7]" is a group of 7 values).
+
+        with LayoutDevice("gripper", "127.0.0.1", 50050) as gripper:
+            state = gripper.read()                            # a LayoutState
+            if state["grasped"]: ...
+            gripper.write({"mode": 0, "value": 0.04}, state.seq)
+
+    No domain checks beyond the layout's lengths: the device refuses what it does not take (and
+    says so in its status value, where it has one)."""
+
+    def __init__(self, kind, address="127.0.0.1", port=None, timeout=1.0, bind_address=None):
+        """kind: a name ("gripper") or code (7). Connects as Device does; raises ValueError for an
+        unknown kind or one that is not a float64 kind (camera, markers), ProtocolError for a
+        describe reply without a usable layout."""
+        code = KIND_CODES.get(kind) if isinstance(kind, str) else kind
+        if isinstance(code, bool) or code not in KIND_NAMES:
+            raise ValueError("device kind %r is not one of %s" % (kind, ", ".join(KIND_CODES)))
+        if code in _NOT_FLOAT64:
+            raise ValueError("%s devices are not float64 arrays: see %s" % (KIND_NAMES[code], _NOT_FLOAT64[code]))
+        self.KIND = code
+        super().__init__(address, port, timeout, bind_address)
+        try:
+            layout = self._describe.get("layout")
+            if not isinstance(layout, dict):
+                raise ProtocolError("%s: describe reply has no layout" % self._label)
+            self.state_fields = _layout_fields(layout.get("state"), self._label, "state")
+            self.command_fields = _layout_fields(layout.get("command", []), self._label, "command")
+        except ProtocolError:
+            self.close()
+            raise
+        self.state_length = _value_count(self.state_fields)
+        self.command_length = _value_count(self.command_fields)
+
+    @property
+    def kind(self):
+        """The device's kind name ("gripper")."""
+        return KIND_NAMES[self.KIND]
+
+    @property
+    def state_names(self):
+        """The state's field names, in payload order (a group counts once)."""
+        return [name for name, _ in self.state_fields]
+
+    @property
+    def command_names(self):
+        """The command's field names, in payload order (a group counts once)."""
+        return [name for name, _ in self.command_fields]
+
+    def _parse(self, seq, t, payload):
+        if len(payload) != self.state_length:
+            raise ProtocolError("bad length")
+        fields, at = {}, 0
+        for name, count in self.state_fields:
+            if count is None:
+                fields[name] = payload[at]
+                at += 1
+            else:
+                fields[name] = tuple(payload[at:at + count])
+                at += count
+        return LayoutState(seq, t, tuple(payload), fields)
+
+    def write(self, fields, seq):
+        """Sends a command answering state `seq`: `fields` maps every command field name to its
+        value (a sequence of values for a group), e.g. {"x": 0.1, "y": 0.0, "z": 1.5}. Never
+        blocks; returns False if the datagram could not be sent. Raises ValueError naming the
+        device and the field for an unknown or missing field, a group of the wrong length or a
+        non-finite value, and when the device takes no commands."""
+        if not self.command_fields:
+            raise ValueError("%s: this device takes no commands" % self._label)
+        if not isinstance(fields, dict):
+            raise ValueError("%s: a command is a dict of field name -> value" % self._label)
+        unknown = [name for name in fields if name not in self.command_names]
+        if unknown:
+            raise ValueError("%s: no command field %r (the fields are %s)"
+                             % (self._label, unknown[0], ", ".join(self.command_names)))
+        payload = []
+        for name, count in self.command_fields:
+            if name not in fields:
+                raise ValueError("%s: command field %r not given" % (self._label, name))
+            value = fields[name]
+            values = [value] if count is None else list(value)
+            if count is not None and len(values) != count:
+                raise ValueError("%s: command field %r has %d values, not %d" % (self._label, name, len(values),
+                                                                                  count))
+            try:
+                values = [float(v) for v in values]
+            except (TypeError, ValueError):
+                raise ValueError("%s: command field %r is not a number" % (self._label, name)) from None
+            if not all(math.isfinite(v) for v in values):
+                raise ValueError("%s: command field %r is not finite" % (self._label, name))
+            payload.extend(values)
+        self._check_seq(seq)
+        return self._send(encode(self.KIND, TYPE_COMMAND, seq, self._time(), payload))
 
 
 # ---- camera (kind 4): frames in chunks, docs/protocol_camera.md ------------------------------

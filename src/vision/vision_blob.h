@@ -101,7 +101,7 @@ class YoyoTracker {
   Blob last_blob_;
   bool seen_ = false, ever_seen_ = false;
   double last_z_ = 0, last_time_s_ = 0;
-  double state_[7] = {0, 0, 0, 0, 0, 0, 0};
+  double state_[7] = {0, 0, 0, 0, 0, 0, 0};  // the yoyo state's 7 values (bridge_layouts.h)
 };
 
 }  // namespace vlab::vision

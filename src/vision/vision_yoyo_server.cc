@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "bridge/bridge_describe.h"
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_yoyo.h"
 
@@ -30,7 +31,7 @@ json YoyoDescribe(const YoyoServerConfig& config, int port) {
   d.port = port;
   d.control_hz = config.frame_hz;
   json facts;
-  facts["layout"] = {{"state", bridge::kYoyoStateLayout}, {"command", json::array()}};
+  facts["layout"] = bridge::LayoutJson(bridge::DeviceKind::kYoyo);
   facts["units"] = {{"x", "m"},
                     {"y", "m"},
                     {"z", "m"},
@@ -86,7 +87,7 @@ void YoyoServer::Publish(double seq, double time, const double* state) {
   header.type = static_cast<int>(bridge::MessageType::kState);
   header.seq = seq;
   header.time = time;
-  const int n = static_cast<int>(bridge::kYoyoStateLayout.size());
+  constexpr int n = bridge::ValueCount(bridge::LayoutOf(bridge::DeviceKind::kYoyo).state);
   header.length = n;
   bridge::EncodePacket(header, state, n, &packet_);
   endpoint_->Publish(packet_, *socket_);

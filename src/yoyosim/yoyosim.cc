@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string_view>
 
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_protocol.h"
 #include "core/core_errors.h"
 
@@ -11,6 +13,21 @@ namespace vlab::yoyosim {
 namespace {
 
 constexpr const char* kHandJoints[3] = {"hand_x", "hand_y", "hand_z"};
+
+// payload positions of the point and yoyo states (bridge_layouts.h)
+constexpr int Point(std::string_view field) { return bridge::StateIndex(bridge::DeviceKind::kPoint, field); }
+constexpr int Yoyo(std::string_view field) { return bridge::StateIndex(bridge::DeviceKind::kYoyo, field); }
+constexpr int kYoyoStatus = Yoyo("status");
+constexpr int kYoyoX = Yoyo("x");
+constexpr int kYoyoY = Yoyo("y");
+constexpr int kYoyoZ = Yoyo("z");
+constexpr int kYoyoVz = Yoyo("vz");
+constexpr int kYoyoStringForce = Yoyo("string_force");
+constexpr int kYoyoSpin = Yoyo("spin");
+constexpr int kPointStatus = Point("status"), kPointX = Point("x"), kPointVx = Point("vx");
+static_assert(Point("y") == kPointX + 1 && Point("z") == kPointX + 2 && Point("vy") == kPointVx + 1 &&
+                  Point("vz") == kPointVx + 2,
+              "the point's x, y, z and vx, vy, vz are consecutive");
 
 // coefficient of `joint` in the fixed tendon `tendon` (0 when absent)
 double TendonCoef(const mjModel* m, int tendon, int joint) {
@@ -166,10 +183,10 @@ const char* YoyoSim::divergence() const {
 }
 
 void YoyoSim::SamplePoint(double* out) const {
-  out[0] = holding_ ? static_cast<double>(bridge::kStatusHolding) : 0.0;
+  out[kPointStatus] = holding_ ? static_cast<double>(bridge::kStatusHolding) : 0.0;
   for (int i = 0; i < 3; ++i) {
-    out[1 + i] = data_->xpos[3 * hand_body_ + i];
-    out[4 + i] = data_->qvel[hand_dof_[i]];  // the slides run along the world axes
+    out[kPointX + i] = data_->xpos[3 * hand_body_ + i];
+    out[kPointVx + i] = data_->qvel[hand_dof_[i]];  // the slides run along the world axes
   }
 }
 
@@ -177,13 +194,13 @@ void YoyoSim::SampleYoyo(double* out) const {
   mjtNum velocity[6];  // [angular; linear] at the site, world orientation
   mj_objectVelocity(model_.get(), data_.get(), mjOBJ_SITE, centre_site_, velocity, 0);
   const mjtNum* centre = data_->site_xpos + 3 * centre_site_;
-  out[0] = 0;  // a simulation always sees the yo-yo
-  out[1] = centre[0];
-  out[2] = centre[1];
-  out[3] = centre[2];
-  out[4] = velocity[5];
-  out[5] = data_->sensordata[plus_force_] + data_->sensordata[minus_force_];
-  out[6] = data_->qvel[spin_dof_];
+  out[kYoyoStatus] = 0;  // a simulation always sees the yo-yo
+  out[kYoyoX] = centre[0];
+  out[kYoyoY] = centre[1];
+  out[kYoyoZ] = centre[2];
+  out[kYoyoVz] = velocity[5];
+  out[kYoyoStringForce] = data_->sensordata[plus_force_] + data_->sensordata[minus_force_];
+  out[kYoyoSpin] = data_->qvel[spin_dof_];
 }
 
 }  // namespace vlab::yoyosim

@@ -11,7 +11,7 @@
 //           the stiff servo at the control rate); Hold keeps the hand where
 //           it is
 //   output  point state [status, x, y, z, vx, vy, vz] of the hand and yo-yo
-//           state [status, x, y, z, vz, string_force, spin] (bridge_yoyo.h
+//           state [status, x, y, z, vz, string_force, spin] (bridge_layouts.h
 //           layouts; SamplePoint, SampleYoyo)
 //   rate    driven by its owner: one Step per control period (period_s, a
 //           whole number of the scene's timesteps)

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_yoyo.h"
 
@@ -11,20 +12,13 @@ namespace {
 
 using nlohmann::json;
 
-template <std::size_t N>
-json Names(const std::array<const char*, N>& names) {
-  json out = json::array();
-  for (const char* n : names) out.push_back(n);
-  return out;
-}
-
 json Vector(const Vec3& v) { return json::array({v[0], v[1], v[2]}); }
 
 }  // namespace
 
 std::string PointDescribeJson(const bridge::DeviceDescription& d, const YoyoSim& sim, const PointFacts& facts) {
   json j;
-  j["layout"] = {{"state", Names(bridge::kPointStateLayout)}, {"command", Names(bridge::kPointCommandLayout)}};
+  j["layout"] = bridge::LayoutJson(bridge::DeviceKind::kPoint);
   j["units"] = {{"x", "m"}, {"y", "m"}, {"z", "m"}, {"vx", "m/s"}, {"vy", "m/s"}, {"vz", "m/s"}, {"frame", "world"}};
   j["status_bits"] = {{"holding", bridge::kStatusHolding},
                       {"refused", bridge::kStatusRefused},
@@ -43,7 +37,7 @@ std::string PointDescribeJson(const bridge::DeviceDescription& d, const YoyoSim&
 std::string YoyoDescribeJson(const bridge::DeviceDescription& d, const YoyoSim& sim) {
   const YoyoParams& y = sim.yoyo();
   json j;
-  j["layout"] = {{"state", Names(bridge::kYoyoStateLayout)}, {"command", json::array()}};
+  j["layout"] = bridge::LayoutJson(bridge::DeviceKind::kYoyo);
   j["units"] = {{"x", "m"},      {"y", "m"}, {"z", "m"}, {"vz", "m/s"}, {"string_force", "N"}, {"spin", "rad/s"},
                 {"frame", "world"}};
   j["status_bits"] = {{"not_seen", bridge::kYoyoNotSeen}};

@@ -1,5 +1,5 @@
 // Describe replies of vlab-yoyosim's two devices: the common fields of
-// bridge_describe plus each kind's layout (bridge_yoyo.h), units and facts.
+// bridge_describe plus each kind's layout (bridge_layouts.h), units and facts.
 #pragma once
 
 #include <string>

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "bridge/bridge_describe.h"
+#include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "yoyosim/yoyosim_describe.h"
 
@@ -16,6 +17,16 @@ namespace {
 constexpr int kMaxDatagramsPerReceive = 1000;
 // longest single wait: a stop request (signal) is seen within this, s
 constexpr double kPollSlice_s = 0.05;
+
+// the point's and the yo-yo's layouts (bridge_layouts.h)
+constexpr bridge::DeviceKind kPoint = bridge::DeviceKind::kPoint, kYoyo = bridge::DeviceKind::kYoyo;
+constexpr int kPointValues = bridge::ValueCount(bridge::LayoutOf(kPoint).state);
+constexpr int kYoyoValues = bridge::ValueCount(bridge::LayoutOf(kYoyo).state);
+constexpr int kPointCommandValues = bridge::ValueCount(bridge::LayoutOf(kPoint).command);
+constexpr int kPointStatus = bridge::StateIndex(kPoint, "status");
+static_assert(bridge::CommandIndex(kPoint, "x") == 0 && bridge::CommandIndex(kPoint, "y") == 1 &&
+                  bridge::CommandIndex(kPoint, "z") == 2 && kPointCommandValues == 3,
+              "a point command is the set-point [x, y, z] YoyoSim takes");
 
 long Periods(double seconds, double period_s) { return std::max(1L, std::lround(seconds / period_s)); }
 
@@ -57,7 +68,7 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
   point.owner_timeout_periods = static_cast<int>(Periods(c.owner_timeout_s, period));
   point.subscriber_timeout_periods = static_cast<int>(Periods(c.subscriber_timeout_s, period));
   point.watchdog_periods = c.watchdog_periods;
-  point.command_length = 3;
+  point.command_length = kPointCommandValues;
   point.status_first = true;
   YoyoSimServer* self = s.get();
   point.check_command = [self](const std::vector<double>& p) { return self->CheckSetPoint(p); };
@@ -173,15 +184,18 @@ void YoyoSimServer::BeginPeriod(long k, vlab::PeriodStart start) {
 
 void YoyoSimServer::Publish(long k) {
   const bridge::Header point{static_cast<int>(bridge::DeviceKind::kPoint), static_cast<int>(bridge::MessageType::kState),
-                             static_cast<double>(k), static_cast<double>(k) * sim_->period_s(), 7};
+                             static_cast<double>(k), static_cast<double>(k) * sim_->period_s(), kPointValues};
+  static_assert(sizeof(values_) / sizeof(values_[0]) >= static_cast<std::size_t>(std::max(kPointValues, kYoyoValues)));
   sim_->SamplePoint(values_);
-  values_[0] = static_cast<double>(static_cast<std::uint32_t>(values_[0]) | point_->status_bits());
-  bridge::EncodePacket(point, values_, 7, &point_state_);
+  const std::uint32_t status = static_cast<std::uint32_t>(values_[kPointStatus]) | point_->status_bits();
+  values_[kPointStatus] = static_cast<double>(status);
+  bridge::EncodePacket(point, values_, kPointValues, &point_state_);
   point_->Publish(point_state_, *point_socket_);
   bridge::Header yoyo = point;
-  yoyo.kind = static_cast<int>(bridge::DeviceKind::kYoyo);
+  yoyo.kind = static_cast<int>(kYoyo);
+  yoyo.length = kYoyoValues;
   sim_->SampleYoyo(values_);
-  bridge::EncodePacket(yoyo, values_, 7, &yoyo_state_);
+  bridge::EncodePacket(yoyo, values_, kYoyoValues, &yoyo_state_);
   yoyo_->Publish(yoyo_state_, *yoyo_socket_);
 }
 

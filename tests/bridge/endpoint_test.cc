@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "bridge/bridge_layouts.h"
+
 namespace vlab::bridge {
 namespace {
 
@@ -20,12 +22,13 @@ EndpointConfig BaseConfig() {
   c.name = "nomad";
   c.kind = DeviceKind::kBase;
   c.describe_json = R"({"name":"nomad","kind":"base"})";
-  c.command_length = 4;
+  c.command_length = CommandLength(DeviceKind::kBase);
   c.status_first = true;
   c.watchdog_periods = 3;
   c.check_command = [](const std::vector<double>& p) {
-    if (p[0] != 0 && p[0] != 1) return CommandCheck::kMalformed;
-    if (std::abs(p[1]) > 1 || std::abs(p[2]) > 1 || std::abs(p[3]) > 2) return CommandCheck::kLimits;
+    const auto at = [&p](const char* field) { return p[CommandIndex(DeviceKind::kBase, field)]; };
+    if (at("frame") != 0 && at("frame") != 1) return CommandCheck::kMalformed;
+    if (std::abs(at("vx")) > 1 || std::abs(at("vy")) > 1 || std::abs(at("wz")) > 2) return CommandCheck::kLimits;
     return CommandCheck::kAccept;
   };
   return c;
@@ -129,7 +132,7 @@ TEST_F(EndpointTest, NonOwnersOfABaseSeeNotOwnerInTheStatus) {
   for (UdpSocket* s : {client_.get(), other_.get()}) {
     const long n = s->Receive(buffer, sizeof buffer, &from, 2.0);
     ASSERT_EQ(n, static_cast<long>(packet.size()));
-    const double status = GetDouble(buffer + kHeaderBytes);
+    const double status = GetDouble(buffer + kHeaderBytes + 8 * StateIndex(DeviceKind::kBase, "status"));
     EXPECT_EQ(status, s == other_.get() ? static_cast<double>(kStatusNotOwner) : 0.0);
   }
 }

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "bridge/bridge_layouts.h"
+
 namespace vlab::bridge {
 namespace {
 
@@ -286,12 +288,13 @@ TEST(ProtocolTest, ParseChecksKindTypeAndLayout) {
   };
 
   // arm command: mode 0..3 only
+  constexpr int kMode = kHeaderValues + CommandIndex(DeviceKind::kArm, "mode");
   std::vector<double> v = ArmCommandValues();
-  v[7] = 4;
+  v[kMode] = 4;
   EXPECT_EQ(parse(v, arm_command_parser), DecodeError::kBadValue);
-  v[7] = -1;
+  v[kMode] = -1;
   EXPECT_EQ(parse(v, arm_command_parser), DecodeError::kBadValue);
-  v[7] = 1.5;
+  v[kMode] = 1.5;
   EXPECT_EQ(parse(v, arm_command_parser), DecodeError::kBadValue);
   // arm state: 1 + 3n values, status a whole number >= 0
   EXPECT_EQ(parse({kMagic, 1, 1, 1, 0, 0, 4, 0, 1, 2, 3}, arm_state_parser), DecodeError::kNone);

@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Tests bridge/python/vlab_client.py: the Python client against a real device endpoint
-(tests/bridge/test_arm_server, C++), against scripted peers for the faults, and the
-joint_control examples (C++ and Python) end to end.
+(tests/bridge/test_arm_server, C++), against scripted peers for the faults, LayoutDevice
+against vlab-yoyosim's point and yoyo devices, and the joint_control examples (C++ and
+Python) end to end.
 
-    python_client_test.py --server PATH [--joint-control PATH] [unittest args, e.g. ClientTest]
+    python_client_test.py --server PATH [--joint-control PATH] [--yoyosim PATH]
+                          [unittest args, e.g. ClientTest]
 
 Timeouts are seconds, never tight: the tests must pass on a loaded machine.
 """
@@ -11,6 +13,7 @@ Timeouts are seconds, never tight: the tests must pass on a loaded machine.
 import argparse
 import json
 import os
+import re
 import socket
 import struct
 import subprocess
@@ -26,6 +29,7 @@ import vlab_client as vc  # noqa: E402
 
 SERVER = None          # test_arm_server binary (--server)
 JOINT_CONTROL = None   # examples/joint_control binary (--joint-control)
+YOYOSIM = None         # vlab-yoyosim binary (--yoyosim)
 PATIENCE_S = 5.0       # how long a test waits for something that must happen
 
 # docs/protocol.md, "A worked example"
@@ -59,6 +63,36 @@ class ArmServer:
         self.reader.join()
         self.proc.stdout.close()
         return [line.rstrip("\n") for line in self.lines]
+
+
+class Yoyosim:
+    """vlab-yoyosim on free ports, run from the source root (its scene path is relative); its start
+    line names both ports."""
+
+    def __init__(self, *args):
+        command = [YOYOSIM, "--point-port", "0", "--yoyo-port", "0"] + list(args)
+        self.proc = subprocess.Popen(command, cwd=SOURCE, stdout=subprocess.PIPE, text=True)
+        line = self.proc.stdout.readline()  # "vlab-yoyosim: point on 127.0.0.1:P, yoyo on 127.0.0.1:Q, ..."
+        ports = re.search(r"point on [^ ]+:(\d+), yoyo on [^ ]+:(\d+)", line)
+        if not ports:
+            self.proc.kill()
+            raise RuntimeError("vlab-yoyosim did not start: %r" % line)
+        self.point_port, self.yoyo_port = int(ports.group(1)), int(ports.group(2))
+        self.lines = []
+        self.reader = threading.Thread(target=lambda: self.lines.extend(self.proc.stdout))
+        self.reader.start()
+
+    def wait(self):
+        """Waits for the end of a --duration run; returns (exit code, output lines after the first)."""
+        code = self.proc.wait(timeout=60)
+        self.reader.join()
+        self.proc.stdout.close()
+        return code, [line.rstrip("\n") for line in self.lines]
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.terminate()
+        return self.wait()
 
 
 class Peer:
@@ -257,6 +291,107 @@ class ClientTest(unittest.TestCase):
                 vc.Arm(address, port)
 
 
+class LayoutDeviceTest(unittest.TestCase):
+    """LayoutDevice: any float64 kind by the names of its describe layout."""
+
+    def test_point_and_yoyo_of_vlab_yoyosim_by_field_name(self):
+        sim = Yoyosim("--duration", "0.1", "--start-timeout", "10", "--timeout", "5")
+        try:
+            with vc.LayoutDevice("point", "127.0.0.1", sim.point_port, timeout=PATIENCE_S) as hand, \
+                    vc.LayoutDevice(vc.KIND_YOYO, "127.0.0.1", sim.yoyo_port, timeout=PATIENCE_S) as yoyo:
+                self.assertEqual(hand.kind, "point")
+                self.assertEqual(hand.state_names, ["status", "x", "y", "z", "vx", "vy", "vz"])
+                self.assertEqual(hand.command_names, ["x", "y", "z"])
+                self.assertEqual(yoyo.state_names, ["status", "x", "y", "z", "vz", "string_force", "spin"])
+                self.assertEqual(yoyo.command_length, 0)
+                start = hand.describe()["start"]
+                h = hand.read(PATIENCE_S)
+                y = yoyo.read(PATIENCE_S)
+                self.assertEqual((h.seq, y.seq), (0, 0))
+                self.assertEqual(h["status"], vc.STATUS_HOLDING)  # no command yet
+                self.assertEqual([h["x"], h["y"], h["z"]], start)
+                self.assertEqual(h.values, tuple(h.fields[name] for name in hand.state_names))
+                self.assertEqual(y["status"], 0)
+                self.assertLess(y["z"], h["z"])  # the yo-yo hangs below the hand
+                self.assertGreaterEqual(y["string_force"], 0.0)
+                self.assertIn("spin", y)
+                with self.assertRaisesRegex(KeyError, "no state field 'grasped'"):
+                    y["grasped"]
+
+                with self.assertRaisesRegex(ValueError, "point 'point' at 127.0.0.1:%d: command field 'z' not given"
+                                            % sim.point_port):
+                    hand.write({"x": 0.0, "y": 0.0}, h.seq)
+                with self.assertRaisesRegex(ValueError, "no command field 'w'"):
+                    hand.write({"x": 0.0, "y": 0.0, "z": 1.5, "w": 1.0}, h.seq)
+                with self.assertRaisesRegex(ValueError, "command field 'x' is not finite"):
+                    hand.write({"x": float("nan"), "y": 0.0, "z": 1.5}, h.seq)
+                with self.assertRaisesRegex(ValueError, "takes no commands"):
+                    yoyo.write({"z": 1.0}, y.seq)
+
+                # lockstep: every period waits for the hand's command; the hand rises 1 mm a period
+                for k in range(10):
+                    self.assertTrue(hand.write({"z": start[2] + 0.001 * (k + 1), "y": start[1], "x": start[0]},
+                                               h.seq))
+                    h, y = hand.read(PATIENCE_S), yoyo.read(PATIENCE_S)
+                    self.assertEqual((h.seq, y.seq), (k + 1, k + 1))
+                    self.assertEqual(h["status"], 0)  # accepted: no longer holding
+                self.assertAlmostEqual(h["z"], start[2] + 0.010, delta=0.002)
+                self.assertGreater(h["vz"], 0.0)
+            code, lines = sim.wait()
+        finally:
+            sim.stop()
+        self.assertEqual(code, 0, lines)
+        self.assertTrue(any("accepted 10, refused 0" in line for line in lines), lines)
+
+    def test_an_arm_by_layout_groups_its_joint_values(self):
+        server = ArmServer()
+        try:
+            with vc.LayoutDevice("arm", "127.0.0.1", server.port, timeout=PATIENCE_S) as arm:
+                self.assertEqual(arm.state_fields, [("status", None), ("q", 7), ("qd", 7), ("tau", 7)])
+                self.assertEqual(arm.command_fields, [("mode", None), ("value", 7)])
+                s = arm.read(PATIENCE_S)
+                self.assertEqual(len(s["q"]), 7)
+                for i in range(7):
+                    self.assertAlmostEqual(s["q"][i], 0.1 * i + 0.001 * s.seq, places=12)
+                    self.assertEqual(s["tau"][i], 10.0 * i)
+                with self.assertRaisesRegex(ValueError, "command field 'value' has 6 values, not 7"):
+                    arm.write({"mode": vc.VELOCITY, "value": [0.0] * 6}, s.seq)
+                qd = [0.1, -0.2, 0.3, -0.4, 0.5, -0.6, 0.7]
+                self.assertTrue(arm.write({"value": qd, "mode": vc.VELOCITY}, s.seq))
+                arm.read(PATIENCE_S)
+        finally:
+            lines = server.stop()
+        commands = [parse_command(line) for line in lines if line.startswith("command ")]
+        self.assertEqual(commands, [(s.seq, vc.VELOCITY, qd)], lines)
+
+    def test_kinds_without_a_float64_layout_or_without_a_usable_layout(self):
+        for kind, message in (("camera", "camera devices are not float64 arrays"),
+                              (vc.KIND_MARKERS, "markers devices are not float64 arrays"),
+                              ("webcam", "device kind 'webcam' is not one of arm, wrench"), (14, "14")):
+            with self.assertRaisesRegex(ValueError, message):
+                vc.LayoutDevice(kind, "127.0.0.1", 50010)
+        gripper = {"name": "g", "kind": "gripper", "protocol": 1}
+        cases = [(dict(gripper), "has no layout"),
+                 (dict(gripper, layout={"state": ["status", "marker[count]"]}), "'marker\\[count\\]' has no whole"),
+                 (dict(gripper, layout={"state": ["x", "x"]}), "names 'x' twice"),
+                 (dict(gripper, layout={"state": ["x", 3]}), "holds 3, not a field name")]
+        for reply, message in cases:
+            peer = Peer(json.dumps(reply).encode())
+            try:
+                with self.assertRaisesRegex(vc.ProtocolError, message):
+                    vc.LayoutDevice("gripper", "127.0.0.1", peer.port, timeout=PATIENCE_S)
+            finally:
+                peer.close()
+
+    def test_kind_codes_are_the_protocol_pages(self):
+        # docs/protocol.md, "Devices and ports": | kind | code | ... |
+        with open(os.path.join(SOURCE, "docs", "protocol.md"), encoding="utf-8") as page:
+            text = page.read()
+        table = text[text.index("## Devices and ports"):]
+        rows = re.findall(r"^\| (\w+) \| (\d+) \|", table[:table.index("\n\n", table.index("| kind |"))], re.M)
+        self.assertEqual({int(code): name for name, code in rows}, vc.KIND_NAMES)
+
+
 class ExampleTest(unittest.TestCase):
     """The joint_control examples against a kinematic arm that follows their commands."""
 
@@ -298,6 +433,8 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser()
     parser.add_argument("--server", required=True)
     parser.add_argument("--joint-control", default=None)
+    parser.add_argument("--yoyosim", default=None)
     args, rest = parser.parse_known_args()
     SERVER, JOINT_CONTROL = args.server, args.joint_control
+    YOYOSIM = os.path.abspath(args.yoyosim) if args.yoyosim else None  # it runs from the source root
     unittest.main(argv=[sys.argv[0], "-v"] + rest)

@@ -15,6 +15,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_yoyo.h"
 #include "core/core_errors.h"
 #include "vision/vision_blob.h"
@@ -22,6 +23,12 @@
 
 namespace vlab::testing {
 namespace {
+
+// positions in the yoyo state the tracker fills (bridge/bridge_layouts.h)
+constexpr int Yoyo(const char* field) { return bridge::StateIndex(bridge::DeviceKind::kYoyo, field); }
+constexpr int kStatus = Yoyo("status"), kX = Yoyo("x"), kY = Yoyo("y"), kZ = Yoyo("z"), kVz = Yoyo("vz");
+constexpr int kForce = Yoyo("string_force"), kSpin = Yoyo("spin");
+constexpr int kValues = bridge::ValueCount(bridge::LayoutOf(bridge::DeviceKind::kYoyo).state);
 
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -44,12 +51,12 @@ TEST_F(YoyoBlobTest, TrackedHeightMatchesTheRenderedYoyoToMillimetres) {
     const double* s = tracker.Track(Image(), model_, X_world_camera(), k * kPeriod);
     ms.push_back(1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     const Eigen::Vector3d truth = TrueCentre();
-    ASSERT_EQ(s[0], 0.0) << "depth " << depth << ": not seen (" << tracker.blob().candidates << " candidates)";
-    z_err_mm.push_back(1000 * std::abs(s[3] - truth.z()));
-    lateral_mm.push_back(1000 * std::hypot(s[1] - truth.x(), s[2] - truth.y()));
-    if (k > 0) vz_err.push_back(std::abs(s[4] - (truth.z() - last_true_z) / kPeriod));
-    EXPECT_EQ(s[5], 0.0);
-    EXPECT_EQ(s[6], 0.0);
+    ASSERT_EQ(s[kStatus], 0.0) << "depth " << depth << ": not seen (" << tracker.blob().candidates << " candidates)";
+    z_err_mm.push_back(1000 * std::abs(s[kZ] - truth.z()));
+    lateral_mm.push_back(1000 * std::hypot(s[kX] - truth.x(), s[kY] - truth.y()));
+    if (k > 0) vz_err.push_back(std::abs(s[kVz] - (truth.z() - last_true_z) / kPeriod));
+    EXPECT_EQ(s[kForce], 0.0);
+    EXPECT_EQ(s[kSpin], 0.0);
     EXPECT_GT(tracker.blob().area_px, 300) << depth;  // both discs: R 35 mm at 2 m is ~12 px
     // (errors 0.0-0.5 mm: the silhouette of both discs, their dark rim included, is centred on the centre)
     last_true_z = truth.z();
@@ -77,19 +84,27 @@ TEST_F(YoyoBlobTest, NoBlobOrNoPoseIsNotSeenWithTheLastValues) {
   // nothing seen yet: not seen, zeros
   cv::Mat grey(480, 640, CV_8UC3, cv::Scalar(120, 120, 120));
   const double* s = tracker.Track(grey, model_, X_world_camera(), 0.0);
-  EXPECT_EQ(s[0], static_cast<double>(bridge::kYoyoNotSeen));
-  for (int i = 1; i < 7; ++i) EXPECT_EQ(s[i], 0.0) << i;
+  EXPECT_EQ(s[kStatus], static_cast<double>(bridge::kYoyoNotSeen));
+  for (int i = 0; i < kValues; ++i) {
+    if (i != kStatus) {
+      EXPECT_EQ(s[i], 0.0) << i;
+    }
+  }
 
   PlaceYoyo(0.5, 1.0);
   Render();
   s = tracker.Track(Image(), model_, X_world_camera(), 0.04);
-  ASSERT_EQ(s[0], 0.0);
-  const std::vector<double> seen(s, s + 7);
-  EXPECT_NEAR(seen[3], TrueCentre().z(), 0.004);
+  ASSERT_EQ(s[kStatus], 0.0);
+  const std::vector<double> seen(s, s + kValues);
+  EXPECT_NEAR(seen[kZ], TrueCentre().z(), 0.004);
 
   auto expect_last = [&](const char* what) {
-    EXPECT_EQ(tracker.state()[0], static_cast<double>(bridge::kYoyoNotSeen)) << what;
-    for (int i = 1; i < 7; ++i) EXPECT_EQ(tracker.state()[i], seen[i]) << what << " value " << i;
+    EXPECT_EQ(tracker.state()[kStatus], static_cast<double>(bridge::kYoyoNotSeen)) << what;
+    for (int i = 0; i < kValues; ++i) {
+      if (i != kStatus) {
+        EXPECT_EQ(tracker.state()[i], seen[i]) << what << " value " << i;
+      }
+    }
     EXPECT_FALSE(tracker.seen()) << what;
   };
   tracker.Track(grey, model_, X_world_camera(), 0.08);
@@ -110,8 +125,8 @@ TEST_F(YoyoBlobTest, NoBlobOrNoPoseIsNotSeenWithTheLastValues) {
   EXPECT_TRUE(tracker.blob().found);
   // seen again: fresh, vz from the last seen frame (the same height: 0)
   s = tracker.Track(Image(), model_, X_world_camera(), 0.24);
-  EXPECT_EQ(s[0], 0.0);
-  EXPECT_NEAR(s[4], 0.0, 1e-9);
+  EXPECT_EQ(s[kStatus], 0.0);
+  EXPECT_NEAR(s[kVz], 0.0, 1e-9);
 }
 
 TEST(YoyoBlob, HolesDoNotMoveTheCentroid) {

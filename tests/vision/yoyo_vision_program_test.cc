@@ -72,7 +72,7 @@ TEST_F(YoyoVisionProgramTest, ServesTheTrackedYoyoAsAYoyoDevice) {
   EXPECT_DOUBLE_EQ(describe["tracker"]["line"]["x"].get<double>(), 0.725);
 
   const std::vector<std::uint8_t> blank(640 * 480 * 3, 110);
-  std::vector<double> last;
+  bridge::Device::State last;  // the last state that saw the yo-yo
   double worst_mm = 0;
   int seen = 0, not_seen = 0;
   for (int k = 0; k < kFrames; ++k) {
@@ -90,23 +90,26 @@ TEST_F(YoyoVisionProgramTest, ServesTheTrackedYoyoAsAYoyoDevice) {
     ASSERT_EQ(state.seq, id);
     EXPECT_DOUBLE_EQ(state.time, exposure_s);
     ASSERT_EQ(state.values.size(), 7u);
+    const auto field = [&](const char* name) { return yoyo->Field(state, name); };
     if (hidden) {
       ++not_seen;
-      EXPECT_EQ(state.values[0], static_cast<double>(bridge::kYoyoNotSeen)) << k;
-      for (int i = 1; i < 7; ++i) EXPECT_EQ(state.values[i], last[i]) << k << " value " << i;
+      EXPECT_EQ(field("status"), static_cast<double>(bridge::kYoyoNotSeen)) << k;
+      for (const char* name : {"x", "y", "z", "vz", "string_force", "spin"}) {
+        EXPECT_EQ(field(name), yoyo->Field(last, name)) << k << " " << name;
+      }
       continue;
     }
     ++seen;
-    EXPECT_EQ(state.values[0], 0.0) << k;
-    const double err_mm = 1000 * std::abs(state.values[3] - TrueCentre().z());
+    EXPECT_EQ(field("status"), 0.0) << k;
+    const double err_mm = 1000 * std::abs(field("z") - TrueCentre().z());
     EXPECT_LT(err_mm, 3.0) << k;  // JPEG q90: 0.3-1.2 mm, one frame 2.5 mm (rendered raw: <= 0.5 mm)
-    EXPECT_NEAR(state.values[1], 0.725, 0.002) << k;
-    EXPECT_NEAR(state.values[2], 0.0, 1e-9) << k;  // the plane facing a camera on -y is y = 0
-    EXPECT_EQ(state.values[5], 0.0);
-    EXPECT_EQ(state.values[6], 0.0);
+    EXPECT_NEAR(field("x"), 0.725, 0.002) << k;
+    EXPECT_NEAR(field("y"), 0.0, 1e-9) << k;  // the plane facing a camera on -y is y = 0
+    EXPECT_EQ(field("string_force"), 0.0);
+    EXPECT_EQ(field("spin"), 0.0);
     worst_mm = std::max(worst_mm, err_mm);
-    std::printf("  frame %d z %.3f err %.2f mm\n", k, TrueCentre().z(), 1000 * (state.values[3] - TrueCentre().z()));
-    last = state.values;
+    std::printf("  frame %d z %.3f err %.2f mm\n", k, TrueCentre().z(), 1000 * (field("z") - TrueCentre().z()));
+    last = state;
   }
   std::printf("vlab vision --yoyo-port over UDP: %d JPEG frames, %d seen (worst z error %.2f mm), %d not seen\n",
               kFrames, seen, worst_mm, not_seen);

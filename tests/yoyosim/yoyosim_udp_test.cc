@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_client_device.h"
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_udp.h"
 #include "bridge/bridge_yoyo.h"
@@ -21,6 +22,14 @@ namespace {
 
 using testing::YoyosimProcess;
 using Clock = std::chrono::steady_clock;
+
+// positions in the point's and the yo-yo's states
+constexpr int kHandZ = StateIndex(DeviceKind::kPoint, "z"), kHandVz = StateIndex(DeviceKind::kPoint, "vz");
+constexpr int kPointStatus = StateIndex(DeviceKind::kPoint, "status");
+constexpr int kYoyoVz = StateIndex(DeviceKind::kYoyo, "vz"), kYoyoForce = StateIndex(DeviceKind::kYoyo, "string_force");
+constexpr int kYoyoValues = ValueCount(LayoutOf(DeviceKind::kYoyo).state);
+// RunLockstep's rows: the yo-yo's state, then the hand's z and vz
+constexpr int kRow = kYoyoValues + 2, kRowHandZ = kYoyoValues, kRowHandVz = kYoyoValues + 1;
 
 double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
 bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
@@ -42,8 +51,8 @@ std::vector<double> RunLockstep(YoyosimProcess& p, int periods) {
     EXPECT_EQ(y.seq, k);
     EXPECT_DOUBLE_EQ(y.time, k * 0.01);
     values.insert(values.end(), y.values.begin(), y.values.end());
-    values.push_back(hand.values[3]);  // hand z
-    values.push_back(hand.values[6]);  // hand vz
+    values.push_back(hand.values[kHandZ]);
+    values.push_back(hand.values[kHandVz]);
     if (k < periods) point.Write(HandAt((k + 1) * 0.01), k);
   }
   return values;
@@ -84,16 +93,17 @@ TEST(YoyosimUdp, LockstepAnswersEveryPeriodOnceAndKeepsThePhysics) {
   EXPECT_TRUE(Has(p.output(), "60 periods (0.600 s), set-points applied 60, lockstep timeouts 0")) << p.output();
   EXPECT_TRUE(Has(p.output(), "accepted 60, refused 0")) << p.output();
   EXPECT_TRUE(Has(p.output(), "stale 0, duplicate 0")) << p.output();
-  // rows of 9: yo-yo [status x y z vz force spin], hand z, hand vz
-  ASSERT_EQ(v.size(), 9u * (kPeriods + 1));
-  auto relative_rate = [&](int k) { return v[9 * k + 8] - v[9 * k + 4]; };  // d' = v_hand - vz
+  // rows: yo-yo [status x y z vz force spin], hand z, hand vz
+  ASSERT_EQ(v.size(), static_cast<std::size_t>(kRow * (kPeriods + 1)));
+  auto at = [&](int k, int i) { return v[kRow * k + i]; };
+  auto relative_rate = [&](int k) { return at(k, kRowHandVz) - at(k, kYoyoVz); };  // d' = v_hand - vz
   const double share = 0.05 * 0.008 * 0.008 / (0.05 * 0.008 * 0.008 + 3.0625e-5);
   const int k1 = 20, k2 = 60;
   const double dt = (k2 - k1) * 0.01;
-  const double a_hand = (v[9 * k2 + 8] - v[9 * k1 + 8]) / dt;
+  const double a_hand = (at(k2, kRowHandVz) - at(k1, kRowHandVz)) / dt;
   const double expected = (9.81 + a_hand) * share;
   EXPECT_NEAR((relative_rate(k2) - relative_rate(k1)) / dt, expected, 1e-4 * expected);
-  EXPECT_GT(v[9 * k2 + 5], 0.0) << "the string is taut";
+  EXPECT_GT(at(k2, kYoyoForce), 0.0) << "the string is taut";
 }
 
 TEST(YoyosimUdp, SameCommandsGiveTheSameYoyoStatesBitForBit) {
@@ -169,7 +179,7 @@ TEST(YoyosimUdp, BadPacketsAreRefusedAndCountedWhileTheRunGoesOn) {
   for (int k = 0; k <= 20; ++k) {
     ASSERT_TRUE(owner.Next()) << "state " << k;
     ASSERT_EQ(owner.header.seq, k);
-    status[k] = owner.values[0];
+    status[k] = owner.values[kPointStatus];
     const double z = 1.5 + 0.001 * k;
     if (k == 3) {  // malformed, six ways
       owner.Send({1, 2, 3});
@@ -203,7 +213,7 @@ TEST(YoyosimUdp, BadPacketsAreRefusedAndCountedWhileTheRunGoesOn) {
   while (other.Next() && other.header.seq < 10) {
   }
   ASSERT_EQ(other.header.seq, 10);
-  EXPECT_EQ(static_cast<unsigned>(other.values[0]) & kStatusNotOwner, kStatusNotOwner);
+  EXPECT_EQ(static_cast<unsigned>(other.values[kPointStatus]) & kStatusNotOwner, kStatusNotOwner);
   EXPECT_EQ(p.Wait(), 0);
   EXPECT_TRUE(Has(p.output(), "20 periods (0.200 s), set-points applied 19, lockstep timeouts 1, releases 0"))
       << p.output();
