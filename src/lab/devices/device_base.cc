@@ -18,6 +18,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
+
 #include "lab/devices/device_base.h"
 #include "core/core_errors.h"
 #include "lab/lab_yaml.h"
@@ -151,7 +153,7 @@ class SimBase final : public Device {
 
   std::string DescribeFacts() const override {
     nlohmann::json j;
-    j["layout"] = {{"state", {"status", "x", "y", "yaw", "vx", "vy", "wz"}}, {"command", {"frame", "vx", "vy", "wz"}}};
+    j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"x", "m (odometry, world)"}, {"yaw", "rad"}, {"vx", "m/s (base frame)"}, {"wz", "rad/s"}};
     j["frames"] = {{"base", 0}, {"world", 1}};
     j["status_bits"] = {{"holding", bridge::kStatusHolding}, {"refused", bridge::kStatusRefused},

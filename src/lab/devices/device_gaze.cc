@@ -24,6 +24,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
+
 #include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
 #include "lab/lab_yaml.h"
@@ -93,7 +95,7 @@ class SimGaze final : public Device {
 
   std::string DescribeFacts() const override {
     nlohmann::json j;
-    j["layout"] = {{"state", {"error_deg", "u", "v", "visible"}}, {"command", nlohmann::json::array()}};
+    j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"error_deg", "deg"}, {"u", "px"}, {"v", "px"}, {"visible", "1 or 0"}};
     j["camera"] = config_.camera;
     j["target"] = config_.target;

@@ -21,6 +21,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
+
 #include "lab/devices/device_gripper.h"
 #include "core/core_errors.h"
 #include "lab/lab_yaml.h"
@@ -134,8 +136,7 @@ class SimGripper final : public Device {
 
   std::string DescribeFacts() const override {
     nlohmann::json j;
-    j["layout"] = {{"state", {"status", "opening", "opening_velocity", "force", "grasped"}},
-                   {"command", {"mode", "value"}}};
+    j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"opening", "m"}, {"opening_velocity", "m/s"}, {"force", "N"}, {"value", "m (mode 0), N (mode 1)"}};
     j["modes"] = {{"position", 0}, {"force", 1}};
     j["status_bits"] = {{"holding", bridge::kStatusHolding}, {"refused", bridge::kStatusRefused},

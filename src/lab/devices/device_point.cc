@@ -29,6 +29,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
+
 #include "bridge/bridge_yoyo.h"
 #include "control/robot_model.h"
 #include "control/task_space.h"
@@ -184,7 +186,7 @@ class SimPoint final : public Device {
 
   std::string DescribeFacts() const override {
     nlohmann::json j;
-    j["layout"] = {{"state", bridge::kPointStateLayout}, {"command", bridge::kPointCommandLayout}};
+    j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"x", "m"}, {"vx", "m/s"}};
     j["frame"] = "world";
     j["arm"] = arm_->name();

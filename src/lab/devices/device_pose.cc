@@ -17,6 +17,8 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
+
 #include "lab/devices/device_pose.h"
 #include "core/core_errors.h"
 #include "lab/lab_yaml.h"
@@ -64,7 +66,7 @@ class SimPose final : public Device {
 
   std::string DescribeFacts() const override {
     nlohmann::json j;
-    j["layout"] = {{"state", {"x", "y", "z", "qw", "qx", "qy", "qz"}}, {"command", nlohmann::json::array()}};
+    j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"x", "m"}, {"qw", "unit quaternion"}};
     j["site"] = config_.site;
     j["frame"] = config_.relative_to;

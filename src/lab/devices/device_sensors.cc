@@ -18,6 +18,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
+
 #include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "lab/lab_yaml.h"
@@ -91,7 +93,7 @@ class SimSensorDevice final : public Device {
 
   std::string DescribeFacts() const override {
     nlohmann::json j;
-    j["layout"] = {{"state", names_}, {"command", nlohmann::json::array()}};
+    j["layout"] = bridge::LayoutJson(kind(), names_);
     if (kind_ == bridge::DeviceKind::kFeet) {
       j["units"] = {{"force", "N"}};
     } else {

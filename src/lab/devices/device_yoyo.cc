@@ -22,6 +22,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
+
 #include "bridge/bridge_yoyo.h"
 #include "lab/devices/device_yoyo.h"
 #include "core/core_errors.h"
@@ -97,7 +99,7 @@ class SimYoyo final : public Device {
 
   std::string DescribeFacts() const override {
     nlohmann::json j;
-    j["layout"] = {{"state", bridge::kYoyoStateLayout}, {"command", nlohmann::json::array()}};
+    j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"x", "m"}, {"vz", "m/s"}, {"string_force", "N"}, {"spin", "rad/s"}};
     j["frame"] = "world";
     j["status_bits"] = {{"not_seen", bridge::kYoyoNotSeen}};
