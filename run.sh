@@ -18,6 +18,7 @@ build/vlab run cases/yoyo/stage1 || status=$?
 if [ -f out/yoyo_stage1/yoyo.png ]; then
   grep -h "amplitude check" out/yoyo_stage1/controller.log || true
   echo "Open out/yoyo_stage1/yoyo.png: the hand's and the yo-yo's height against time (numbers in"
-  echo "out/yoyo_stage1/yoyo.csv). The other stages: ./run.sh cases/yoyo/stage2, ./run.sh cases/yoyo/stage3."
+  echo "out/yoyo_stage1/yoyo.csv; how to read it: cases/yoyo/README.md). The other stages:"
+  echo "./run.sh cases/yoyo/stage2, ./run.sh cases/yoyo/stage3."
 fi
 exit $status
