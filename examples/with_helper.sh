@@ -2,8 +2,8 @@
 # with_helper.sh: runs a helper program in the background and a controller in the
 # foreground, for an external controller that needs a second program beside it:
 #   with_helper.sh HELPER [ARGS...] -- CONTROLLER [ARGS...]
-# The yo-yo stages use it: stage 2 starts vlab-yoyosim beside examples/yoyo_control,
-# stage 3 starts `vlab vision --yoyo-port` (scenes/yoyo_stage2.yaml, yoyo_stage3.yaml).
+# The yo-yo stages use it: stage 2 starts vlab-yoyosim beside cases/yoyo/yoyo_control,
+# stage 3 starts `vlab vision --yoyo-port` (cases/yoyo/stage2.yaml, stage3.yaml).
 # When the controller exits, the helper gets SIGTERM. SIGTERM or SIGINT to this script
 # (the end of a `vlab run` signals the whole process group) ends both. The exit status is
 # the controller's (a controller the signal ended: this script ends by it too); where the
