@@ -1,4 +1,4 @@
-// Every scenario shipped under scenes/ binds: each device finds the MJCF joints,
+// Every scenario shipped under scenes/ and cases/*/ binds: each device finds the MJCF joints,
 // actuators, sensors, sites, bodies and cameras it names (Lab::Create throws
 // InputError naming the missing one otherwise), the scene loads without a
 // MuJoCo warning, and the log has the columns of every device. Running them to
@@ -18,10 +18,17 @@
 namespace vlab::lab {
 namespace {
 
+// scenes/*.yaml and every case study's cases/NAME/*.yaml, sorted
 std::vector<std::string> ShippedScenarios() {
   std::vector<std::string> out;
-  for (const auto& entry : std::filesystem::directory_iterator(VLAB_SOURCE_DIR "/scenes")) {
-    if (entry.path().extension() == ".yaml") out.push_back(entry.path().string());
+  const auto add_scenarios_in = [&out](const std::filesystem::path& dir) {
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+      if (entry.path().extension() == ".yaml") out.push_back(entry.path().string());
+    }
+  };
+  add_scenarios_in(VLAB_SOURCE_DIR "/scenes");
+  for (const auto& entry : std::filesystem::directory_iterator(VLAB_SOURCE_DIR "/cases")) {
+    if (entry.is_directory()) add_scenarios_in(entry.path());
   }
   std::sort(out.begin(), out.end());
   return out;
@@ -31,6 +38,9 @@ TEST(ShippedScenarios, EveryDeviceBindsToItsScene) {
   InstallMujocoHandlers();
   const std::vector<std::string> files = ShippedScenarios();
   ASSERT_GE(files.size(), 7u);  // pa10_reach, pa10_joint_pd, pa10_serve, pa10_cubes, pa10_nomad_reach, hoap3_stand, head_track, ...
+  ASSERT_TRUE(std::any_of(files.begin(), files.end(), [](const std::string& f) {
+    return f.find("/cases/yoyo/stage1.yaml") != std::string::npos;
+  }));  // and the case studies' (cases/yoyo/stage1.yaml, ...)
   for (const std::string& file : files) {
     SCOPED_TRACE(file);
     const Scenario scenario = LoadScenario(file);
