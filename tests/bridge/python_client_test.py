@@ -367,7 +367,7 @@ class LayoutDeviceTest(unittest.TestCase):
     def test_kinds_without_a_float64_layout_or_without_a_usable_layout(self):
         for kind, message in (("camera", "camera devices are not float64 arrays"),
                               (vc.KIND_MARKERS, "markers devices are not float64 arrays"),
-                              ("webcam", "device kind 'webcam' is not one of arm, wrench"), (14, "14")):
+                              ("webcam", "device kind 'webcam' is not one of arm, wrench"), (99, "99")):
             with self.assertRaisesRegex(ValueError, message):
                 vc.LayoutDevice(kind, "127.0.0.1", 50010)
         gripper = {"name": "g", "kind": "gripper", "protocol": 1}
