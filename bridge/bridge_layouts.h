@@ -188,6 +188,10 @@ inline constexpr LayoutField kPoseState[] = {
     {"qy", "", "orientation in that frame (unit quaternion)"},
     {"qz", "", "orientation in that frame (unit quaternion)"},
 };
+inline constexpr LayoutField kCounterState[] = {
+    {"revolutions", "turns", "whole turns since the start of the run, signed"},
+    {"rpm", "1/min", "the speed over the last gate time, rounded to the describe reply's resolution_rpm"},
+};
 
 }  // namespace layout_detail
 
@@ -215,6 +219,8 @@ inline constexpr KindLayout kKindLayouts[kMaxDeviceKind] = {
      "output only; lab ground truth"},
     {DeviceKind::kPose, "pose", true, layout_detail::Fields(layout_detail::kPoseState), {},
      "output only; ground truth of a tracked frame"},
+    {DeviceKind::kCounter, "counter", true, layout_detail::Fields(layout_detail::kCounterState), {},
+     "output only; a gate-time speed counter"},
 };
 
 namespace layout_detail {

@@ -63,8 +63,9 @@ enum class DeviceKind : int {
   kYoyo = 11,    ///< yo-yo state
   kGaze = 12,    ///< ground-truth gaze of a camera on a target (lab only)
   kPose = 13,    ///< pose of a tracked frame, like a motion-capture system
+  kCounter = 14,  ///< speed counter on a spinning joint (the PowerBall's rpm counter)
 };
-inline constexpr int kMaxDeviceKind = 13;
+inline constexpr int kMaxDeviceKind = 14;
 enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3 };
 
 /// Arm status bits (state payload value 0, as a whole number).

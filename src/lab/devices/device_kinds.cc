@@ -4,6 +4,7 @@
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_base.h"
 #include "lab/devices/device_camera.h"
+#include "lab/devices/device_counter.h"
 #include "lab/devices/device_gaze.h"
 #include "lab/devices/device_gripper.h"
 #include "lab/devices/device_point.h"
@@ -34,6 +35,7 @@ const DeviceKindSpec kDeviceKinds[] = {
     {DeviceKind::kPose, &ReadPoseParams, &MakePose},
     {DeviceKind::kPoint, &ReadPointParams, &MakePoint},
     {DeviceKind::kYoyo, &ReadYoyoParams, &MakeYoyo},
+    {DeviceKind::kCounter, &ReadCounterParams, &MakeCounter},
 };
 
 const char* Name(DeviceKind kind) { return bridge::KindName(static_cast<int>(kind)); }
