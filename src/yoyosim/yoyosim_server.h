@@ -1,5 +1,5 @@
 // The yo-yo simulator on the wire: a YoyoSim behind two bridge DeviceEndpoints,
-// `point` (the hand) and `yoyo`, timed by the lab's clock (lab_clock.h).
+// `point` (the hand) and `yoyo`, timed by the lab's clock policy (core/core_clock.h).
 //
 // Ports
 //   input   point port: point commands [x, y, z] (hand set-point, m, world),

@@ -1,5 +1,5 @@
-// Tests the base, feet and imu devices (src/lab/lab_base_device.cc,
-// lab_sensor_device.cc): a holonomic base on planar joints with velocity
+// Tests the base, feet and imu devices (src/lab/devices/device_base.cc,
+// device_sensors.cc): a holonomic base on planar joints with velocity
 // actuators tracks commands within its acceleration limits, in the base and
 // the world frame, brakes on hold, keeps exact odometry without drift and a
 // seeded, repeatable drift with it; touch sensors under a resting body sum to

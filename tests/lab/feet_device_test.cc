@@ -1,4 +1,4 @@
-// Tests the feet device's support columns (src/lab/lab_sensor_device.cc with
+// Tests the feet device's support columns (src/lab/devices/device_sensors.cc with
 // `pads` and `weight_of`) and the support polygon (src/lab/lab_support_polygon.cc)
 // against closed forms:
 //   - a block resting on four pads with its COM off centre: the FSR sum is its

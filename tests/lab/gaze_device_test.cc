@@ -1,4 +1,4 @@
-// Tests the gaze probe (src/lab/lab_gaze_device.cc) against closed forms: a
+// Tests the gaze probe (src/lab/devices/device_gaze.cc) against closed forms: a
 // camera on a turning body and a fixed camera in a general pose, targets on
 // and off the optical axis, behind the camera and outside the image; the
 // angle is atan of the lateral over the axial distance, the pixel the

@@ -1,5 +1,5 @@
-// Tests the gripper and pose devices (src/lab/lab_gripper_device.cc,
-// lab_pose_device.cc) on the mjcf/gripper model mounted fixed, jaws pointing
+// Tests the gripper and pose devices (src/lab/devices/device_gripper.cc,
+// device_pose.cc) on the mjcf/gripper model mounted fixed, jaws pointing
 // down, with a 5 cm cube between the pads:
 //   - position mode: the opening ramps at the configured speed and settles at
 //     the set-point; out-of-range and unknown-mode commands are refused;

@@ -1,4 +1,4 @@
-// Tests the point device (src/lab/lab_point_device.cc) on the PA10 of
+// Tests the point device (src/lab/devices/device_point.cc) on the PA10 of
 // scenes/pa10.xml: it holds before its first command, moves the tool tip to a
 // commanded point with the start orientation kept, ramps at max_speed, refuses
 // non-finite and out-of-workspace commands, holds on the watchdog, overrides

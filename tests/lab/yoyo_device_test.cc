@@ -1,4 +1,4 @@
-// Tests the yoyo device (src/lab/lab_yoyo_device.cc) in scenes/pa10_yoyo.xml:
+// Tests the yoyo device (src/lab/devices/device_yoyo.cc) in scenes/pa10_yoyo.xml:
 // its values against the model's state and the closed forms of DATASHEET §6.3
 // (centre = hand - d along the hand's z, tension = sum of the two sensors, zero
 // when slack, T = m g J / (J + m r²) while descending), the 25 Hz sample and

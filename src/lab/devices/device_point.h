@@ -14,7 +14,7 @@ namespace vlab::lab {
 /// A task-space interface to an arm's tool (kind point), like a robot
 /// controller's Cartesian position input: a commanded point [x, y, z] that the
 /// device turns into joint velocity commands for its arm every control period
-/// (src/lab/lab_point_device.cc).
+/// (device_point.cc).
 struct PointParams : DeviceParams {
   std::string arm;                  ///< the arm device it drives (a device of the same scenario)
   std::string site = "tool";        ///< the point: an MJCF site at the end of the arm's chain

@@ -13,7 +13,7 @@ namespace vlab::lab {
 
 /// The yo-yo of mjcf/yoyo measured (kind yoyo): its centre, vertical speed,
 /// string tension and spin, optionally at a camera's rate and with noise
-/// (src/lab/lab_yoyo_device.cc). Defaults: the model's names.
+/// (device_yoyo.cc). Defaults: the model's names.
 struct YoyoParams : DeviceParams {
   std::string slide = "yoyo_drop";   ///< slide joint d: the centre's distance below the hand, m
   std::string spin = "yoyo_spin";    ///< hinge joint of the spin
