@@ -10,22 +10,39 @@
 //   - a pose device tracks the cube in the gripper's frame and its distance to
 //     a target site;
 //   - bad bindings name the device and the element.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
 #include <gtest/gtest.h>
 
+#include "bridge/bridge_layouts.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/devices/device_gripper.h"
 #include "lab/devices/device_pose.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "mujoco_fixture.h"
 #include "test_util.h"
 
 namespace vlab::lab {
 namespace {
 
 constexpr double kCubeMass = 0.1;  // kg
+
+// the gripper's and the pose's state payloads (docs/protocol.md)
+constexpr int kStatus = bridge::StateIndex(bridge::DeviceKind::kGripper, "status");
+constexpr int kOpening = bridge::StateIndex(bridge::DeviceKind::kGripper, "opening");
+constexpr int kForce = bridge::StateIndex(bridge::DeviceKind::kGripper, "force");
+constexpr int kGrasped = bridge::StateIndex(bridge::DeviceKind::kGripper, "grasped");
+constexpr int kPoseQx = bridge::StateIndex(bridge::DeviceKind::kPose, "qx");
+
+// the index of the log column `name` of `device`, -1 when it has none
+int ColumnOf(const Device& device, const std::string& name) {
+  const std::vector<std::string> columns = device.Columns();
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  return it == columns.end() ? -1 : static_cast<int>(it - columns.begin());
+}
 
 // the scene, written in `dir`: MJCF includes are relative to the including file
 std::string SceneXml(const std::string& dir) {
@@ -53,14 +70,12 @@ std::string SceneXml(const std::string& dir) {
 </mujoco>)";
 }
 
-class GripperDeviceTest : public ::testing::Test {
+class GripperDeviceTest : public test::MujocoTest {
  protected:
   void SetUp() override {
     testing::WriteFile(dir_ / "scene.xml", SceneXml(dir_.path()));
-    model_ = LoadModel(dir_ / "scene.xml");
-    m_ = model_.get();
-    data_ = MakeData(m_);
-    d_ = data_.get();
+    m_ = LoadModel(dir_ / "scene.xml");
+    d_ = MakeData(m_);
     // the jaws wide open around the cube
     for (const char* jaw : {"gripper_left", "gripper_right"}) d_->qpos[m_->jnt_qposadr[mj_name2id(m_, mjOBJ_JOINT, jaw)]] = 0.034;
     mj_forward(m_, d_);
@@ -103,8 +118,6 @@ class GripperDeviceTest : public ::testing::Test {
   }
 
   testing::TempDir dir_;
-  ModelPtr model_;
-  DataPtr data_;
   mjModel* m_ = nullptr;
   mjData* d_ = nullptr;
   std::unique_ptr<Device> gripper_, pose_;
@@ -116,32 +129,34 @@ TEST_F(GripperDeviceTest, OpensAtItsSpeedAndRefusesWhatItCannotDo) {
   EXPECT_EQ(gripper_->CheckCommand({1, -1}), bridge::CommandCheck::kLimits);
   EXPECT_EQ(gripper_->CheckCommand({2, 0}), bridge::CommandCheck::kMalformed);
   ASSERT_EQ(gripper_->CheckCommand({0, 0.052}), bridge::CommandCheck::kAccept);
-  const double start = State()[1];
+  const double start = State()[kOpening];
   EXPECT_NEAR(start, 0.068, 1e-6);  // wide open, as set up
   gripper_->Command({0, 0.052});    // close to 1 mm from the cube on each side
   Run(0.1);                         // 0.1 s at 83 mm/s: 8.3 mm of set-point travel
   std::vector<double> row(gripper_->ColumnCount());
   gripper_->Row(*d_, row.data());
-  EXPECT_NEAR(start - row[4], 0.083 * 0.1, 1e-9);  // the servo's set-point (log column setpoint)
-  EXPECT_LT(start - State()[1], start - row[4]);    // the jaws follow it, behind
-  EXPECT_EQ(State()[0], 0.0);                       // commanded: not holding
+  const int setpoint = ColumnOf(*gripper_, "gripper.setpoint");
+  ASSERT_GE(setpoint, 0);
+  EXPECT_NEAR(start - row[setpoint], 0.083 * 0.1, 1e-9);        // the servo's set-point
+  EXPECT_LT(start - State()[kOpening], start - row[setpoint]);  // the jaws follow it, behind
+  EXPECT_EQ(State()[kStatus], 0.0);                             // commanded: not holding
   Run(3.0);
-  EXPECT_NEAR(State()[1], 0.052, 0.0005);
-  EXPECT_EQ(State()[4], 0.0);  // nothing pressed between the pads
-  EXPECT_LT(State()[3], 0.01);
+  EXPECT_NEAR(State()[kOpening], 0.052, 0.0005);
+  EXPECT_EQ(State()[kGrasped], 0.0);  // nothing pressed between the pads
+  EXPECT_LT(State()[kForce], 0.01);
 }
 
 TEST_F(GripperDeviceTest, GripsWithTheCommandedForceAndHoldsTheCube) {
   const double grip_N = 40.0;
   Run(0.1);  // the cube settles on its pedestal between the open jaws
   const double z0 = PoseRow()[2];
-  EXPECT_EQ(State()[4], 0.0);
+  EXPECT_EQ(State()[kGrasped], 0.0);
   gripper_->Command({1, grip_N});
   Run(2.5);  // the jaws close against their damping (4800 N s/m each: about 8 mm/s at 40 N)
   std::vector<double> s = State();
-  EXPECT_NEAR(s[1], 0.05, 0.001);           // the jaws stopped at the cube's width
-  EXPECT_NEAR(s[3], grip_N, grip_N * 0.05);  // each pad presses with the grip force
-  EXPECT_EQ(s[4], 1.0);                      // grasped
+  EXPECT_NEAR(s[kOpening], 0.05, 0.001);          // the jaws stopped at the cube's width
+  EXPECT_NEAR(s[kForce], grip_N, grip_N * 0.05);  // each pad presses with the grip force
+  EXPECT_EQ(s[kGrasped], 1.0);                    // grasped
   // take the pedestal away: friction alone holds the cube (2 pads x mu x 40 N >> m g)
   const int pedestal = mj_name2id(m_, mjOBJ_GEOM, "pedestal");
   m_->geom_contype[pedestal] = m_->geom_conaffinity[pedestal] = 0;
@@ -152,18 +167,18 @@ TEST_F(GripperDeviceTest, GripsWithTheCommandedForceAndHoldsTheCube) {
   // held: a cube that slipped would have fallen metres in that second; the soft
   // contacts let it creep a fraction of a millimetre
   EXPECT_LT(std::abs(z2 - z1), 1e-3);
-  EXPECT_EQ(State()[4], 1.0);
+  EXPECT_EQ(State()[kGrasped], 1.0);
   // the watchdog's hold keeps the grip
   gripper_->Hold();
   Run(0.5);
-  EXPECT_EQ(State()[4], 1.0);
-  EXPECT_EQ(State()[0], static_cast<double>(bridge::kStatusHolding));
+  EXPECT_EQ(State()[kGrasped], 1.0);
+  EXPECT_EQ(State()[kStatus], static_cast<double>(bridge::kStatusHolding));
   EXPECT_LT(std::abs(PoseRow()[2] - z1), 1e-3);
   // open: the cube falls out, nothing is grasped
   gripper_->Command({0, 0.068});
   Run(0.5);
-  EXPECT_EQ(State()[4], 0.0);
-  EXPECT_LT(State()[3], 0.5);
+  EXPECT_EQ(State()[kGrasped], 0.0);
+  EXPECT_LT(State()[kForce], 0.5);
   EXPECT_GT(PoseRow()[2], z1 + 0.05);  // the gripper's z points down: the cube moved away along it
 }
 
@@ -180,7 +195,7 @@ TEST_F(GripperDeviceTest, PoseDeviceReportsTheFrameAndTheTarget) {
   std::vector<double> state;
   pose_->State(&state);
   ASSERT_EQ(state.size(), 7u);
-  EXPECT_NEAR(std::abs(state[4]), 1.0, 1e-12);  // the gripper is the world turned 180 deg about x: q = (0, 1, 0, 0)
+  EXPECT_NEAR(std::abs(state[kPoseQx]), 1.0, 1e-12);  // the gripper is the world turned 180 deg about x: q = (0, 1, 0, 0)
 }
 
 TEST_F(GripperDeviceTest, BadBindingsNameTheElement) {
