@@ -4,10 +4,12 @@
 // non-finite and out-of-workspace commands, holds on the watchdog, overrides
 // the arm's own commands, and the scenario rules around it (its arm must exist,
 // one driver per arm).
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
 
+#include "bridge/bridge_layouts.h"
 #include "control/task_space.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_kinds.h"
@@ -15,12 +17,28 @@
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
+#include "mujoco_fixture.h"
 #include "test_util.h"
 
 namespace vlab::lab {
 namespace {
 
 constexpr double kPeriod = 0.01;  // s: 10 physics steps of 1 ms
+
+// the point device's state payload (docs/protocol.md)
+constexpr int kStatus = bridge::StateIndex(bridge::DeviceKind::kPoint, "status");
+constexpr int kX = bridge::StateIndex(bridge::DeviceKind::kPoint, "x");
+constexpr int kVx = bridge::StateIndex(bridge::DeviceKind::kPoint, "vx");
+constexpr int kVy = bridge::StateIndex(bridge::DeviceKind::kPoint, "vy");
+constexpr int kVz = bridge::StateIndex(bridge::DeviceKind::kPoint, "vz");
+static_assert(bridge::StateIndex(bridge::DeviceKind::kPoint, "z") == kX + 2, "x, y, z follow each other");
+
+// the index of the log column `name` of `device`, -1 when it has none
+int ColumnOf(const Device& device, const std::string& name) {
+  const std::vector<std::string> columns = device.Columns();
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  return it == columns.end() ? -1 : static_cast<int>(it - columns.begin());
+}
 
 DeviceConfig ArmConfig() {
   DeviceConfig c;
@@ -46,31 +64,36 @@ DeviceConfig PointConfig(double max_speed = 0.2) {
   return c;
 }
 
-// The arm and its point device, stepped like the lab's run loop does.
+// The arm and its point device on a model and data the fixture owns, stepped
+// like the lab's run loop does.
 struct Rig {
-  ModelPtr model = LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
-  DataPtr data = MakeData(model.get());
-  std::unique_ptr<SimArm> arm = SimArm::Create({model.get(), kPeriod, 1, "pa10.xml"}, ArmConfig());
+  mjModel* model;
+  mjData* data;
+  std::unique_ptr<SimArm> arm;
   std::unique_ptr<Device> point;
-  int tool = mj_name2id(model.get(), mjOBJ_SITE, "tool");
+  int tool;
 
-  explicit Rig(double max_speed = 0.2) {
-    point = MakeDevice({model.get(), kPeriod, 1, "pa10.xml"}, PointConfig(max_speed));
+  Rig(mjModel* m, mjData* d, double max_speed)
+      : model(m),
+        data(d),
+        arm(SimArm::Create({m, kPeriod, 1, "pa10.xml"}, ArmConfig())),
+        tool(mj_name2id(m, mjOBJ_SITE, "tool")) {
+    point = MakeDevice({model, kPeriod, 1, "pa10.xml"}, PointConfig(max_speed));
     point->Bind({arm.get(), point.get()});
-    mj_resetData(model.get(), data.get());
+    mj_resetData(model, data);
     arm->SetInitialState(*data);
-    mj_forward(model.get(), data.get());
+    mj_forward(model, data);
     arm->Start(*data);
     point->Reset(*data);
   }
   void Period() {
     point->BeginPeriod(*data, data->time);
     for (int i = 0; i < 10; ++i) {
-      mj_step1(model.get(), data.get());
+      mj_step1(model, data);
       arm->Actuate(*data, 0.001);
-      mj_step2(model.get(), data.get());
+      mj_step2(model, data);
     }
-    mj_forward(model.get(), data.get());  // positions of the state reached, for exact comparisons
+    mj_forward(model, data);  // positions of the state reached, for exact comparisons
     point->Sample(*data, data->time);
   }
   std::vector<double> State() const {
@@ -82,24 +105,41 @@ struct Rig {
   Eigen::Matrix3d ToolR() const {
     return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(data->site_xmat + 9 * tool);
   }
+  // the point's set-point from its log row
+  Eigen::Vector3d Setpoint() const {
+    std::vector<double> row(point->ColumnCount());
+    point->Row(*data, row.data());
+    const int x = ColumnOf(*point, "hand.setpoint.x");
+    EXPECT_GE(x, 0);
+    EXPECT_EQ(ColumnOf(*point, "hand.setpoint.z"), x + 2);
+    return Eigen::Vector3d(row[x], row[x + 1], row[x + 2]);
+  }
 };
 
-TEST(PointDeviceTest, HoldsBeforeTheFirstCommand) {
-  Rig rig;
+class PointDeviceTest : public test::MujocoTest {
+ protected:
+  Rig NewRig(double max_speed = 0.2) {
+    mjModel* m = LoadModel("scenes/pa10.xml");
+    return Rig(m, MakeData(m), max_speed);
+  }
+};
+
+TEST_F(PointDeviceTest, HoldsBeforeTheFirstCommand) {
+  Rig rig = NewRig();
   const Eigen::Vector3d start = rig.Tool();
   EXPECT_NEAR(start.x(), 0.725, 1e-4);  // the ready pose's tool tip (scenes/pa10.xml)
   EXPECT_NEAR(start.z(), 0.435, 5e-4);  // 0.43471: the pose's angles are rounded to 1e-6 rad
   for (int k = 0; k < 100; ++k) rig.Period();
   const std::vector<double> s = rig.State();
   ASSERT_EQ(s.size(), 7u);
-  EXPECT_EQ(s[0], static_cast<double>(bridge::kStatusHolding));
+  EXPECT_EQ(s[kStatus], static_cast<double>(bridge::kStatusHolding));
   EXPECT_LT((rig.Tool() - start).norm(), 1e-6);
-  for (int i = 0; i < 3; ++i) EXPECT_DOUBLE_EQ(s[1 + i], rig.Tool()[i]);
-  for (int i = 4; i < 7; ++i) EXPECT_NEAR(s[i], 0.0, 1e-6);
+  for (int i = 0; i < 3; ++i) EXPECT_DOUBLE_EQ(s[kX + i], rig.Tool()[i]);
+  for (int i : {kVx, kVy, kVz}) EXPECT_NEAR(s[i], 0.0, 1e-6);
 }
 
-TEST(PointDeviceTest, MovesTheToolToTheCommandKeepingItsOrientation) {
-  Rig rig;  // max_speed 0.2 m/s
+TEST_F(PointDeviceTest, MovesTheToolToTheCommandKeepingItsOrientation) {
+  Rig rig = NewRig();  // max_speed 0.2 m/s
   const Eigen::Vector3d start = rig.Tool();
   const Eigen::Matrix3d R_start = rig.ToolR();
   const Eigen::Vector3d goal = start + Eigen::Vector3d(0.06, -0.03, 0.08);  // 0.1044 m away
@@ -108,21 +148,23 @@ TEST(PointDeviceTest, MovesTheToolToTheCommandKeepingItsOrientation) {
   std::vector<double> row(rig.point->ColumnCount());
   for (int k = 0; k < 25; ++k) rig.Period();
   rig.point->Row(*rig.data, row.data());
-  const Eigen::Vector3d setpoint(row[6], row[7], row[8]);
+  const Eigen::Vector3d setpoint = rig.Setpoint();
   const Eigen::Vector3d along = start + 0.05 * (goal - start).normalized();
   EXPECT_LT((setpoint - along).norm(), 1e-12);
   EXPECT_LT((rig.Tool() - along).norm(), 0.003);  // the tip follows within the servo's lag
-  EXPECT_NEAR(std::hypot(std::hypot(rig.State()[4], rig.State()[5]), rig.State()[6]), 0.2, 0.01);
-  EXPECT_EQ(rig.State()[0], 0.0);
+  EXPECT_NEAR(std::hypot(std::hypot(rig.State()[kVx], rig.State()[kVy]), rig.State()[kVz]), 0.2, 0.01);
+  EXPECT_EQ(rig.State()[kStatus], 0.0);
   for (int k = 0; k < 175; ++k) rig.Period();  // 2 s in all
   EXPECT_LT((rig.Tool() - goal).norm(), 2e-6);
   EXPECT_LT(control::OrientationError(R_start, rig.ToolR()).norm(), 2e-5);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(rig.State()[1 + i], goal[i], 2e-6);
-  EXPECT_LT(row[10], 1e-3);  // rot_error while moving, rad
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(rig.State()[kX + i], goal[i], 2e-6);
+  const int rot_error = ColumnOf(*rig.point, "hand.rot_error");
+  ASSERT_GE(rot_error, 0);
+  EXPECT_LT(row[rot_error], 1e-3);  // while moving, rad
 }
 
-TEST(PointDeviceTest, RefusesNonFiniteAndOutOfWorkspaceCommands) {
-  Rig rig;
+TEST_F(PointDeviceTest, RefusesNonFiniteAndOutOfWorkspaceCommands) {
+  Rig rig = NewRig();
   EXPECT_EQ(rig.point->command_length(), 3);
   EXPECT_EQ(rig.point->CheckCommand({0.7, 0.0, 0.5}), bridge::CommandCheck::kAccept);
   EXPECT_EQ(rig.point->CheckCommand({NAN, 0.0, 0.5}), bridge::CommandCheck::kMalformed);
@@ -132,15 +174,15 @@ TEST(PointDeviceTest, RefusesNonFiniteAndOutOfWorkspaceCommands) {
   EXPECT_EQ(rig.point->CheckCommand({0.9, 0.3, 0.8}), bridge::CommandCheck::kAccept);  // the box's corner
 }
 
-TEST(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
-  Rig rig(1.0);
+TEST_F(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
+  Rig rig = NewRig(1.0);
   const Eigen::Vector3d start = rig.Tool();
   rig.point->Command({start.x(), start.y(), start.z() + 0.2});
   for (int k = 0; k < 10; ++k) rig.Period();  // 0.1 s of 0.2: moving up at 1 m/s
   rig.point->Hold();
   for (int k = 0; k < 50; ++k) rig.Period();
   const Eigen::Vector3d held = rig.Tool();
-  EXPECT_EQ(rig.State()[0], static_cast<double>(bridge::kStatusHolding));
+  EXPECT_EQ(rig.State()[kStatus], static_cast<double>(bridge::kStatusHolding));
   EXPECT_GT(held.z() - start.z(), 0.08);
   EXPECT_LT(held.z() - start.z(), 0.13);
   for (int k = 0; k < 50; ++k) rig.Period();
@@ -148,13 +190,11 @@ TEST(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
   // the next command starts from there: no jump to the old set-point
   rig.point->Command({held.x(), held.y(), held.z()});
   rig.Period();
-  std::vector<double> row(rig.point->ColumnCount());
-  rig.point->Row(*rig.data, row.data());
-  EXPECT_LT((Eigen::Vector3d(row[6], row[7], row[8]) - held).norm(), 1e-6);
+  EXPECT_LT((rig.Setpoint() - held).norm(), 1e-6);
 }
 
-TEST(PointDeviceTest, OverridesTheArmsOwnCommandsEveryPeriod) {
-  Rig rig;
+TEST_F(PointDeviceTest, OverridesTheArmsOwnCommandsEveryPeriod) {
+  Rig rig = NewRig();
   const Eigen::Vector3d start = rig.Tool();
   bridge::ArmCommand spin;
   spin.mode = bridge::ArmMode::kVelocity;
@@ -167,7 +207,7 @@ TEST(PointDeviceTest, OverridesTheArmsOwnCommandsEveryPeriod) {
   EXPECT_LT((rig.Tool() - start).norm(), 1e-6);
 }
 
-TEST(PointDeviceTest, ScenarioRules) {
+TEST(PointScenarioTest, ScenarioRules) {
   vlab::testing::TempDir dir;
   const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\nduration: 0.1\n"
                            "control_period: 0.01\ndevices:\n"
