@@ -5,23 +5,37 @@
 // seeded, repeatable drift with it; touch sensors under a resting body sum to
 // its weight and an IMU at rest reads +g. Then the same base served over UDP
 // in lockstep, commanded by the generic client.
+#include <algorithm>
 #include <cmath>
 #include <future>
 #include <thread>
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "bridge/bridge_client_device.h"
+#include "bridge/bridge_layouts.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/devices/device_base.h"
 #include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
+#include "mujoco_fixture.h"
 #include "test_util.h"
 
 namespace vlab::lab {
 namespace {
+
+// the base's state payload (docs/protocol.md)
+constexpr int kStatus = bridge::StateIndex(bridge::DeviceKind::kBase, "status");
+constexpr int kX = bridge::StateIndex(bridge::DeviceKind::kBase, "x");
+constexpr int kY = bridge::StateIndex(bridge::DeviceKind::kBase, "y");
+constexpr int kYaw = bridge::StateIndex(bridge::DeviceKind::kBase, "yaw");
+constexpr int kVx = bridge::StateIndex(bridge::DeviceKind::kBase, "vx");
+constexpr int kVy = bridge::StateIndex(bridge::DeviceKind::kBase, "vy");
+constexpr int kWz = bridge::StateIndex(bridge::DeviceKind::kBase, "wz");
 
 // 40 kg base on x, y, yaw joints; four feet with touch sensors; an IMU.
 constexpr const char* kBaseXml = R"(
@@ -76,21 +90,22 @@ DeviceConfig BaseConfig(bool drift) {
   return c;
 }
 
+// The base on a model and data the fixture owns.
 struct Rig {
-  ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
-  DataPtr data = MakeData(model.get());
+  mjModel* model;
+  mjData* data;
   std::unique_ptr<Device> base;
-  explicit Rig(bool drift = false, std::uint64_t seed = 7) {
-    base = MakeDevice({model.get(), 0.002, seed, ""}, BaseConfig(drift));
-    mj_forward(model.get(), data.get());
+  Rig(mjModel* m, mjData* d, bool drift, std::uint64_t seed) : model(m), data(d) {
+    base = MakeDevice({model, 0.002, seed, ""}, BaseConfig(drift));
+    mj_forward(model, data);
     base->Reset(*data);
   }
   // one control period of 10 ms
   void Period() {
     for (int i = 0; i < 10; ++i) {
-      mj_step1(model.get(), data.get());
+      mj_step1(model, data);
       base->Actuate(*data, 0.001);
-      mj_step2(model.get(), data.get());
+      mj_step2(model, data);
     }
     base->Sample(*data, data->time);
   }
@@ -101,26 +116,43 @@ struct Rig {
   }
 };
 
-TEST(BaseDeviceTest, TracksABaseFrameCommandWithinTheAccelerationLimit) {
-  Rig rig;
-  EXPECT_EQ(rig.State()[0], static_cast<double>(bridge::kStatusHolding));
-  rig.base->Command({0, 0.5, 0, 0});
-  rig.Period();  // 10 ms at 1 m/s^2: at most 0.01 m/s
-  EXPECT_LE(rig.State()[4], 0.0101);
-  EXPECT_GT(rig.State()[4], 0.002);  // moving, behind the reference by the servo lag (10 ms)
-  for (int k = 0; k < 100; ++k) rig.Period();  // 1 s: long reached 0.5 m/s
-  const std::vector<double> s = rig.State();
-  EXPECT_EQ(s[0], 0.0);
-  EXPECT_NEAR(s[4], 0.5, 0.005);   // vx
-  EXPECT_NEAR(s[5], 0.0, 1e-3);    // vy
-  // position after the ramp (0.5 s, 0.125 m) and 0.51 s at 0.5 m/s, within the servo lag
-  EXPECT_NEAR(s[1], 0.125 + 0.5 * 0.51, 0.01);
+class BaseDeviceTest : public test::MujocoTest {
+ protected:
+  Rig NewRig(bool drift = false, std::uint64_t seed = 7) {
+    mjModel* m = LoadModelFromString("base.xml", kBaseXml);
+    return Rig(m, MakeData(m), drift, seed);
+  }
+};
+
+class SensorDeviceTest : public test::MujocoTest {};
+
+// the wire index of the sensor value `name` ("acc.z") in the state of a feet or imu device
+int SensorValueIndex(const Device& device, const std::string& name) {
+  const nlohmann::json state = nlohmann::json::parse(device.DescribeFacts()).at("layout").at("state");
+  const auto it = std::find(state.begin(), state.end(), name);
+  return it == state.end() ? -1 : static_cast<int>(it - state.begin());
 }
 
-TEST(BaseDeviceTest, BaseFrameFollowsTheYawWorldFrameDoesNot) {
-  Rig rig;
+TEST_F(BaseDeviceTest, TracksABaseFrameCommandWithinTheAccelerationLimit) {
+  Rig rig = NewRig();
+  EXPECT_EQ(rig.State()[kStatus], static_cast<double>(bridge::kStatusHolding));
+  rig.base->Command({0, 0.5, 0, 0});
+  rig.Period();  // 10 ms at 1 m/s^2: at most 0.01 m/s
+  EXPECT_LE(rig.State()[kVx], 0.0101);
+  EXPECT_GT(rig.State()[kVx], 0.002);  // moving, behind the reference by the servo lag (10 ms)
+  for (int k = 0; k < 100; ++k) rig.Period();  // 1 s: long reached 0.5 m/s
+  const std::vector<double> s = rig.State();
+  EXPECT_EQ(s[kStatus], 0.0);
+  EXPECT_NEAR(s[kVx], 0.5, 0.005);
+  EXPECT_NEAR(s[kVy], 0.0, 1e-3);
+  // position after the ramp (0.5 s, 0.125 m) and 0.51 s at 0.5 m/s, within the servo lag
+  EXPECT_NEAR(s[kX], 0.125 + 0.5 * 0.51, 0.01);
+}
+
+TEST_F(BaseDeviceTest, BaseFrameFollowsTheYawWorldFrameDoesNot) {
+  Rig rig = NewRig();
   rig.data->qpos[2] = M_PI / 2;  // facing +y
-  mj_forward(rig.model.get(), rig.data.get());
+  mj_forward(rig.model, rig.data);
   rig.base->Reset(*rig.data);
   rig.base->Command({0, 0.3, 0, 0});  // forward = world +y
   for (int k = 0; k < 150; ++k) rig.Period();
@@ -130,39 +162,41 @@ TEST(BaseDeviceTest, BaseFrameFollowsTheYawWorldFrameDoesNot) {
   for (int k = 0; k < 150; ++k) rig.Period();
   EXPECT_NEAR(rig.data->qvel[0], 0.3, 3e-3);
   EXPECT_NEAR(rig.data->qvel[1], 0.0, 2e-3);
-  EXPECT_NEAR(rig.State()[5], -0.3, 3e-3);  // seen from the base: to its right
+  EXPECT_NEAR(rig.State()[kVy], -0.3, 3e-3);  // seen from the base: to its right
 }
 
-TEST(BaseDeviceTest, HoldBrakesAtTheAccelerationLimit) {
-  Rig rig;
+TEST_F(BaseDeviceTest, HoldBrakesAtTheAccelerationLimit) {
+  Rig rig = NewRig();
   rig.base->Command({0, 0.8, 0, 1.0});
   for (int k = 0; k < 120; ++k) rig.Period();
   rig.base->Hold();
   for (int k = 0; k < 40; ++k) rig.Period();  // 0.4 s of 0.8 s needed to stop
-  EXPECT_NEAR(std::hypot(rig.State()[4], rig.State()[5]), 0.4, 0.02);
+  EXPECT_NEAR(std::hypot(rig.State()[kVx], rig.State()[kVy]), 0.4, 0.02);
   for (int k = 0; k < 60; ++k) rig.Period();
-  for (int i = 4; i < 7; ++i) EXPECT_NEAR(rig.State()[i], 0.0, 1e-3);
-  EXPECT_EQ(rig.State()[0], static_cast<double>(bridge::kStatusHolding));
+  for (int i : {kVx, kVy, kWz}) EXPECT_NEAR(rig.State()[i], 0.0, 1e-3);
+  EXPECT_EQ(rig.State()[kStatus], static_cast<double>(bridge::kStatusHolding));
 }
 
-TEST(BaseDeviceTest, OdometryIsExactWithoutDriftAndSeededWithIt) {
-  Rig exact, drift_a(true, 7), drift_b(true, 7), drift_c(true, 8);
+TEST_F(BaseDeviceTest, OdometryIsExactWithoutDriftAndSeededWithIt) {
+  Rig exact = NewRig(), drift_a = NewRig(true, 7), drift_b = NewRig(true, 7), drift_c = NewRig(true, 8);
   for (Rig* r : {&exact, &drift_a, &drift_b, &drift_c}) {
     r->base->Command({0, 0.4, 0.1, 0.5});
     for (int k = 0; k < 300; ++k) r->Period();
   }
   const std::vector<double> e = exact.State();
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(e[1 + i], exact.data->qpos[i], 1e-12);
+  EXPECT_NEAR(e[kX], exact.data->qpos[0], 1e-12);  // the joints bx, by, byaw
+  EXPECT_NEAR(e[kY], exact.data->qpos[1], 1e-12);
+  EXPECT_NEAR(e[kYaw], exact.data->qpos[2], 1e-12);
   const std::vector<double> a = drift_a.State(), b = drift_b.State(), c = drift_c.State();
   EXPECT_EQ(a, b);  // same seed: the same drift, bit for bit
-  EXPECT_NE(a[1], c[1]);
-  const double error = std::hypot(a[1] - drift_a.data->qpos[0], a[2] - drift_a.data->qpos[1]);
+  EXPECT_NE(a[kX], c[kX]);
+  const double error = std::hypot(a[kX] - drift_a.data->qpos[0], a[kY] - drift_a.data->qpos[1]);
   EXPECT_GT(error, 1e-5);  // it drifts ...
   EXPECT_LT(error, 0.2);   // ... by a few percent of the 1.2 m travelled at most
 }
 
-TEST(BaseDeviceTest, ChecksCommands) {
-  Rig rig;
+TEST_F(BaseDeviceTest, ChecksCommands) {
+  Rig rig = NewRig();
   EXPECT_EQ(rig.base->command_length(), 4);
   EXPECT_EQ(rig.base->CheckCommand({0, 1.0, -1.0, 2.0}), bridge::CommandCheck::kAccept);
   EXPECT_EQ(rig.base->CheckCommand({2, 0, 0, 0}), bridge::CommandCheck::kMalformed);
@@ -171,14 +205,14 @@ TEST(BaseDeviceTest, ChecksCommands) {
   EXPECT_EQ(rig.base->CheckCommand({1, 0, 0, -2.5}), bridge::CommandCheck::kLimits);
 }
 
-TEST(BaseDeviceTest, BadBindingsNameTheElement) {
-  ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
+TEST_F(BaseDeviceTest, BadBindingsNameTheElement) {
+  mjModel* model = LoadModelFromString("base.xml", kBaseXml);
   DeviceConfig c = BaseConfig(false);
   c.EditParams<BaseParams>().joints[2] = "nope";
   EXPECT_THROW(
       {
         try {
-          MakeDevice({model.get(), 0.002, 1, ""}, c);
+          MakeDevice({model, 0.002, 1, ""}, c);
         } catch (const InputError& e) {
           EXPECT_NE(std::string(e.what()).find("no joint 'nope'"), std::string::npos) << e.what();
           throw;
@@ -187,20 +221,20 @@ TEST(BaseDeviceTest, BadBindingsNameTheElement) {
       InputError);
   c = BaseConfig(false);
   c.EditParams<BaseParams>().joints = {"by", "bx", "bx"};  // yaw must be a hinge
-  EXPECT_THROW(MakeDevice({model.get(), 0.002, 1, ""}, c), InputError);
+  EXPECT_THROW(MakeDevice({model, 0.002, 1, ""}, c), InputError);
   c = BaseConfig(false);
   c.EditParams<BaseParams>().actuators = {"vy", "vx", "wz"};  // actuators of the wrong joints
-  EXPECT_THROW(MakeDevice({model.get(), 0.002, 1, ""}, c), InputError);
+  EXPECT_THROW(MakeDevice({model, 0.002, 1, ""}, c), InputError);
   DeviceConfig feet;
   feet.name = "feet";
   feet.kind = bridge::DeviceKind::kFeet;
   feet.EditParams<SensorParams>().sensors = {"t1", "gyro"};  // a gyro is no foot sensor
-  EXPECT_THROW(MakeDevice({model.get(), 0.002, 1, ""}, feet), InputError);
+  EXPECT_THROW(MakeDevice({model, 0.002, 1, ""}, feet), InputError);
 }
 
-TEST(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
-  ModelPtr model = LoadModelFromString("base.xml", kBaseXml);
-  DataPtr data = MakeData(model.get());
+TEST_F(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
+  mjModel* model = LoadModelFromString("base.xml", kBaseXml);
+  mjData* data = MakeData(model);
   DeviceConfig feet;
   feet.name = "feet";
   feet.kind = bridge::DeviceKind::kFeet;
@@ -209,12 +243,12 @@ TEST(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
   imu.name = "imu";
   imu.kind = bridge::DeviceKind::kImu;
   imu.EditParams<SensorParams>().sensors = {"gyro", "acc"};
-  auto f = MakeDevice({model.get(), 0.002, 1, ""}, feet);
-  auto i = MakeDevice({model.get(), 0.002, 1, ""}, imu);
+  auto f = MakeDevice({model, 0.002, 1, ""}, feet);
+  auto i = MakeDevice({model, 0.002, 1, ""}, imu);
   EXPECT_EQ(f->Columns().size(), 4u);
   EXPECT_EQ(i->Columns(), (std::vector<std::string>{"imu.gyro.x", "imu.gyro.y", "imu.gyro.z", "imu.acc.x",
                                                      "imu.acc.y", "imu.acc.z"}));
-  for (int k = 0; k < 2000; ++k) mj_step(model.get(), data.get());
+  for (int k = 0; k < 2000; ++k) mj_step(model, data);
   f->Sample(*data, data->time);
   i->Sample(*data, data->time);
   std::vector<double> forces, imu_values;
@@ -225,8 +259,14 @@ TEST(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
   const double weight = 5.04 * 9.81;  // box and the four feet
   EXPECT_NEAR(sum, weight, 0.005 * weight);
   for (double v : forces) EXPECT_NEAR(v, weight / 4, 0.05 * weight);  // symmetric
-  for (int k = 0; k < 3; ++k) EXPECT_NEAR(imu_values[k], 0.0, 1e-3);
-  EXPECT_NEAR(imu_values[5], 9.81, 0.01);
+  for (const char* axis : {"gyro.x", "gyro.y", "gyro.z"}) {
+    const int k = SensorValueIndex(*i, axis);
+    ASSERT_GE(k, 0) << axis;
+    EXPECT_NEAR(imu_values[k], 0.0, 1e-3) << axis;
+  }
+  const int acc_z = SensorValueIndex(*i, "acc.z");
+  ASSERT_GE(acc_z, 0);
+  EXPECT_NEAR(imu_values[acc_z], 9.81, 0.01);
 }
 
 // The base in a lockstep lab, commanded over UDP by the generic client.
@@ -269,8 +309,8 @@ checks:
   run.join();
   EXPECT_EQ(result.exit_code, 0) << result.failure;
   EXPECT_EQ(result.periods, 100);
-  EXPECT_NEAR(s.values[1], 0.125 + 0.5 * 0.5, 0.02);  // odometry x after the ramp and 0.5 s at speed
-  EXPECT_NEAR(s.values[4], 0.5, 0.01);
+  EXPECT_NEAR(s.values[kX], 0.125 + 0.5 * 0.5, 0.02);  // odometry x after the ramp and 0.5 s at speed
+  EXPECT_NEAR(s.values[kVx], 0.5, 0.01);
 }
 
 }  // namespace
