@@ -9,17 +9,25 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_layouts.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
+#include "mujoco_fixture.h"
 #include "test_util.h"
 
 namespace vlab::lab {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+
+// the gaze probe's state payload (docs/protocol.md)
+constexpr int kErrorDeg = bridge::StateIndex(bridge::DeviceKind::kGaze, "error_deg");
+constexpr int kU = bridge::StateIndex(bridge::DeviceKind::kGaze, "u");
+constexpr int kV = bridge::StateIndex(bridge::DeviceKind::kGaze, "v");
+constexpr int kVisible = bridge::StateIndex(bridge::DeviceKind::kGaze, "visible");
 
 // Camera `eye` 0.1 m in front of a hinge about world z at (0, 0, 1), looking
 // along the body's +x (fovy 45 deg); body `ball` 2 m ahead at the same height;
@@ -64,15 +72,16 @@ struct Sample {
   double error_deg, u, v, visible;
 };
 
+// The scene, on a model and data the fixture owns.
 struct Rig {
-  ModelPtr model = LoadModelFromString("gaze.xml", kXml);
-  DataPtr data = MakeData(model.get());
+  mjModel* model;
+  mjData* data;
 
   // The probe's output with the hinge at `pan` rad.
   Sample Probe(const DeviceConfig& c, double pan = 0.0) {
     data->qpos[0] = pan;
-    mj_forward(model.get(), data.get());
-    auto device = MakeDevice({model.get(), 0.002, 1, ""}, c);
+    mj_forward(model, data);
+    auto device = MakeDevice({model, 0.002, 1, ""}, c);
     device->Sample(*data, 0.0);
     std::vector<double> state;
     device->State(&state);
@@ -80,15 +89,23 @@ struct Rig {
     std::vector<double> row(4);
     device->Row(*data, row.data());
     EXPECT_EQ(row, state);
-    return {state[0], state[1], state[2], state[3]};
+    return {state[kErrorDeg], state[kU], state[kV], state[kVisible]};
+  }
+};
+
+class GazeDeviceTest : public test::MujocoTest {
+ protected:
+  Rig NewRig() {
+    mjModel* m = LoadModelFromString("gaze.xml", kXml);
+    return {m, MakeData(m)};
   }
 };
 
 // focal length of a W x H image of a camera with vertical field of view fovy
 double Focal(int height, double fovy_deg) { return 0.5 * height / std::tan(0.5 * fovy_deg * kDeg); }
 
-TEST(GazeDeviceTest, TargetOnTheOpticalAxisIsAtThePrincipalPoint) {
-  Rig rig;
+TEST_F(GazeDeviceTest, TargetOnTheOpticalAxisIsAtThePrincipalPoint) {
+  Rig rig = NewRig();
   const Sample s = rig.Probe(Gaze("eye", "ball"));
   EXPECT_NEAR(s.error_deg, 0.0, 1e-9);
   EXPECT_NEAR(s.u, 159.5, 1e-9);
@@ -96,11 +113,11 @@ TEST(GazeDeviceTest, TargetOnTheOpticalAxisIsAtThePrincipalPoint) {
   EXPECT_EQ(s.visible, 1.0);
 }
 
-TEST(GazeDeviceTest, TurnedCameraSeesTheTargetAtTheClosedFormAngleAndPixel) {
+TEST_F(GazeDeviceTest, TurnedCameraSeesTheTargetAtTheClosedFormAngleAndPixel) {
   // camera at (0.1 cos a, 0.1 sin a, 1) looking along (cos a, sin a, 0), its
   // image x axis (sin a, -cos a, 0): the ball at (2, 0, 1) has X = 2 sin a,
   // Y = 0, Z = 2 cos a - 0.1
-  Rig rig;
+  Rig rig = NewRig();
   const double f = Focal(240, 45);
   for (double a : {0.1, -0.25, 0.3}) {
     const double x = 2 * std::sin(a), z = 2 * std::cos(a) - 0.1;
@@ -112,8 +129,8 @@ TEST(GazeDeviceTest, TurnedCameraSeesTheTargetAtTheClosedFormAngleAndPixel) {
   }
 }
 
-TEST(GazeDeviceTest, TargetAboveTheAxisIsAboveTheImageCentre) {
-  Rig rig;
+TEST_F(GazeDeviceTest, TargetAboveTheAxisIsAboveTheImageCentre) {
+  Rig rig = NewRig();
   const double f = Focal(240, 45);
   const Sample s = rig.Probe(Gaze("eye", "above"));  // X = 0, Y = -0.5 (up), Z = 1.9
   EXPECT_NEAR(s.error_deg, std::atan(0.5 / 1.9) / kDeg, 1e-9);
@@ -122,8 +139,8 @@ TEST(GazeDeviceTest, TargetAboveTheAxisIsAboveTheImageCentre) {
   EXPECT_EQ(s.visible, 1.0);
 }
 
-TEST(GazeDeviceTest, FixedCameraInAGeneralPose) {
-  Rig rig;
+TEST_F(GazeDeviceTest, FixedCameraInAGeneralPose) {
+  Rig rig = NewRig();
   const double f = Focal(480, 50);
   const Sample s = rig.Probe(Gaze("fixed", "probe", 640, 480));  // camera coordinates (0.4, 0.3, 3)
   EXPECT_NEAR(s.error_deg, std::atan(0.5 / 3.0) / kDeg, 1e-9);
@@ -132,14 +149,14 @@ TEST(GazeDeviceTest, FixedCameraInAGeneralPose) {
   EXPECT_EQ(s.visible, 1.0);
 }
 
-TEST(GazeDeviceTest, SiteWinsOverABodyOfTheSameName) {
-  Rig rig;
+TEST_F(GazeDeviceTest, SiteWinsOverABodyOfTheSameName) {
+  Rig rig = NewRig();
   const Sample s = rig.Probe(Gaze("eye", "post"));  // the site: 0.25 m above the axis, 1.9 m ahead
   EXPECT_NEAR(s.error_deg, std::atan(0.25 / 1.9) / kDeg, 1e-9);
 }
 
-TEST(GazeDeviceTest, TargetBehindTheCameraIsNotVisible) {
-  Rig rig;
+TEST_F(GazeDeviceTest, TargetBehindTheCameraIsNotVisible) {
+  Rig rig = NewRig();
   const Sample s = rig.Probe(Gaze("eye", "behind"));  // straight behind: Z = -1.1
   EXPECT_NEAR(s.error_deg, 180.0, 1e-9);
   EXPECT_EQ(s.u, -1.0);
@@ -147,10 +164,10 @@ TEST(GazeDeviceTest, TargetBehindTheCameraIsNotVisible) {
   EXPECT_EQ(s.visible, 0.0);
 }
 
-TEST(GazeDeviceTest, VisibleOnlyInsideTheImage) {
+TEST_F(GazeDeviceTest, VisibleOnlyInsideTheImage) {
   // turn the camera so that the ball projects to u: with k = (u - cx) / f,
   // 2 sin a / (2 cos a - 0.1) = k  <=>  a = atan(k) - asin(0.1 k / (2 sqrt(1 + k^2)))
-  Rig rig;
+  Rig rig = NewRig();
   const double f = Focal(240, 45);
   auto turn_to = [&](double u) {
     const double k = (u - 159.5) / f;
@@ -163,11 +180,11 @@ TEST(GazeDeviceTest, VisibleOnlyInsideTheImage) {
   }
 }
 
-TEST(GazeDeviceTest, ResetSamplesTheInitialStateAndDescribeGivesTheLayout) {
-  Rig rig;
+TEST_F(GazeDeviceTest, ResetSamplesTheInitialStateAndDescribeGivesTheLayout) {
+  Rig rig = NewRig();
   rig.data->qpos[0] = 0.1;
-  mj_forward(rig.model.get(), rig.data.get());
-  auto device = MakeDevice({rig.model.get(), 0.002, 1, ""}, Gaze("eye", "ball"));
+  mj_forward(rig.model, rig.data);
+  auto device = MakeDevice({rig.model, 0.002, 1, ""}, Gaze("eye", "ball"));
   EXPECT_EQ(device->kind(), bridge::DeviceKind::kGaze);
   EXPECT_EQ(device->command_length(), 0);
   EXPECT_EQ(device->Columns(), (std::vector<std::string>{"gaze.error_deg", "gaze.u", "gaze.v", "gaze.visible"}));
@@ -182,11 +199,11 @@ TEST(GazeDeviceTest, ResetSamplesTheInitialStateAndDescribeGivesTheLayout) {
   EXPECT_EQ(j["intrinsics"]["cx"].get<double>(), 159.5);
 }
 
-TEST(GazeDeviceTest, UnknownCameraOrTargetIsNamed) {
-  Rig rig;
+TEST_F(GazeDeviceTest, UnknownCameraOrTargetIsNamed) {
+  Rig rig = NewRig();
   auto message = [&](const DeviceConfig& c) {
     try {
-      MakeDevice({rig.model.get(), 0.002, 1, ""}, c);
+      MakeDevice({rig.model, 0.002, 1, ""}, c);
     } catch (const InputError& e) {
       return std::string(e.what());
     }
