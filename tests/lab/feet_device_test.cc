@@ -23,6 +23,7 @@
 #include "core/core_mujoco.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_support_polygon.h"
+#include "mujoco_fixture.h"
 #include "test_util.h"
 
 namespace vlab::lab {
@@ -69,39 +70,42 @@ DeviceConfig FeetConfig() {
   return c;
 }
 
-// Lets the block settle for `seconds`, samples the device, returns its log row.
-std::vector<double> SettledRow(const std::string& xml, double seconds = 2.0, std::vector<double>* state = nullptr) {
-  ModelPtr model = LoadModelFromString("block.xml", xml);
-  DataPtr data = MakeData(model.get());
-  std::unique_ptr<Device> feet = MakeDevice({model.get(), 0.002, 1, ""}, FeetConfig());
-  for (int k = 0; k < std::lround(seconds / 0.001); ++k) mj_step(model.get(), data.get());
-  feet->Sample(*data, data->time);
-  std::vector<double> row(feet->ColumnCount());
-  feet->Row(*data, row.data());
-  if (state) feet->State(state);
-  return row;
-}
+class FeetDeviceTest : public test::MujocoTest {
+ protected:
+  // Lets the block settle for `seconds`, samples the device, returns its log row.
+  std::vector<double> SettledRow(const std::string& xml, double seconds = 2.0, std::vector<double>* state = nullptr) {
+    mjModel* model = LoadModelFromString("block.xml", xml);
+    mjData* data = MakeData(model);
+    std::unique_ptr<Device> feet = MakeDevice({model, 0.002, 1, ""}, FeetConfig());
+    for (int k = 0; k < std::lround(seconds / 0.001); ++k) mj_step(model, data);
+    feet->Sample(*data, data->time);
+    std::vector<double> row(feet->ColumnCount());
+    feet->Row(*data, row.data());
+    if (state) feet->State(state);
+    return row;
+  }
+};
 
-TEST(FeetDeviceTest, ColumnsAreLogOnlyAndTheWireKeepsTheSensorValues) {
-  ModelPtr model = LoadModelFromString("block.xml", BlockXml(0, 0));
-  std::unique_ptr<Device> feet = MakeDevice({model.get(), 0.002, 1, ""}, FeetConfig());
+TEST_F(FeetDeviceTest, ColumnsAreLogOnlyAndTheWireKeepsTheSensorValues) {
+  mjModel* model = LoadModelFromString("block.xml", BlockXml(0, 0));
+  std::unique_ptr<Device> feet = MakeDevice({model, 0.002, 1, ""}, FeetConfig());
   EXPECT_EQ(feet->Columns(), (std::vector<std::string>{"feet.t1", "feet.t2", "feet.t3", "feet.t4", "feet.sum",
                                                         "feet.sum_error", "feet.cop_x", "feet.cop_y",
                                                         "feet.cop_margin"}));
   EXPECT_EQ(feet->ColumnCount(), 9);
   DeviceConfig weight_only = FeetConfig();
   weight_only.EditParams<SensorParams>().pads.clear();
-  EXPECT_EQ(MakeDevice({model.get(), 0.002, 1, ""}, weight_only)->ColumnCount(), 6);  // values, sum, sum_error
+  EXPECT_EQ(MakeDevice({model, 0.002, 1, ""}, weight_only)->ColumnCount(), 6);  // values, sum, sum_error
   DeviceConfig plain = FeetConfig();
   plain.EditParams<SensorParams>().pads.clear();
   plain.EditParams<SensorParams>().weight_of.clear();
-  EXPECT_EQ(MakeDevice({model.get(), 0.002, 1, ""}, plain)->ColumnCount(), 4);
+  EXPECT_EQ(MakeDevice({model, 0.002, 1, ""}, plain)->ColumnCount(), 4);
   std::vector<double> state;
   SettledRow(BlockXml(0, 0), 0.5, &state);
   EXPECT_EQ(state.size(), 4u);
 }
 
-TEST(FeetDeviceTest, CopIsTheComProjectionOnFourPads) {
+TEST_F(FeetDeviceTest, CopIsTheComProjectionOnFourPads) {
   const double cx = 0.03, cy = -0.02;
   const std::vector<double> row = SettledRow(BlockXml(cx, cy));
   EXPECT_NEAR(row[4], kMass * kG, 1e-3 * kMass * kG);  // sum = m g
@@ -113,7 +117,7 @@ TEST(FeetDeviceTest, CopIsTheComProjectionOnFourPads) {
   EXPECT_NEAR(row[8], 0.06, 2e-4);
 }
 
-TEST(FeetDeviceTest, ARaisedPadLeavesATriangle) {
+TEST_F(FeetDeviceTest, ARaisedPadLeavesATriangle) {
   const double cx = -0.03, cy = 0.03;
   const std::vector<double> row = SettledRow(BlockXml(cx, cy, 0.005));
   EXPECT_EQ(row[3], 0.0);  // pad 4 off the floor
@@ -127,7 +131,7 @@ TEST(FeetDeviceTest, ARaisedPadLeavesATriangle) {
   EXPECT_NEAR(row[8], diagonal, 2e-4);  // the diagonal is the nearest side here
 }
 
-TEST(FeetDeviceTest, NoContactGivesNoCop) {
+TEST_F(FeetDeviceTest, NoContactGivesNoCop) {
   const std::vector<double> row = SettledRow(BlockXml(0, 0, 0, 0.5), 0.01);  // still falling
   EXPECT_EQ(row[4], 0.0);
   EXPECT_EQ(row[5], -1.0);
