@@ -12,6 +12,7 @@
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "mujoco_fixture.h"
 
 namespace vlab::lab {
 namespace {
@@ -44,23 +45,20 @@ ArmCommand Cmd(ArmMode mode, std::vector<double> v) {
 }
 
 // The lab's sequence: initial state, servo start, then physics steps with the
-// servo between mj_step1 and mj_step2. Fails the test on any MuJoCo warning.
-class ArmDeviceTest : public ::testing::Test {
+// servo between mj_step1 and mj_step2. The fixture fails the test on any MuJoCo warning.
+class ArmDeviceTest : public test::MujocoTest {
  protected:
   void SetUp() override {
-    model_ = LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
-    data_ = MakeData(model_.get());
-    arm_ = SimArm::Create({model_.get(), kPeriod, 1, "pa10.xml"}, ArmConfig());
+    model_ = LoadModel("scenes/pa10.xml");
+    data_ = MakeData(model_);
+    arm_ = SimArm::Create({model_, kPeriod, 1, "pa10.xml"}, ArmConfig());
     mj_resetData(m(), d());
     arm_->SetInitialState(*d());
     mj_forward(m(), d());
     arm_->Start(*d());
   }
-  void TearDown() override {
-    for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(d()->warning[w].number, 0) << "MuJoCo warning " << WarningName(w);
-  }
-  const mjModel* m() const { return model_.get(); }
-  mjData* d() { return data_.get(); }
+  const mjModel* m() const { return model_; }
+  mjData* d() { return data_; }
   double q(int i) { return d()->qpos[m()->jnt_qposadr[mj_name2id(m(), mjOBJ_JOINT, kJoints[i].c_str())]]; }
   double ctrl(int i) { return d()->ctrl[mj_name2id(m(), mjOBJ_ACTUATOR, kJoints[i].c_str())]; }
   // Runs `seconds` of physics (whole control periods), re-sending `cmd` every period if given.
@@ -83,8 +81,8 @@ class ArmDeviceTest : public ::testing::Test {
     return s;
   }
 
-  ModelPtr model_;
-  DataPtr data_;
+  mjModel* model_ = nullptr;
+  mjData* data_ = nullptr;
   std::unique_ptr<SimArm> arm_;
 };
 
@@ -226,34 +224,36 @@ std::string CreateError(const mjModel* m, const DeviceConfig& c) {
   return "";
 }
 
-TEST(ArmDeviceCreateTest, ErrorsNameDeviceAndElement) {
-  ModelPtr model = LoadModel(VLAB_SOURCE_DIR "/scenes/pa10.xml");
+class ArmDeviceCreateTest : public test::MujocoTest {};
+
+TEST_F(ArmDeviceCreateTest, ErrorsNameDeviceAndElement) {
+  const mjModel* model = LoadModel("scenes/pa10.xml");
   DeviceConfig c = ArmConfig();
   c.EditParams<ArmParams>().joints[3] = "E9";
-  std::string e = CreateError(model.get(), c);
+  std::string e = CreateError(model, c);
   EXPECT_NE(e.find("arm.yaml:9"), std::string::npos) << e;
   EXPECT_NE(e.find("device 'pa10'"), std::string::npos) << e;
   EXPECT_NE(e.find("no joint 'E9'"), std::string::npos) << e;
 
   c = ArmConfig();
   c.EditParams<ArmParams>().actuators[6] = "W2_motor";
-  e = CreateError(model.get(), c);
+  e = CreateError(model, c);
   EXPECT_NE(e.find("device 'pa10'"), std::string::npos) << e;
   EXPECT_NE(e.find("no actuator 'W2_motor'"), std::string::npos) << e;
 
   c = ArmConfig();
   std::swap(c.EditParams<ArmParams>().actuators[0], c.EditParams<ArmParams>().actuators[1]);  // motors exist, but on the wrong joints
-  e = CreateError(model.get(), c);
+  e = CreateError(model, c);
   EXPECT_NE(e.find("actuator 'S2' is not a motor on joint 'S1'"), std::string::npos) << e;
 
   c = ArmConfig();
   c.EditParams<ArmParams>().initial[1] = 2.0;  // S2 range is +-94 deg = +-1.64 rad
-  e = CreateError(model.get(), c);
+  e = CreateError(model, c);
   EXPECT_NE(e.find("initial position of joint 'S2'"), std::string::npos) << e;
 }
 
-TEST(ArmDeviceCreateTest, RejectsNonMotorActuators) {
-  ModelPtr model = LoadModelFromString("servo.xml", R"(
+TEST_F(ArmDeviceCreateTest, RejectsNonMotorActuators) {
+  const mjModel* model = LoadModelFromString("servo.xml", R"(
 <mujoco>
   <worldbody>
     <body>
@@ -277,16 +277,16 @@ TEST(ArmDeviceCreateTest, RejectsNonMotorActuators) {
   c.where = "toy.yaml:3";
   c.EditParams<ArmParams>().joints = {"a"};
   c.EditParams<ArmParams>().actuators = {"pos_a"};
-  std::string e = CreateError(model.get(), c);
+  std::string e = CreateError(model, c);
   EXPECT_NE(e.find("device 'toy'"), std::string::npos) << e;
   EXPECT_NE(e.find("actuator 'pos_a' is not a motor on joint 'a'"), std::string::npos) << e;
   c.EditParams<ArmParams>().joints = {"b"};
   c.EditParams<ArmParams>().actuators = {"geared_b"};
-  e = CreateError(model.get(), c);
+  e = CreateError(model, c);
   EXPECT_NE(e.find("actuator 'geared_b' must have gear 1"), std::string::npos) << e;
   c.EditParams<ArmParams>().joints = {"a"};
   c.EditParams<ArmParams>().actuators = {"motor_a"};
-  EXPECT_EQ(CreateError(model.get(), c), "");  // the control: a plain motor binds
+  EXPECT_EQ(CreateError(model, c), "");  // the control: a plain motor binds
 }
 
 }  // namespace
