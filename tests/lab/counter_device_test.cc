@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_counter.h"
 #include "lab/devices/device_kinds.h"
@@ -28,6 +29,10 @@ namespace {
 constexpr double kRpm = 60.0 / (2.0 * M_PI);  // rpm per rad/s
 constexpr double kStep = 0.001;               // s, the model's timestep
 constexpr double kInertia = 2e-5;             // kg m², the rotor about its axle
+
+// the counter's state payload (docs/protocol.md)
+constexpr int kRevolutions = bridge::StateIndex(bridge::DeviceKind::kCounter, "revolutions");
+constexpr int kReading = bridge::StateIndex(bridge::DeviceKind::kCounter, "rpm");
 
 // a rotor on a hinge about z, a torque motor on it, and a slide joint
 constexpr const char* kXml = R"(
@@ -95,20 +100,20 @@ TEST_F(CounterTest, ConstantSpinCountsTurnsAndReadsItsSpeed) {
   for (int k = 1; k <= 200; ++k) {
     const std::vector<double> s = Period();
     ASSERT_EQ(s.size(), 2u);
-    EXPECT_EQ(s[0], std::floor(k * 199.0 / 600.0)) << "period " << k;
-    EXPECT_NEAR(s[1], 1990.0, 1e-6) << "period " << k;
+    EXPECT_EQ(s[kRevolutions], std::floor(k * 199.0 / 600.0)) << "period " << k;
+    EXPECT_NEAR(s[kReading], 1990.0, 1e-6) << "period " << k;
   }
   // 1990 rpm for 2.01 s: 66.67 turns
-  EXPECT_EQ(Period()[0], 66.0);
+  EXPECT_EQ(Period()[kRevolutions], 66.0);
 }
 
 TEST_F(CounterTest, BackwardsSpinCountsNegativeTurns) {
   Start(Counter(), -2 * M_PI);  // one turn per second, backwards
   std::vector<double> s = Period();
-  EXPECT_EQ(s[0], -1.0);  // 0.01 turn backwards is in turn -1
-  EXPECT_NEAR(s[1], -60.0, 1e-6);
+  EXPECT_EQ(s[kRevolutions], -1.0);  // 0.01 turn backwards is in turn -1
+  EXPECT_NEAR(s[kReading], -60.0, 1e-6);
   for (int k = 0; k < 99; ++k) s = Period();
-  EXPECT_NEAR(s[0], -1.0, 1.0);  // exactly one turn: -1 or -2 by rounding of the angle
+  EXPECT_NEAR(s[kRevolutions], -1.0, 1.0);  // exactly one turn: -1 or -2 by rounding of the angle
 }
 
 TEST_F(CounterTest, AGateReadsTheMeanSpeedOverItAndHoldsIt) {
@@ -119,17 +124,17 @@ TEST_F(CounterTest, AGateReadsTheMeanSpeedOverItAndHoldsIt) {
   for (int k = 1; k <= 50; ++k) {
     const std::vector<double> s = Period();
     if (k % 10 != 0) {
-      EXPECT_EQ(s[1], held) << "period " << k << ": a reading is held until the next gate ends";
+      EXPECT_EQ(s[kReading], held) << "period " << k << ": a reading is held until the next gate ends";
       continue;
     }
     const int n = 100;  // steps per gate
     const double gate_start_speed = omega0 + alpha * kStep * (k - 10) * 10;
     const double expected = (gate_start_speed + alpha * kStep * (n + 1) / 2.0) * kRpm;
-    EXPECT_NEAR(s[1], expected, 1e-6 * expected) << "period " << k;
+    EXPECT_NEAR(s[kReading], expected, 1e-6 * expected) << "period " << k;
     // the speed half a gate ago, within α h / 2
-    EXPECT_NEAR(s[1], (omega0 + alpha * (k * 0.01 - 0.05)) * kRpm, alpha * kStep * kRpm) << "period " << k;
-    EXPECT_GT(s[1], held);
-    held = s[1];
+    EXPECT_NEAR(s[kReading], (omega0 + alpha * (k * 0.01 - 0.05)) * kRpm, alpha * kStep * kRpm) << "period " << k;
+    EXPECT_GT(s[kReading], held);
+    held = s[kReading];
   }
 }
 
@@ -137,7 +142,7 @@ TEST_F(CounterTest, ReadingsAreRoundedToTheResolution) {
   const double omega = 1234.0 / kRpm;
   Start(Counter(0, 10), omega);
   const std::vector<double> s = Period();
-  EXPECT_DOUBLE_EQ(s[1], 1230.0);
+  EXPECT_DOUBLE_EQ(s[kReading], 1230.0);
   std::vector<std::string> expected{"rpm.revolutions", "rpm.rpm", "rpm.true_rpm"};
   EXPECT_EQ(counter_->Columns(), expected);
   std::vector<double> row(3);
