@@ -330,7 +330,8 @@ TEST(ProtocolTest, NamesOfKindsAndErrors) {
   EXPECT_STREQ(KindName(11), "yoyo");
   EXPECT_STREQ(KindName(12), "gaze");
   EXPECT_STREQ(KindName(13), "pose");
-  EXPECT_STREQ(KindName(14), "unknown");
+  EXPECT_STREQ(KindName(14), "counter");
+  EXPECT_STREQ(KindName(kMaxDeviceKind + 1), "unknown");
   EXPECT_STREQ(KindName(0), "unknown");
   EXPECT_EQ(KindFromName("sim"), 3);
   EXPECT_EQ(KindFromName("camera"), 4);
