@@ -120,7 +120,8 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   }
   const double last_frame_s = (frames - 1) * every;
   const double run_periods = std::ceil(last_frame_s / period - 1e-9);
-  scenario.duration_s = std::min(scenario.duration_s, std::max(0.0, run_periods) * period);
+  // (a run simulates at least one period, even for the frame at t = 0 alone)
+  scenario.duration_s = std::min(scenario.duration_s, std::max(1.0, run_periods) * period);
   scenario.checks.clear();          // rendering is not a regression run
   scenario.outputs.images.clear();  // this command writes its own images
 

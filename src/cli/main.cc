@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli/cli_commands.h"
+#include "lab/lab_scenario.h"
 
 #ifndef VLAB_VERSION
 #define VLAB_VERSION "0.0.0"
@@ -24,9 +25,9 @@ int main(int argc, char** argv) {
              "(the plots' paths are printed)");
   run_cmd->add_option("scenario", run.scenario, "Scenario file (YAML); the .yaml extension may be left out")
       ->required();
-  run_cmd->add_option("--out", run.out_dir, "Output folder (default: out/<scenario name>)");
+  run_cmd->add_option("--out", run.out_dir, "Output folder (default: out/<scenario name>); an existing one is replaced only if vlab wrote it or it is empty");
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress bar and no per-check lines");
-  run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0)");
+  run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   run_cmd->add_option("--seed", run.seed, "Override the scenario's seed (>= 0)");
   run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
 
@@ -43,9 +44,9 @@ int main(int argc, char** argv) {
     cmd->add_option("--clock", a->clock, "fast | lockstep | realtime (default: the scenario's)")
         ->check(CLI::IsMember({"fast", "lockstep", "realtime"}));
   }
-  serve_cmd->add_option("--out", serve.out_dir, "Output folder (default: out/<scenario name>)");
+  serve_cmd->add_option("--out", serve.out_dir, "Output folder (default: out/<scenario name>); an existing one is replaced only if vlab wrote it or it is empty");
   serve_cmd->add_flag("-q,--quiet", serve.quiet, "Only the start line and the result line");
-  serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0)");
+  serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
 
   vlab::cli::BenchArgs bench;
@@ -68,17 +69,17 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
     // range checks here, so that each error is one short line
     auto given = [](CLI::App* cmd, const char* name) { return cmd->get_option(name)->count() > 0; };
-    if (run_cmd->parsed() && given(run_cmd, "--duration") && !(run.duration_s > 0)) {
-      throw CLI::ValidationError("--duration must be > 0 s");
+    if (run_cmd->parsed() && given(run_cmd, "--duration") && !vlab::lab::ValidDuration(run.duration_s)) {
+      throw CLI::ValidationError("--duration must be > 0 s and at most 1e6 s");
     }
     if (run_cmd->parsed() && given(run_cmd, "--seed") && run.seed < 0) {
       throw CLI::ValidationError("--seed must be >= 0");
     }
-    if (serve_cmd->parsed() && given(serve_cmd, "--duration") && !(serve.duration_s > 0)) {
-      throw CLI::ValidationError("--duration must be > 0 s");
+    if (serve_cmd->parsed() && given(serve_cmd, "--duration") && !vlab::lab::ValidDuration(serve.duration_s)) {
+      throw CLI::ValidationError("--duration must be > 0 s and at most 1e6 s");
     }
-    if (bench_cmd->parsed() && given(bench_cmd, "--duration") && !(bench.duration_s > 0)) {
-      throw CLI::ValidationError("--duration must be > 0 s");
+    if (bench_cmd->parsed() && given(bench_cmd, "--duration") && !vlab::lab::ValidDuration(bench.duration_s)) {
+      throw CLI::ValidationError("--duration must be > 0 s and at most 1e6 s");
     }
     if (bench_cmd->parsed() && !(bench.realtime_s > 0 && bench.realtime_s <= 3600)) {
       throw CLI::ValidationError("--realtime must be > 0 and <= 3600 s");

@@ -6,6 +6,7 @@
 namespace vlab::lab {
 
 std::string Verdict(const RunResult& r, bool diverged) {
+  if (r.periods == 0 && !diverged) return "no control period was simulated: nothing was checked";
   for (const auto& w : r.warnings) {
     if (diverged && IsDivergenceWarning(WarningIndex(w.name))) {
       return "diverged at t = " + FormatDouble(w.first_time_s) + " s: " + w.message;

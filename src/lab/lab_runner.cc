@@ -48,6 +48,12 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
     }
   }
 
+  // a run simulates at least one period
+  if (std::lround(scenario.duration_s / scenario.control_period_s) < 1) {
+    throw InputError(scenario.file + ": duration " + FormatDouble(scenario.duration_s) +
+                     " s is shorter than half a control period (" + FormatDouble(scenario.control_period_s) +
+                     " s): nothing would be simulated");
+  }
   // the control period must be a whole number of physics steps
   const double ts = m->opt.timestep;
   const double ratio = scenario.control_period_s / ts;

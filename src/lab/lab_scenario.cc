@@ -231,9 +231,11 @@ Scenario LoadScenario(const std::string& path) {
   const std::string scene = r.String("scene");
   s.scene = (fs::path(path).parent_path() / scene).lexically_normal().string();
   s.duration_s = r.Number("duration");
-  if (!(s.duration_s > 0)) r.Fail("duration", "must be > 0 s");
+  if (!ValidDuration(s.duration_s)) r.Fail("duration", "must be > 0 s and at most 1e6 s");
   s.control_period_s = r.Number("control_period", s.control_period_s);
-  if (!(s.control_period_s > 0)) r.Fail("control_period", "must be > 0 s");
+  if (!(s.control_period_s > 0 && s.control_period_s <= kMaxControlPeriod_s)) {
+    r.Fail("control_period", "must be > 0 s and at most 10 s");
+  }
   const double seed = r.Number("seed", 1);
   if (seed < 0 || seed != std::floor(seed) || seed > 9007199254740992.0) r.Fail("seed", "must be a non-negative integer");
   s.seed = static_cast<std::uint64_t>(seed);

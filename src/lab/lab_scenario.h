@@ -132,6 +132,13 @@ struct Scenario {
 /// Resolves a scenario argument: PATH, or PATH.yaml when PATH does not exist.
 std::string ResolveScenarioPath(const std::string& arg);
 
+/// The longest run a scenario or `--duration` may ask for, s (about 11.6 days).
+inline constexpr double kMaxDuration_s = 1e6;
+/// The longest control period, s.
+inline constexpr double kMaxControlPeriod_s = 10.0;
+/// True for a duration a run can simulate: finite, > 0 and at most kMaxDuration_s.
+inline bool ValidDuration(double duration_s) { return duration_s > 0 && duration_s <= kMaxDuration_s; }
+
 /// The scenario's clock, run in `mode`.
 ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode);
 

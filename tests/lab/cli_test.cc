@@ -55,7 +55,7 @@ TEST(CliTest, DefaultScenarioPassesAndWritesOutputs) {
   ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
   EXPECT_EQ(r.err, "");
   EXPECT_EQ(Entries(tmp.path()), std::set<std::string>{"out"});  // no staging folder left
-  EXPECT_EQ(Entries(tmp / "out"), (std::set<std::string>{"log.csv", "summary.json"}));
+  EXPECT_EQ(Entries(tmp / "out"), (std::set<std::string>{"log.csv", "summary.json", ".vlab-output"}));
 
   const nlohmann::json s = nlohmann::json::parse(ReadFile(tmp / "out/summary.json"));
   EXPECT_EQ(s.at("result"), "pass");
@@ -203,8 +203,50 @@ TEST(CliTest, BadOptionsExit2WithOneLine) {
   ExpectRejected({
       {"no scenario", "run", {"scenario"}},
       {"negative duration", "run scenes/pa10_reach --duration -1", {"--duration"}},
+      {"infinite duration", "run scenes/pa10_reach --duration inf", {"--duration", "at most 1e6 s"}},
+      {"huge duration", "run scenes/pa10_reach --duration 1e300", {"--duration", "at most 1e6 s"}},
+      {"shorter than half a period", "run scenes/pa10_reach --duration 0.0009",
+       {"pa10_reach.yaml", "is shorter than half a control period (0.002 s): nothing would be simulated"}},
+      {"huge duration served", "serve scenes/pa10_serve --duration 1e300", {"--duration", "at most 1e6 s"}},
       {"unknown option", "run scenes/pa10_reach --durration 1", {"--durration"}},
   });
+}
+
+TEST(CliTest, DurationsThatCannotRunAreBadInput) {
+  TempDir dir;
+  std::vector<BadInput> cases;
+  // too long, or not a number the YAML reader takes (non-finite)
+  const std::vector<std::pair<std::string, std::string>> durations = {
+      {"1e300", "duration: must be > 0 s and at most 1e6 s"},
+      {"2e6", "duration: must be > 0 s and at most 1e6 s"},
+      {".inf", "duration: expected a finite number"},
+      {".nan", "duration: expected a finite number"}};
+  for (const auto& [duration, why] : durations) {
+    std::string text = ReadFile(DefaultScenarioWith(dir, "d", "  - {name: t, signal: time, max: 100}\n"));
+    text.replace(text.find("duration: 1.0"), 13, "duration: " + duration);
+    const std::string path = dir / ("duration_" + std::to_string(cases.size()) + ".yaml");
+    WriteFile(path, text);
+    cases.push_back({"duration " + duration, "run '" + path + "'", {path + ":", why}});
+  }
+  ExpectRejected(cases);
+}
+
+// --out never removes or replaces a folder vlab did not write
+TEST(CliTest, OutOnAForeignFolderExits2AndLeavesItAlone) {
+  TempDir tmp;
+  fs::create_directory(tmp / "mine");
+  WriteFile(tmp / "mine/notes.txt", "my notes");
+  const auto r = RunVlab("run scenes/pa10_reach --duration 0.1 -q --out '" + (tmp / "mine") + "'");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_TRUE(Has(r.err, "output folder '" + (tmp / "mine") + "'")) << r.err;
+  EXPECT_TRUE(Has(r.err, "not an output folder of vlab's")) << r.err;
+  EXPECT_EQ(ReadFile(tmp / "mine/notes.txt"), "my notes");
+  EXPECT_EQ(Entries(tmp.path()), std::set<std::string>{"mine"});
+  EXPECT_EQ(Entries(tmp / "mine"), std::set<std::string>{"notes.txt"});
+  // a folder vlab wrote is replaced, run after run
+  ASSERT_EQ(RunVlab("run scenes/pa10_reach --duration 0.1 -q --out '" + (tmp / "run") + "'").exit_code, 0);
+  ASSERT_EQ(RunVlab("run scenes/pa10_reach --duration 0.1 -q --out '" + (tmp / "run") + "'").exit_code, 0);
+  EXPECT_EQ(Entries(tmp / "run"), (std::set<std::string>{"log.csv", "summary.json", ".vlab-output"}));
 }
 
 TEST(CliTest, DivergingModelExits1NamingTheCause) {
@@ -274,7 +316,7 @@ TEST(CliTest, FailedCheckExits1AndWritesCompleteOutput) {
   ASSERT_EQ(r.exit_code, 1) << r.err;
   EXPECT_TRUE(Has(r.err, "check 'impossible' failed")) << r.err;
   EXPECT_EQ(Entries(tmp.path()), (std::set<std::string>{"out", "strict.yaml"}));
-  EXPECT_EQ(Entries(tmp / "out"), (std::set<std::string>{"log.csv", "summary.json"}));
+  EXPECT_EQ(Entries(tmp / "out"), (std::set<std::string>{"log.csv", "summary.json", ".vlab-output"}));
   const nlohmann::json s = nlohmann::json::parse(ReadFile(tmp / "out/summary.json"));
   EXPECT_EQ(s.at("result"), "fail");
   ASSERT_EQ(s.at("checks").size(), 2u);

@@ -3,6 +3,7 @@
 // appears whole on Commit or not at all.
 #include "lab/lab_log.h"
 #include "lab/lab_output.h"
+#include "core/core_errors.h"
 
 #include <gtest/gtest.h>
 
@@ -175,16 +176,20 @@ TEST(OutputDirTest, FilesAppearOnlyOnCommit) {
 TEST(OutputDirTest, CommitReplacesPreviousFolder) {
   TempDir tmp;
   const std::string final_dir = tmp / "run";
-  fs::create_directory(final_dir);
-  WriteFile(final_dir + "/old.txt", "old");
-  WriteFile(final_dir + "/log.csv", "old log");
+  {
+    auto out = OutputDir::Create(final_dir);  // a previous run's folder, with files of its own
+    WriteFile(out->File("old.txt"), "old");
+    WriteFile(out->File("log.csv"), "old log");
+    out->Commit();
+  }
+  EXPECT_EQ(Entries(final_dir), (std::set<std::string>{"old.txt", "log.csv", kOutputMarker}));
   {
     auto out = OutputDir::Create(final_dir);
     WriteFile(out->File("log.csv"), "new log");
     EXPECT_EQ(ReadFile(final_dir + "/log.csv"), "old log");  // untouched until Commit
     out->Commit();
   }
-  EXPECT_EQ(Entries(final_dir), std::set<std::string>{"log.csv"});  // nothing of the old folder mixed in
+  EXPECT_EQ(Entries(final_dir), (std::set<std::string>{"log.csv", kOutputMarker}));  // nothing of the old folder mixed in
   EXPECT_EQ(ReadFile(final_dir + "/log.csv"), "new log");
   EXPECT_EQ(Entries(tmp.path()), std::set<std::string>{"run"});  // no .old or staging folder left
 }
@@ -194,6 +199,7 @@ TEST(OutputDirTest, DestructionWithoutCommitLeavesPreviousResult) {
   const std::string final_dir = tmp / "run";
   fs::create_directory(final_dir);
   WriteFile(final_dir + "/log.csv", "complete");
+  WriteFile(final_dir + "/" + kOutputMarker, "");  // a previous result of vlab's
   std::string staging;
   {
     auto out = OutputDir::Create(final_dir);
@@ -205,13 +211,55 @@ TEST(OutputDirTest, DestructionWithoutCommitLeavesPreviousResult) {
   }
   EXPECT_FALSE(fs::exists(staging));
   EXPECT_EQ(Entries(tmp.path()), std::set<std::string>{"run"});
-  EXPECT_EQ(Entries(final_dir), std::set<std::string>{"log.csv"});
+  EXPECT_EQ(Entries(final_dir), (std::set<std::string>{"log.csv", kOutputMarker}));
   EXPECT_EQ(ReadFile(final_dir + "/log.csv"), "complete");
 
   // and with no previous result, nothing at all remains
   TempDir fresh;
   { auto out = OutputDir::Create(fresh / "run"); WriteFile(out->File("log.csv"), "x"); }
   EXPECT_TRUE(Entries(fresh.path()).empty());
+}
+
+// vlab replaces only what it wrote: a folder with entries and no marker, or a file, is refused
+// before anything is written; an empty folder is taken
+TEST(OutputDirTest, NeverReplacesWhatVlabDidNotWrite) {
+  TempDir tmp;
+  const std::string mine = tmp / "mine";
+  fs::create_directory(mine);
+  WriteFile(mine + "/notes.txt", "a user's own file");
+  WriteFile(tmp / "file", "a file");
+  for (const std::string& target : {mine, tmp / "file"}) {
+    try {
+      OutputDir::Create(target);
+      ADD_FAILURE() << "took " << target;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("output folder '" + target + "'"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(ReadFile(mine + "/notes.txt"), "a user's own file");
+  EXPECT_EQ(ReadFile(tmp / "file"), "a file");
+  EXPECT_EQ(Entries(tmp.path()), (std::set<std::string>{"mine", "file"}));  // no staging folder either
+
+  fs::create_directory(tmp / "empty");
+  auto out = OutputDir::Create(tmp / "empty");
+  WriteFile(out->File("log.csv"), "x");
+  out->Commit();
+  EXPECT_EQ(Entries(tmp / "empty"), (std::set<std::string>{"log.csv", kOutputMarker}));
+
+  // a foreign folder that appears during the run: the run's files stay where they were written
+  auto late = OutputDir::Create(tmp / "late");
+  WriteFile(late->File("log.csv"), "kept");
+  fs::create_directory(tmp / "late");
+  WriteFile(tmp / "late/theirs.txt", "theirs");
+  try {
+    late->Commit();
+    ADD_FAILURE() << "replaced a foreign folder";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("this run's files are in"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ReadFile(late->File("log.csv")), "kept");
+  late.reset();
+  EXPECT_EQ(ReadFile(tmp / "late/theirs.txt"), "theirs");
 }
 
 TEST(OutputDirTest, RejectsNonFolderNames) {

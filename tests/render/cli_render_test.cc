@@ -50,7 +50,7 @@ TEST(CliRender, WritesFramesAndVideo) {
     ExpectPng(dir / ("frames/depth" + std::string(name)), CV_16UC1, 320, 240);
     ExpectPng(dir / ("frames/seg" + std::string(name)), CV_16UC1, 320, 240);
   }
-  EXPECT_EQ(Entries(dir / "frames").size(), 4u * 3 + 2);  // + frames.csv, render.json
+  EXPECT_EQ(Entries(dir / "frames").size(), 4u * 3 + 3);  // + frames.csv, render.json, .vlab-output
   EXPECT_EQ(Lines(ReadFile(dir / "frames/frames.csv")),
             (std::vector<std::string>{"frame,time", "0,0", "1,0.05", "2,0.1", "3,0.15"}));
   const auto meta = nlohmann::json::parse(ReadFile(dir / "frames/render.json"));
@@ -73,7 +73,7 @@ TEST(CliRender, ReplacesTheOutputFolderWhole) {
   ASSERT_EQ(RunVlab(base + " --frames 3").exit_code, 0);
   ASSERT_EQ(RunVlab(base + " --frames 2").exit_code, 0);
   EXPECT_EQ(Entries(dir / "frames"),
-            (std::set<std::string>{"rgb_000000.png", "rgb_000001.png", "frames.csv", "render.json"}));
+            (std::set<std::string>{"rgb_000000.png", "rgb_000001.png", "frames.csv", "render.json", ".vlab-output"}));
   EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"frames"}));  // no staging folder left
 }
 
@@ -136,7 +136,7 @@ TEST(CliRun, ImageOutputsAreWritten) {
   const ProcessResult r = RunVlab("run tests/data/render_outputs.yaml -q --out " + (dir / "run"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::set<std::string> top = Entries(dir / "run");
-  EXPECT_EQ(top, (std::set<std::string>{"log.csv", "summary.json", "overview", "overview.mp4"}));
+  EXPECT_EQ(top, (std::set<std::string>{"log.csv", "summary.json", "overview", "overview.mp4", ".vlab-output"}));
   const std::set<std::string> frames = Entries(dir / "run/overview");
   EXPECT_EQ(frames.size(), 6u * 3 + 1);  // rgb, depth, seg per frame + frames.csv
   for (int n = 0; n < 6; ++n) {
