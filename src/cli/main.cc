@@ -89,6 +89,19 @@ int main(int argc, char** argv) {
     }
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // no subcommand, or one vlab does not have: name the ones it has
+    bool any = false;
+    for (const CLI::App* sub : app.get_subcommands({})) any = any || sub->parsed();
+    if (!any) {
+      std::string known;
+      for (const CLI::App* sub : app.get_subcommands({})) known += (known.empty() ? "" : ", ") + sub->get_name();
+      const bool named = argc > 1 && argv[1][0] != '-';
+      const std::string what = named      ? "unknown subcommand '" + std::string(argv[1]) + "'"
+                               : argc > 1 ? std::string(e.what())
+                                          : std::string("a subcommand is required");
+      std::fprintf(stderr, "vlab: error: %s (known: %s; see vlab --help)\n", what.c_str(), known.c_str());
+      return 2;
+    }
     std::fprintf(stderr, "vlab: error: %s (see vlab --help)\n", e.what());
     return 2;
   }

@@ -37,7 +37,13 @@ std::vector<double> Lab::FinalQpos() const {
 std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
   auto impl = std::make_unique<Impl>();
   impl->scenario = scenario;
-  impl->model = LoadModel(scenario.scene);
+  try {
+    impl->model = LoadModel(scenario.scene);
+  } catch (const InputError& e) {
+    // name the scenario's file, line and key too (a scenario built in code has no position)
+    if (scenario.scene_where.empty()) throw;
+    throw InputError(scenario.scene_where + ": scene: " + e.what());
+  }
   const mjModel* m = impl->model.get();
   impl->data = MakeData(m);
   if (!scenario.keyframe.empty()) {

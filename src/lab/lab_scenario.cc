@@ -1,7 +1,9 @@
 #include "lab/lab_scenario.h"
 
 #include <cmath>
+#include <cctype>
 #include <filesystem>
+#include <fstream>
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
@@ -218,6 +220,17 @@ ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode) {
 }
 
 Scenario LoadScenario(const std::string& path) {
+  // an MJCF scene where a scenario is expected: say so, not what YAML makes of XML
+  {
+    std::ifstream in(path);
+    char first = 0;
+    while (in.get(first) && std::isspace(static_cast<unsigned char>(first))) {
+    }
+    if (in && first == '<') {
+      throw InputError(path + ": this is an MJCF scene, not a scenario: a scenario is a YAML file that names its "
+                       "scene (scene: FILE.xml), its devices and checks (docs/scenarios.md)");
+    }
+  }
   const YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) throw InputError(path + ": a scenario must be a YAML mapping");
   MapReader r(path, root, "");
@@ -230,6 +243,7 @@ Scenario LoadScenario(const std::string& path) {
   s.description = r.String("description", "");
   const std::string scene = r.String("scene");
   s.scene = (fs::path(path).parent_path() / scene).lexically_normal().string();
+  s.scene_where = YamlWhere(path, root["scene"]);
   s.duration_s = r.Number("duration");
   if (!ValidDuration(s.duration_s)) r.Fail("duration", "must be > 0 s and at most 1e6 s");
   s.control_period_s = r.Number("control_period", s.control_period_s);

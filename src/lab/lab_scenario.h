@@ -123,6 +123,7 @@ struct Scenario {
   std::vector<std::string> allow_warnings;
   std::string keyframe;        ///< scene keyframe every reset starts from ("": the model's qpos0)
   std::string keyframe_where;  ///< "FILE:LINE" of the keyframe key, for messages
+  std::string scene_where;     ///< "FILE:LINE" of the scene key, for messages
   std::vector<DeviceConfig> devices;
   ControllerConfig controller;
   OutputsConfig outputs;

@@ -352,5 +352,26 @@ TEST(CliTest, HelpNamesSubcommands) {
   EXPECT_NE(RunVlab("").exit_code, 0);  // a subcommand is required
 }
 
+TEST(CliTest, WrongThingsGivenSayWhatTheyAre) {
+  // an unknown subcommand, and none: the known ones are named
+  for (const std::string args : {"foo", ""}) {
+    const auto r = RunVlab(args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_TRUE(Has(r.err, args.empty() ? "a subcommand is required" : "unknown subcommand 'foo'")) << r.err;
+    EXPECT_TRUE(Has(r.err, "known: run, serve, devices, bench, render, camera, vision, cubes")) << r.err;
+  }
+  // a scene where a scenario is expected
+  const auto scene = RunVlab("run scenes/pa10.xml -q");
+  EXPECT_EQ(scene.exit_code, 2);
+  EXPECT_TRUE(Has(scene.err, "scenes/pa10.xml: this is an MJCF scene, not a scenario")) << scene.err;
+  // a scenario whose scene is missing: its file, line and key, and the scene's path
+  TempDir dir;
+  WriteFile(dir / "s.yaml", "name: s\nduration: 1\nscene: nope.xml\n");
+  const auto missing = RunVlab("run '" + (dir / "s.yaml") + "' -q --out '" + (dir / "out") + "'");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_TRUE(Has(missing.err, dir / "s.yaml" + ":3: scene: scene '" + (dir / "nope.xml") + "'")) << missing.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 }  // namespace
 }  // namespace vlab::lab
