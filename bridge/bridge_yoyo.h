@@ -29,6 +29,16 @@ inline constexpr std::array<const char*, 7> kPointStateLayout = FieldNames<7>(La
 /// Value names of the yoyo kind's state (it takes no commands).
 inline constexpr std::array<const char*, 7> kYoyoStateLayout = FieldNames<7>(LayoutOf(DeviceKind::kYoyo).state);
 
+/// Payload positions of the yoyo state's values (the table's), and its length.
+inline constexpr int kYoyoStatus = StateIndex(DeviceKind::kYoyo, "status");
+inline constexpr int kYoyoX = StateIndex(DeviceKind::kYoyo, "x");
+inline constexpr int kYoyoY = StateIndex(DeviceKind::kYoyo, "y");
+inline constexpr int kYoyoZ = StateIndex(DeviceKind::kYoyo, "z");
+inline constexpr int kYoyoVz = StateIndex(DeviceKind::kYoyo, "vz");
+inline constexpr int kYoyoStringForce = StateIndex(DeviceKind::kYoyo, "string_force");
+inline constexpr int kYoyoSpin = StateIndex(DeviceKind::kYoyo, "spin");
+inline constexpr int kYoyoValues = ValueCount(LayoutOf(DeviceKind::kYoyo).state);
+
 /// Yoyo status bit: no fresh measurement of the position in this state.
 inline constexpr unsigned kYoyoNotSeen = 1u << 6;  // after the arm bits (bridge_protocol.h)
 

@@ -1,7 +1,6 @@
 #include "vision/vision_blob.h"
 
 #include <cmath>
-#include <string_view>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -12,21 +11,6 @@
 #include "core/core_errors.h"
 
 namespace vlab::vision {
-
-namespace {
-
-// payload position of a yoyo state field (bridge_layouts.h)
-constexpr int Yoyo(std::string_view field) { return bridge::StateIndex(bridge::DeviceKind::kYoyo, field); }
-constexpr int kYoyoStatus = Yoyo("status");
-constexpr int kYoyoX = Yoyo("x");
-constexpr int kYoyoY = Yoyo("y");
-constexpr int kYoyoZ = Yoyo("z");
-constexpr int kYoyoVz = Yoyo("vz");
-constexpr int kYoyoStringForce = Yoyo("string_force");
-constexpr int kYoyoSpin = Yoyo("spin");
-constexpr int kYoyoValues = bridge::ValueCount(bridge::LayoutOf(bridge::DeviceKind::kYoyo).state);
-
-}  // namespace
 
 BlobConfig BlobColor(const std::string& name) {
   if (name == "red") return BlobConfig{};
@@ -99,24 +83,24 @@ std::optional<Eigen::Vector3d> LocateOnLine(double u, double v, const CameraMode
 
 const double* YoyoTracker::Track(const cv::Mat& rgb, const CameraModel& camera,
                                  const std::optional<Eigen::Isometry3d>& X_world_camera, double time_s) {
-  static_assert(sizeof(state_) / sizeof(state_[0]) == kYoyoValues);
+  static_assert(sizeof(state_) / sizeof(state_[0]) == bridge::kYoyoValues);
   last_blob_ = FindBlob(rgb, blob_, &hsv_, &mask_);
   std::optional<Eigen::Vector3d> p;
   if (last_blob_.found && X_world_camera) p = LocateOnLine(last_blob_.u, last_blob_.v, camera, *X_world_camera, line_);
   seen_ = p.has_value();
   if (!seen_) {
-    state_[kYoyoStatus] = static_cast<double>(bridge::kYoyoNotSeen);  // the values stay the last ones
+    state_[bridge::kYoyoStatus] = static_cast<double>(bridge::kYoyoNotSeen);  // the values stay the last ones
     return state_;
   }
   const double dt = time_s - last_time_s_;
   const double vz = ever_seen_ && dt > 0 && dt <= max_gap_s_ ? (p->z() - last_z_) / dt : 0.0;
-  state_[kYoyoStatus] = 0;
-  state_[kYoyoX] = p->x();
-  state_[kYoyoY] = p->y();
-  state_[kYoyoZ] = p->z();
-  state_[kYoyoVz] = vz;
-  state_[kYoyoStringForce] = 0;  // not measured by vision
-  state_[kYoyoSpin] = 0;          // not measured by vision
+  state_[bridge::kYoyoStatus] = 0;
+  state_[bridge::kYoyoX] = p->x();
+  state_[bridge::kYoyoY] = p->y();
+  state_[bridge::kYoyoZ] = p->z();
+  state_[bridge::kYoyoVz] = vz;
+  state_[bridge::kYoyoStringForce] = 0;  // not measured by vision
+  state_[bridge::kYoyoSpin] = 0;          // not measured by vision
   ever_seen_ = true;
   last_z_ = p->z();
   last_time_s_ = time_s;

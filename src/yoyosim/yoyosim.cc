@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "bridge/bridge_layouts.h"
+#include "bridge/bridge_yoyo.h"
 #include "bridge/bridge_protocol.h"
 #include "core/core_errors.h"
 
@@ -14,16 +15,8 @@ namespace {
 
 constexpr const char* kHandJoints[3] = {"hand_x", "hand_y", "hand_z"};
 
-// payload positions of the point and yoyo states (bridge_layouts.h)
+// payload positions of the point state (bridge_layouts.h; the yoyo state's are in bridge_yoyo.h)
 constexpr int Point(std::string_view field) { return bridge::StateIndex(bridge::DeviceKind::kPoint, field); }
-constexpr int Yoyo(std::string_view field) { return bridge::StateIndex(bridge::DeviceKind::kYoyo, field); }
-constexpr int kYoyoStatus = Yoyo("status");
-constexpr int kYoyoX = Yoyo("x");
-constexpr int kYoyoY = Yoyo("y");
-constexpr int kYoyoZ = Yoyo("z");
-constexpr int kYoyoVz = Yoyo("vz");
-constexpr int kYoyoStringForce = Yoyo("string_force");
-constexpr int kYoyoSpin = Yoyo("spin");
 constexpr int kPointStatus = Point("status"), kPointX = Point("x"), kPointVx = Point("vx");
 static_assert(Point("y") == kPointX + 1 && Point("z") == kPointX + 2 && Point("vy") == kPointVx + 1 &&
                   Point("vz") == kPointVx + 2,
@@ -194,13 +187,13 @@ void YoyoSim::SampleYoyo(double* out) const {
   mjtNum velocity[6];  // [angular; linear] at the site, world orientation
   mj_objectVelocity(model_.get(), data_.get(), mjOBJ_SITE, centre_site_, velocity, 0);
   const mjtNum* centre = data_->site_xpos + 3 * centre_site_;
-  out[kYoyoStatus] = 0;  // a simulation always sees the yo-yo
-  out[kYoyoX] = centre[0];
-  out[kYoyoY] = centre[1];
-  out[kYoyoZ] = centre[2];
-  out[kYoyoVz] = velocity[5];
-  out[kYoyoStringForce] = data_->sensordata[plus_force_] + data_->sensordata[minus_force_];
-  out[kYoyoSpin] = data_->qvel[spin_dof_];
+  out[bridge::kYoyoStatus] = 0;  // a simulation always sees the yo-yo
+  out[bridge::kYoyoX] = centre[0];
+  out[bridge::kYoyoY] = centre[1];
+  out[bridge::kYoyoZ] = centre[2];
+  out[bridge::kYoyoVz] = velocity[5];
+  out[bridge::kYoyoStringForce] = data_->sensordata[plus_force_] + data_->sensordata[minus_force_];
+  out[bridge::kYoyoSpin] = data_->qvel[spin_dof_];
 }
 
 }  // namespace vlab::yoyosim

@@ -6,6 +6,7 @@
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_layouts.h"
+#include "bridge/bridge_yoyo.h"
 #include "core/core_errors.h"
 #include "yoyosim/yoyosim_describe.h"
 
@@ -21,7 +22,6 @@ constexpr double kPollSlice_s = 0.05;
 // the point's and the yo-yo's layouts (bridge_layouts.h)
 constexpr bridge::DeviceKind kPoint = bridge::DeviceKind::kPoint, kYoyo = bridge::DeviceKind::kYoyo;
 constexpr int kPointValues = bridge::ValueCount(bridge::LayoutOf(kPoint).state);
-constexpr int kYoyoValues = bridge::ValueCount(bridge::LayoutOf(kYoyo).state);
 constexpr int kPointCommandValues = bridge::ValueCount(bridge::LayoutOf(kPoint).command);
 constexpr int kPointStatus = bridge::StateIndex(kPoint, "status");
 static_assert(bridge::CommandIndex(kPoint, "x") == 0 && bridge::CommandIndex(kPoint, "y") == 1 &&
@@ -185,7 +185,7 @@ void YoyoSimServer::BeginPeriod(long k, vlab::PeriodStart start) {
 void YoyoSimServer::Publish(long k) {
   const bridge::Header point{static_cast<int>(bridge::DeviceKind::kPoint), static_cast<int>(bridge::MessageType::kState),
                              static_cast<double>(k), static_cast<double>(k) * sim_->period_s(), kPointValues};
-  static_assert(sizeof(values_) / sizeof(values_[0]) >= static_cast<std::size_t>(std::max(kPointValues, kYoyoValues)));
+  static_assert(sizeof(values_) / sizeof(values_[0]) >= static_cast<std::size_t>(std::max(kPointValues, bridge::kYoyoValues)));
   sim_->SamplePoint(values_);
   const std::uint32_t status = static_cast<std::uint32_t>(values_[kPointStatus]) | point_->status_bits();
   values_[kPointStatus] = static_cast<double>(status);
@@ -193,9 +193,9 @@ void YoyoSimServer::Publish(long k) {
   point_->Publish(point_state_, *point_socket_);
   bridge::Header yoyo = point;
   yoyo.kind = static_cast<int>(kYoyo);
-  yoyo.length = kYoyoValues;
+  yoyo.length = bridge::kYoyoValues;
   sim_->SampleYoyo(values_);
-  bridge::EncodePacket(yoyo, values_, kYoyoValues, &yoyo_state_);
+  bridge::EncodePacket(yoyo, values_, bridge::kYoyoValues, &yoyo_state_);
   yoyo_->Publish(yoyo_state_, *yoyo_socket_);
 }
 
