@@ -49,8 +49,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     const int port = override_port != options.ports.end() ? override_port->second : c.port;
     Served d;
     d.device = device;
-    if (OwnTransport* t = device->own_transport()) {
-      t->Unserve();
+    if (OwnTransport* t = device->own_transport()) {  // unserved again by ~LabBridge
       t->Serve(options.bind, port, server, clock_name);
       b->fds_.push_back(t->fd());
       b->devices_.push_back(std::move(d));

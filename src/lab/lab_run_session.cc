@@ -56,10 +56,7 @@ RunSession::~RunSession() { SetMujocoErrorCleanup(nullptr); }
 void RunSession::Prepare() {
   InstallMujocoHandlers();
   TakeMujocoWarningTexts();
-  s_.ResetState();
-  for (auto& device : s_.devices) {
-    if (OwnTransport* t = device->own_transport()) t->Unserve();  // MakeBridge serves them again when serving
-  }
+  s_.ResetState();  // (a camera is served only while a bridge exists: LabBridge serves and unserves it)
   // a scenario's external controller: vlab run serves on loopback and starts it
   const Scenario& sc = s_.scenario;
   external_ = StartsExternalController(sc, options_.serve != nullptr);

@@ -35,17 +35,18 @@ constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 class SimCounter final : public Device {
  public:
   SimCounter(const DeviceContext& context, const DeviceConfig& c)
-      : Device(c), config_(c.ParamsAs<CounterParams>()), period_s_(context.control_period_s) {
+      : Device(c), config_(c.ParamsAs<CounterParams>()) {
     const mjModel* m = context.model;
+    const double period_s = context.control_period_s;
     const int joint = mj_name2id(m, mjOBJ_JOINT, config_.joint.c_str());
     if (joint < 0) throw InputError(who() + ": the scene has no joint '" + config_.joint + "'");
     if (m->jnt_type[joint] != mjJNT_HINGE) throw InputError(who() + ": joint '" + config_.joint + "' is not a hinge");
     qpos_adr_ = m->jnt_qposadr[joint];
     dof_adr_ = m->jnt_dofadr[joint];
-    gate_s_ = config_.rate_hz > 0 ? 1.0 / config_.rate_hz : period_s_;
-    if (gate_s_ < period_s_ - kSameTime_s) {
+    gate_s_ = config_.rate_hz > 0 ? 1.0 / config_.rate_hz : period_s;
+    if (gate_s_ < period_s - kSameTime_s) {
       throw InputError(who() + ": rate " + FormatDouble(config_.rate_hz) + " Hz is faster than the control rate (" +
-                       FormatDouble(1.0 / period_s_) + " Hz)");
+                       FormatDouble(1.0 / period_s) + " Hz)");
     }
   }
 
@@ -94,7 +95,6 @@ class SimCounter final : public Device {
 
  private:
   CounterParams config_;
-  double period_s_;
   int qpos_adr_ = -1, dof_adr_ = -1;
   double gate_s_ = 0;
   double angle_start_ = 0, gate_angle_ = 0, gate_start_ = 0, next_reading_ = 0;
