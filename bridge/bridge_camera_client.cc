@@ -24,7 +24,6 @@ struct CameraClient::Impl {
 namespace {
 
 constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
-constexpr double kDescribeRetry_s = 0.25;    // resend a lost describe request this often
 
 std::string Number(double v) {
   std::ostringstream out;
@@ -42,7 +41,9 @@ std::chrono::steady_clock::time_point After(std::chrono::steady_clock::time_poin
 
 CameraClient::CameraClient(CameraClient&&) noexcept = default;
 CameraClient& CameraClient::operator=(CameraClient&&) noexcept = default;
-CameraClient::~CameraClient() = default;
+CameraClient::~CameraClient() {
+  if (session_ && socket_) session_->Leave(*socket_, device_);
+}
 
 CameraClient CameraClient::Connect(const std::string& address, int port, const CameraClientOptions& options) {
   return CameraClient(address, port, options);
@@ -57,36 +58,15 @@ CameraClient::CameraClient(const std::string& address, int port, const CameraCli
   const bool any_v4 = options.bind_address == "0.0.0.0";
   socket_ = UdpSocket::Bind(any_v4 && device_.address().is_v6() ? "::" : options.bind_address, 0);
   receive_buffer_bytes_ = SetSocketBuffer(socket_->fd(), SO_RCVBUF, options.receive_buffer_bytes);
-  EncodeDescribeRequest(DeviceKind::kCamera, &request_);
-
-  // the reply is the first datagram from the device that starts with '{';
-  // chunks arriving meanwhile are fed to the assembler; a lost request is resent
-  const Clock::time_point deadline = After(start_, options.timeout_s);
-  Clock::time_point resend = start_;
-  for (;;) {
-    const Clock::time_point now = Clock::now();
-    if (now >= resend) {
-      if (!KeepAlive()) throw NetworkError(Label() + ": cannot send the describe request");
-      resend = After(now, kDescribeRetry_s);
-    }
-    const double wait_s = std::max(0.0, Seconds(std::min(deadline, resend) - now));
-    Endpoint from;
-    const long n = socket_->Receive(buffer_.data(), buffer_.size(), &from, wait_s);
-    if (n < 0) {
-      if (Clock::now() < deadline) continue;
-      throw TimeoutError(Label() + ": no describe reply within " + Number(options.timeout_s) +
-                         " s (is a camera serving that address and port?)");
-    }
-    if (from.port() != device_.port()) {
-      ++datagrams_skipped_;
-      continue;
-    }
-    if (n > 0 && buffer_[0] == '{') {
-      CheckDescribe(buffer_.data(), n);
-      break;
-    }
-    impl_->assembler.Add(buffer_.data(), static_cast<std::size_t>(n), Seconds(Clock::now() - start_));
-  }
+  session_ = std::make_unique<ClientSession>(DeviceKind::kCamera, Label());
+  // the handshake; chunks arriving meanwhile are fed to the assembler
+  session_->Connect(
+      *socket_, device_, options.timeout_s, &buffer_,
+      [this](const unsigned char* json, long size) { CheckDescribe(json, size); },
+      [this](long size) {
+        impl_->assembler.Add(buffer_.data(), static_cast<std::size_t>(size), Seconds(Clock::now() - start_));
+      },
+      &datagrams_skipped_);
   next_keepalive_ = After(Clock::now(), options_.keepalive_s);
 }
 
@@ -150,7 +130,7 @@ int CameraClient::local_port() const { return socket_->local_port(); }
 
 const AssemblerCounters& CameraClient::counters() const { return impl_->assembler.counters(); }
 
-bool CameraClient::KeepAlive() { return socket_->SendTo(request_.data(), request_.size(), device_); }
+bool CameraClient::KeepAlive() { return session_->KeepAlive(*socket_, device_); }
 
 bool CameraClient::NextFrame(Clock::time_point deadline, bool queued_only, CameraFrame* frame) {
   FrameAssembler& assembler = impl_->assembler;
@@ -175,8 +155,9 @@ bool CameraClient::NextFrame(Clock::time_point deadline, bool queued_only, Camer
       if (queued_only || now >= deadline) return false;
       continue;
     }
-    if (from.port() != device_.port() || (n > 0 && buffer_[0] == '{')) {
-      ++datagrams_skipped_;  // another sender, or a describe reply to a keep-alive
+    if (from.port() != device_.port() || (n > 0 && buffer_[0] == '{') ||
+        IsSessionReply(buffer_.data(), static_cast<std::size_t>(n))) {
+      ++datagrams_skipped_;  // another sender, a describe reply, or the answer to a keep-alive
       continue;
     }
     ChunkError error;

@@ -29,6 +29,7 @@
 #include "bridge/bridge_camera.h"
 #include "bridge/bridge_camera_assembler.h"
 #include "bridge/bridge_errors.h"
+#include "bridge/bridge_session.h"
 #include "bridge/bridge_udp.h"
 
 namespace vlab::bridge {
@@ -77,7 +78,7 @@ class CameraClient {
   /// consumer wants. Throws as Receive.
   void ReceiveLatest(double timeout_s, Frame* frame);
 
-  /// Sends a describe request now (Receive does it every keepalive_s).
+  /// Renews the subscription now (Receive does it every keepalive_s).
   bool KeepAlive();
 
   const nlohmann::json& describe() const { return describe_; }
@@ -98,7 +99,7 @@ class CameraClient {
   long frames_returned() const { return frames_returned_; }
   long frames_skipped() const { return frames_skipped_; }  ///< whole frames ReceiveLatest passed over
   long undecodable() const { return undecodable_; }        ///< whole frames whose JPEG did not decode to width x height
-  long datagrams_skipped() const { return datagrams_skipped_; }  ///< describe replies, other senders
+  long datagrams_skipped() const { return datagrams_skipped_; }  ///< describe and session replies, other senders
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -122,7 +123,7 @@ class CameraClient {
   CameraEncoding encoding_ = CameraEncoding::kRaw;
   CameraCalibration calibration_;
   std::vector<unsigned char> buffer_;
-  std::vector<unsigned char> request_;
+  std::unique_ptr<ClientSession> session_;
   Clock::time_point start_;
   Clock::time_point next_keepalive_;
   int receive_buffer_bytes_ = 0;

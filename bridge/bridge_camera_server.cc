@@ -91,8 +91,11 @@ std::unique_ptr<CameraServer> CameraServer::Create(const CameraServerConfig& con
   s->socket_ = UdpSocket::Bind(config.bind_address, config.port);
   s->send_buffer_bytes_ = SetSocketBuffer(s->socket_->fd(), SO_SNDBUF, config.send_buffer_bytes);
   s->describe_json_ = CameraDescribeJson(d, config.bind_address, s->socket_->local_port(), config.chunk_bytes);
-  s->timeout_frames_ = std::max(1L, static_cast<long>(std::ceil(config.subscriber_timeout_s * d.fps)));
-  s->subscribers_.reserve(static_cast<std::size_t>(config.max_subscribers));
+  SessionConfig sessions;
+  sessions.kind = DeviceKind::kCamera;
+  sessions.max_subscribers = config.max_subscribers;
+  sessions.subscriber_timeout_s = config.subscriber_timeout_s;
+  s->sessions_ = std::make_unique<SessionTable>(sessions);
   s->receive_buffer_.resize(65536);
   s->chunk_.resize(ChunkDatagramBytes(config.chunk_bytes));
   s->payload_.reserve(kMaxPacketValues);
@@ -116,29 +119,10 @@ void CameraServer::Poll(double timeout_s) {
   }
 }
 
-void CameraServer::Subscribe(const Endpoint& from) {
-  const long now = counters_.frames;
-  for (Subscriber& s : subscribers_) {
-    if (s.endpoint == from) {
-      s.last_frame = now;
-      return;
-    }
-  }
-  DropSilent();
-  if (static_cast<int>(subscribers_.size()) >= config_.max_subscribers) {
-    const auto silent_longer = [](const Subscriber& a, const Subscriber& b) { return a.last_frame < b.last_frame; };
-    subscribers_.erase(std::min_element(subscribers_.begin(), subscribers_.end(), silent_longer));
-    ++counters_.subscribers_dropped;
-  }
-  subscribers_.push_back({from, now});
-}
-
 void CameraServer::DropSilent() {
-  const long now = counters_.frames;
-  const auto silent = [&](const Subscriber& s) { return now - s.last_frame > timeout_frames_; };
-  const auto end = std::remove_if(subscribers_.begin(), subscribers_.end(), silent);
-  counters_.subscribers_dropped += static_cast<long>(subscribers_.end() - end);
-  subscribers_.erase(end, subscribers_.end());
+  const long before = sessions_->counters().expired;
+  sessions_->Expire();
+  counters_.subscribers_dropped += sessions_->counters().expired - before;
 }
 
 void CameraServer::Handle(const unsigned char* data, std::size_t size, const Endpoint& from) {
@@ -146,26 +130,33 @@ void CameraServer::Handle(const unsigned char* data, std::size_t size, const End
   ++c.received;
   Header header;
   DecodeError e = DecodePacket(data, size, &header, &payload_);
-  // a describe request is answered whatever kind it names: tools discover with it
+  // a describe request is answered whatever kind it names (0: any): tools discover with it
   const bool describe = e == DecodeError::kNone && header.type == static_cast<int>(MessageType::kDescribe);
-  if (e == DecodeError::kNone && !describe && header.kind != static_cast<int>(DeviceKind::kCamera)) {
+  if (e == DecodeError::kNone &&
+      (describe ? header.kind > kMaxDeviceKind : header.kind != static_cast<int>(DeviceKind::kCamera))) {
     e = DecodeError::kBadKind;
   }
-  if (e == DecodeError::kNone && header.type == static_cast<int>(MessageType::kState)) e = DecodeError::kBadType;
+  const bool request = describe || header.type == static_cast<int>(MessageType::kSubscribe);
+  // a camera takes no commands, and states and session replies go the other way
+  if (e == DecodeError::kNone && !request) e = DecodeError::kBadType;
+  if (e == DecodeError::kNone) {
+    switch (sessions_->HandleRequest(header, payload_, from, *socket_)) {
+      case SessionTable::Outcome::kMalformed:
+        e = DecodeError::kBadLength;
+        break;
+      case SessionTable::Outcome::kDescribe:
+        ++c.describes;
+        socket_->SendTo(reinterpret_cast<const unsigned char*>(describe_json_.data()), describe_json_.size(), from);
+        break;
+      default:
+        break;
+    }
+  }
   if (e != DecodeError::kNone) {
     ++c.refused;
     ++c.refused_malformed;
-    return;
   }
-  Subscribe(from);
-  if (describe) {
-    ++c.describes;
-    socket_->SendTo(reinterpret_cast<const unsigned char*>(describe_json_.data()), describe_json_.size(), from);
-    return;
-  }
-  // output-only device: a command is refused (its sender stays subscribed)
-  ++c.refused;
-  ++c.refused_malformed;
+  c.sessions = sessions_->counters();
 }
 
 bool CameraServer::TestDrop() {
@@ -180,8 +171,9 @@ bool CameraServer::TestDrop() {
 
 bool CameraServer::SendBytes(const ChunkHeader& frame, const std::uint8_t* data) {
   DropSilent();
-  if (subscribers_.empty()) return false;
-  for (Subscriber& s : subscribers_) s.failed = false;
+  std::vector<SessionTable::Session>& subscribers = sessions_->sessions();
+  if (subscribers.empty()) return false;
+  for (SessionTable::Session& s : subscribers) s.mark = false;
   const int count = ChunkCount(frame.frame_bytes, config_.chunk_bytes);
   ChunkHeader h = frame;
   h.chunk_count = count;
@@ -196,13 +188,13 @@ bool CameraServer::SendBytes(const ChunkHeader& frame, const std::uint8_t* data)
       damaged = true;
       continue;
     }
-    for (Subscriber& s : subscribers_) {
+    for (SessionTable::Session& s : subscribers) {
       if (socket_->SendTo(chunk_.data(), size, s.endpoint)) {
         ++counters_.chunks_sent;
         counters_.bytes_sent += static_cast<long>(h.chunk_bytes);
       } else {
         ++counters_.send_failures;
-        s.failed = true;
+        s.mark = true;  // a chunk of this frame did not go out
       }
     }
   }
@@ -210,8 +202,8 @@ bool CameraServer::SendBytes(const ChunkHeader& frame, const std::uint8_t* data)
     ++counters_.test_damaged_frames;
     return false;
   }
-  const bool whole =
-      std::any_of(subscribers_.begin(), subscribers_.end(), [](const Subscriber& s) { return !s.failed; });
+  const bool whole = std::any_of(subscribers.begin(), subscribers.end(),
+                                 [](const SessionTable::Session& s) { return !s.mark; });
   if (whole) ++counters_.frames_sent;
   return whole;
 }
@@ -250,7 +242,7 @@ bool CameraServer::SendImage(std::int64_t id, double time_s, const std::uint8_t*
     return false;
   }
   DropSilent();
-  if (subscribers_.empty()) {  // nobody listens: skip the encoding
+  if (sessions_->sessions().empty()) {  // nobody listens: skip the encoding
     ++counters_.frames;
     last_id_ = id;
     return false;

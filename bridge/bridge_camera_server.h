@@ -10,13 +10,13 @@
 //   rate    driven by its owner: Poll whenever its socket is readable (or
 //           now and then), Send once per frame
 // Rules (the same as bridge::DeviceEndpoint's, with frames for periods)
-//   - any well-formed datagram from an address subscribes it to the frames;
-//     a subscriber silent for subscriber_timeout_s is dropped (send a
-//     describe request now and then to keep the subscription);
+//   - sessions (bridge_session.h): frames go to subscribers only, who asked
+//     with a subscribe request after the cookie handshake; describe replies
+//     only to a request with the cookie, rate-limited per source; a
+//     subscriber silent for subscriber_timeout_s is dropped (renew the
+//     subscription now and then); a full table refuses newcomers;
 //   - a malformed datagram is refused and counted by reason; nothing else changes;
-//   - a camera takes no commands: a command subscribes its sender, and is
-//     refused and counted;
-//   - at most max_subscribers; when full, the one silent the longest is dropped.
+//   - a camera takes no commands: a command is refused and counted.
 // Threading: one thread at a time. Never throws and never blocks in Poll,
 // Send or SendImage (the socket is non-blocking: a chunk the kernel cannot
 // take is counted as a send failure). No allocation per chunk; JPEG encoding
@@ -32,6 +32,7 @@
 #include "bridge/bridge_camera.h"
 #include "bridge/bridge_endpoint.h"
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
 #include "bridge/bridge_udp.h"
 
 namespace vlab::bridge {
@@ -66,7 +67,7 @@ struct CameraServerConfig {
   int port = 0;  ///< 0: any free port
   CameraDescription description;
   std::size_t chunk_bytes = kDefaultChunkBytes;  ///< frame bytes per chunk, 1..kMaxChunkBytes
-  double subscriber_timeout_s = 10;             ///< drop a subscriber silent this long (counted in frames at fps)
+  double subscriber_timeout_s = 10;             ///< drop a subscriber silent this long (wall clock)
   int max_subscribers = 16;
   int send_buffer_bytes = 4 << 20;  ///< SO_SNDBUF asked for (a burst of chunks to every subscriber)
   /// Test hook: drop each chunk with this probability before it is sent
@@ -76,7 +77,7 @@ struct CameraServerConfig {
 };
 
 struct CameraServerCounters {
-  EndpointCounters endpoint;  ///< received, describes, refused, refused_malformed (the rest stay 0)
+  EndpointCounters endpoint;  ///< received, describes, refused, refused_malformed, sessions (the rest stay 0)
   long frames = 0;            ///< frames given to Send / SendImage
   long frames_sent = 0;       ///< frames sent to at least one subscriber
   long chunks_sent = 0;       ///< datagrams sent, all subscribers
@@ -113,7 +114,7 @@ class CameraServer {
   int port() const;
   /// The socket's descriptor, to wait on it together with others (WaitReadable).
   int fd();
-  int subscribers() const { return static_cast<int>(subscribers_.size()); }
+  int subscribers() const { return static_cast<int>(sessions_->sessions().size()); }
   /// SO_SNDBUF the kernel granted, bytes.
   int send_buffer_bytes() const { return send_buffer_bytes_; }
   const std::string& describe_json() const { return describe_json_; }
@@ -121,14 +122,8 @@ class CameraServer {
   const CameraServerCounters& counters() const { return counters_; }
 
  private:
-  struct Subscriber {
-    Endpoint endpoint;
-    long last_frame = 0;
-    bool failed = false;  // a chunk of the current frame could not be sent
-  };
   explicit CameraServer(const CameraServerConfig& config);
   void Handle(const unsigned char* data, std::size_t size, const Endpoint& from);
-  void Subscribe(const Endpoint& from);
   void DropSilent();
   bool SendBytes(const ChunkHeader& frame, const std::uint8_t* data);
   bool TestDrop();
@@ -137,8 +132,7 @@ class CameraServer {
   CameraServerCounters counters_;
   std::unique_ptr<UdpSocket> socket_;
   std::string describe_json_;
-  std::vector<Subscriber> subscribers_;
-  long timeout_frames_ = 0;
+  std::unique_ptr<SessionTable> sessions_;
   std::int64_t last_id_ = -1;
   int send_buffer_bytes_ = 0;
   std::uint64_t drop_state_ = 0;

@@ -16,7 +16,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
-constexpr double kDescribeRetry_s = 0.25;     // resend a lost describe request this often
 constexpr double kMaxSeq = 9007199254740992.0;  // 2^53: the largest whole seq a double holds exactly
 
 std::string Number(double v) {
@@ -50,7 +49,6 @@ std::vector<double> Limits(const nlohmann::json& limits, const char* field, std:
 
 DeviceClient::DeviceClient(DeviceClient&&) noexcept = default;
 DeviceClient& DeviceClient::operator=(DeviceClient&&) noexcept = default;
-DeviceClient::~DeviceClient() = default;
 
 DeviceClient::DeviceClient(DeviceKind kind, const std::string& address, int port, double timeout_s,
                            const std::string& bind_address)
@@ -59,36 +57,21 @@ DeviceClient::DeviceClient(DeviceKind kind, const std::string& address, int port
   // an IPv6 device needs an IPv6 socket
   const bool any_v4 = bind_address == "0.0.0.0";
   socket_ = UdpSocket::Bind(any_v4 && device_.address().is_v6() ? "::" : bind_address, 0);
-  EncodeDescribeRequest(kind_, &request_);
-
-  CheckDescribe(ReceiveDescribe(timeout_s));
+  session_ = std::make_unique<ClientSession>(kind_, Label());
+  // the handshake: the cookie, then the describe reply and the subscription;
+  // states arriving meanwhile are checked for their kind and skipped
+  session_->Connect(
+      *socket_, device_, timeout_s, &buffer_, [this](const unsigned char* json, long size) { CheckDescribe(json, size); },
+      [this](long size) { AcceptState(size, false); }, &skipped_);
 }
 
-long DeviceClient::ReceiveDescribe(double timeout_s) {
-  // the reply is the first datagram starting with '{'; states are skipped; a
-  // lost request is sent again
-  const Clock::time_point deadline = After(start_, timeout_s);
-  Clock::time_point resend = start_;
-  for (;;) {
-    const Clock::time_point now = Clock::now();
-    if (now >= resend) {
-      if (!Send(request_)) throw NetworkError(Label() + ": cannot send the describe request");
-      resend = After(now, kDescribeRetry_s);
-    }
-    long size = 0;
-    if (!ReceiveFromDevice(std::min(deadline, resend), &size)) {
-      if (Clock::now() < deadline) continue;
-      throw TimeoutError(Label() + ": no describe reply within " + Seconds(timeout_s) +
-                         " (is a device of this kind serving that address and port?)");
-    }
-    if (size > 0 && buffer_[0] == '{') return size;
-    AcceptState(size, false);  // throws on anything but a state of this kind
-  }
+DeviceClient::~DeviceClient() {
+  if (session_ && socket_) session_->Leave(*socket_, device_);
 }
 
-void DeviceClient::CheckDescribe(long size) {
+void DeviceClient::CheckDescribe(const unsigned char* json, long size) {
   try {
-    describe_ = nlohmann::json::parse(buffer_.data(), buffer_.data() + size);
+    describe_ = nlohmann::json::parse(json, json + size);
   } catch (const nlohmann::json::exception& e) {
     throw ProtocolError(Label() + ": describe reply is not valid JSON: " + e.what());
   }
@@ -116,7 +99,7 @@ std::string DeviceClient::Label() const {
 
 int DeviceClient::local_port() const { return socket_->local_port(); }
 
-bool DeviceClient::KeepAlive() { return Send(request_); }
+bool DeviceClient::KeepAlive() { return session_->KeepAlive(*socket_, device_); }
 
 bool DeviceClient::Send(const std::vector<unsigned char>& packet) {
   return socket_->SendTo(packet.data(), packet.size(), device_);
@@ -147,8 +130,8 @@ bool DeviceClient::ReceiveFromDevice(Clock::time_point deadline, long* size) {
 }
 
 bool DeviceClient::AcceptState(long size, bool parse) {
-  if (size > 0 && buffer_[0] == '{') {  // a describe reply (keep-alive)
-    ++skipped_;
+  if ((size > 0 && buffer_[0] == '{') || IsSessionReply(buffer_.data(), static_cast<std::size_t>(size))) {
+    ++skipped_;  // a describe reply, or the answer to a renewal
     return false;
   }
   Header header;

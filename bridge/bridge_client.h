@@ -5,8 +5,9 @@
 //   Wrench input  none                         output state [F (N), M (N m), filter, saturated]
 //   Sim    input  command [op, arg]            output state [sim_time, mode, clock, ...]
 //
-// Connecting sends a describe request, which also subscribes the client: from
-// then on the device sends it one state per control period. A controller's
+// Connecting makes a session (docs/protocol.md, "Sessions"): the client gets
+// its cookie, the describe reply and a subscription; from then on the device
+// sends it one state per control period. Destroying a handle unsubscribes it. A controller's
 // loop is Read (or ReadLatest) -> compute -> Write(..., seq = state.seq); the
 // seq of a command must be the seq of the state it answers. Read and Connect
 // block up to their timeout; Write never blocks.
@@ -31,6 +32,7 @@
 #include "bridge/bridge_errors.h"
 #include "bridge/bridge_messages.h"
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
 #include "bridge/bridge_udp.h"
 
 namespace vlab::bridge {
@@ -56,20 +58,21 @@ class DeviceClient {
   /// The local UDP port the client receives states on.
   int local_port() const;
 
-  /// Sends a describe request without waiting for the reply (Read skips
+  /// Renews the subscription without waiting for the reply (Read skips
   /// it). A passive client (one that never writes) must do this now and then
   /// to stay subscribed: the device drops subscribers silent for a
-  /// scenario-defined time (5000 periods by default). False if the send failed.
+  /// scenario-defined time (10 s by default). False if the send failed.
   bool KeepAlive();
 
-  /// Datagrams Read/ReadLatest skipped: describe replies and datagrams from
-  /// other ports than the device's.
+  /// Datagrams Read/ReadLatest skipped: describe and session replies and
+  /// datagrams from other ports than the device's.
   long skipped() const { return skipped_; }
 
  protected:
-  /// Opens a socket on bind_address, port 0 (any free port), sends a describe
-  /// request to address:port and waits up to timeout_s for the JSON reply,
-  /// skipping states that arrive meanwhile. Checks "protocol" and "kind".
+  /// Opens a socket on bind_address, port 0 (any free port), and makes a
+  /// session with address:port (cookie, describe reply, subscription) within
+  /// timeout_s, skipping states that arrive meanwhile. Checks "protocol" and
+  /// "kind" of the reply.
   DeviceClient(DeviceKind kind, const std::string& address, int port, double timeout_s,
                const std::string& bind_address);
 
@@ -91,10 +94,8 @@ class DeviceClient {
   std::vector<unsigned char> packet_;  ///< scratch for encoding
 
  private:
-  /// Sends describe requests until the JSON reply arrives; returns its size.
-  long ReceiveDescribe(double timeout_s);
-  /// Parses and checks the reply in the buffer ("protocol", "kind"), keeps it.
-  void CheckDescribe(long size);
+  /// Parses and checks the describe reply ("protocol", "kind"), keeps it.
+  void CheckDescribe(const unsigned char* json, long size);
   /// Receives one datagram from the device within the deadline; false on timeout.
   bool ReceiveFromDevice(std::chrono::steady_clock::time_point deadline, long* size);
   /// Checks one received datagram: false for a describe reply (skipped),
@@ -105,11 +106,11 @@ class DeviceClient {
   DeviceKind kind_;
   Endpoint device_;
   std::unique_ptr<UdpSocket> socket_;
+  std::unique_ptr<ClientSession> session_;
   nlohmann::json describe_;
   std::string name_;
   std::chrono::steady_clock::time_point start_;
   std::vector<unsigned char> buffer_;
-  std::vector<unsigned char> request_;
   std::vector<double> payload_;
   Header header_;
   long skipped_ = 0;

@@ -1,12 +1,25 @@
 #include "bridge/bridge_endpoint.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vlab::bridge {
 
-DeviceEndpoint::DeviceEndpoint(EndpointConfig config) : config_(std::move(config)) {
+namespace {
+
+SessionConfig Sessions(const EndpointConfig& c) {
+  SessionConfig s;
+  s.kind = c.kind;
+  s.max_subscribers = c.max_subscribers;
+  s.subscriber_timeout_s = c.subscriber_timeout_s;
+  s.clock = c.clock;
+  return s;
+}
+
+}  // namespace
+
+DeviceEndpoint::DeviceEndpoint(EndpointConfig config) : config_(std::move(config)), sessions_(Sessions(config_)) {
   payload_.reserve(kMaxPacketValues);
-  subscribers_.reserve(config_.max_subscribers);
   arm_command_.value.reserve(kMaxPacketValues);
   parsed_.value.reserve(kMaxPacketValues);
   command_.reserve(kMaxPacketValues);
@@ -14,29 +27,21 @@ DeviceEndpoint::DeviceEndpoint(EndpointConfig config) : config_(std::move(config
   not_owner_packet_.reserve(kMaxPacketValues * sizeof(double));
 }
 
-void DeviceEndpoint::Subscribe(const Endpoint& from, long period) {
-  for (Subscriber& s : subscribers_) {
-    if (s.endpoint == from) {
-      s.last_period = period;
-      return;
-    }
-  }
-  // drop silent subscribers first; when still full, the longest silent one
-  for (std::size_t i = 0; i < subscribers_.size();) {
-    if (period - subscribers_[i].last_period > config_.subscriber_timeout_periods) {
-      subscribers_.erase(subscribers_.begin() + static_cast<long>(i));
-    } else {
-      ++i;
-    }
-  }
-  if (static_cast<int>(subscribers_.size()) >= config_.max_subscribers) {
-    std::size_t oldest = 0;
-    for (std::size_t i = 1; i < subscribers_.size(); ++i) {
-      if (subscribers_[i].last_period < subscribers_[oldest].last_period) oldest = i;
-    }
-    subscribers_.erase(subscribers_.begin() + static_cast<long>(oldest));
-  }
-  subscribers_.push_back({from, period});
+const EndpointCounters& DeviceEndpoint::counters() const {
+  counters_.sessions = sessions_.counters();
+  return counters_;
+}
+
+void DeviceEndpoint::ReleaseOwner() {
+  if (owner_) ++counters_.owners_released;
+  owner_.reset();
+  last_seq_ = -1;
+}
+
+bool DeviceEndpoint::ReleaseSilentOwner() {
+  if (!owner_ || sessions_.Now() - owner_heard_s_ <= config_.owner_timeout_s) return false;
+  ReleaseOwner();
+  return true;
 }
 
 bool DeviceEndpoint::CheckArmLimits(const ArmCommandMsg& c) const {
@@ -61,48 +66,73 @@ bool DeviceEndpoint::CheckArmLimits(const ArmCommandMsg& c) const {
   }
 }
 
-bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const Endpoint& from, long period,
-                            UdpSocket& socket) {
+DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const Endpoint& from,
+                                                 long period, UdpSocket& socket) {
   ++counters_.received;
   const bool from_owner = owner_ && *owner_ == from;
   auto refuse = [&](long* reason) {
     ++*reason;
     ++counters_.refused;
     if (from_owner) refused_flag_ = true;
-    return false;
+    return Received::kOther;
   };
   DecodeError e = DecodePacket(data, size, &header_, &payload_);
-  // a describe request is answered whatever kind it names: tools discover with it
+  // a describe request is answered whatever kind it names (0: any): tools discover with it
   const bool describe = e == DecodeError::kNone && header_.type == static_cast<int>(MessageType::kDescribe);
-  if (e == DecodeError::kNone && !describe && header_.kind != static_cast<int>(config_.kind)) e = DecodeError::kBadKind;
-  if (e == DecodeError::kNone && header_.type == static_cast<int>(MessageType::kState)) e = DecodeError::kBadType;
+  if (e == DecodeError::kNone && (describe ? header_.kind > kMaxDeviceKind : header_.kind != static_cast<int>(config_.kind))) {
+    e = DecodeError::kBadKind;
+  }
+  if (e == DecodeError::kNone && (header_.type == static_cast<int>(MessageType::kState) ||
+                                  header_.type == static_cast<int>(MessageType::kSession))) {
+    e = DecodeError::kBadType;
+  }
   if (e != DecodeError::kNone) return refuse(&counters_.refused_malformed);
-  Subscribe(from, period);
 
-  if (describe) {
-    ++counters_.describes;
-    socket.SendTo(reinterpret_cast<const unsigned char*>(config_.describe_json.data()),
-                  config_.describe_json.size(), from);
-    return false;
+  if (describe || header_.type == static_cast<int>(MessageType::kSubscribe)) {
+    switch (sessions_.HandleRequest(header_, payload_, from, socket)) {
+      case SessionTable::Outcome::kMalformed:
+        return refuse(&counters_.refused_malformed);
+      case SessionTable::Outcome::kDescribe:
+        ++counters_.describes;
+        socket.SendTo(reinterpret_cast<const unsigned char*>(config_.describe_json.data()),
+                      config_.describe_json.size(), from);
+        return Received::kOther;
+      case SessionTable::Outcome::kSubscribed:
+        return Received::kSubscribed;
+      case SessionTable::Outcome::kUnsubscribed:
+        if (from_owner) ReleaseOwner();  // an owner that leaves gives its input up
+        return Received::kOther;
+      case SessionTable::Outcome::kRenewed:
+        if (from_owner) owner_heard_s_ = sessions_.Now();
+        return Received::kOther;
+      default:
+        return Received::kOther;
+    }
   }
   const bool commanded =
       config_.kind == DeviceKind::kArm || config_.kind == DeviceKind::kSim || config_.command_length > 0;
   if (!commanded) return refuse(&counters_.refused_malformed);  // output-only device
+  // commands come from subscribers only: a proven address, which states reach
+  if (!sessions_.Touch(from)) return refuse(&counters_.refused_not_subscribed);
 
   // one owner at a time; an owner silent for too long gives the input up. A
   // new owner takes over with its first ACCEPTED command only.
-  if (owner_ && !from_owner && period - owner_last_period_ <= config_.owner_timeout_periods) {
-    return refuse(&counters_.refused_not_owner);
+  ReleaseSilentOwner();
+  if (owner_ && !from_owner) return refuse(&counters_.refused_not_owner);
+  if (from_owner) owner_heard_s_ = sessions_.Now();  // any datagram shows the owner is alive
+  // the seq answers a state this device published, newer than the last accepted
+  if (header_.seq > newest_seq_) {
+    ++counters_.future;
+    return Received::kOther;
   }
-  if (from_owner) owner_last_period_ = period;  // any datagram shows the owner is alive
-  const double last_seq = from_owner ? last_seq_ : -1;
-  if (header_.seq < last_seq) {
+  const double last_seq = owner_ ? last_seq_ : -1;
+  if (header_.seq < last_seq || header_.seq < newest_seq_ - kSeqWindow) {
     ++counters_.stale;
-    return false;
+    return Received::kOther;
   }
   if (header_.seq == last_seq) {
     ++counters_.duplicate;
-    return false;
+    return Received::kOther;
   }
   if (config_.kind == DeviceKind::kArm) {
     if (ParseArmCommand(header_, payload_, config_.joints, &parsed_) != DecodeError::kNone) {
@@ -124,7 +154,7 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
     sim_command_ = parsed;
   }
   if (!from_owner) owner_ = from;
-  owner_last_period_ = period;
+  owner_heard_s_ = sessions_.Now();
   last_seq_ = header_.seq;
   last_command_period_ = period;
   ever_commanded_ = true;
@@ -132,7 +162,7 @@ bool DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const E
   refused_flag_ = false;
   watchdog_hold_ = false;
   ++counters_.accepted;
-  return true;
+  return Received::kCommand;
 }
 
 bool DeviceEndpoint::BeginPeriod(long period) {
@@ -176,6 +206,9 @@ std::uint32_t DeviceEndpoint::status_bits() const {
 }
 
 void DeviceEndpoint::Publish(const std::vector<unsigned char>& packet, UdpSocket& socket) {
+  if (packet.size() >= kHeaderBytes) newest_seq_ = std::max(newest_seq_, GetDouble(packet.data() + 4 * sizeof(double)));
+  ReleaseSilentOwner();
+  sessions_.Expire(owner_ ? &*owner_ : nullptr);
   const bool mark = config_.status_first && owner_ && packet.size() > kHeaderBytes;
   if (mark) {
     // the same state with kStatusNotOwner, for everyone but the owner
@@ -185,7 +218,7 @@ void DeviceEndpoint::Publish(const std::vector<unsigned char>& packet, UdpSocket
     const std::uint32_t bits = value >= 0 && value <= 4294967295.0 ? static_cast<std::uint32_t>(value) : 0;
     PutDouble(static_cast<double>(bits | kStatusNotOwner), status);
   }
-  for (const Subscriber& s : subscribers_) {
+  for (const SessionTable::Session& s : sessions_.sessions()) {
     const bool to_owner = owner_ && s.endpoint == *owner_;
     const std::vector<unsigned char>& p = mark && !to_owner ? not_owner_packet_ : packet;
     socket.SendTo(p.data(), p.size(), s.endpoint);

@@ -10,16 +10,25 @@
 //   rate    driven by its owner: Handle whenever a datagram arrives,
 //           BeginPeriod/Publish once per control period
 // Rules
-//   - any well-formed datagram from an address subscribes it to the states;
-//     a subscriber silent for subscriber_timeout_periods is dropped (send a
-//     describe request now and then to keep a passive subscription);
+//   - sessions (bridge_session.h): states go to subscribers only; a client
+//     subscribes with a subscribe request after proving its address (the
+//     cookie handshake), and a describe request is answered with the JSON only
+//     when it carries the cookie; a subscriber silent for
+//     subscriber_timeout_s (wall clock) is dropped; a full table refuses
+//     newcomers and never evicts anyone;
 //   - a malformed datagram is refused and counted by reason; nothing else changes;
-//   - commands (arm, sim): the sender of the first accepted command owns the
-//     command input; others are refused (status bit kStatusNotOwner in the
-//     states they receive) until the owner has been silent for
-//     owner_timeout_periods, after which the next accepted command takes over;
-//   - an owner's command with a seq lower than its last accepted one is stale,
-//     an equal one a duplicate: both ignored and counted;
+//   - commands (arm, sim and the other commanded kinds) are taken from
+//     subscribers only (others: refused_not_subscribed); the subscriber of
+//     the first accepted command owns the command input; others are refused
+//     (status bit kStatusNotOwner in the states they receive) until the owner
+//     has been silent for owner_timeout_s of the wall clock, in every state of
+//     the lab (paused too): then the owner is released (ReleaseSilentOwner)
+//     and the next accepted command takes over; an owner that unsubscribes
+//     gives its input up at once;
+//   - a command's seq must be one of the newest kSeqWindow + 1 states the
+//     device published (Publish) and higher than the owner's last accepted
+//     one: lower is stale, equal a duplicate, not yet published is from the
+//     future; all ignored and counted;
 //   - arm commands are checked against the joint count and the position,
 //     velocity and torque limits; a refused command sets kStatusRefused and
 //     leaves the previous command in force;
@@ -41,6 +50,7 @@
 #include <vector>
 
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
 #include "bridge/bridge_udp.h"
 
 namespace vlab::bridge {
@@ -54,9 +64,13 @@ struct EndpointCounters {
   long refused_malformed = 0;  ///< size, magic, version, kind, type, length, NaN/Inf, domain
   long refused_limits = 0;   ///< wrong joint count or a value beyond a limit
   long refused_not_owner = 0;  ///< commands from a non-owner
-  long stale = 0;            ///< seq lower than the last accepted (ignored)
+  long refused_not_subscribed = 0;  ///< commands from a source that is no subscriber
+  long stale = 0;            ///< seq lower than the last accepted, or older than the window (ignored)
   long duplicate = 0;        ///< seq equal to the last accepted (ignored)
+  long future = 0;           ///< seq of a state not published yet (ignored)
   long watchdog_holds = 0;   ///< times the watchdog put the arm on hold
+  long owners_released = 0;  ///< owners released after falling silent (or by the lab)
+  SessionCounters sessions;  ///< handshakes, subscriptions, rate limits
 };
 
 /// Verdict of a kind's command check.
@@ -70,8 +84,8 @@ struct EndpointConfig {
   std::string name;
   DeviceKind kind = DeviceKind::kArm;
   std::string describe_json;  ///< the device's describe reply
-  int owner_timeout_periods = 500;
-  int subscriber_timeout_periods = 5000;
+  double owner_timeout_s = 1;        ///< wall clock
+  double subscriber_timeout_s = 10;  ///< wall clock
   int watchdog_periods = 3;   ///< arm only; 0 disables
   // arm only: one entry per joint (empty: no limit of that kind)
   int joints = 0;
@@ -85,18 +99,28 @@ struct EndpointConfig {
   /// The state's first payload value is a status word (arm, base, gripper):
   /// non-owners get kStatusNotOwner in it.
   bool status_first = false;
+  /// Wall clock, s (null: the monotonic clock). Tests pass their own.
+  std::function<double()> clock;
 };
 
 class DeviceEndpoint {
  public:
   explicit DeviceEndpoint(EndpointConfig config);
 
-  /// Handles one datagram received at period `period` (replies to a describe
-  /// request through `socket`). Returns true when it was an accepted command.
-  bool Handle(const unsigned char* data, std::size_t size, const Endpoint& from, long period, UdpSocket& socket);
+  /// What one datagram was.
+  enum class Received { kOther, kCommand, kSubscribed };
+
+  /// Handles one datagram received at period `period` (replies to describe
+  /// and subscribe requests through `socket`). Returns kCommand for an
+  /// accepted command, kSubscribed for a new subscriber (which the caller
+  /// may send the latest state at once).
+  Received Handle(const unsigned char* data, std::size_t size, const Endpoint& from, long period, UdpSocket& socket);
 
   /// Starts period k: runs the arm watchdog. True when the arm must hold.
   bool BeginPeriod(long period);
+  /// Releases an owner silent for owner_timeout_s; true when it did. Call
+  /// it now and then in every state (the lab: every period and while paused).
+  bool ReleaseSilentOwner();
 
   /// The newest accepted command not yet taken.
   bool TakeArmCommand(ArmCommandMsg* command);
@@ -108,35 +132,31 @@ class DeviceEndpoint {
   bool has_owner() const { return owner_.has_value(); }
   /// Frees the command input now (the lab does this when a lockstep owner
   /// stopped answering): the next sender becomes the owner.
-  void ReleaseOwner() {
-    owner_.reset();
-    last_seq_ = -1;
-  }
+  void ReleaseOwner();
 
   /// Status bits the endpoint adds for the owner (refused, watchdog).
   std::uint32_t status_bits() const;
 
-  /// Sends one encoded state to every subscriber. For arm states, subscribers
-  /// other than the owner get kStatusNotOwner set when an owner exists.
+  /// Sends one encoded state to every subscriber (and drops the silent
+  /// ones). For arm states, subscribers other than the owner get
+  /// kStatusNotOwner set when an owner exists. Its seq is the newest a
+  /// command may answer.
   void Publish(const std::vector<unsigned char>& state_packet, UdpSocket& socket);
 
-  const EndpointCounters& counters() const { return counters_; }
+  const EndpointCounters& counters() const;
+  int subscribers() const { return static_cast<int>(sessions_.sessions().size()); }
   const EndpointConfig& config() const { return config_; }
 
  private:
-  struct Subscriber {
-    Endpoint endpoint;
-    long last_period = 0;
-  };
-  void Subscribe(const Endpoint& from, long period);
   bool CheckArmLimits(const ArmCommandMsg& command) const;
 
   EndpointConfig config_;
-  EndpointCounters counters_;
-  std::vector<Subscriber> subscribers_;
+  mutable EndpointCounters counters_;  // (its sessions part is copied in by counters())
+  SessionTable sessions_;
   std::optional<Endpoint> owner_;
-  long owner_last_period_ = 0;
+  double owner_heard_s_ = 0;
   double last_seq_ = -1;
+  double newest_seq_ = -1;  // seq of the newest state published
   long last_command_period_ = 0;
   bool ever_commanded_ = false;
   bool refused_flag_ = false;

@@ -93,8 +93,8 @@ DecodeError DecodePacket(const unsigned char* data, std::size_t size, Header* h,
   for (std::size_t i = 0; i < values; ++i) {
     if (!std::isfinite(GetDouble(data + 8 * i))) return DecodeError::kNotFinite;
   }
-  if (!IsWhole(header[2], 1, 255)) return DecodeError::kBadKind;
-  if (!IsWhole(header[3], 1, 3)) return DecodeError::kBadType;
+  if (!IsWhole(header[2], 0, 255)) return DecodeError::kBadKind;  // 0: a describe request to any kind
+  if (!IsWhole(header[3], 1, 5)) return DecodeError::kBadType;
   if (!IsWhole(header[4], 0, 9007199254740992.0)) return DecodeError::kBadValue;
   if (header[6] != static_cast<double>(values - kHeaderValues)) return DecodeError::kBadLength;
   h->kind = static_cast<int>(header[2]);
@@ -179,10 +179,6 @@ void EncodeSimCommand(double seq, double time, const SimCommandMsg& m, std::vect
   v[kSimCommandArg] = m.arg;
   PacketWriter w(DeviceKind::kSim, MessageType::kCommand, seq, time, kSimCommandValues, out);
   for (double x : v) w.Put(x);
-}
-
-void EncodeDescribeRequest(DeviceKind kind, std::vector<unsigned char>* out) {
-  PacketWriter w(kind, MessageType::kDescribe, 0, 0, 0, out);
 }
 
 DecodeError ParseArmState(const Header& h, const std::vector<double>& p, int joints, ArmStateMsg* m) {

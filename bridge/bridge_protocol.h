@@ -1,14 +1,15 @@
-// The vlab wire protocol, version 1: one header shared by servers, clients,
+// The vlab wire protocol, version 2: one header shared by servers, clients,
 // the kinematic simulator and the tests. docs/protocol.md is its contract.
 //
 // Every control-rate datagram is an array of little-endian IEEE-754 float64:
 //
 //   index  field         value
 //   0      magic         1447838018 (the ASCII bytes "VLAB" read as a big-endian uint32)
-//   1      version       1
-//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-13: see DeviceKind)
+//   1      version       2
+//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-14: see DeviceKind)
 //   3      type          1 state (device -> client), 2 command (client -> device),
-//                        3 describe request (client -> device)
+//                        3 describe request, 4 subscribe request (client -> device),
+//                        5 session reply (device -> client): bridge_session.h
 //   4      seq           sequence number (see below)
 //   5      time          seconds: simulated time of a state; the sender's clock in a command
 //   6      length        number of payload values that follow
@@ -19,15 +20,18 @@
 //
 // Sequence numbers: a state's seq is the control period k it closes (0, 1, 2,
 // ...). A command's seq is the seq of the newest state its sender has read,
-// i.e. the period it answers. A device accepts commands with increasing seq
-// only: a lower seq than the last accepted is stale, an equal one a duplicate;
-// both are ignored and counted. In lockstep the lab waits for the command
-// whose seq equals the period it published.
+// i.e. the period it answers. A device accepts a command only when its seq is
+// one of the newest kSeqWindow + 1 it published and higher than the owner's
+// last accepted one: an older seq is stale, an equal one a duplicate, a seq
+// the device has not published yet is from the future; all are ignored and
+// counted. In lockstep the lab waits for the command whose seq equals the
+// period it published.
 //
 // Payloads: the fields of every kind's state and command, in order, with
 // their units, are the table of bridge_layouts.h (arm: [status, q_1..q_n,
 // qd_1..qd_n, tau_1..tau_n] and [mode, value_1..value_n], n joints; wrench,
-// sim and the others: fixed lists). A describe request has no payload.
+// sim and the others: fixed lists). Describe and subscribe requests carry
+// [cookie, arg] (bridge_session.h).
 //
 // Decoding never trusts the datagram: sizes, magic, version, kind, type,
 // length and finiteness are checked before any value is used.
@@ -41,11 +45,13 @@
 namespace vlab::bridge {
 
 inline constexpr double kMagic = 1447838018.0;  // "VLAB"
-inline constexpr int kProtocolVersion = 1;
+inline constexpr int kProtocolVersion = 2;
 inline constexpr int kHeaderValues = 7;
 inline constexpr std::size_t kHeaderBytes = kHeaderValues * sizeof(double);
 /// Largest control-rate datagram accepted (values), header included.
 inline constexpr int kMaxPacketValues = 1024;
+/// A command may answer any of the newest kSeqWindow + 1 states a device published.
+inline constexpr int kSeqWindow = 100;
 
 /// Device kinds. 1-3 are described below; the others have their own headers
 /// and sections of docs/protocol.md (camera frames are chunked, not float64).
@@ -66,7 +72,7 @@ enum class DeviceKind : int {
   kCounter = 14,  ///< speed counter on a spinning joint (the PowerBall's rpm counter)
 };
 inline constexpr int kMaxDeviceKind = 14;
-enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3 };
+enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3, kSubscribe = 4, kSession = 5 };
 
 /// Arm status bits (state payload value 0, as a whole number).
 enum ArmStatusBit : std::uint32_t {
@@ -155,7 +161,7 @@ void EncodeArmCommand(double seq, double time, const ArmCommandMsg& m, std::vect
 void EncodeWrenchState(double seq, double time, const WrenchStateMsg& m, std::vector<unsigned char>* out);
 void EncodeSimState(double seq, double time, const SimStateMsg& m, std::vector<unsigned char>* out);
 void EncodeSimCommand(double seq, double time, const SimCommandMsg& m, std::vector<unsigned char>* out);
-void EncodeDescribeRequest(DeviceKind kind, std::vector<unsigned char>* out);
+// (describe and subscribe requests: bridge_session.h)
 
 /// Payload -> message, with the layout checks of each kind (`joints` = the
 /// arm's joint count, or -1 to take it from the length).

@@ -62,8 +62,8 @@ std::unique_ptr<KinsimServer> KinsimServer::Create(const ServerConfig& c, std::u
   e.name = a.name;
   e.kind = bridge::DeviceKind::kArm;
   e.describe_json = bridge::DescribeJson(d);
-  e.owner_timeout_periods = static_cast<int>(Periods(c.owner_timeout_s, c.rate_hz));
-  e.subscriber_timeout_periods = static_cast<int>(Periods(c.subscriber_timeout_s, c.rate_hz));
+  e.owner_timeout_s = c.owner_timeout_s;
+  e.subscriber_timeout_s = c.subscriber_timeout_s;
   e.watchdog_periods = c.watchdog_periods;
   e.joints = arm->dof();
   e.position_min = a.position_min;

@@ -62,7 +62,6 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     }
     bridge::EndpointConfig ec;
     ec.name = device->name();
-    ec.subscriber_timeout_periods = static_cast<int>(std::lround(10.0 * control_hz));
     device->ConfigureEndpoint(control_hz, &ec);
     const bridge::DeviceDescription common{device->name(), server, clock_name, options.bind, d.socket->local_port(),
                                            control_hz};
@@ -89,11 +88,11 @@ void LabBridge::Receive(Served& d) {
   for (;;) {
     const long n = d.socket->Receive(buffer_.data(), buffer_.size(), &from, 0.0);
     if (n < 0) return;
-    const long describes = d.endpoint->counters().describes;
-    const bool command = d.endpoint->Handle(buffer_.data(), static_cast<std::size_t>(n), from, period_, *d.socket);
-    if (command) d.command_arrival = WallNow();
+    using Received = bridge::DeviceEndpoint::Received;
+    const Received what = d.endpoint->Handle(buffer_.data(), static_cast<std::size_t>(n), from, period_, *d.socket);
+    if (what == Received::kCommand) d.command_arrival = WallNow();
     // a new subscriber gets the latest state at once (it may be what lockstep waits on)
-    if (d.endpoint->counters().describes != describes && !d.last_state.empty()) {
+    if (what == Received::kSubscribed && !d.last_state.empty()) {
       d.socket->SendTo(d.last_state.data(), d.last_state.size(), from);
     }
   }
@@ -181,6 +180,11 @@ void LabBridge::ApplyCommands(std::int64_t k) {
 bool LabBridge::TakeCommand(Device& device) {
   Served* d = Find(device);
   return d && d->endpoint && device.TakeCommand(*d->endpoint, &payload_);
+}
+
+bool LabBridge::ReleaseSilentOwner(const Device& device) {
+  Served* d = Find(device);
+  return d && d->endpoint && d->endpoint->ReleaseSilentOwner();
 }
 
 void LabBridge::NoteTimeout(int release_after) {

@@ -71,6 +71,10 @@ class LabBridge final : public CommandSource {
   /// The newest accepted command of `device` (a served device), applied to it.
   /// False when none came.
   bool TakeCommand(Device& device);
+  /// Releases the owner of `device` when it has been silent for its owner
+  /// timeout (wall clock); true when it did. Publish does it for every
+  /// device; the lab calls this while paused, when nothing is published.
+  bool ReleaseSilentOwner(const Device& device);
   /// Also wait on fd, which becomes readable when the controller process
   /// that `vlab run` started has exited: from then on no period waits.
   void WatchPeerExit(int fd);

@@ -171,6 +171,13 @@ bool RunSession::Period() {
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
   if (paused_) {
     bridge_->Poll(0.02);
+    // an owner that paused and fell silent loses the sim: nobody else could resume
+    if (bridge_->ReleaseSilentOwner(*s_.sim) && s_.sim->on_owner_lost() == OnOwnerLost::kResume) {
+      paused_ = false;
+      steps_left_ = -1;
+      clock_->set_factor(clock_->factor());  // realtime: pace from now
+      Publish(k_);
+    }
     return true;
   }
   // 1. the clock, the commands

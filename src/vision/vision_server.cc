@@ -24,9 +24,17 @@ std::unique_ptr<MarkersServer> MarkersServer::Create(const MarkersServerConfig& 
   return server;
 }
 
+bridge::SessionConfig MarkersServer::Sessions(const MarkersServerConfig& config, const double* now_s) {
+  bridge::SessionConfig s;
+  s.kind = bridge::DeviceKind::kMarkers;
+  s.max_subscribers = std::max(1, config.max_subscribers);
+  s.subscriber_timeout_s = config.subscriber_timeout_s;
+  s.clock = [now_s] { return *now_s; };
+  return s;
+}
+
 MarkersServer::MarkersServer(const MarkersServerConfig& config)
-    : config_(config), table_(config.max_markers), buffer_(kBufferBytes) {
-  subscribers_.reserve(static_cast<std::size_t>(std::max(1, config.max_subscribers)));
+    : config_(config), table_(config.max_markers), sessions_(Sessions(config, &now_s_)), buffer_(kBufferBytes) {
   payload_.reserve(bridge::kMaxPacketValues);
   packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
 }
@@ -39,11 +47,12 @@ int MarkersServer::Poll(double now_s) {
     const long size = socket_->Receive(buffer_.data(), buffer_.size(), &from, 0, &truncated);
     if (size < 0) return handled;
     ++handled;
-    Handle(size, from, truncated, now_s);
+    now_s_ = now_s;
+    Handle(size, from, truncated);
   }
 }
 
-void MarkersServer::Handle(long size, const bridge::Endpoint& from, bool truncated, double now_s) {
+void MarkersServer::Handle(long size, const bridge::Endpoint& from, bool truncated) {
   ++counters_.received;
   auto refuse = [this](long* reason) {
     ++*reason;
@@ -53,22 +62,29 @@ void MarkersServer::Handle(long size, const bridge::Endpoint& from, bool truncat
   bridge::DecodeError e =
       truncated ? bridge::DecodeError::kTooLong
                 : bridge::DecodePacket(buffer_.data(), static_cast<std::size_t>(size), &header, &payload_);
-  // a describe request is answered whatever kind it names: tools discover with it
-  const bool describe =
-      e == bridge::DecodeError::kNone && header.type == static_cast<int>(bridge::MessageType::kDescribe);
-  if (e == bridge::DecodeError::kNone && !describe && header.kind != static_cast<int>(bridge::DeviceKind::kMarkers)) {
+  using bridge::MessageType;
+  // a describe request is answered whatever kind it names (0: any): tools discover with it
+  const bool describe = e == bridge::DecodeError::kNone && header.type == static_cast<int>(MessageType::kDescribe);
+  if (e == bridge::DecodeError::kNone &&
+      (describe ? header.kind > bridge::kMaxDeviceKind : header.kind != static_cast<int>(bridge::DeviceKind::kMarkers))) {
     e = bridge::DecodeError::kBadKind;
   }
-  if (e == bridge::DecodeError::kNone && header.type == static_cast<int>(bridge::MessageType::kState)) {
+  if (e == bridge::DecodeError::kNone && (header.type == static_cast<int>(MessageType::kState) ||
+                                          header.type == static_cast<int>(MessageType::kSession))) {
     e = bridge::DecodeError::kBadType;
   }
   if (e != bridge::DecodeError::kNone) return refuse(&counters_.refused_malformed);
-  Subscribe(from, now_s);
-  if (describe) {
-    ++counters_.describes;
-    socket_->SendTo(reinterpret_cast<const unsigned char*>(describe_json_.data()), describe_json_.size(), from);
+  if (describe || header.type == static_cast<int>(MessageType::kSubscribe)) {
+    const auto outcome = sessions_.HandleRequest(header, payload_, from, *socket_);
+    counters_.sessions = sessions_.counters();
+    if (outcome == bridge::SessionTable::Outcome::kMalformed) return refuse(&counters_.refused_malformed);
+    if (outcome == bridge::SessionTable::Outcome::kDescribe) {
+      ++counters_.describes;
+      socket_->SendTo(reinterpret_cast<const unsigned char*>(describe_json_.data()), describe_json_.size(), from);
+    }
     return;
   }
+  if (!sessions_.Touch(from)) return refuse(&counters_.refused_not_subscribed);
   if (bridge::ParseMarkersCommand(header, payload_, &descriptions_) != bridge::DecodeError::kNone) {
     return refuse(&counters_.refused_malformed);
   }
@@ -82,33 +98,12 @@ bool MarkersServer::Describe(const std::vector<bridge::MarkerDescriptionMsg>& de
   return true;
 }
 
-void MarkersServer::Subscribe(const bridge::Endpoint& from, double now_s) {
-  for (Subscriber& s : subscribers_) {
-    if (s.endpoint == from) {
-      s.last_s = now_s;
-      return;
-    }
-  }
-  // drop silent subscribers first; when still full, the longest silent one
-  subscribers_.erase(
-      std::remove_if(subscribers_.begin(), subscribers_.end(),
-                     [&](const Subscriber& s) { return now_s - s.last_s > config_.subscriber_timeout_s; }),
-      subscribers_.end());
-  if (static_cast<int>(subscribers_.size()) >= config_.max_subscribers && !subscribers_.empty()) {
-    const auto oldest = std::min_element(subscribers_.begin(), subscribers_.end(),
-                                         [](const Subscriber& a, const Subscriber& b) { return a.last_s < b.last_s; });
-    subscribers_.erase(oldest);
-  }
-  subscribers_.push_back({from, now_s});
-}
-
 void MarkersServer::Publish(double seq, double time, const bridge::MarkersStateMsg& state, double now_s) {
-  subscribers_.erase(
-      std::remove_if(subscribers_.begin(), subscribers_.end(),
-                     [&](const Subscriber& s) { return now_s - s.last_s > config_.subscriber_timeout_s; }),
-      subscribers_.end());
+  now_s_ = now_s;
+  sessions_.Expire();
+  counters_.sessions = sessions_.counters();
   bridge::EncodeMarkersState(seq, time, state, &packet_);
-  for (const Subscriber& s : subscribers_) socket_->SendTo(packet_.data(), packet_.size(), s.endpoint);
+  for (const auto& s : sessions_.sessions()) socket_->SendTo(packet_.data(), packet_.size(), s.endpoint);
   ++counters_.states;
 }
 

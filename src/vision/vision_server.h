@@ -9,11 +9,13 @@
 //   rate    driven by its owner: Poll whenever convenient (the vision
 //           program polls between frames), Publish once per frame
 // Rules (those of bridge::DeviceEndpoint, with seconds for periods)
-//   - any well-formed datagram (right framing; a describe request of any
-//     kind, or a command of kind markers) subscribes its sender; a subscriber
-//     silent for subscriber_timeout_s is dropped; at most max_subscribers,
-//     when full the one silent the longest is dropped;
-//   - a marker-description command from anyone is applied whole (no owner;
+//   - sessions (bridge_session.h): states go to subscribers only, who asked
+//     with a subscribe request after the cookie handshake; describe replies
+//     only to a request with the cookie, rate-limited per source; a
+//     subscriber silent for subscriber_timeout_s is dropped (a command
+//     renews it); a full table refuses newcomers;
+//   - a marker-description command from any subscriber (others: refused) is
+//     applied whole (no owner;
 //     the latest description of a marker wins); a malformed one (framing,
 //     layout, unknown dictionary or id, side outside [0, 10] m) or one that
 //     would overfill the table is refused and counted, and changes nothing;
@@ -28,6 +30,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_markers.h"
+#include "bridge/bridge_session.h"
 #include "bridge/bridge_udp.h"
 #include "vision/vision_locate.h"
 
@@ -51,7 +54,9 @@ struct MarkersServerCounters {
   long refused = 0;            ///< all refusals
   long refused_malformed = 0;  ///< framing, kind, type, layout, domain
   long refused_limits = 0;     ///< the table would exceed max_markers
+  long refused_not_subscribed = 0;  ///< commands from a source that is no subscriber
   long states = 0;             ///< states published (frames)
+  bridge::SessionCounters sessions;  ///< handshakes, subscriptions, rate limits
 };
 
 class MarkersServer {
@@ -73,24 +78,21 @@ class MarkersServer {
   const std::string& describe_json() const { return describe_json_; }
   int local_port() const { return socket_->local_port(); }
   int fd() { return socket_->fd(); }
-  int subscribers() const { return static_cast<int>(subscribers_.size()); }
+  int subscribers() const { return static_cast<int>(sessions_.sessions().size()); }
   const MarkersServerCounters& counters() const { return counters_; }
 
  private:
-  struct Subscriber {
-    bridge::Endpoint endpoint;
-    double last_s = 0;
-  };
   explicit MarkersServer(const MarkersServerConfig& config);
-  void Handle(long size, const bridge::Endpoint& from, bool truncated, double now_s);
-  void Subscribe(const bridge::Endpoint& from, double now_s);
+  static bridge::SessionConfig Sessions(const MarkersServerConfig& config, const double* now_s);
+  void Handle(long size, const bridge::Endpoint& from, bool truncated);
   void RebuildDescribe();
 
   MarkersServerConfig config_;
   std::unique_ptr<bridge::UdpSocket> socket_;
   MarkerTable table_;
   MarkersServerCounters counters_;
-  std::vector<Subscriber> subscribers_;
+  double now_s_ = 0;  // the caller's clock at the last Poll or Publish: the sessions' clock
+  bridge::SessionTable sessions_;
   std::string describe_json_;
   // scratch
   std::vector<unsigned char> buffer_;

@@ -57,7 +57,7 @@ std::unique_ptr<YoyoServer> YoyoServer::Create(const YoyoServerConfig& config) {
   e.name = config.name;
   e.kind = bridge::DeviceKind::kYoyo;
   e.describe_json = YoyoDescribe(config, server->socket_->local_port()).dump();
-  e.subscriber_timeout_periods = static_cast<int>(std::ceil(config.subscriber_timeout_s * kTicksPerSecond));
+  e.subscriber_timeout_s = config.subscriber_timeout_s;
   e.max_subscribers = std::max(1, config.max_subscribers);
   e.watchdog_periods = 0;
   e.command_length = 0;  // no commands

@@ -65,8 +65,8 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
   d.port = s->point_socket_->local_port();
   point.kind = bridge::DeviceKind::kPoint;
   point.describe_json = PointDescribeJson(d, *sim, PointFacts{c.speed_max, c.watchdog_periods, c.owner_timeout_s});
-  point.owner_timeout_periods = static_cast<int>(Periods(c.owner_timeout_s, period));
-  point.subscriber_timeout_periods = static_cast<int>(Periods(c.subscriber_timeout_s, period));
+  point.owner_timeout_s = c.owner_timeout_s;
+  point.subscriber_timeout_s = c.subscriber_timeout_s;
   point.watchdog_periods = c.watchdog_periods;
   point.command_length = kPointCommandValues;
   point.status_first = true;
@@ -79,7 +79,7 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
   d.port = s->yoyo_socket_->local_port();
   yoyo.kind = bridge::DeviceKind::kYoyo;
   yoyo.describe_json = YoyoDescribeJson(d, *sim);
-  yoyo.subscriber_timeout_periods = point.subscriber_timeout_periods;
+  yoyo.subscriber_timeout_s = point.subscriber_timeout_s;
   s->yoyo_ = std::make_unique<bridge::DeviceEndpoint>(std::move(yoyo));
 
   // the lab's clock policy
@@ -116,11 +116,13 @@ void YoyoSimServer::Receive() {
       bridge::Endpoint from;
       const long size = socket.Receive(datagram_.data(), datagram_.size(), &from, 0.0);
       if (size < 0) break;
-      const long describes = endpoint.counters().describes;
-      const bool accepted = endpoint.Handle(datagram_.data(), static_cast<std::size_t>(size), from, period_, socket);
+      using Received = bridge::DeviceEndpoint::Received;
+      const Received what = endpoint.Handle(datagram_.data(), static_cast<std::size_t>(size), from, period_, socket);
       // a new subscriber gets the latest state at once (it may be what lockstep waits on)
-      if (endpoint.counters().describes != describes) socket.SendTo(last_state.data(), last_state.size(), from);
-      if (!accepted || !point) continue;
+      if (what == Received::kSubscribed && !last_state.empty()) {
+        socket.SendTo(last_state.data(), last_state.size(), from);
+      }
+      if (what != Received::kCommand || !point) continue;
       // an accepted set-point: the newest, applied at the next period start
       point_->TakeCommand(&command_);
       std::copy(command_.begin(), command_.begin() + 3, pending_W_.begin());

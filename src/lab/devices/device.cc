@@ -30,7 +30,8 @@ void Device::EncodeState(double seq, double t, std::uint32_t endpoint_bits, std:
 
 void Device::ConfigureEndpoint(double control_hz, bridge::EndpointConfig* ec) const {
   ec->kind = kind();
-  ec->owner_timeout_periods = std::max(1, static_cast<int>(std::lround(owner_timeout_s() * control_hz)));
+  (void)control_hz;
+  ec->owner_timeout_s = owner_timeout_s();
   ec->command_length = command_length();
   if (ec->command_length > 0) {
     ec->check_command = [this](const std::vector<double>& p) { return CheckCommand(p); };

@@ -327,9 +327,9 @@ void SimArm::EncodeState(double seq, double t, std::uint32_t endpoint_bits, std:
   bridge::EncodeArmState(seq, t, message_, out);
 }
 
-void SimArm::ConfigureEndpoint(double control_hz, bridge::EndpointConfig* ec) const {
+void SimArm::ConfigureEndpoint(double, bridge::EndpointConfig* ec) const {
   ec->kind = bridge::DeviceKind::kArm;
-  ec->owner_timeout_periods = std::max(1, static_cast<int>(std::lround(owner_timeout_s_ * control_hz)));
+  ec->owner_timeout_s = owner_timeout_s_;
   ec->joints = dof();
   ec->position_min = Limits(lower_, true);
   ec->position_max = Limits(upper_, true);

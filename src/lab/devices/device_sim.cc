@@ -1,13 +1,33 @@
 #include "lab/devices/device_sim.h"
 
 #include "bridge/bridge_describe.h"
+#include "lab/lab_yaml.h"
 
 namespace vlab::lab {
 
-std::shared_ptr<const DeviceParams> ReadSimParams(MapReader&) { return std::make_shared<SimParams>(); }
+std::shared_ptr<const DeviceParams> ReadSimParams(MapReader& r) {
+  auto p = std::make_shared<SimParams>();
+  const std::string lost = r.String("on_owner_lost", "resume");
+  if (lost == "resume") {
+    p->on_owner_lost = OnOwnerLost::kResume;
+  } else if (lost == "stay_paused") {
+    p->on_owner_lost = OnOwnerLost::kStayPaused;
+  } else {
+    r.Fail("on_owner_lost", "must be resume or stay_paused, not '" + lost + "'");
+  }
+  p->owner_timeout_s = r.Number("owner_timeout", p->owner_timeout_s);
+  if (!(p->owner_timeout_s > 0) || p->owner_timeout_s > 3600) r.Fail("owner_timeout", "must be > 0 and <= 3600 s");
+  return p;
+}
 
 std::unique_ptr<Device> MakeSim(const DeviceContext&, const DeviceConfig& config) {
   return std::make_unique<SimControl>(config);
+}
+
+SimControl::SimControl(const DeviceConfig& config) : Device(config) {
+  const SimParams& p = config.ParamsAs<SimParams>();
+  on_owner_lost_ = p.on_owner_lost;
+  owner_timeout_s_ = p.owner_timeout_s;
 }
 
 void SimControl::Bind(const std::vector<Device*>& devices) {
@@ -22,9 +42,9 @@ bool SimControl::TakeOp(bridge::SimCommandMsg* command) {
   return true;
 }
 
-void SimControl::EncodeState(double seq, double t, std::uint32_t, std::vector<double>*,
+void SimControl::EncodeState(double, double t, std::uint32_t, std::vector<double>*,
                              std::vector<unsigned char>* out) const {
-  bridge::EncodeSimState(seq, t, state_, out);
+  bridge::EncodeSimState(static_cast<double>(states_ - 1), t, state_, out);
 }
 
 std::string SimControl::DescribeJson(const bridge::DeviceDescription& common) const {

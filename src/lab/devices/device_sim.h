@@ -7,7 +7,11 @@
 //           period begins (and while paused), never waited for
 //   output  [sim_time, mode, clock, periods, refused_packets,
 //           missed_deadlines, realtime_factor, max_lateness], set by the lab
-//           before every publish
+//           before every publish. Its seq counts the states it sent (the
+//           state re-sent after an op while paused gets a seq of its own, so
+//           that the next op can answer it); `periods` is the period.
+// Its owner is released after owner_timeout of silence (wall clock), paused
+// or not; a pause then ends or stays as `on_owner_lost` says.
 // It has no physics: the lab's loop reads its commands and writes its state.
 #pragma once
 
@@ -20,18 +24,27 @@
 
 namespace vlab::lab {
 
-/// The sim device has no keys of its own.
-struct SimParams : DeviceParams {};
+/// What the lab does when the sim device's owner falls silent while paused.
+enum class OnOwnerLost { kResume, kStayPaused };
+
+struct SimParams : DeviceParams {
+  OnOwnerLost on_owner_lost = OnOwnerLost::kResume;  ///< on_owner_lost: resume | stay_paused
+  double owner_timeout_s = 1.0;                      ///< owner_timeout, s (wall clock)
+};
 
 std::shared_ptr<const DeviceParams> ReadSimParams(MapReader& r);
 std::unique_ptr<Device> MakeSim(const DeviceContext& context, const DeviceConfig& config);
 
 class SimControl final : public Device {
  public:
-  explicit SimControl(const DeviceConfig& config) : Device(config) {}
+  explicit SimControl(const DeviceConfig& config);
 
-  /// The state the next publish sends.
-  void set_state(const bridge::SimStateMsg& state) { state_ = state; }
+  /// The state the next publish sends (one call per publish: it counts them).
+  void set_state(const bridge::SimStateMsg& state) {
+    state_ = state;
+    ++states_;
+  }
+  OnOwnerLost on_owner_lost() const { return on_owner_lost_; }
   /// The newest command the bridge took since the last call, if any.
   bool TakeOp(bridge::SimCommandMsg* command);
 
@@ -42,8 +55,12 @@ class SimControl final : public Device {
   std::string DescribeJson(const bridge::DeviceDescription& common) const override;
   CommandRole command_role() const override { return CommandRole::kRun; }
   bool TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) override;
+  double owner_timeout_s() const override { return owner_timeout_s_; }
 
  private:
+  OnOwnerLost on_owner_lost_ = OnOwnerLost::kResume;
+  double owner_timeout_s_ = 1.0;
+  long states_ = 0;  // states set, i.e. published
   std::vector<std::string> devices_;  // every device of the scenario, in its order
   bridge::SimStateMsg state_;
   bridge::SimCommandMsg pending_;
