@@ -108,7 +108,8 @@ class ArmServer {
         Endpoint from;
         const long n = socket_->Receive(buffer.data(), buffer.size(), &from, left > 0 ? left : 0);
         if (n < 0) break;
-        if (endpoint_.Handle(buffer.data(), static_cast<std::size_t>(n), from, k, *socket_) &&
+        if (endpoint_.Handle(buffer.data(), static_cast<std::size_t>(n), from, k, *socket_) ==
+                DeviceEndpoint::Received::kCommand &&
             endpoint_.TakeArmCommand(&command)) {
           commands_.push_back({endpoint_.last_accepted_seq(), command.mode, command.value});
         }

@@ -1,6 +1,8 @@
-// Tests the DeviceEndpoint rules for the kinds that take commands through the
+// Tests the DeviceEndpoint rules: sessions (the cookie handshake, explicit
+// subscription, the full table, the describe rate limit), ownership on the
+// wall clock, the seq window, and the kinds that take commands through the
 // generic path (base, gripper, point: EndpointConfig::command_length and
-// check_command), and for output-only kinds, over real loopback sockets.
+// check_command) and output-only kinds, over real loopback sockets.
 #include "bridge/bridge_endpoint.h"
 
 #include <cmath>
@@ -17,7 +19,7 @@ namespace {
 using Bytes = std::vector<unsigned char>;
 
 // A base: [frame, vx, vy, wz], frame 0 or 1, |v| <= 1 m/s, |wz| <= 2 rad/s.
-EndpointConfig BaseConfig() {
+EndpointConfig BaseConfig(const double* now_s = nullptr) {
   EndpointConfig c;
   c.name = "nomad";
   c.kind = DeviceKind::kBase;
@@ -31,6 +33,7 @@ EndpointConfig BaseConfig() {
     if (std::abs(at("vx")) > 1 || std::abs(at("vy")) > 1 || std::abs(at("wz")) > 2) return CommandCheck::kLimits;
     return CommandCheck::kAccept;
   };
+  if (now_s) c.clock = [now_s] { return *now_s; };
   return c;
 }
 
@@ -39,6 +42,9 @@ class EndpointTest : public ::testing::Test {
   std::unique_ptr<UdpSocket> device_ = UdpSocket::Bind("127.0.0.1", 0);
   std::unique_ptr<UdpSocket> client_ = UdpSocket::Bind("127.0.0.1", 0);
   std::unique_ptr<UdpSocket> other_ = UdpSocket::Bind("127.0.0.1", 0);
+  unsigned char buffer_[2048];
+
+  using Received = DeviceEndpoint::Received;
 
   bool Send(DeviceEndpoint& e, UdpSocket& from, int kind, double seq, std::vector<double> payload, long period) {
     Header h;
@@ -48,13 +54,67 @@ class EndpointTest : public ::testing::Test {
     h.length = static_cast<int>(payload.size());
     Bytes packet;
     EncodePacket(h, payload.data(), h.length, &packet);
-    return e.Handle(packet.data(), packet.size(), from.local_endpoint(), period, *device_);
+    return e.Handle(packet.data(), packet.size(), from.local_endpoint(), period, *device_) == Received::kCommand;
+  }
+  // hands a request from `from` to the endpoint; returns the reply's size (-1: none within 0.5 s)
+  long Request(DeviceEndpoint& e, UdpSocket& from, const Bytes& request, Received* what = nullptr) {
+    Drain(from);  // (states published before)
+    const Received r = e.Handle(request.data(), request.size(), from.local_endpoint(), 0, *device_);
+    if (what) *what = r;
+    Endpoint sender;
+    return from.Receive(buffer_, sizeof buffer_, &sender, 0.5);
+  }
+  // the session reply in buffer_: cookie and result
+  std::pair<double, SessionResult> Reply(long size) {
+    Header h;
+    std::vector<double> payload;
+    EXPECT_EQ(DecodePacket(buffer_, static_cast<std::size_t>(size), &h, &payload), DecodeError::kNone);
+    double cookie = 0;
+    SessionResult result = SessionResult::kLimited;
+    EXPECT_TRUE(ParseSessionReply(h, payload, &cookie, &result));
+    return {cookie, result};
+  }
+  // the whole handshake of `from`: its cookie
+  double Subscribe(DeviceEndpoint& e, UdpSocket& from) {
+    const DeviceKind kind = e.config().kind;
+    Bytes request;
+    EncodeSubscribeRequest(kind, 0, 1, &request);
+    const long n = Request(e, from, request);
+    EXPECT_EQ(n, static_cast<long>(request.size()));  // the challenge is no larger than the request
+    const double cookie = Reply(n).first;
+    EncodeSubscribeRequest(kind, cookie, 1, &request);
+    const int before = e.subscribers();
+    Received what;
+    EXPECT_EQ(Reply(Request(e, from, request, &what)).second, SessionResult::kSubscribed);
+    // a newcomer is reported (the lab sends it the latest state at once), a renewal is not
+    EXPECT_EQ(what, e.subscribers() > before ? Received::kSubscribed : Received::kOther);
+    return cookie;
+  }
+  // publishes a base state of seq `seq` (the newest a command may answer)
+  void PublishBase(DeviceEndpoint& e, double seq) {
+    Header h;
+    h.kind = static_cast<int>(DeviceKind::kBase);
+    h.type = static_cast<int>(MessageType::kState);
+    h.seq = seq;
+    const double state[7] = {0, 1, 2, 3, 4, 5, 6};
+    Bytes packet;
+    EncodePacket(h, state, 7, &packet);
+    e.Publish(packet, *device_);
+  }
+  // drops whatever is queued at a client
+  void Drain(UdpSocket& s) {
+    Endpoint from;
+    while (s.Receive(buffer_, sizeof buffer_, &from, 0.0) >= 0) {
+    }
   }
 };
 
 TEST_F(EndpointTest, BaseCommandsAreCheckedAndTaken) {
   DeviceEndpoint e(BaseConfig());
   const int base = static_cast<int>(DeviceKind::kBase);
+  Subscribe(e, *client_);
+  Subscribe(e, *other_);
+  PublishBase(e, 10);
   std::vector<double> taken;
   EXPECT_FALSE(e.TakeCommand(&taken));
   EXPECT_TRUE(Send(e, *client_, base, 1, {0, 0.5, -0.2, 0.1}, 1));
@@ -83,6 +143,8 @@ TEST_F(EndpointTest, BaseCommandsAreCheckedAndTaken) {
 
 TEST_F(EndpointTest, WatchdogHoldsABaseWhoseCommandsStop) {
   DeviceEndpoint e(BaseConfig());
+  Subscribe(e, *client_);
+  PublishBase(e, 1);
   EXPECT_FALSE(e.BeginPeriod(5));  // never commanded: no watchdog
   EXPECT_TRUE(Send(e, *client_, static_cast<int>(DeviceKind::kBase), 0, {0, 0.1, 0, 0}, 10));
   for (long k = 11; k <= 13; ++k) EXPECT_FALSE(e.BeginPeriod(k)) << k;
@@ -101,26 +163,25 @@ TEST_F(EndpointTest, OutputOnlyKindsRefuseCommandsButAnswerDescribe) {
   EXPECT_FALSE(Send(e, *client_, static_cast<int>(DeviceKind::kFeet), 0, {1, 2}, 0));
   EXPECT_EQ(e.counters().refused_malformed, 1);
   Bytes request;
-  EncodeDescribeRequest(DeviceKind::kFeet, &request);
-  e.Handle(request.data(), request.size(), client_->local_endpoint(), 1, *device_);
-  unsigned char reply[256];
-  Endpoint from;
-  const long n = client_->Receive(reply, sizeof reply, &from, 2.0);
+  EncodeDescribeRequest(static_cast<int>(DeviceKind::kFeet), 0, &request);
+  const double cookie = Reply(Request(e, *client_, request)).first;
+  EncodeDescribeRequest(static_cast<int>(DeviceKind::kFeet), cookie, &request);
+  const long n = Request(e, *client_, request);
   ASSERT_GT(n, 0);
-  EXPECT_EQ(std::string(reinterpret_cast<char*>(reply), static_cast<std::size_t>(n)), c.describe_json);
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(buffer_), static_cast<std::size_t>(n)), c.describe_json);
   EXPECT_FALSE(e.BeginPeriod(100));  // nothing to watch
 }
 
 TEST_F(EndpointTest, NonOwnersOfABaseSeeNotOwnerInTheStatus) {
   DeviceEndpoint e(BaseConfig());
   const int base = static_cast<int>(DeviceKind::kBase);
+  Subscribe(e, *client_);
+  PublishBase(e, 0);
+  Drain(*client_);
   ASSERT_TRUE(Send(e, *client_, base, 0, {0, 0, 0, 0}, 0));
-  Bytes request;
-  EncodeDescribeRequest(DeviceKind::kBase, &request);
-  e.Handle(request.data(), request.size(), other_->local_endpoint(), 0, *device_);  // subscribes
+  Subscribe(e, *other_);
   unsigned char buffer[512];
   Endpoint from;
-  ASSERT_GT(other_->Receive(buffer, sizeof buffer, &from, 2.0), 0);  // the describe reply
   Header h;
   h.kind = base;
   h.type = static_cast<int>(MessageType::kState);
@@ -135,6 +196,150 @@ TEST_F(EndpointTest, NonOwnersOfABaseSeeNotOwnerInTheStatus) {
     const double status = GetDouble(buffer + kHeaderBytes + 8 * StateIndex(DeviceKind::kBase, "status"));
     EXPECT_EQ(status, s == other_.get() ? static_cast<double>(kStatusNotOwner) : 0.0);
   }
+}
+
+TEST_F(EndpointTest, AnUnprovenSourceGetsOnlyAChallengeOfItsOwnSize) {
+  DeviceEndpoint e(BaseConfig());
+  // a describe request without the cookie: a 72-byte challenge back, no JSON, no subscription
+  Bytes request;
+  EncodeDescribeRequest(0, 0, &request);
+  ASSERT_EQ(request.size(), 72u);
+  const long n = Request(e, *client_, request);
+  EXPECT_EQ(n, 72);
+  const auto [cookie, result] = Reply(n);
+  EXPECT_EQ(result, SessionResult::kChallenge);
+  EXPECT_GE(cookie, 1);
+  EXPECT_LT(cookie, 9007199254740992.0);
+  EXPECT_EQ(e.counters().describes, 0);
+  // a wrong cookie is a challenge again; a subscribe request too
+  EncodeSubscribeRequest(DeviceKind::kBase, cookie + 1, 1, &request);
+  EXPECT_EQ(Reply(Request(e, *client_, request)).second, SessionResult::kChallenge);
+  EXPECT_EQ(e.subscribers(), 0);
+  // another source's cookie does not open the door for this one: cookies depend on the port
+  EncodeSubscribeRequest(DeviceKind::kBase, cookie, 1, &request);
+  EXPECT_EQ(Reply(Request(e, *other_, request)).second, SessionResult::kChallenge);
+  EXPECT_EQ(e.subscribers(), 0);
+  EXPECT_EQ(e.counters().sessions.challenges, 3);
+  // nobody subscribed: a state goes nowhere
+  PublishBase(e, 0);
+  Endpoint from;
+  EXPECT_LT(client_->Receive(buffer_, sizeof buffer_, &from, 0.1), 0);
+  EXPECT_LT(other_->Receive(buffer_, sizeof buffer_, &from, 0.1), 0);
+  // with the cookie: the JSON
+  EncodeDescribeRequest(static_cast<int>(DeviceKind::kBase), cookie, &request);
+  const long json = Request(e, *client_, request);
+  ASSERT_GT(json, 0);
+  EXPECT_EQ(buffer_[0], '{');
+  EXPECT_EQ(e.counters().describes, 1);
+}
+
+TEST_F(EndpointTest, CommandsFromNonSubscribersAreRefusedAndDoNotSubscribe) {
+  DeviceEndpoint e(BaseConfig());
+  PublishBase(e, 5);
+  EXPECT_FALSE(Send(e, *client_, static_cast<int>(DeviceKind::kBase), 5, {0, 0, 0, 0}, 5));
+  EXPECT_EQ(e.counters().refused_not_subscribed, 1);
+  EXPECT_EQ(e.subscribers(), 0);
+  EXPECT_FALSE(e.has_owner());
+}
+
+TEST_F(EndpointTest, AFullTableRefusesNewcomersAndKeepsItsSubscribers) {
+  EndpointConfig c = BaseConfig();
+  c.max_subscribers = 2;
+  DeviceEndpoint e(c);
+  Subscribe(e, *client_);
+  Subscribe(e, *other_);
+  auto third = UdpSocket::Bind("127.0.0.1", 0);
+  Bytes request;
+  EncodeSubscribeRequest(DeviceKind::kBase, 0, 1, &request);
+  const double cookie = Reply(Request(e, *third, request)).first;
+  EncodeSubscribeRequest(DeviceKind::kBase, cookie, 1, &request);
+  EXPECT_EQ(Reply(Request(e, *third, request)).second, SessionResult::kFull);
+  EXPECT_EQ(e.subscribers(), 2);
+  EXPECT_EQ(e.counters().sessions.refused_full, 1);
+  // one leaves: the newcomer gets in
+  EncodeSubscribeRequest(DeviceKind::kBase, Subscribe(e, *other_), 0, &request);
+  EXPECT_EQ(Reply(Request(e, *other_, request)).second, SessionResult::kUnsubscribed);
+  EncodeSubscribeRequest(DeviceKind::kBase, cookie, 1, &request);
+  EXPECT_EQ(Reply(Request(e, *third, request)).second, SessionResult::kSubscribed);
+  EXPECT_EQ(e.subscribers(), 2);
+}
+
+TEST_F(EndpointTest, DescribeRepliesAreRateLimitedPerSource) {
+  double now = 100;
+  DeviceEndpoint e(BaseConfig(&now));
+  Bytes request;
+  EncodeDescribeRequest(0, 0, &request);
+  const double cookie = Reply(Request(e, *client_, request)).first;
+  EncodeDescribeRequest(0, cookie, &request);
+  // a burst of 10, then one per 0.1 s (10 Hz)
+  const auto json = [&](long n) { return n > 0 && buffer_[0] == '{'; };
+  for (int i = 0; i < 10; ++i) EXPECT_TRUE(json(Request(e, *client_, request))) << i;
+  const long limited = Request(e, *client_, request);
+  EXPECT_EQ(limited, 72);
+  EXPECT_EQ(Reply(limited).second, SessionResult::kLimited);
+  EXPECT_EQ(e.counters().sessions.describes_limited, 1);
+  now += 0.15;
+  EXPECT_TRUE(json(Request(e, *client_, request)));
+  EXPECT_EQ(Reply(Request(e, *client_, request)).second, SessionResult::kLimited);
+  // another source has a budget of its own
+  EncodeDescribeRequest(0, 0, &request);
+  const double other_cookie = Reply(Request(e, *other_, request)).first;
+  EncodeDescribeRequest(0, other_cookie, &request);
+  EXPECT_TRUE(json(Request(e, *other_, request)));
+  EXPECT_EQ(e.counters().describes, 12);
+}
+
+TEST_F(EndpointTest, ASilentOwnerIsReleasedOnTheWallClockAndARenewingOneIsNot) {
+  double now = 0;
+  EndpointConfig c = BaseConfig(&now);
+  c.owner_timeout_s = 1.0;
+  DeviceEndpoint e(c);
+  const int base = static_cast<int>(DeviceKind::kBase);
+  const double cookie = Subscribe(e, *client_);
+  Subscribe(e, *other_);
+  PublishBase(e, 0);
+  ASSERT_TRUE(Send(e, *client_, base, 0, {0, 0, 0, 0}, 0));
+  // no period passes (the lab is paused): the owner renews its subscription and stays owner
+  Bytes renew;
+  EncodeSubscribeRequest(DeviceKind::kBase, cookie, 1, &renew);
+  for (int i = 0; i < 5; ++i) {
+    now += 0.6;
+    EXPECT_EQ(Reply(Request(e, *client_, renew)).second, SessionResult::kSubscribed);
+    EXPECT_FALSE(e.ReleaseSilentOwner());
+  }
+  EXPECT_FALSE(Send(e, *other_, base, 0, {0, 0, 0, 0}, 0));
+  EXPECT_EQ(e.counters().refused_not_owner, 1);
+  // silent for 1 s of the wall clock: released, with no period and no datagram needed
+  now += 1.01;
+  EXPECT_TRUE(e.ReleaseSilentOwner());
+  EXPECT_FALSE(e.has_owner());
+  EXPECT_EQ(e.counters().owners_released, 1);
+  EXPECT_TRUE(Send(e, *other_, base, 0, {0, 0, 0, 0}, 0));  // the other takes over
+  // an owner that unsubscribes gives its input up at once
+  Bytes leave;
+  EncodeSubscribeRequest(DeviceKind::kBase, Subscribe(e, *other_), 0, &leave);
+  Request(e, *other_, leave);
+  EXPECT_FALSE(e.has_owner());
+}
+
+TEST_F(EndpointTest, ACommandMustAnswerAPublishedStateWithinTheWindow) {
+  DeviceEndpoint e(BaseConfig());
+  const int base = static_cast<int>(DeviceKind::kBase);
+  Subscribe(e, *client_);
+  // nothing published yet: every seq is from the future
+  EXPECT_FALSE(Send(e, *client_, base, 0, {0, 0, 0, 0}, 0));
+  EXPECT_EQ(e.counters().future, 1);
+  PublishBase(e, 200);
+  EXPECT_FALSE(Send(e, *client_, base, 9007199254740992.0, {0, 0, 0, 0}, 0));  // 2^53
+  EXPECT_FALSE(Send(e, *client_, base, 201, {0, 0, 0, 0}, 0));
+  EXPECT_EQ(e.counters().future, 3);
+  EXPECT_FALSE(Send(e, *client_, base, 200 - kSeqWindow - 1, {0, 0, 0, 0}, 0));  // older than the window
+  EXPECT_EQ(e.counters().stale, 1);
+  EXPECT_TRUE(Send(e, *client_, base, 200 - kSeqWindow, {0, 0, 0, 0}, 0));      // the oldest it takes
+  EXPECT_TRUE(Send(e, *client_, base, 200, {0, 0, 0, 0}, 0));
+  EXPECT_FALSE(Send(e, *client_, base, 200, {0, 0, 0, 0}, 0));
+  EXPECT_EQ(e.counters().duplicate, 1);
+  EXPECT_EQ(e.counters().accepted, 2);
 }
 
 }  // namespace

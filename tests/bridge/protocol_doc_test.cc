@@ -11,6 +11,7 @@
 // The checker is run on the page as it is (no problem allowed) and on copies
 // of it with one mistake each, which it must report: a check that cannot
 // fail would prove nothing.
+#include <cctype>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -20,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include "bridge/bridge_layouts.h"
+#include "bridge/bridge_session.h"
 #include "bridge/bridge_protocol.h"
 
 namespace vlab::bridge {
@@ -367,6 +369,54 @@ TEST(ProtocolDocTest, EachMistakeInThePageIsReported) {
     EXPECT_TRUE(found) << m.what << ": not reported as '" << m.reported[0] << "'; the checker said:\n"
                        << Joined(problems);
   }
+}
+
+// the page's hex examples (fenced blocks of hex digits only), in page order
+std::vector<std::string> HexBlocks(const std::string& page) {
+  std::vector<std::string> blocks;
+  std::string block;
+  bool in = false, hex = true;
+  for (const std::string& line : Lines(page)) {
+    if (line.rfind("```", 0) == 0) {
+      if (in && hex && !block.empty()) blocks.push_back(block);
+      in = !in;
+      block.clear();
+      hex = true;
+      continue;
+    }
+    if (!in) continue;
+    for (char c : line) {
+      if (std::isxdigit(static_cast<unsigned char>(c))) {
+        block += c;
+      } else if (c != ' ') {
+        hex = false;
+      }
+    }
+  }
+  return blocks;
+}
+
+std::string Hex(const std::vector<unsigned char>& bytes) {
+  static const char* digits = "0123456789abcdef";
+  std::string out;
+  for (unsigned char b : bytes) {
+    out += digits[b >> 4];
+    out += digits[b & 15];
+  }
+  return out;
+}
+
+TEST(ProtocolDocTest, TheHexExamplesAreWhatTheEncodersWrite) {
+  const std::vector<std::string> blocks = HexBlocks(ReadPage());
+  ASSERT_EQ(blocks.size(), 2u) << "the page's worked examples: an arm command and a subscribe request";
+  std::vector<unsigned char> bytes;
+  ArmCommandMsg m;  // "A worked example": velocity, answering state 42 at client time 1.5 s
+  m.mode = 2;
+  m.value = {0.5, -0.25, 0.125, 0, 1, -1, 0.0625};
+  EncodeArmCommand(42, 1.5, m, &bytes);
+  EXPECT_EQ(blocks[0], Hex(bytes));
+  EncodeSubscribeRequest(DeviceKind::kArm, 4503599627370497.0, 1, &bytes);  // cookie 2^52 + 1
+  EXPECT_EQ(blocks[1], Hex(bytes));
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // datagram is refused with its reason, and the worked example of
 // docs/protocol.md is exactly what EncodePacket writes.
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
 
 #include <cmath>
 #include <cstdio>
@@ -44,7 +45,7 @@ DecodeError Decode(const Bytes& bytes, Header* h = nullptr, std::vector<double>*
 }
 
 // a valid arm command datagram for 7 joints, as doubles, to corrupt one field at a time
-std::vector<double> ArmCommandValues() { return {kMagic, 1, 1, 2, 42, 1.5, 8, 2, 0.5, -0.25, 0.125, 0, 1, -1, 0.0625}; }
+std::vector<double> ArmCommandValues() { return {kMagic, 2, 1, 2, 42, 1.5, 8, 2, 0.5, -0.25, 0.125, 0, 1, -1, 0.0625}; }
 
 TEST(ProtocolTest, DoublesAreLittleEndianWhateverTheHost) {
   unsigned char b[8];
@@ -56,11 +57,11 @@ TEST(ProtocolTest, DoublesAreLittleEndianWhateverTheHost) {
   EXPECT_EQ(GetDouble(b), -0.0625);
 }
 
-// docs/protocol.md, "A worked example": the same hex string, byte for byte
+// docs/protocol.md, "A worked example", value by value (protocol_doc_test reads the page's hex)
 TEST(ProtocolTest, WorkedExampleOfTheDocsMatchesEncodePacket) {
   const std::string documented =
       "000080501093d541"  // magic 1447838018
-      "000000000000f03f"  // version 1
+      "0000000000000040"  // version 2
       "000000000000f03f"  // kind 1 (arm)
       "0000000000000040"  // type 2 (command)
       "0000000000004540"  // seq 42
@@ -178,17 +179,25 @@ TEST(ProtocolTest, SimStateAndCommandRoundTrip) {
   }
 }
 
-TEST(ProtocolTest, DescribeRequestIsAHeaderOnly) {
+TEST(ProtocolTest, RequestsCarryCookieAndArgument) {
   Bytes bytes;
-  EncodeDescribeRequest(DeviceKind::kWrench, &bytes);
-  EXPECT_EQ(bytes.size(), kHeaderBytes);
+  EncodeDescribeRequest(2, 12345, &bytes);
+  EXPECT_EQ(bytes.size(), kHeaderBytes + 16);  // 72 bytes: as large as the session reply it may get
   Header h;
   std::vector<double> p;
   ASSERT_EQ(Decode(bytes, &h, &p), DecodeError::kNone);
   EXPECT_EQ(h.kind, 2);
   EXPECT_EQ(h.type, 3);
-  EXPECT_EQ(h.length, 0);
-  EXPECT_TRUE(p.empty());
+  EXPECT_EQ(p, (std::vector<double>{12345, 0}));
+  EncodeDescribeRequest(0, 0, &bytes);  // kind 0: any device
+  ASSERT_EQ(Decode(bytes, &h, &p), DecodeError::kNone);
+  EXPECT_EQ(h.kind, 0);
+  EncodeSubscribeRequest(DeviceKind::kCamera, 7, 0, &bytes);
+  ASSERT_EQ(Decode(bytes, &h, &p), DecodeError::kNone);
+  EXPECT_EQ(h.kind, 4);
+  EXPECT_EQ(h.type, 4);
+  EXPECT_EQ(p, (std::vector<double>{7, 0}));
+  EXPECT_FALSE(IsSessionReply(bytes.data(), bytes.size()));
 }
 
 TEST(ProtocolTest, FramingErrors) {
@@ -220,12 +229,13 @@ TEST(ProtocolTest, FramingErrors) {
   };
   EXPECT_EQ(with(0, 1447838019), DecodeError::kBadMagic);
   EXPECT_EQ(with(0, kNaN), DecodeError::kBadMagic);
-  EXPECT_EQ(with(1, 2), DecodeError::kBadVersion);
-  EXPECT_EQ(with(1, 0), DecodeError::kBadVersion);
-  EXPECT_EQ(with(2, 0), DecodeError::kBadKind);
+  EXPECT_EQ(with(1, 1), DecodeError::kBadVersion);  // version 1: no sessions
+  EXPECT_EQ(with(1, 3), DecodeError::kBadVersion);
+  EXPECT_EQ(with(2, -1), DecodeError::kBadKind);   // (0 frames: a describe request to any kind)
   EXPECT_EQ(with(2, 1.5), DecodeError::kBadKind);
+  EXPECT_EQ(with(2, 256), DecodeError::kBadKind);
   EXPECT_EQ(with(3, 0), DecodeError::kBadType);
-  EXPECT_EQ(with(3, 4), DecodeError::kBadType);
+  EXPECT_EQ(with(3, 6), DecodeError::kBadType);
   EXPECT_EQ(with(4, -1), DecodeError::kBadValue);   // seq below 0
   EXPECT_EQ(with(4, 2.5), DecodeError::kBadValue);  // seq not whole
   EXPECT_EQ(with(4, 1e17), DecodeError::kBadValue);  // seq beyond 2^53
@@ -297,29 +307,29 @@ TEST(ProtocolTest, ParseChecksKindTypeAndLayout) {
   v[kMode] = 1.5;
   EXPECT_EQ(parse(v, arm_command_parser), DecodeError::kBadValue);
   // arm state: 1 + 3n values, status a whole number >= 0
-  EXPECT_EQ(parse({kMagic, 1, 1, 1, 0, 0, 4, 0, 1, 2, 3}, arm_state_parser), DecodeError::kNone);
-  EXPECT_EQ(parse({kMagic, 1, 1, 1, 0, 0, 3, 0, 1, 2}, arm_state_parser), DecodeError::kBadLength);
-  EXPECT_EQ(parse({kMagic, 1, 1, 1, 0, 0, 1, 0}, arm_state_parser), DecodeError::kBadLength);
-  EXPECT_EQ(parse({kMagic, 1, 1, 1, 0, 0, 4, -1, 1, 2, 3}, arm_state_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 1, 1, 0, 0, 4, 0.5, 1, 2, 3}, arm_state_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 1, 1, 0, 0, 4, 0, 1, 2, 3}, arm_state_parser), DecodeError::kNone);
+  EXPECT_EQ(parse({kMagic, 2, 1, 1, 0, 0, 3, 0, 1, 2}, arm_state_parser), DecodeError::kBadLength);
+  EXPECT_EQ(parse({kMagic, 2, 1, 1, 0, 0, 1, 0}, arm_state_parser), DecodeError::kBadLength);
+  EXPECT_EQ(parse({kMagic, 2, 1, 1, 0, 0, 4, -1, 1, 2, 3}, arm_state_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 1, 1, 0, 0, 4, 0.5, 1, 2, 3}, arm_state_parser), DecodeError::kBadValue);
   // wrench state: 8 values, filter 0..6, saturated 0/1
-  EXPECT_EQ(parse({kMagic, 1, 2, 1, 0, 0, 8, 0, 0, 0, 0, 0, 0, 6, 1}, wrench_parser), DecodeError::kNone);
-  EXPECT_EQ(parse({kMagic, 1, 2, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0}, wrench_parser), DecodeError::kBadLength);
-  EXPECT_EQ(parse({kMagic, 1, 2, 1, 0, 0, 8, 0, 0, 0, 0, 0, 0, 7, 0}, wrench_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 2, 1, 0, 0, 8, 0, 0, 0, 0, 0, 0, 0, 2}, wrench_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 2, 1, 0, 0, 8, 0, 0, 0, 0, 0, 0, 6, 1}, wrench_parser), DecodeError::kNone);
+  EXPECT_EQ(parse({kMagic, 2, 2, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0}, wrench_parser), DecodeError::kBadLength);
+  EXPECT_EQ(parse({kMagic, 2, 2, 1, 0, 0, 8, 0, 0, 0, 0, 0, 0, 7, 0}, wrench_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 2, 1, 0, 0, 8, 0, 0, 0, 0, 0, 0, 0, 2}, wrench_parser), DecodeError::kBadValue);
   // sim state: mode 0/1, clock 0..2
-  EXPECT_EQ(parse({kMagic, 1, 3, 1, 0, 0, 8, 0, 2, 0, 0, 0, 0, 1, 0}, sim_state_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 1, 0, 0, 8, 0, 0, 3, 0, 0, 0, 1, 0}, sim_state_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 1}, sim_state_parser), DecodeError::kBadLength);
+  EXPECT_EQ(parse({kMagic, 2, 3, 1, 0, 0, 8, 0, 2, 0, 0, 0, 0, 1, 0}, sim_state_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 1, 0, 0, 8, 0, 0, 3, 0, 0, 0, 1, 0}, sim_state_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 1}, sim_state_parser), DecodeError::kBadLength);
   // sim command: op 1..5, step a whole number of periods >= 1, factor in (0, 1000]
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 2, 0, 0}, sim_command_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 2, 6, 0}, sim_command_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 2, 4, 0}, sim_command_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 2, 4, 2.5}, sim_command_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 2, 5, 0}, sim_command_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 2, 5, 1001}, sim_command_parser), DecodeError::kBadValue);
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 3, 1, 0, 0}, sim_command_parser), DecodeError::kBadLength);
-  EXPECT_EQ(parse({kMagic, 1, 3, 2, 0, 0, 2, 4, 3}, sim_command_parser), DecodeError::kNone);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 2, 0, 0}, sim_command_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 2, 6, 0}, sim_command_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 2, 4, 0}, sim_command_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 2, 4, 2.5}, sim_command_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 2, 5, 0}, sim_command_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 2, 5, 1001}, sim_command_parser), DecodeError::kBadValue);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 3, 1, 0, 0}, sim_command_parser), DecodeError::kBadLength);
+  EXPECT_EQ(parse({kMagic, 2, 3, 2, 0, 0, 2, 4, 3}, sim_command_parser), DecodeError::kNone);
 }
 
 TEST(ProtocolTest, NamesOfKindsAndErrors) {

@@ -108,7 +108,8 @@ int main(int argc, char** argv) {
       Endpoint from;
       const long n = socket->Receive(buffer.data(), buffer.size(), &from, left > 0 ? left : 0);
       if (n < 0) break;
-      if (endpoint.Handle(buffer.data(), static_cast<std::size_t>(n), from, k, *socket) &&
+      if (endpoint.Handle(buffer.data(), static_cast<std::size_t>(n), from, k, *socket) ==
+              DeviceEndpoint::Received::kCommand &&
           endpoint.TakeArmCommand(&command)) {
         std::string values;
         char number[32];

@@ -4,6 +4,7 @@
 // against scripted peers.
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -12,6 +13,7 @@
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_camera_server.h"
+#include "bridge/bridge_session.h"
 #include "bridge/bridge_protocol.h"
 #include "camera_test_util.h"
 
@@ -47,11 +49,41 @@ CameraServerConfig SmallConfig() {
 struct Peer {
   explicit Peer(int port) : socket(UdpSocket::Bind("127.0.0.1", 0)), to(UdpSocket::MakeEndpoint("127.0.0.1", port)) {}
   void Send(const Bytes& b) { socket->SendTo(b.data(), b.size(), to); }
-  void Describe(DeviceKind kind) {
-    Bytes b;
-    EncodeDescribeRequest(kind, &b);
-    Send(b);
+  // one request answered by the server (pumped by `poll`): the reply, or empty
+  Bytes Ask(const Bytes& request, const std::function<void()>& poll) {
+    Send(request);
+    poll();
+    Bytes buf(65536);
+    const long n = socket->Receive(buf.data(), buf.size(), nullptr, 0.5);
+    return n < 0 ? Bytes() : Bytes(buf.begin(), buf.begin() + n);
   }
+  // the session reply's result, or -1
+  static int Result(const Bytes& reply, double* cookie = nullptr) {
+    Header h;
+    std::vector<double> p;
+    SessionResult r;
+    double c = 0;
+    if (!IsSessionReply(reply.data(), reply.size()) || DecodePacket(reply.data(), reply.size(), &h, &p) != DecodeError::kNone ||
+        !ParseSessionReply(h, p, &c, &r)) {
+      return -1;
+    }
+    if (cookie) *cookie = c;
+    return static_cast<int>(r);
+  }
+  // the handshake, then a subscribe request (action 1) or a describe request (action -1); the last reply
+  Bytes Session(CameraServer& server, int action = 1) {
+    const auto poll = [&server] { server.Poll(0.2); };
+    Bytes request;
+    EncodeSubscribeRequest(DeviceKind::kCamera, 0, 1, &request);
+    EXPECT_EQ(Result(Ask(request, poll), &cookie), static_cast<int>(SessionResult::kChallenge));
+    if (action < 0) {
+      EncodeDescribeRequest(static_cast<int>(DeviceKind::kCamera), cookie, &request);
+    } else {
+      EncodeSubscribeRequest(DeviceKind::kCamera, cookie, action, &request);
+    }
+    return Ask(request, poll);
+  }
+  double cookie = 0;
   // datagrams that arrive within timeout_s
   std::vector<Bytes> Drain(double timeout_s = 0.2) {
     std::vector<Bytes> out;
@@ -109,74 +141,84 @@ TEST(CameraServerTest, DescribeReplyHasTheCameraFacts) {
   EXPECT_EQ(client.Label(), "camera 'webcam' at 127.0.0.1:" + std::to_string(server->port()));
 }
 
-TEST(CameraServerTest, AnyWellFormedDatagramSubscribesMalformedOnesDoNot) {
+TEST(CameraServerTest, OnlyAProvenSubscribeRequestSubscribes) {
   CameraServerConfig config = SmallConfig();
-  config.subscriber_timeout_s = 0.4;  // 10 frames at 25 Hz
+  config.subscriber_timeout_s = 0.4;
   auto server = CameraServer::Create(config);
+  const auto poll = [&server] { server->Poll(0.2); };
   Peer describer(server->port()), commander(server->port()), garbage(server->port());
-  describer.Describe(DeviceKind::kArm);  // answered whatever kind it names
+  Bytes request;
+  EncodeDescribeRequest(static_cast<int>(DeviceKind::kArm), 0, &request);  // answered whatever kind it names
+  const Bytes challenge = describer.Ask(request, poll);
+  EXPECT_EQ(challenge.size(), request.size());  // no larger than the request
+  EXPECT_EQ(Peer::Result(challenge), static_cast<int>(SessionResult::kChallenge));
   Bytes command;
   EncodeSimCommand(0, 0, {1, 0}, &command);
-  PutDouble(4, command.data() + 16);  // a camera "command": refused, but its sender subscribes
+  PutDouble(4, command.data() + 16);  // a camera "command": refused, and no subscription
   commander.Send(command);
   garbage.Send({1, 2, 3});
   Bytes state;
   EncodeWrenchState(0, 0, {}, &state);
-  PutDouble(4, state.data() + 16);  // a camera state sent to the camera: refused, no subscription
+  PutDouble(4, state.data() + 16);  // a camera state sent to the camera: refused
   garbage.Send(state);
   server->Poll(0.2);
   server->Poll(0.05);
   const EndpointCounters& c = server->counters().endpoint;
   EXPECT_EQ(c.received, 4);
-  EXPECT_EQ(c.describes, 1);
+  EXPECT_EQ(c.describes, 0);
   EXPECT_EQ(c.refused, 3);
   EXPECT_EQ(c.refused_malformed, 3);
-  EXPECT_EQ(server->subscribers(), 2);
-  const auto reply = describer.Drain();
-  ASSERT_FALSE(reply.empty());
-  EXPECT_EQ(reply[0][0], '{');
+  EXPECT_EQ(c.sessions.challenges, 1);
+  EXPECT_EQ(server->subscribers(), 0);
+  ASSERT_FALSE(server->Send(PatternFrame(0, 64, 48)));  // nobody to send to
+  EXPECT_EQ(Chunks(commander.Drain(0.05)), 0);
 
-  ASSERT_TRUE(server->Send(PatternFrame(0, 64, 48)));
+  // the describe reply with the cookie; then a subscription
+  const Bytes json = describer.Session(*server, -1);
+  ASSERT_FALSE(json.empty());
+  EXPECT_EQ(json[0], '{');
+  EXPECT_EQ(server->subscribers(), 0);  // a describe does not subscribe
+  EXPECT_EQ(Peer::Result(describer.Session(*server)), static_cast<int>(SessionResult::kSubscribed));
+  EXPECT_EQ(Peer::Result(commander.Session(*server)), static_cast<int>(SessionResult::kSubscribed));
+  EXPECT_EQ(server->subscribers(), 2);
+  ASSERT_TRUE(server->Send(PatternFrame(1, 64, 48)));
   EXPECT_EQ(Chunks(describer.Drain()), 10);
   EXPECT_EQ(Chunks(commander.Drain()), 10);
   EXPECT_EQ(Chunks(garbage.Drain(0.05)), 0);
   EXPECT_EQ(server->counters().chunks_sent, 20);
 
-  // silent subscribers are dropped after subscriber_timeout_s (in frames at fps); a describe keeps one alive
-  for (int i = 1; i <= 11; ++i) {
-    if (i == 6) describer.Describe(DeviceKind::kCamera);
-    server->Poll(i == 6 ? 0.2 : 0);
-    server->Send(PatternFrame(i, 64, 48));
-  }
+  // silent subscribers are dropped after subscriber_timeout_s of the wall clock; a renewal keeps one
+  std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  Bytes renew;
+  EncodeSubscribeRequest(DeviceKind::kCamera, describer.cookie, 1, &renew);
+  EXPECT_EQ(Peer::Result(describer.Ask(renew, poll)), static_cast<int>(SessionResult::kSubscribed));
+  std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  server->Send(PatternFrame(2, 64, 48));
   EXPECT_EQ(server->subscribers(), 1);
   EXPECT_EQ(server->counters().subscribers_dropped, 1);
+  EXPECT_EQ(Chunks(describer.Drain()), 10);
+  EXPECT_EQ(Chunks(commander.Drain(0.05)), 0);
 }
 
-TEST(CameraServerTest, MostSubscribersThenTheLongestSilentGoes) {
+TEST(CameraServerTest, AFullTableRefusesNewcomersAndKeepsItsSubscribers) {
   CameraServerConfig config = SmallConfig();
   config.max_subscribers = 2;
   auto server = CameraServer::Create(config);
   Peer a(server->port()), b(server->port()), c(server->port());
-  a.Describe(DeviceKind::kCamera);
-  server->Poll(0.2);
-  server->Send(PatternFrame(0, 64, 48));
-  b.Describe(DeviceKind::kCamera);
-  server->Poll(0.2);
-  server->Send(PatternFrame(1, 64, 48));
-  c.Describe(DeviceKind::kCamera);
-  server->Poll(0.2);
+  EXPECT_EQ(Peer::Result(a.Session(*server)), static_cast<int>(SessionResult::kSubscribed));
+  EXPECT_EQ(Peer::Result(b.Session(*server)), static_cast<int>(SessionResult::kSubscribed));
+  EXPECT_EQ(Peer::Result(c.Session(*server)), static_cast<int>(SessionResult::kFull));
   EXPECT_EQ(server->subscribers(), 2);
-  a.Drain(0.05);
+  EXPECT_EQ(server->counters().endpoint.sessions.refused_full, 1);
   server->Send(PatternFrame(2, 64, 48));
-  EXPECT_EQ(Chunks(a.Drain(0.1)), 0);  // a was silent the longest
-  EXPECT_EQ(Chunks(c.Drain()), 10);
+  EXPECT_EQ(Chunks(a.Drain()), 10);  // nobody was evicted
+  EXPECT_EQ(Chunks(c.Drain(0.1)), 0);
 }
 
 TEST(CameraServerTest, RefusesFramesThatBreakTheLayout) {
   auto server = CameraServer::Create(SmallConfig());
   Peer p(server->port());
-  p.Describe(DeviceKind::kCamera);
-  server->Poll(0.2);
+  p.Session(*server);
   EXPECT_TRUE(server->Send(PatternFrame(5, 64, 48)));
   EXPECT_FALSE(server->Send(PatternFrame(5, 64, 48)));  // id not increasing
   EXPECT_FALSE(server->Send(PatternFrame(4, 64, 48)));
@@ -276,16 +318,16 @@ std::string ConnectError(const std::string& reply, Bytes then = {}) {
 }
 
 TEST(CameraClientTest, TypedErrors) {
-  EXPECT_NE(ConnectError<VersionMismatch>(Describe("protocol", 2)).find("protocol version 2"), std::string::npos);
+  EXPECT_NE(ConnectError<VersionMismatch>(Describe("protocol", 1)).find("protocol version 1"), std::string::npos);
   EXPECT_NE(ConnectError<ProtocolError>(Describe("kind", "arm")).find("not \"camera\""), std::string::npos);
   EXPECT_NE(ConnectError<ProtocolError>(Describe("intrinsics")).find("intrinsics.fx"), std::string::npos);
   EXPECT_NE(ConnectError<ProtocolError>(Describe("encoding", "png")).find("encoding"), std::string::npos);
   EXPECT_NE(ConnectError<ProtocolError>("{not json").find("not valid JSON"), std::string::npos);
-  // a chunk of another protocol version while receiving
+  // a chunk of another protocol version while connecting
   CameraFrame f = PatternFrame(0, 4, 2);
   Bytes chunk = testing::Chunks(f, 60000)[0];
-  PutDouble(2, chunk.data() + 8);
-  EXPECT_NE(ConnectError<VersionMismatch>(Describe(), chunk).find("chunk of protocol version 2"), std::string::npos);
+  PutDouble(1, chunk.data() + 8);
+  EXPECT_NE(ConnectError<VersionMismatch>(Describe(), chunk).find("of protocol version 1"), std::string::npos);
   // nothing there
   const int port = UdpSocket::Bind("127.0.0.1", 0)->local_port();
   CameraClientOptions options;

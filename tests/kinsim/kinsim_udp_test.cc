@@ -12,6 +12,7 @@
 
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_udp.h"
+#include "wire_session.h"
 #include "kinsim_process.h"
 #include "test_util.h"
 
@@ -34,9 +35,11 @@ struct Client {
     EncodeArmCommand(seq, 0.0, ArmCommandMsg{mode, value}, &packet);
     SendRaw(packet);
   }
+  /// Subscribes (the cookie handshake), then asks for the describe reply.
   void Subscribe() {
+    const double cookie = vlab::testing::WireSubscribe(*socket, device, DeviceKind::kArm);
     std::vector<unsigned char> packet;
-    EncodeDescribeRequest(DeviceKind::kArm, &packet);
+    EncodeDescribeRequest(static_cast<int>(DeviceKind::kArm), cookie, &packet);
     SendRaw(packet);
   }
   /// Next datagram that is JSON (a describe reply), within timeout_s; "" if none.

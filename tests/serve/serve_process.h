@@ -13,6 +13,7 @@
 
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_udp.h"
+#include "wire_session.h"
 
 namespace vlab::testing {
 
@@ -84,12 +85,15 @@ class Peer {
  public:
   explicit Peer(int port) : socket_(bridge::UdpSocket::Bind("127.0.0.1", 0)), to_(bridge::UdpSocket::MakeEndpoint("127.0.0.1", port)) {}
   void Send(const std::vector<unsigned char>& packet) { socket_->SendTo(packet.data(), packet.size(), to_); }
+  /// Subscribes (the cookie handshake), then asks for the describe reply.
   void Describe(bridge::DeviceKind kind) {
+    cookie_ = WireSubscribe(*socket_, to_, kind);
     std::vector<unsigned char> p;
-    bridge::EncodeDescribeRequest(kind, &p);
+    bridge::EncodeDescribeRequest(static_cast<int>(kind), cookie_, &p);
     Send(p);
   }
-  /// Next arm state (skips describe replies); false on timeout.
+  double cookie() const { return cookie_; }
+  /// Next arm state (skips describe and session replies); false on timeout.
   bool ReadArm(bridge::Header* h, bridge::ArmStateMsg* m, double timeout_s = 5) {
     unsigned char buf[65536];
     std::vector<double> payload;
@@ -110,6 +114,7 @@ class Peer {
  private:
   std::unique_ptr<bridge::UdpSocket> socket_;
   bridge::Endpoint to_;
+  double cookie_ = 0;
 };
 
 }  // namespace vlab::testing

@@ -1,0 +1,55 @@
+// The session handshake of a raw test peer (docs/protocol.md, "Sessions"):
+// for tests that speak the wire byte by byte rather than through a client
+// library.
+#pragma once
+
+#include <chrono>
+#include <vector>
+
+#include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
+#include "bridge/bridge_udp.h"
+
+namespace vlab::testing {
+
+/// Asks `device` for the cookie of `socket`'s address and subscribes it
+/// (action 1) or ends its subscription (action 0). Returns the cookie, or 0
+/// when the device did not answer within timeout_s, or refused (table full).
+/// Other datagrams that arrive meanwhile (states, describe replies) are kept
+/// in *other when given.
+inline double WireSubscribe(bridge::UdpSocket& socket, const bridge::Endpoint& device, bridge::DeviceKind kind,
+                            int action = 1, double timeout_s = 2.0,
+                            std::vector<std::vector<unsigned char>>* other = nullptr) {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                   std::chrono::duration<double>(timeout_s));
+  std::vector<unsigned char> request, buffer(65536);
+  double cookie = 0;
+  bridge::Header h;
+  std::vector<double> payload;
+  for (int attempt = 0; attempt < 2; ++attempt) {  // the challenge, then the request with the cookie
+    bridge::EncodeSubscribeRequest(kind, cookie, action, &request);
+    socket.SendTo(request.data(), request.size(), device);
+    for (;;) {
+      const double left = std::chrono::duration<double>(end - Clock::now()).count();
+      if (left <= 0) return 0;
+      bridge::Endpoint from;
+      const long n = socket.Receive(buffer.data(), buffer.size(), &from, left);
+      if (n < 0) return 0;
+      if (!bridge::IsSessionReply(buffer.data(), static_cast<std::size_t>(n))) {
+        if (other) other->emplace_back(buffer.begin(), buffer.begin() + n);
+        continue;
+      }
+      bridge::DecodePacket(buffer.data(), static_cast<std::size_t>(n), &h, &payload);
+      bridge::SessionResult result;
+      if (!bridge::ParseSessionReply(h, payload, &cookie, &result)) return 0;
+      if (result == bridge::SessionResult::kChallenge && attempt == 0) break;
+      const bool ok = action == 1 ? result == bridge::SessionResult::kSubscribed
+                                  : result == bridge::SessionResult::kUnsubscribed;
+      return ok ? cookie : 0;
+    }
+  }
+  return 0;
+}
+
+}  // namespace vlab::testing
