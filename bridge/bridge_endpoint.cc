@@ -89,7 +89,9 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   if (e != DecodeError::kNone) return refuse(&counters_.refused_malformed);
 
   if (describe || header_.type == static_cast<int>(MessageType::kSubscribe)) {
-    switch (sessions_.HandleRequest(header_, payload_, from, socket)) {
+    const SessionTable::Outcome outcome = sessions_.HandleRequest(header_, payload_, from, socket);
+    if (outcome != SessionTable::Outcome::kMalformed) ++counters_.requests;
+    switch (outcome) {
       case SessionTable::Outcome::kMalformed:
         return refuse(&counters_.refused_malformed);
       case SessionTable::Outcome::kDescribe:

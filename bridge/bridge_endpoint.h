@@ -58,6 +58,7 @@ namespace vlab::bridge {
 /// Counters of a device endpoint (reported by the sim device and in summary.json).
 struct EndpointCounters {
   long received = 0;         ///< datagrams received
+  long requests = 0;         ///< well-formed describe and subscribe requests (answered, or limited)
   long accepted = 0;         ///< commands accepted
   long describes = 0;        ///< describe requests answered
   long refused = 0;          ///< all refusals: malformed + limits + not owner (stale and duplicate apart)
@@ -145,6 +146,8 @@ class DeviceEndpoint {
 
   const EndpointCounters& counters() const;
   int subscribers() const { return static_cast<int>(sessions_.sessions().size()); }
+  /// The cookie of a source (what its challenge carries), for tests.
+  double cookie(const Endpoint& from) const { return sessions_.Cookie(from); }
   const EndpointConfig& config() const { return config_; }
 
  private:

@@ -93,7 +93,8 @@ DecodeError DecodePacket(const unsigned char* data, std::size_t size, Header* h,
   for (std::size_t i = 0; i < values; ++i) {
     if (!std::isfinite(GetDouble(data + 8 * i))) return DecodeError::kNotFinite;
   }
-  if (!IsWhole(header[2], 0, 255)) return DecodeError::kBadKind;  // 0: a describe request to any kind
+  // 0: a describe request to any kind (+0 only: -0 would not survive the round trip through an int)
+  if (!IsWhole(header[2], 0, 255) || std::signbit(header[2])) return DecodeError::kBadKind;
   if (!IsWhole(header[3], 1, 5)) return DecodeError::kBadType;
   if (!IsWhole(header[4], 0, 9007199254740992.0)) return DecodeError::kBadValue;
   if (header[6] != static_cast<double>(values - kHeaderValues)) return DecodeError::kBadLength;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 
@@ -232,10 +233,12 @@ void ClientSession::Connect(UdpSocket& socket, const Endpoint& device, double ti
     const long n = socket.Receive(buffer->data(), buffer->size(), &from, std::max(0.0, wait_s));
     if (n < 0) {
       if (Clock::now() < deadline) continue;
-      throw TimeoutError(label_ + ": " + (cookie_ == 0 ? "no answer" : !described ? "no describe reply" : "no subscription") +
-                         " within " + std::to_string(timeout_s) +
-                         " s (is a device of this kind and protocol version " + std::to_string(kProtocolVersion) +
-                         " serving that address and port?)");
+      char within[32];
+      std::snprintf(within, sizeof within, "%g", timeout_s);
+      throw TimeoutError(label_ + ": " +
+                         (cookie_ == 0 ? "no answer" : !described ? "no describe reply" : "no subscription") +
+                         " within " + within + " s (is a device of this kind and protocol version " +
+                         std::to_string(kProtocolVersion) + " serving that address and port?)");
     }
     // a multi-homed device may answer from another address, never from another port
     if (from.port() != device.port()) {

@@ -52,4 +52,45 @@ inline double WireSubscribe(bridge::UdpSocket& socket, const bridge::Endpoint& d
   return 0;
 }
 
+/// A session reply as a device sends it.
+inline std::vector<unsigned char> SessionReplyPacket(bridge::DeviceKind kind, double cookie,
+                                                     bridge::SessionResult result) {
+  const double payload[2] = {cookie, static_cast<double>(result)};
+  bridge::Header h;
+  h.kind = static_cast<int>(kind);
+  h.type = static_cast<int>(bridge::MessageType::kSession);
+  std::vector<unsigned char> out;
+  bridge::EncodePacket(h, payload, 2, &out);
+  return out;
+}
+
+/// Plays a device's side of a client's handshake on `socket` (for tests that
+/// fake a device): a challenge with `cookie` for the first request, then
+/// "subscribed" for the subscribe request with it; the describe reply is the
+/// caller's to send. Returns the number of requests that were as expected
+/// (3: describe without cookie, then describe and subscribe with it, in
+/// either order); *client is the client's address.
+inline int PlayHandshake(bridge::UdpSocket& socket, bridge::Endpoint* client, bridge::DeviceKind kind, double cookie,
+                         double timeout_s = 5.0) {
+  std::vector<unsigned char> buffer(65536);
+  bridge::Header h;
+  std::vector<double> p;
+  int good = 0;
+  for (int i = 0; i < 3; ++i) {
+    const long n = socket.Receive(buffer.data(), buffer.size(), client, timeout_s);
+    if (n < 0 || bridge::DecodePacket(buffer.data(), static_cast<std::size_t>(n), &h, &p) != bridge::DecodeError::kNone ||
+        p.size() != 2) {
+      return good;
+    }
+    const std::vector<unsigned char> reply =
+        i == 0 ? SessionReplyPacket(kind, cookie, bridge::SessionResult::kChallenge)
+               : SessionReplyPacket(kind, cookie, bridge::SessionResult::kSubscribed);
+    const bool describe = h.type == static_cast<int>(bridge::MessageType::kDescribe);
+    const bool subscribe = h.type == static_cast<int>(bridge::MessageType::kSubscribe);
+    if (i == 0 ? describe && p[0] == 0 : (describe || subscribe) && p[0] == cookie) ++good;
+    if (i == 0 || subscribe) socket.SendTo(reply.data(), reply.size(), *client);
+  }
+  return good;
+}
+
 }  // namespace vlab::testing

@@ -74,10 +74,12 @@ int ServeCommand(const ServeArgs& args) {
     for (const auto& d : r.served) {
       if (args.quiet) break;
       const auto& c = d.counters;
-      std::printf("  %-8s received %ld, accepted %ld, refused %ld (malformed %ld, limits %ld, not owner %ld), "
-                  "stale %ld, duplicate %ld, watchdog holds %ld\n",
+      std::printf("  %-8s received %ld, accepted %ld, refused %ld (malformed %ld, limits %ld, not owner %ld, "
+                  "not subscribed %ld), stale %ld, duplicate %ld, future %ld, watchdog holds %ld; subscribed %ld, "
+                  "challenges %ld\n",
                   d.name.c_str(), c.received, c.accepted, c.refused, c.refused_malformed, c.refused_limits,
-                  c.refused_not_owner, c.stale, c.duplicate, c.watchdog_holds);
+                  c.refused_not_owner, c.refused_not_subscribed, c.stale, c.duplicate, c.future, c.watchdog_holds,
+                  c.sessions.subscribed, c.sessions.challenges);
     }
     std::printf("%s: %s, %.2f s simulated in %.2f s, clock %s; output in %s/\n", scenario.name.c_str(),
                 r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), out_dir.c_str());

@@ -60,10 +60,17 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
   for (const auto& d : r.served) {
     const auto& c = d.counters;
     served.push_back({{"name", d.name}, {"kind", d.kind}, {"address", d.address}, {"port", d.port},
-                      {"received", c.received}, {"accepted", c.accepted}, {"describes", c.describes},
+                      {"received", c.received}, {"requests", c.requests}, {"accepted", c.accepted}, {"describes", c.describes},
                       {"refused", c.refused}, {"refused_malformed", c.refused_malformed},
                       {"refused_limits", c.refused_limits}, {"refused_not_owner", c.refused_not_owner},
-                      {"stale", c.stale}, {"duplicate", c.duplicate}, {"watchdog_holds", c.watchdog_holds}});
+                      {"refused_not_subscribed", c.refused_not_subscribed}, {"stale", c.stale},
+                      {"duplicate", c.duplicate}, {"future", c.future}, {"watchdog_holds", c.watchdog_holds},
+                      {"owners_released", c.owners_released},
+                      {"sessions",
+                       {{"challenges", c.sessions.challenges}, {"subscribed", c.sessions.subscribed},
+                        {"unsubscribed", c.sessions.unsubscribed}, {"expired", c.sessions.expired},
+                        {"refused_full", c.sessions.refused_full},
+                        {"describes_limited", c.sessions.describes_limited}}}});
   }
   return {
       {"scenario", sc.name},

@@ -15,6 +15,7 @@
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_layouts.h"
 #include "bridge/bridge_udp.h"
+#include "wire_session.h"
 
 namespace vlab::bridge {
 namespace {
@@ -38,6 +39,7 @@ class Peer {
   }
   void Send(const Bytes& bytes) { socket_->SendTo(bytes.data(), bytes.size(), client_); }
   void Send(const std::string& text) { Send(Bytes(text.begin(), text.end())); }
+  int Handshake(DeviceKind kind) { return testing::PlayHandshake(*socket_, &client_, kind, 77); }
   void SendState(DeviceKind kind, double seq, const std::vector<double>& values) {
     Bytes packet;
     EncodePacket(Header{static_cast<int>(kind), static_cast<int>(MessageType::kState), seq, 0.01 * seq,
@@ -66,7 +68,7 @@ std::future<Device> Connect(Peer& peer, DeviceKind kind, const std::string& desc
   auto future = std::async(std::launch::async, [kind, port = peer.port()] {
     return Device::Connect(kind, "127.0.0.1", port, kPatience_s);
   });
-  EXPECT_FALSE(peer.Receive().empty()) << "no describe request";
+  EXPECT_EQ(peer.Handshake(kind), 3) << "describe, then describe and subscribe with the cookie";
   peer.Send(describe);
   return future;
 }

@@ -17,6 +17,8 @@
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_endpoint.h"
+#include "bridge/bridge_session.h"
+#include "wire_session.h"
 
 namespace vlab::bridge {
 namespace {
@@ -145,6 +147,7 @@ class Peer {
   void Send(const Bytes& bytes) { socket_->SendTo(bytes.data(), bytes.size(), client_); }
   void Send(const std::string& text) { Send(Bytes(text.begin(), text.end())); }
   const Endpoint& client() const { return client_; }
+  int Handshake(DeviceKind kind) { return testing::PlayHandshake(*socket_, &client_, kind, 77); }
 
  private:
   std::unique_ptr<UdpSocket> socket_;
@@ -161,16 +164,12 @@ Bytes StatePacket(long k, int joints = 7) {
   return out;
 }
 
-// connects an Arm to the peer in the background; the peer answers the describe request
+// connects an Arm to the peer in the background; the peer plays the device's
+// side of the handshake: the describe reply is the test's to send
 std::future<Arm> ConnectToPeer(Peer& peer) {
   auto future =
       std::async(std::launch::async, [port = peer.port()] { return Arm::Connect("127.0.0.1", port, kPatience_s); });
-  Header h;
-  std::vector<double> p;
-  const Bytes request = peer.Receive();
-  EXPECT_EQ(DecodePacket(request.data(), request.size(), &h, &p), DecodeError::kNone);
-  EXPECT_EQ(h.kind, 1);
-  EXPECT_EQ(h.type, 3);
+  EXPECT_EQ(peer.Handshake(DeviceKind::kArm), 3) << "describe, then describe and subscribe with the cookie";
   return future;
 }
 
@@ -198,7 +197,7 @@ TEST(ClientTest, ConnectDescribesTheArm) {
   ASSERT_EQ(arm.velocity_max().size(), 7u);
   EXPECT_EQ(arm.velocity_max()[2], 2.0);
   EXPECT_NEAR(arm.position_max()[1], 94 * M_PI / 180, 1e-12);
-  EXPECT_EQ(arm.describe()["protocol"], 1);
+  EXPECT_EQ(arm.describe()["protocol"], 2);
   EXPECT_TRUE(Contains(arm.Label(), "arm 'pa10' at 127.0.0.1:" + std::to_string(server.port())));
   EXPECT_GT(arm.local_port(), 0);
 }
@@ -256,7 +255,7 @@ TEST(ClientTest, RefusedAndNotOwnerShowInTheStatus) {
   Eigen::VectorXd too_fast = Eigen::VectorXd::Constant(7, 0.1);
   owner.Write(ArmMode::kVelocity, too_fast, s.seq);  // accepted: the client owns the arm
   too_fast[0] = 5;  // beyond S1's 1 rad/s
-  owner.Write(ArmMode::kVelocity, too_fast, s.seq + 1);
+  owner.Write(ArmMode::kVelocity, too_fast, owner.Read(kPatience_s).seq);
   other.Write(ArmMode::kVelocity, Eigen::VectorXd::Zero(7), other.ReadLatest(kPatience_s).seq);
 
   auto wait_for_bit = [](Arm& arm, std::uint32_t bit) {
@@ -369,19 +368,19 @@ TEST(ClientTest, GarbageReplyIsAProtocolError) {
 
 TEST(ClientTest, OtherProtocolVersionIsAVersionMismatch) {
   nlohmann::json j = nlohmann::json::parse(DescribeJson(Pa10Description()));
-  j["protocol"] = 2;
+  j["protocol"] = 3;
   ArmServer server(j.dump());
   const std::string message =
       ThrownMessage<VersionMismatch>([&] { Arm::Connect("127.0.0.1", server.port(), kPatience_s); });
-  EXPECT_TRUE(Contains(message, "protocol version 2")) << message;
-  EXPECT_TRUE(Contains(message, "version 1")) << message;
+  EXPECT_TRUE(Contains(message, "protocol version 3")) << message;
+  EXPECT_TRUE(Contains(message, "version 2")) << message;
 
-  // a version-2 binary packet while connecting
+  // a version-1 binary packet while connecting
   Peer peer;
   std::future<Arm> connecting = ConnectToPeer(peer);
-  Bytes v2 = StatePacket(0);
-  PutDouble(2.0, v2.data() + 8);
-  peer.Send(v2);
+  Bytes v1 = StatePacket(0);
+  PutDouble(1.0, v1.data() + 8);
+  peer.Send(v1);
   EXPECT_THROW(connecting.get(), VersionMismatch);
 }
 
@@ -391,7 +390,7 @@ TEST(ClientTest, SilenceIsATimeoutNamingTheEndpoint) {
   const std::string message =
       ThrownMessage<TimeoutError>([&] { Arm::Connect("127.0.0.1", silent->local_port(), 0.3); });
   EXPECT_TRUE(Contains(message, "127.0.0.1:" + std::to_string(silent->local_port()))) << message;
-  EXPECT_TRUE(Contains(message, "no describe reply")) << message;
+  EXPECT_TRUE(Contains(message, "no answer")) << message;
   EXPECT_GE(std::chrono::duration<double>(steady_clock::now() - begin).count(), 0.29);
 }
 

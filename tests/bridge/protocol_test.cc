@@ -213,7 +213,7 @@ TEST(ProtocolTest, FramingErrors) {
 
   std::vector<double> huge(kMaxPacketValues + 1, 0.0);
   huge[0] = kMagic;
-  huge[1] = 1;
+  huge[1] = 2;
   huge[2] = 1;
   huge[3] = 2;
   huge[6] = kMaxPacketValues + 1 - kHeaderValues;

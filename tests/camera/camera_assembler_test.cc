@@ -182,7 +182,7 @@ TEST(FrameAssemblerTest, RefusesMalformedAndTooLargeChunksByReason) {
   ChunkError e;
   EXPECT_EQ(Add(a, d, 0, &e), Result::kRefused);
   EXPECT_EQ(e, ChunkError::kTooLarge);
-  PutDouble(2, d.data() + 8);  // version 2
+  PutDouble(1, d.data() + 8);  // version 1
   EXPECT_EQ(Add(a, d, 0, &e), Result::kRefused);
   EXPECT_EQ(e, ChunkError::kBadVersion);
   const Datagram json = {'{', '}'};

@@ -72,7 +72,7 @@ Bytes With(int index, double value, ChunkHeader h = Example()) {
 
 TEST(CameraCodecTest, WorkedExampleOfTheDocsMatchesTheEncoder) {
   const std::string documented =
-      "000080501093d541000000000000f03f0000000000001040000000000000f03f"
+      "000080501093d54100000000000000400000000000001040000000000000f03f"
       "0000000000001c40000000000000d03f0000000000003040000000000000f03f"
       "0000000000000040000000000000104000000000000000400000000000000000"
       "000000000000384000000000000030400000000000002040000000000000f03f"
@@ -146,7 +146,7 @@ TEST(CameraCodecTest, RefusesFraming) {
   EXPECT_EQ(Decode(Bytes(b.begin(), b.begin() + 55)), ChunkError::kTooShort);
   EXPECT_EQ(Decode(Bytes(b.begin(), b.begin() + 100)), ChunkError::kTooShort);  // header says 16 values
   EXPECT_EQ(Decode(With(0, 1447838019)), ChunkError::kBadMagic);
-  EXPECT_EQ(Decode(With(1, 2)), ChunkError::kBadVersion);
+  EXPECT_EQ(Decode(With(1, 1)), ChunkError::kBadVersion);
   EXPECT_EQ(Decode(With(2, 1)), ChunkError::kBadKind);
   EXPECT_EQ(Decode(With(3, 2)), ChunkError::kBadType);
   EXPECT_EQ(Decode(With(3, 3)), ChunkError::kBadType);

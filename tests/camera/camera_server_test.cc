@@ -114,7 +114,7 @@ TEST(CameraServerTest, DescribeReplyHasTheCameraFacts) {
   poll.join();
   const nlohmann::json& j = client.describe();
   EXPECT_EQ(j["kind"], "camera");
-  EXPECT_EQ(j["protocol"], 1);
+  EXPECT_EQ(j["protocol"], 2);
   EXPECT_EQ(j["name"], "webcam");
   EXPECT_EQ(j["server"], "camera_server_test");
   EXPECT_EQ(j["source"], "test pattern");

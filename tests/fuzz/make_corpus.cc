@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
 
 namespace vlab::bridge {
 namespace {
@@ -99,10 +100,24 @@ Seeds MakeSeeds() {
   add("sim_command_step", [](Bytes* b) { EncodeSimCommand(4, 10.3, {static_cast<int>(SimOp::kStep), 10}, b); });
   add("sim_command_set_realtime_factor",
       [](Bytes* b) { EncodeSimCommand(5, 10.4, {static_cast<int>(SimOp::kSetRealtimeFactor), 0.5}, b); });
-  // describe requests: no payload
-  add("describe_arm", [](Bytes* b) { EncodeDescribeRequest(DeviceKind::kArm, b); });
-  add("describe_wrench", [](Bytes* b) { EncodeDescribeRequest(DeviceKind::kWrench, b); });
-  add("describe_sim", [](Bytes* b) { EncodeDescribeRequest(DeviceKind::kSim, b); });
+  // describe and subscribe requests: [cookie, arg]; cookie 1 stands for the sender's real
+  // cookie (the fuzzer puts it in), 0 asks for a challenge
+  add("describe_arm", [](Bytes* b) { EncodeDescribeRequest(static_cast<int>(DeviceKind::kArm), 1, b); });
+  add("describe_wrench", [](Bytes* b) { EncodeDescribeRequest(static_cast<int>(DeviceKind::kWrench), 1, b); });
+  add("describe_sim", [](Bytes* b) { EncodeDescribeRequest(static_cast<int>(DeviceKind::kSim), 1, b); });
+  add("describe_any_no_cookie", [](Bytes* b) { EncodeDescribeRequest(0, 0, b); });
+  add("subscribe_arm_no_cookie", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kArm, 0, 1, b); });
+  add("subscribe_arm", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kArm, 1, 1, b); });
+  add("subscribe_sim", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kSim, 1, 1, b); });
+  add("unsubscribe_arm", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kArm, 1, 0, b); });
+  add("subscribe_wrong_cookie", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kWrench, 123456789, 1, b); });
+  add("session_reply", [](Bytes* b) {
+    const double payload[2] = {987654321, 1};
+    Header h;
+    h.kind = static_cast<int>(DeviceKind::kArm);
+    h.type = static_cast<int>(MessageType::kSession);
+    EncodePacket(h, payload, 2, b);
+  });
   return seeds;
 }
 

@@ -6,18 +6,23 @@
 //      counts -1, 1 and 7). The framing is re-encoded and must give back the
 //      input's bytes; whatever parses is re-encoded and must decode and parse
 //      to the same message, bit for bit;
-//   2. a fresh arm, sim and wrench DeviceEndpoint in a fixed scenario: an
-//      accepted command is pending, then the datagram comes from the owner,
-//      again (a duplicate), from a second client, from that client once the
-//      owner timed out, from a third client, and from the first once the
-//      others' subscriptions lapsed. A finding there reproduces from the
-//      input alone;
+//   2. a fresh arm, sim and wrench DeviceEndpoint in a fixed scenario: two
+//      clients subscribed (the cookie handshake), an accepted command
+//      pending, then the datagram comes from the owner, again (a duplicate),
+//      from the second subscriber, from it once the owner timed out (on the
+//      endpoint's wall clock, a fake one here), from a third client that never
+//      subscribed, and from the first once the others' subscriptions lapsed.
+//      A finding there reproduces from the input alone;
 //   3. long-lived endpoints that see every input, from two alternating
 //      clients, with the period advancing every few inputs (BeginPeriod,
 //      Take*Command, Publish), so ownership, watchdog and subscriber code run
 //      across inputs (a finding there may need the inputs before it).
+// In a describe or subscribe request, cookie 1 stands for the sender's real
+// cookie (the harness puts it in), so that the fuzzer reaches the paths past
+// the handshake; any other cookie is what the input says.
 // After each step the endpoint's invariants are checked: the counters add up,
-// only a well-formed command is accepted, and a taken command is one the
+// only a well-formed command answering a published state is accepted, the
+// subscribers never outnumber the table, and a taken command is one the
 // device accepts. A broken invariant or round trip aborts with a message; that,
 // and any sanitizer report, is a finding.
 //
@@ -136,6 +141,9 @@ void CheckRoundTrips(const unsigned char* data, std::size_t size, const Header& 
 
 // ---- endpoints and their invariants --------------------------------------------
 
+// the endpoints' wall clock: advanced by the harness
+double g_now_s = 1000;
+
 struct Net {
   std::unique_ptr<UdpSocket> device = UdpSocket::Bind("127.0.0.1", 0);
   std::unique_ptr<UdpSocket> client_a = UdpSocket::Bind("127.0.0.1", 0);  // a sink: never read
@@ -158,8 +166,9 @@ EndpointConfig ArmConfig() {
   c.name = d.name;
   c.kind = DeviceKind::kArm;
   c.describe_json = DescribeJson(d);
-  c.owner_timeout_periods = 4;
-  c.subscriber_timeout_periods = 8;
+  c.owner_timeout_s = 0.04;
+  c.subscriber_timeout_s = 0.08;
+  c.clock = [] { return g_now_s; };
   c.watchdog_periods = 3;
   c.joints = kArmJoints;
   c.position_min = d.position_min;
@@ -178,9 +187,10 @@ EndpointConfig SimConfig() {
   c.name = d.name;
   c.kind = DeviceKind::kSim;
   c.describe_json = DescribeJson(d);
-  c.owner_timeout_periods = 4;
-  c.subscriber_timeout_periods = 8;
-  c.max_subscribers = 1;  // the second client evicts the first
+  c.owner_timeout_s = 0.04;
+  c.subscriber_timeout_s = 0.08;
+  c.clock = [] { return g_now_s; };
+  c.max_subscribers = 1;  // the second client is refused: the table is full
   return c;
 }
 
@@ -192,19 +202,25 @@ EndpointConfig WrenchConfig() {
   c.name = d.name;
   c.kind = DeviceKind::kWrench;
   c.describe_json = DescribeJson(d);
-  c.subscriber_timeout_periods = 8;
+  c.subscriber_timeout_s = 0.08;
+  c.clock = [] { return g_now_s; };
   return c;
 }
 
 void CheckCounters(const DeviceEndpoint& ep) {
   const EndpointCounters& c = ep.counters();
-  Check(c.refused == c.refused_malformed + c.refused_limits + c.refused_not_owner, "refused != sum of its reasons");
-  Check(c.received == c.accepted + c.describes + c.refused + c.stale + c.duplicate,
-        "received != accepted + describes + refused + stale + duplicate");
+  Check(c.refused == c.refused_malformed + c.refused_limits + c.refused_not_owner + c.refused_not_subscribed,
+        "refused != sum of its reasons");
+  Check(c.received == c.accepted + c.requests + c.refused + c.stale + c.duplicate + c.future,
+        "received != accepted + requests + refused + stale + duplicate + future");
+  Check(c.describes <= c.requests, "more describe replies than requests");
+  Check(ep.subscribers() <= ep.config().max_subscribers, "more subscribers than the table holds");
 }
 
 // an accepted datagram is a well-formed command of the device's kind, now the last seq
-void CheckAfterHandle(const DeviceEndpoint& ep, bool accepted, const unsigned char* data, std::size_t size) {
+void CheckAfterHandle(const DeviceEndpoint& ep, DeviceEndpoint::Received received, const unsigned char* data,
+                      std::size_t size) {
+  const bool accepted = received == DeviceEndpoint::Received::kCommand;
   CheckCounters(ep);
   if (ep.config().kind == DeviceKind::kWrench) Check(!accepted && !ep.has_owner(), "wrench accepted a command");
   if (!accepted) return;
@@ -214,6 +230,36 @@ void CheckAfterHandle(const DeviceEndpoint& ep, bool accepted, const unsigned ch
   Check(h.kind == static_cast<int>(ep.config().kind) && h.type == static_cast<int>(MessageType::kCommand),
         "accepted something other than a command of its kind");
   Check(h.seq == ep.last_accepted_seq(), "accepted, but last_accepted_seq is not the command's seq");
+}
+
+// the datagram as `from` sends it: cookie 1 in a request becomes from's real cookie
+const unsigned char* WithCookie(const DeviceEndpoint& ep, const unsigned char* data, std::size_t size,
+                                const Endpoint& from, std::vector<unsigned char>* patched) {
+  Header h;
+  std::vector<double> p;
+  if (DecodePacket(data, size, &h, &p) != DecodeError::kNone || p.size() != 2 || p[0] != 1 ||
+      (h.type != static_cast<int>(MessageType::kDescribe) && h.type != static_cast<int>(MessageType::kSubscribe))) {
+    return data;
+  }
+  patched->assign(data, data + size);
+  PutDouble(ep.cookie(from), patched->data() + kHeaderBytes);
+  return patched->data();
+}
+
+DeviceEndpoint::Received HandleAs(DeviceEndpoint& ep, const unsigned char* data, std::size_t size,
+                                  const Endpoint& from, long period, UdpSocket& device) {
+  std::vector<unsigned char> patched;
+  const unsigned char* bytes = WithCookie(ep, data, size, from, &patched);
+  const DeviceEndpoint::Received r = ep.Handle(bytes, size, from, period, device);
+  CheckAfterHandle(ep, r, bytes, size);
+  return r;
+}
+
+// the handshake of `from`, as a client does it
+void Subscribe(DeviceEndpoint& ep, const Endpoint& from, UdpSocket& device) {
+  std::vector<unsigned char> request;
+  EncodeSubscribeRequest(ep.config().kind, ep.cookie(from), 1, &request);
+  CheckAfterHandle(ep, ep.Handle(request.data(), request.size(), from, 0, device), request.data(), request.size());
 }
 
 // a command taken from the endpoint must be one it accepts
@@ -277,12 +323,15 @@ std::vector<unsigned char> StatePacket(const DeviceEndpoint& ep, long period) {
 // ---- 2. one datagram in a fixed scenario, fresh endpoint -----------------------
 
 void RunScenario(const EndpointConfig& config, const unsigned char* data, std::size_t size, Net& net) {
+  g_now_s = 1000;
   DeviceEndpoint ep(config);
   long period = 0;
-  auto handle = [&](const Endpoint& from) {
-    CheckAfterHandle(ep, ep.Handle(data, size, from, period, *net.device), data, size);
-  };
-  // client a owns the device, with an accepted command (seq 0) not taken yet
+  auto handle = [&](const Endpoint& from) { HandleAs(ep, data, size, from, period, *net.device); };
+  // clients a and b subscribed (b may find the table full), state 0 published;
+  // a owns the device, with an accepted command (seq 0) not taken yet
+  Subscribe(ep, net.a, *net.device);
+  Subscribe(ep, net.b, *net.device);
+  ep.Publish(StatePacket(ep, period), *net.device);
   std::vector<unsigned char> primer;
   if (config.kind == DeviceKind::kArm) {
     ArmCommandMsg hold;
@@ -291,22 +340,26 @@ void RunScenario(const EndpointConfig& config, const unsigned char* data, std::s
   } else if (config.kind == DeviceKind::kSim) {
     EncodeSimCommand(0, 0, {static_cast<int>(SimOp::kPause), 0}, &primer);
   } else {
-    EncodeDescribeRequest(config.kind, &primer);
+    EncodeDescribeRequest(static_cast<int>(config.kind), ep.cookie(net.a), &primer);
   }
   CheckAfterHandle(ep, ep.Handle(primer.data(), primer.size(), net.a, period, *net.device), primer.data(),
                    primer.size());
   handle(net.a);  // from the owner
   TakeAndCheck(ep);
   handle(net.a);  // the same again: a duplicate
-  handle(net.b);  // from another client while a owns the device
-  period += config.owner_timeout_periods + 1;
+  handle(net.b);  // from another subscriber while a owns the device
+  period += 5;
+  g_now_s += config.owner_timeout_s * 1.5;
   ep.BeginPeriod(period);  // the owner fell silent: watchdog
-  handle(net.b);           // b takes over
-  TakeAndCheck(ep);
+  ep.ReleaseSilentOwner();
   ep.Publish(StatePacket(ep, period), *net.device);
-  handle(net.c);  // a third client: the subscriber list may be full
-  period += config.subscriber_timeout_periods + 1;
-  handle(net.a);  // the others fell silent: dropped as subscribers
+  handle(net.b);  // b takes over
+  TakeAndCheck(ep);
+  handle(net.c);  // a client that never subscribed
+  period += 10;
+  g_now_s += config.subscriber_timeout_s * 1.5;
+  ep.Publish(StatePacket(ep, period), *net.device);  // the others fell silent: dropped as subscribers
+  handle(net.a);
   TakeAndCheck(ep);
   ep.Publish(StatePacket(ep, period), *net.device);
 }
@@ -319,15 +372,20 @@ struct LongLived {
   DeviceEndpoint wrench{WrenchConfig()};
   long inputs = 0;
   long period = 0;
+  double now_s = 5000;  // its own time line (RunScenario resets the shared clock)
 };
 
 void RunLongLived(LongLived& l, const unsigned char* data, std::size_t size, Net& net) {
+  g_now_s = l.now_s;
   const Endpoint& from = l.inputs % 2 == 0 ? net.a : net.b;
   for (DeviceEndpoint* ep : {&l.arm, &l.sim, &l.wrench}) {
-    CheckAfterHandle(*ep, ep->Handle(data, size, from, l.period, *net.device), data, size);
+    if (l.inputs % 64 == 0) Subscribe(*ep, from, *net.device);  // now and then, as clients renew
+    HandleAs(*ep, data, size, from, l.period, *net.device);
   }
   if (++l.inputs % kInputsPerPeriod != 0) return;
   ++l.period;
+  l.now_s += 0.002;
+  g_now_s = l.now_s;
   for (DeviceEndpoint* ep : {&l.arm, &l.sim, &l.wrench}) {
     ep->BeginPeriod(l.period);
     TakeAndCheck(*ep);

@@ -125,7 +125,7 @@ TEST_F(KinsimUdpTest, StartLineAndDescribe) {
   ASSERT_FALSE(text.empty()) << "no describe reply";
   const nlohmann::json j = nlohmann::json::parse(text);
   EXPECT_EQ(j["kind"], "arm");
-  EXPECT_EQ(j["protocol"], 1);
+  EXPECT_EQ(j["protocol"], 2);
   EXPECT_EQ(j["name"], "pa10");
   EXPECT_EQ(j["server"], "vlab-kinsim");
   EXPECT_EQ(j["clock"], "realtime");
@@ -290,6 +290,7 @@ TEST_F(KinsimUdpTest, SecondClientIsNotTheOwner) {
   Client other(process_->port());
   owner.Subscribe();
   ASSERT_TRUE(owner.Stream(2, v_, 0.05));
+  other.Subscribe();  // (a non-subscriber's commands are refused as such, before ownership counts)
   // the other client commands while the owner streams
   const std::vector<double> v_other(kJoints, -0.3);
   const Clock::time_point start = Clock::now();
@@ -298,7 +299,7 @@ TEST_F(KinsimUdpTest, SecondClientIsNotTheOwner) {
     ASSERT_TRUE(owner.NextState());
     owner.Send(owner.header.seq, 2, v_);
     if (owner.header.seq > 0 && static_cast<long>(owner.header.seq) % 10 == 0) {
-      other.Send(owner.header.seq + 1000, 2, v_other);
+      other.Send(owner.header.seq, 2, v_other);
       ++sent;
     }
     EXPECT_FALSE(Has(owner.state.status, kStatusNotOwner));

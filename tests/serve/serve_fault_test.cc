@@ -33,6 +33,7 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
   Peer second(arm_port);                           // a second controller
   std::unique_ptr<Peer> restarted;                 // the controller after its restart
   peer->Describe(bridge::DeviceKind::kArm);
+  second.Describe(bridge::DeviceKind::kArm);  // a subscriber: its commands reach the ownership check
   const std::vector<double> v = {0.1, 0, 0, 0, 0, 0, 0};
   Header h;
   ArmStateMsg s;
@@ -62,7 +63,7 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
       bad[0] ^= 0xFF;  // magic
       peer->Send(bad);
       bad = p;
-      bridge::PutDouble(2.0, bad.data() + 8);  // version 2
+      bridge::PutDouble(1.0, bad.data() + 8);  // version 1
       peer->Send(bad);
       bad = p;
       bridge::PutDouble(std::numeric_limits<double>::quiet_NaN(), bad.data() + 8 * 8);

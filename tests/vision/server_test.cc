@@ -12,6 +12,7 @@
 #include "bridge/bridge_errors.h"
 #include "bridge/bridge_markers.h"
 #include "vision/vision_server.h"
+#include "wire_session.h"
 
 namespace vlab::vision {
 namespace {
@@ -78,7 +79,7 @@ TEST_F(MarkersServerTest, DescribeNamesTheTableAndTheLayout) {
   EXPECT_EQ(client.name(), "eyes");
   EXPECT_EQ(client.kind(), bridge::DeviceKind::kMarkers);
   const nlohmann::json& d = client.describe();
-  EXPECT_EQ(d["protocol"], 1);
+  EXPECT_EQ(d["protocol"], 2);
   EXPECT_EQ(d["camera"]["name"], "webcam");  // the extra facts are merged in
   EXPECT_EQ(d["layout"]["marker"].size(), 7u);
   EXPECT_EQ(d["max_markers_per_state"], 27);
@@ -114,8 +115,15 @@ TEST_F(MarkersServerTest, DescriptionsAppliedWholeOrRefusedWhole) {
 }
 
 TEST_F(MarkersServerTest, MalformedDatagramsChangeNothing) {
-  const long before = server_->counters().received;
+  const bridge::Endpoint device = bridge::UdpSocket::MakeEndpoint("127.0.0.1", server_->local_port());
   std::vector<unsigned char> packet;
+  bridge::EncodeMarkersCommand(0, 0, {{0, 1, 0.02}}, &packet);
+  SendRaw(packet);  // a valid command from a non-subscriber: refused, and it subscribes nobody
+  PollUntilReceived(*server_, server_->counters().received + 1, 0);
+  EXPECT_EQ(server_->counters().refused_not_subscribed, 1);
+  EXPECT_EQ(server_->subscribers(), 0);
+  WhileServing(*server_, 0, [&] { EXPECT_GT(testing::WireSubscribe(*raw_, device, bridge::DeviceKind::kMarkers), 0); });
+  const long before = server_->counters().received;
   bridge::EncodeMarkersCommand(0, 0, {{0, 1, 0.02}, {0, 50, 0.02}}, &packet);  // one bad id: all refused
   SendRaw(packet);
   bridge::EncodeMarkersCommand(0, 0, {{0, 1, 0.02}}, &packet);
@@ -133,9 +141,7 @@ TEST_F(MarkersServerTest, MalformedDatagramsChangeNothing) {
   EXPECT_EQ(server_->counters().accepted, 0);
   EXPECT_EQ(server_->table().size(), 2u);
   EXPECT_EQ(server_->table().SideOf(0, 1), 0.0);
-  // (the command with a bad id was well framed: it subscribed its sender, as
-  // every device does; the garbage did not add another)
-  EXPECT_EQ(server_->subscribers(), 1);
+  EXPECT_EQ(server_->subscribers(), 1);  // the raw socket, subscribed above: nothing dropped it
 }
 
 TEST_F(MarkersServerTest, StatesReachSubscribersUntilTheyFallSilent) {

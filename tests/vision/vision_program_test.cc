@@ -156,7 +156,7 @@ TEST(VisionCommand, NoCameraFailsWithOneLine) {
   const int silent = socket->local_port();
   const ProcessResult r = RunVlab("vision --camera 127.0.0.1:" + std::to_string(silent) + " --connect-timeout 0.5", 30);
   EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_NE(r.err.find("no describe reply within 0.5 s"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no answer within 0.5 s"), std::string::npos) << r.err;
   EXPECT_EQ(Lines(r.err).size(), 1u) << r.err;
 }
 

@@ -16,6 +16,7 @@
 #include "bridge/bridge_udp.h"
 #include "bridge/bridge_yoyo.h"
 #include "yoyosim_process.h"
+#include "wire_session.h"
 
 namespace vlab::bridge {
 namespace {
@@ -151,13 +152,13 @@ struct Raw {
     Send(bytes);
   }
   void Command(double seq, const std::vector<double>& xyz) { Send(10, 2, seq, xyz); }
-  /// The next point state (JSON skipped): fills header and values.
+  /// The next point state (JSON and session replies skipped): fills header and values.
   bool Next(double timeout_s = 5) {
     const Clock::time_point start = Clock::now();
     unsigned char buffer[8192];
     while (Seconds(start) < timeout_s) {
       const long n = socket->Receive(buffer, sizeof(buffer), nullptr, 0.1);
-      if (n <= 0 || buffer[0] == '{') continue;
+      if (n <= 0 || buffer[0] == '{' || IsSessionReply(buffer, static_cast<std::size_t>(n))) continue;
       if (DecodePacket(buffer, static_cast<std::size_t>(n), &header, &values) == DecodeError::kNone) return true;
     }
     return false;
@@ -172,9 +173,10 @@ TEST(YoyosimUdp, BadPacketsAreRefusedAndCountedWhileTheRunGoesOn) {
   YoyosimProcess p({"--duration", "0.2", "--start-timeout", "10", "--timeout", "0.3"});
   ASSERT_TRUE(p.ok()) << p.output();
   Raw owner(p.point_port()), other(p.point_port()), yoyo(p.yoyo_port());
-  owner.Send(10, 3, 0, {});  // describe: subscribes, state 0 follows
-  other.Send(10, 3, 0, {});
-  yoyo.Send(11, 3, 0, {});
+  // subscribe (the cookie handshake): state 0 follows
+  ASSERT_GT(vlab::testing::WireSubscribe(*owner.socket, owner.to, DeviceKind::kPoint), 0);
+  ASSERT_GT(vlab::testing::WireSubscribe(*other.socket, other.to, DeviceKind::kPoint), 0);
+  ASSERT_GT(vlab::testing::WireSubscribe(*yoyo.socket, yoyo.to, DeviceKind::kYoyo), 0);
   std::vector<double> status(21, -1);
   for (int k = 0; k <= 20; ++k) {
     ASSERT_TRUE(owner.Next()) << "state " << k;
@@ -218,7 +220,7 @@ TEST(YoyosimUdp, BadPacketsAreRefusedAndCountedWhileTheRunGoesOn) {
   EXPECT_TRUE(Has(p.output(), "20 periods (0.200 s), set-points applied 19, lockstep timeouts 1, releases 0"))
       << p.output();
   EXPECT_TRUE(Has(p.output(), "accepted 19, refused 8 (malformed 6, limits 1, not owner 1)")) << p.output();
-  EXPECT_TRUE(Has(p.output(), "yoyo: received 3, describes 1, refused 2")) << p.output();
+  EXPECT_TRUE(Has(p.output(), "yoyo: received 4, describes 0, refused 2")) << p.output();  // 2: the handshake
 }
 
 TEST(YoyosimUdp, LockstepReleasesASilentOwnerAfterThreeTimeouts) {
