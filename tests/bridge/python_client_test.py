@@ -43,6 +43,11 @@ WORKED_EXAMPLE_HEX = (
     "0000000000004540000000000000f83f00000000000020400000000000000040"
     "000000000000e03f000000000000d0bf000000000000c03f0000000000000000"
     "000000000000f03f000000000000f0bf000000000000b03f")
+# the same section: a subscribe request to the arm with cookie 2^52 + 1, action 1
+WORKED_SUBSCRIBE_HEX = (
+    "000080501093d5410000000000000040000000000000f03f0000000000001040"
+    "000000000000000000000000000000000000000000000040"
+    "0100000000003043000000000000f03f")
 
 
 class ArmServer:
@@ -303,6 +308,8 @@ class CodecTest(unittest.TestCase):
                          struct.pack("<9d", vc.MAGIC, 2, 4, 4, 0, 0, 2, 12345, 1))
         self.assertEqual(vc.encode_subscribe_request(vc.KIND_ARM, 7, vc.UNSUBSCRIBE),
                          struct.pack("<9d", vc.MAGIC, 2, 1, 4, 0, 0, 2, 7, 0))
+        worked = vc.encode_subscribe_request(vc.KIND_ARM, 2 ** 52 + 1, vc.SUBSCRIBE)
+        self.assertEqual(worked.hex(), WORKED_SUBSCRIBE_HEX)
         self.assertEqual(vc.REQUEST_BYTES, 72)
 
         def reply(*values):
