@@ -1,4 +1,4 @@
-"""Python client of the vlab wire protocol, version 1 (docs/protocol.md).
+"""Python client of the vlab wire protocol, version 2 (docs/protocol.md).
 
 Standard library only (socket, struct, json, select, math, time; OpenCV's cv2 only to
 decode JPEG camera frames, and only if installed): copy this file next to a script, or
@@ -6,7 +6,7 @@ put its folder on sys.path.
 
     from vlab_client import Arm, VELOCITY
 
-    with Arm("127.0.0.1", 50010) as arm:          # describe + subscribe
+    with Arm("127.0.0.1", 50010) as arm:          # session: cookie, describe, subscribe
         print(arm.describe()["joints"])
         state = arm.read(timeout=1.0)              # seq, time (s), status, q, qd, tau
         arm.write(VELOCITY, [0.0] * arm.joints, state.seq)
@@ -15,10 +15,21 @@ Devices: Arm (commands: hold, position, velocity, torque), Wrench (output only),
 Sim (pause, resume, step, reset, realtime factor), Camera (whole frames, reassembled
 from chunks; docs/protocol_camera.md), and LayoutDevice for any float64 kind (base,
 gripper, feet, imu, point, yoyo, gaze, pose, ...): states decoded into fields by the
-names of the device's describe layout, commands written by field name. Connecting
-sends a describe request, which also subscribes the client: the device then sends it
-one state per control period (a camera: every frame). The seq of a command must be the seq of the state it answers.
-read/read_latest wait up to their timeout; write never blocks.
+names of the device's describe layout, commands written by field name.
+
+Connecting makes a session (docs/protocol.md, "Sessions"): the client asks for the
+cookie of its address and port (a describe request without one is answered with a
+challenge only), then with the cookie for the describe reply and a subscription. From
+then on the device sends it one state per control period (a camera: every frame), and
+to subscribers only. The device drops a subscriber silent for 10 s (its default): a
+command renews the subscription, so does keep_alive(), which a client that never
+writes must call now and then (every second is plenty; Camera does it by itself).
+close() unsubscribes. The seq of a command must be the seq of a state it answers: one
+of the newest 101 the device published, higher than the seq of the client's last
+accepted command. The first accepted command makes the client the device's owner;
+others are refused until the owner was silent (no command, no renewal) for the
+device's owner timeout (1 s of wall clock by default). read/read_latest wait up to
+their timeout; write never blocks.
 
     with LayoutDevice("point", "127.0.0.1", 50060) as hand:
         state = hand.read(timeout=1.0)             # state["z"], state.fields, state.values
@@ -29,8 +40,9 @@ read/read_latest wait up to their timeout; write never blocks.
         # JPEG frames are decoded with OpenCV's cv2 when it is installed
 
 Errors: VlabError > NetworkError, ProtocolError > VersionMismatch, VlabTimeout
-(also a builtin TimeoutError); ValueError for a caller's own mistake (wrong number
-of values, non-finite value, negative seq). A handle is not thread-safe.
+(also a builtin TimeoutError); ProtocolError too when the device refuses the
+subscription (its subscriber table is full); ValueError for a caller's own mistake
+(wrong number of values, non-finite value, negative seq). A handle is not thread-safe.
 """
 
 import collections
@@ -42,7 +54,7 @@ import struct
 import time
 
 MAGIC = 1447838018
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 HEADER_VALUES = 7
 MAX_PACKET_VALUES = 1024
 MAX_SEQ = 2 ** 53
@@ -58,7 +70,19 @@ KIND_NAMES = {KIND_ARM: "arm", KIND_WRENCH: "wrench", KIND_SIM: "sim", KIND_CAME
 KIND_CODES = {name: code for code, name in KIND_NAMES.items()}
 # kinds whose payload is not one float64 array per period: their own clients
 _NOT_FLOAT64 = {KIND_CAMERA: "docs/protocol_camera.md, class Camera", KIND_MARKERS: "docs/protocol_markers.md"}
-TYPE_STATE, TYPE_COMMAND, TYPE_DESCRIBE = 1, 2, 3
+# message types: state (device -> client), command, describe and subscribe requests (client ->
+# device), session reply (device -> client)
+TYPE_STATE, TYPE_COMMAND, TYPE_DESCRIBE, TYPE_SUBSCRIBE, TYPE_SESSION = 1, 2, 3, 4, 5
+KIND_ANY = 0  # a describe request to a device of any kind
+# subscribe request actions
+UNSUBSCRIBE, SUBSCRIBE = 0, 1
+# session reply results (docs/protocol.md, "Sessions")
+SESSION_CHALLENGE = 0     # repeat the request with this cookie
+SESSION_SUBSCRIBED = 1    # subscribed (or renewed): states follow
+SESSION_FULL = 2          # refused: the device has as many subscribers as it takes
+SESSION_UNSUBSCRIBED = 3  # no longer subscribed
+SESSION_LIMITED = 4       # describe refused by the per-source rate limit: retry later
+REQUEST_BYTES = 8 * (HEADER_VALUES + 2)  # describe and subscribe requests, session replies: 72
 
 # arm command modes
 HOLD, POSITION, VELOCITY, TORQUE = 0, 1, 2, 3
@@ -68,7 +92,7 @@ STATUS_AT_LIMIT, STATUS_WATCHDOG, STATUS_NOT_OWNER = 8, 16, 32
 # sim operations
 SIM_RESET, SIM_PAUSE, SIM_RESUME, SIM_STEP, SIM_SET_REALTIME_FACTOR = 1, 2, 3, 4, 5
 
-_DESCRIBE_RETRY_S = 0.25  # resend a lost describe request this often
+_REQUEST_RETRY_S = 0.25  # resend lost requests this often while connecting
 
 
 class VlabError(Exception):
@@ -128,8 +152,47 @@ def encode(kind, mtype, seq, t, payload):
     return struct.pack("<%dd" % len(values), *values)
 
 
+def encode_describe_request(kind, cookie):
+    """A describe request (72 bytes) to a device of `kind` (KIND_ANY: whatever its kind) with the
+    cookie of the sender's address and port (0 before the device gave one: only a challenge comes
+    back)."""
+    return encode(kind, TYPE_DESCRIBE, 0, 0, [cookie, 0])
+
+
+def encode_subscribe_request(kind, cookie, action):
+    """A subscribe request (72 bytes) to a device of `kind`: action SUBSCRIBE (or renew) or
+    UNSUBSCRIBE, with the cookie the device gave."""
+    return encode(kind, TYPE_SUBSCRIBE, 0, 0, [cookie, action])
+
+
+def is_session_reply(data):
+    """True for a session reply of this protocol version (72 bytes, type 5): read functions skip
+    the replies to renewals."""
+    if len(data) != REQUEST_BYTES:
+        return False
+    magic, version, _, mtype = struct.unpack_from("<4d", data)
+    return magic == MAGIC and version == PROTOCOL_VERSION and mtype == TYPE_SESSION
+
+
+def parse_session_reply(data):
+    """(kind, cookie, result) of a session reply, the cookie a whole number 1 <= cookie < 2^53 and
+    the result one of SESSION_*; None if the datagram is not one."""
+    if not is_session_reply(data):
+        return None
+    try:
+        kind, mtype, _, _, payload = decode(data)
+    except ProtocolError:
+        return None
+    cookie, result = payload
+    if not _whole(cookie, 1, MAX_SEQ - 1) or not _whole(result, SESSION_CHALLENGE, SESSION_LIMITED):
+        return None
+    return kind, int(cookie), int(result)
+
+
 def decode(data):
-    """Checks a datagram's framing; returns (kind, type, seq, time, payload) or raises ProtocolError."""
+    """Checks a datagram's framing (the checks of the C++ DecodePacket: size, magic, version,
+    finiteness, kind 0..255, type 1..5, seq, length); returns (kind, type, seq, time, payload) or
+    raises ProtocolError (VersionMismatch for another protocol version)."""
     size = len(data)
     if size < 8 * HEADER_VALUES or size % 8:
         raise ProtocolError("too short (%d bytes)" % size)
@@ -144,9 +207,9 @@ def decode(data):
                               % (version, PROTOCOL_VERSION))
     if not all(math.isfinite(v) for v in values):
         raise ProtocolError("non-finite value")
-    if not _whole(kind, 1, 255):
+    if not _whole(kind, KIND_ANY, 255):
         raise ProtocolError("bad kind")
-    if not _whole(mtype, 1, 3):
+    if not _whole(mtype, TYPE_STATE, TYPE_SESSION):
         raise ProtocolError("bad type")
     if not _whole(seq, 0, MAX_SEQ):
         raise ProtocolError("bad seq")
@@ -156,14 +219,16 @@ def decode(data):
 
 
 class Device:
-    """What every device handle shares: socket, describe reply, reception of states."""
+    """What every device handle shares: socket, session, describe reply, reception of states."""
 
     KIND = None
 
     def __init__(self, address="127.0.0.1", port=None, timeout=1.0, bind_address=None):
-        """Connects: sends a describe request to address:port and waits up to `timeout` s for
-        the JSON reply (states arriving meanwhile are skipped). Raises NetworkError (bad
-        address), VlabTimeout (no reply), VersionMismatch, ProtocolError (wrong kind, bad reply)."""
+        """Connects: makes a session with address:port (the cookie, then with it the describe reply
+        and a subscription), resending lost requests, within `timeout` s; states arriving meanwhile
+        are checked for their kind and skipped. Raises NetworkError (bad address), VlabTimeout (no
+        answer, no describe reply or no subscription), VersionMismatch, ProtocolError (wrong kind,
+        bad reply, subscription refused: the device's subscriber table is full)."""
         if not isinstance(port, int) or not 1 <= port <= 65535:
             raise NetworkError("port %r out of range 1..65535" % (port,))
         if not _numeric_address(address) and not _host_name(address):
@@ -183,35 +248,65 @@ class Device:
             self._sock.close()
             raise NetworkError("%s: cannot open a UDP socket: %s" % (self._label, e)) from None
         self._start = time.monotonic()
-        self._request = encode(self.KIND, TYPE_DESCRIBE, 0, 0, [])
-        self.skipped = 0  # datagrams skipped: describe replies, other senders
+        self.cookie = 0   # the cookie of this client's address and port, given by the device
+        self.skipped = 0  # datagrams skipped: describe and session replies, other senders
         try:
             self._describe = self._connect(timeout)
         except BaseException:
-            self._sock.close()
+            self.close()
             raise
         self.name = self._describe.get("name", "")
         if isinstance(self.name, str) and self.name:
             self._label = "%s '%s' at %s:%d" % (KIND_NAMES[self.KIND], self.name, self._device[0], self._device[1])
 
     def _connect(self, timeout):
+        """The handshake of docs/protocol.md ("Sessions"), as the C++ ClientSession::Connect: a
+        describe request without a cookie brings the challenge; with its cookie, the describe
+        request and the subscribe request are resent until the JSON and the subscription came.
+        Returns the checked describe reply."""
         deadline = time.monotonic() + timeout
         resend = 0.0
+        reply, subscribed = None, False
         while True:
             now = time.monotonic()
-            if now >= resend:
-                if not self._send(self._request):
-                    raise NetworkError("%s: cannot send the describe request" % self._label)
-                resend = now + _DESCRIBE_RETRY_S
+            if now >= resend:  # first the cookie, then (with it) the reply and the subscription
+                sent = True
+                if reply is None:
+                    sent = self._send(encode_describe_request(self.KIND, self.cookie))
+                if self.cookie and not subscribed:
+                    sent = self.keep_alive() and sent
+                if not sent:
+                    raise NetworkError("%s: cannot send to the device" % self._label)
+                resend = now + _REQUEST_RETRY_S
             data = self._receive(min(deadline, resend))
             if data is None:
                 if time.monotonic() < deadline:
                     continue
-                raise VlabTimeout("%s: no describe reply within %g s (is a device of this kind serving that "
-                                  "address and port?)" % (self._label, timeout))
+                missing = "no answer" if not self.cookie else "no describe reply" if reply is None \
+                    else "no subscription"
+                raise VlabTimeout("%s: %s within %g s (is a device of this kind and protocol version %d serving "
+                                  "that address and port?)" % (self._label, missing, timeout, PROTOCOL_VERSION))
             if data[:1] == b"{":
-                return self._check_describe(data)
-            self._frame(data)  # a state may come first; anything else raises
+                if reply is None:
+                    reply = self._check_describe(data)
+            elif is_session_reply(data):
+                session = parse_session_reply(data)
+                if session is None:
+                    continue
+                _, cookie, result = session
+                if result == SESSION_FULL:
+                    raise ProtocolError("%s: the device refused the subscription: its subscriber table is full "
+                                        "(it has as many subscribers as it takes)" % self._label)
+                if result == SESSION_CHALLENGE and cookie != self.cookie:
+                    self.cookie = cookie
+                    resend = time.monotonic()  # at once, with the cookie
+                if result == SESSION_SUBSCRIBED:
+                    subscribed = True
+                # SESSION_LIMITED: the describe request goes again at the next resend
+            else:
+                self._frame(data)  # a state may come first; anything else raises
+            if reply is not None and subscribed:
+                return reply
 
     def _check_describe(self, data):
         try:
@@ -247,9 +342,11 @@ class Device:
         return self._sock.getsockname()[1]
 
     def keep_alive(self):
-        """Sends a describe request without waiting (read skips the reply). A client that never
-        writes must do this now and then (every second is plenty) to stay subscribed."""
-        return self._send(self._request)
+        """Renews the subscription (a subscribe request with the cookie) without waiting: read skips
+        the device's reply. The device drops a subscriber silent for its subscriber timeout (10 s by
+        default): a client that never writes must call this now and then (every second is plenty).
+        A renewal also keeps an owner the owner. False if the datagram could not be sent."""
+        return self._send(encode_subscribe_request(self.KIND, self.cookie, SUBSCRIBE))
 
     def read(self, timeout=1.0):
         """The next state, waiting up to `timeout` s. Raises VlabTimeout, or ProtocolError on a
@@ -276,7 +373,12 @@ class Device:
                 state = newer
 
     def close(self):
-        """Closes the socket (the device drops the subscription after its timeout)."""
+        """Unsubscribes (a subscribe request with action UNSUBSCRIBE, no reply awaited; an owner
+        gives its command input up with it) and closes the socket. Closing twice does nothing."""
+        if self._sock.fileno() < 0:
+            return
+        if self.cookie:
+            self._send(encode_subscribe_request(self.KIND, self.cookie, UNSUBSCRIBE))
         self._sock.close()
 
     def __enter__(self):
@@ -328,7 +430,7 @@ class Device:
         return seq, t, payload
 
     def _state(self, data):
-        if data[:1] == b"{":  # a describe reply (keep-alive)
+        if data[:1] == b"{" or is_session_reply(data):  # a describe reply, or the answer to a renewal
             self.skipped += 1
             return None
         seq, t, payload = self._frame(data)
@@ -391,7 +493,9 @@ class Arm(Device):
         """Sends a command answering state `seq`: mode (HOLD, POSITION, VELOCITY, TORQUE) and one
         value per joint (rad, rad/s, N m; may be empty for HOLD). Never blocks; returns False
         if the datagram could not be sent. Raises ValueError on a bad mode, value count,
-        non-finite value or seq. Acceptance shows in the status bits of the next states."""
+        non-finite value or seq. The arm ignores a seq outside its newest 101 states or not
+        above the last accepted one; acceptance shows in the status bits of the next states
+        (STATUS_REFUSED, STATUS_NOT_OWNER)."""
         if mode not in (HOLD, POSITION, VELOCITY, TORQUE):
             raise ValueError("arm mode %r is not 0..3" % (mode,))
         values = [float(v) for v in values]
@@ -424,7 +528,11 @@ class Wrench(Device):
 
 class Sim(Device):
     """The simulation's control device: SIM_RESET, SIM_PAUSE, SIM_RESUME, SIM_STEP (arg periods),
-    SIM_SET_REALTIME_FACTOR (arg factor)."""
+    SIM_SET_REALTIME_FACTOR (arg factor). Its state's seq counts the states it sent (the state sent
+    again after an operation while paused has a seq of its own, for the next operation to answer);
+    `periods` is the control period. An owner that pauses must keep writing or call keep_alive()
+    within the owner timeout (1 s of wall clock by default), or it loses the sim and the lab
+    resumes (or stays paused, as the scenario says)."""
 
     KIND = KIND_SIM
 
@@ -440,7 +548,8 @@ class Sim(Device):
         return SimState(seq, t, p[0], int(p[1]), int(p[2]), p[3], p[4], p[5], p[6], p[7])
 
     def write(self, op, arg, seq):
-        """Sends an operation answering state `seq`. Never blocks; False if not sent. Raises
+        """Sends an operation answering state `seq` (the seq of the newest state read: each
+        operation answers a state of its own). Never blocks; False if not sent. Raises
         ValueError on an unknown op, a non-finite arg or a bad seq."""
         if op not in (SIM_RESET, SIM_PAUSE, SIM_RESUME, SIM_STEP, SIM_SET_REALTIME_FACTOR):
             raise ValueError("sim op %r is not 1..5" % (op,))
@@ -570,7 +679,7 @@ class LayoutDevice(Device):
         value (a sequence of values for a group), e.g. {"x": 0.1, "y": 0.0, "z": 1.5}. Never
         blocks; returns False if the datagram could not be sent. Raises ValueError naming the
         device and the field for an unknown or missing field, a group of the wrong length or a
-        non-finite value, and when the device takes no commands."""
+        non-finite value, and when the device takes no commands. The seq rules are Arm.write's."""
         if not self.command_fields:
             raise ValueError("%s: this device takes no commands" % self._label)
         if not isinstance(fields, dict):
@@ -813,8 +922,8 @@ class Camera(Device):
     """A camera (webcam, simulated or real): whole frames, never torn. read()/read_latest() return
     CameraFrame tuples. Raw frames need nothing but the standard library; JPEG frames are decoded
     with OpenCV's Python module (cv2) when installed (decode=False gives the JPEG bytes alone).
-    The client sends a describe request every `keepalive` s while reading, so its subscription
-    never lapses. Incomplete frames are dropped; malformed chunks are counted (counters,
+    The client renews its subscription every `keepalive` s while reading, so it never lapses;
+    close() unsubscribes. Incomplete frames are dropped; malformed chunks are counted (counters,
     refused_by), not raised."""
 
     KIND = KIND_CAMERA
@@ -915,7 +1024,7 @@ class Camera(Device):
                 if queued_only:
                     return None
                 continue
-            if data[:1] == b"{":  # a describe reply to a keep-alive
+            if data[:1] == b"{" or is_session_reply(data):  # a describe reply, the answer to a keep-alive
                 self.skipped += 1
                 continue
             try:

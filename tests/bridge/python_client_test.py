@@ -1,16 +1,18 @@
 #!/usr/bin/env python3
 """Tests bridge/python/vlab_client.py: the Python client against a real device endpoint
-(tests/bridge/test_arm_server, C++), against scripted peers for the faults, LayoutDevice
+(tests/bridge/test_arm_server, C++: sessions, ownership), against a scripted device of
+protocol 2 for the faults (loss, rate limits, refusals, garbage, silence), LayoutDevice
 against vlab-yoyosim's point and yoyo devices, and the joint_control examples (C++ and
 Python) end to end.
 
-    python_client_test.py --server PATH [--joint-control PATH] [--yoyosim PATH]
+    python_client_test.py --server PATH [--joint-control PATH] [--yoyosim PATH] [--vlab PATH]
                           [unittest args, e.g. ClientTest]
 
 Timeouts are seconds, never tight: the tests must pass on a loaded machine.
 """
 
 import argparse
+import hashlib
 import json
 import os
 import re
@@ -18,10 +20,12 @@ import socket
 import struct
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import unittest
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 HERE = os.path.dirname(os.path.abspath(__file__))
 SOURCE = os.path.normpath(os.path.join(HERE, "..", ".."))
 sys.path.insert(0, os.path.join(SOURCE, "bridge", "python"))
@@ -30,14 +34,20 @@ import vlab_client as vc  # noqa: E402
 SERVER = None          # test_arm_server binary (--server)
 JOINT_CONTROL = None   # examples/joint_control binary (--joint-control)
 YOYOSIM = None         # vlab-yoyosim binary (--yoyosim)
+VLAB = None            # vlab binary (--vlab)
 PATIENCE_S = 5.0       # how long a test waits for something that must happen
 
-# docs/protocol.md, "A worked example"
+# docs/protocol.md, "A worked example" (protocol version 2)
 WORKED_EXAMPLE_HEX = (
-    "000080501093d541000000000000f03f000000000000f03f0000000000000040"
+    "000080501093d5410000000000000040000000000000f03f0000000000000040"
     "0000000000004540000000000000f83f00000000000020400000000000000040"
     "000000000000e03f000000000000d0bf000000000000c03f0000000000000000"
     "000000000000f03f000000000000f0bf000000000000b03f")
+# the same section: a subscribe request to the arm with cookie 2^52 + 1, action 1
+WORKED_SUBSCRIBE_HEX = (
+    "000080501093d5410000000000000040000000000000f03f0000000000001040"
+    "000000000000000000000000000000000000000000000040"
+    "0100000000003043000000000000f03f")
 
 
 class ArmServer:
@@ -95,37 +105,144 @@ class Yoyosim:
         return self.wait()
 
 
-class Peer:
-    """A scripted device: answers the first datagram it gets with the given replies."""
+class Lab:
+    """vlab serve scenes/pa10_serve in realtime on free ports, writing into a temporary folder;
+    its start line names the ports."""
 
-    def __init__(self, *replies):
+    def __init__(self, duration_s=60):
+        self.out = tempfile.TemporaryDirectory()
+        command = [VLAB, "serve", "scenes/pa10_serve", "--clock", "realtime", "-q", "--port", "pa10=0", "--port",
+                   "jr3=0", "--port", "sim=0", "--duration", str(duration_s), "--out",
+                   os.path.join(self.out.name, "run")]
+        # (its stderr too: "interrupted" when the test ends it)
+        self.proc = subprocess.Popen(command, cwd=SOURCE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        line = self.proc.stdout.readline()  # "vlab serve: pa10_serve, ...; pa10 (arm) 127.0.0.1:P; ..."
+        ports = dict(re.findall(r"(\w+) \(\w+\) [^ ]+:(\d+);", line))
+        if not {"pa10", "sim"} <= set(ports):
+            self.proc.kill()
+            raise RuntimeError("vlab serve did not start: %r" % line)
+        self.arm_port, self.sim_port = int(ports["pa10"]), int(ports["sim"])
+        self.lines = []
+        self.reader = threading.Thread(target=lambda: self.lines.extend(self.proc.stdout))
+        self.reader.start()
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.terminate()
+        self.proc.wait(timeout=PATIENCE_S)
+        self.reader.join()
+        self.proc.stdout.close()
+        self.out.cleanup()
+
+
+class FakeDevice:
+    """A scripted device of protocol 2 on a loopback socket (a thread), with the session rules of
+    bridge/bridge_session.cc: the cookie of a source is a keyed hash of its address and port; a
+    request without it, or with a wrong one, is answered with a challenge only (72 bytes, the size
+    of the request); with it, a describe request is answered with `describe` (the JSON reply, or
+    whatever datagrams a test scripts) and a subscribe request subscribes (result 1, then the
+    datagrams of `on_subscribe`) or unsubscribes (result 3). publish() sends to subscribers only.
+    Faults: `drop` first datagrams lost, `limited` first describe requests refused by the rate
+    limit (result 4), `full` (every subscription refused, result 2), `subscribes=False` (subscribe
+    requests unanswered). Every well-framed datagram is recorded in `requests`."""
+
+    def __init__(self, describe=None, kind=vc.KIND_ARM, on_subscribe=(), drop=0, limited=0, full=False,
+                 subscribes=True):
+        self.kind = kind
+        self.describe = [describe_json()] if describe is None else \
+            [describe] if isinstance(describe, bytes) else list(describe)
+        self.on_subscribe = list(on_subscribe)
+        self.drop, self.limited, self.full, self.subscribes = drop, limited, full, subscribes
+        self.key = os.urandom(16)  # the cookies' secret
+        self.requests = []         # (source, kind, type, seq, payload), in arrival order
+        self.subscribers = set()
+        self.lock = threading.Lock()
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(PATIENCE_S)
+        self.sock.settimeout(0.05)
         self.port = self.sock.getsockname()[1]
-        self.request = None
-        self.client = None
-        self.thread = threading.Thread(target=self._answer, args=(replies,))
+        self.stopping = threading.Event()
+        self.thread = threading.Thread(target=self._serve)
         self.thread.start()
 
-    def _answer(self, replies):
-        try:
-            self.request, self.client = self.sock.recvfrom(65536)
-        except socket.timeout:
-            return
-        for r in replies:
-            self.sock.sendto(r, self.client)
+    def cookie(self, source):
+        """The cookie of an (address, port): 1 <= cookie < 2^53."""
+        data = socket.inet_pton(socket.AF_INET, source[0]) + struct.pack("<H", source[1])
+        digest = hashlib.blake2b(data, key=self.key, digest_size=8).digest()
+        return (int.from_bytes(digest, "little") & (2 ** 53 - 1)) or 1
 
-    def send(self, data):
-        self.sock.sendto(data, self.client)
+    def _reply(self, source, result):
+        self.sock.sendto(vc.encode(self.kind, vc.TYPE_SESSION, 0, 0, [self.cookie(source), result]), source)
+
+    def _serve(self):
+        while not self.stopping.is_set():
+            try:
+                data, source = self.sock.recvfrom(65536)
+            except socket.timeout:
+                continue
+            if self.drop > 0:
+                self.drop -= 1
+                continue
+            try:
+                kind, mtype, seq, _, payload = vc.decode(data)
+            except vc.ProtocolError:
+                continue  # refused (a device counts it)
+            with self.lock:
+                self.requests.append((source, kind, mtype, seq, payload))
+            request = mtype in (vc.TYPE_DESCRIBE, vc.TYPE_SUBSCRIBE) and len(payload) == 2
+            if not request or (mtype == vc.TYPE_SUBSCRIBE and kind != self.kind):
+                continue  # a command (recorded), or a request this device refuses
+            if payload[0] != self.cookie(source):
+                self._reply(source, vc.SESSION_CHALLENGE)
+            elif mtype == vc.TYPE_DESCRIBE and self.limited > 0:
+                self.limited -= 1
+                self._reply(source, vc.SESSION_LIMITED)
+            elif mtype == vc.TYPE_DESCRIBE:
+                for d in self.describe:
+                    self.sock.sendto(d, source)
+            elif not self.subscribes:
+                continue
+            elif payload[1] == vc.UNSUBSCRIBE:
+                with self.lock:
+                    self.subscribers.discard(source)
+                self._reply(source, vc.SESSION_UNSUBSCRIBED)
+            elif self.full:
+                self._reply(source, vc.SESSION_FULL)
+            else:
+                with self.lock:
+                    self.subscribers.add(source)
+                self._reply(source, vc.SESSION_SUBSCRIBED)
+                for d in self.on_subscribe:
+                    self.sock.sendto(d, source)
+
+    def publish(self, data):
+        """Sends a datagram to every subscriber."""
+        with self.lock:
+            subscribers = list(self.subscribers)
+        for s in subscribers:
+            self.sock.sendto(data, s)
+
+    def requests_of(self, mtype):
+        """[(source, kind, cookie, arg)] of the requests of a type received so far."""
+        with self.lock:
+            return [(r[0], r[1]) + tuple(r[4]) for r in self.requests if r[2] == mtype]
+
+    def wait_for(self, condition, what):
+        """Waits (PATIENCE_S at most) until condition() is true; fails naming `what`."""
+        give_up = time.monotonic() + PATIENCE_S
+        while not condition():
+            if time.monotonic() > give_up:
+                raise AssertionError("the fake device never saw %s: %r" % (what, self.requests))
+            time.sleep(0.01)
 
     def close(self):
+        self.stopping.set()
         self.thread.join()
         self.sock.close()
 
 
 def describe_json(**changes):
-    d = {"name": "pa10", "kind": "arm", "protocol": 1, "joints": ["S1", "S2", "S3", "E1", "E2", "W1", "W2"],
+    d = {"name": "pa10", "kind": "arm", "protocol": 2, "joints": ["S1", "S2", "S3", "E1", "E2", "W1", "W2"],
          "limits": {"position_min": [], "position_max": [], "velocity_max": [1.0] * 7, "torque_max": []}}
     d.update(changes)
     return json.dumps(d).encode()
@@ -143,6 +260,17 @@ def arm_state(seq, joints=7):
                      [0] + q + [-0.5 * i for i in range(joints)] + [10.0 * i for i in range(joints)])
 
 
+def receive_all(sock, quiet_s):
+    """Every datagram that arrives on `sock` until it has been quiet for quiet_s."""
+    sock.settimeout(quiet_s)
+    out = []
+    while True:
+        try:
+            out.append(sock.recv(65536))
+        except socket.timeout:
+            return out
+
+
 class CodecTest(unittest.TestCase):
     def test_worked_example_of_the_docs(self):
         data = vc.encode(vc.KIND_ARM, vc.TYPE_COMMAND, 42, 1.5, [2, 0.5, -0.25, 0.125, 0, 1, -1, 0.0625])
@@ -154,21 +282,55 @@ class CodecTest(unittest.TestCase):
         vc.decode(good)
         cases = {
             "too short": [good[:48], good[:-1], b""],
-            "too long": [struct.pack("<1025d", vc.MAGIC, 1, 1, 1, 0, 0, 1018, *([0] * 1018))],
+            "too long": [struct.pack("<1025d", vc.MAGIC, 2, 1, 1, 0, 0, 1018, *([0] * 1018))],
             "bad magic": [struct.pack("<d", 1.0) + good[8:]],
             "non-finite": [good[:40] + struct.pack("<d", float("nan")) + good[48:],
                            good[:-8] + struct.pack("<d", float("inf"))],
             "bad length": [good[:48] + struct.pack("<d", 21) + good[56:]],
             "bad seq": [good[:32] + struct.pack("<d", 2.5) + good[40:]],
-            "bad kind": [good[:16] + struct.pack("<d", 0) + good[24:]],
-            "bad type": [good[:24] + struct.pack("<d", 4) + good[32:]],
+            "bad kind": [good[:16] + struct.pack("<d", 256) + good[24:], good[:16] + struct.pack("<d", -1) + good[24:]],
+            "bad type": [good[:24] + struct.pack("<d", 6) + good[32:], good[:24] + struct.pack("<d", 0) + good[32:]],
         }
         for reason, datagrams in cases.items():
             for data in datagrams:
                 with self.assertRaisesRegex(vc.ProtocolError, reason):
                     vc.decode(data)
-        with self.assertRaises(vc.VersionMismatch):
-            vc.decode(good[:8] + struct.pack("<d", 2) + good[16:])
+        with self.assertRaisesRegex(vc.VersionMismatch, "protocol version 1, this client speaks version 2"):
+            vc.decode(good[:8] + struct.pack("<d", 1) + good[16:])
+
+    def test_session_requests_and_replies(self):
+        # [magic, 2, kind, type, 0, 0, 2, cookie, arg]: 72 bytes
+        self.assertEqual(vc.encode_describe_request(vc.KIND_ANY, 0),
+                         struct.pack("<9d", vc.MAGIC, 2, 0, 3, 0, 0, 2, 0, 0))
+        self.assertEqual(vc.encode_describe_request(vc.KIND_ARM, 2 ** 53 - 1),
+                         struct.pack("<9d", vc.MAGIC, 2, 1, 3, 0, 0, 2, 2 ** 53 - 1, 0))
+        self.assertEqual(vc.encode_subscribe_request(vc.KIND_CAMERA, 12345, vc.SUBSCRIBE),
+                         struct.pack("<9d", vc.MAGIC, 2, 4, 4, 0, 0, 2, 12345, 1))
+        self.assertEqual(vc.encode_subscribe_request(vc.KIND_ARM, 7, vc.UNSUBSCRIBE),
+                         struct.pack("<9d", vc.MAGIC, 2, 1, 4, 0, 0, 2, 7, 0))
+        worked = vc.encode_subscribe_request(vc.KIND_ARM, 2 ** 52 + 1, vc.SUBSCRIBE)
+        self.assertEqual(worked.hex(), WORKED_SUBSCRIBE_HEX)
+        self.assertEqual(vc.REQUEST_BYTES, 72)
+
+        def reply(*values):
+            return struct.pack("<%dd" % len(values), *values)
+
+        self.assertEqual(vc.parse_session_reply(reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 99, 0)), (1, 99, 0))
+        self.assertEqual(vc.parse_session_reply(reply(vc.MAGIC, 2, 4, 5, 0, 0, 2, 2 ** 53 - 1, 4)),
+                         (4, 2 ** 53 - 1, vc.SESSION_LIMITED))
+        for bad in (reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 0, 1),        # cookie 0
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 2 ** 53, 1),  # cookie too large
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 2.5, 1),      # not whole
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 5),        # no such result
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 1.5),
+                    reply(vc.MAGIC, 2, 1, 1, 0, 0, 2, 9, 1),        # a state
+                    reply(vc.MAGIC, 1, 1, 5, 0, 0, 2, 9, 1),        # version 1
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 3, 9, 1, 0),     # 80 bytes
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, float("nan"))):
+            self.assertIsNone(vc.parse_session_reply(bad), bad.hex())
+        self.assertTrue(vc.is_session_reply(reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 1)))
+        self.assertFalse(vc.is_session_reply(describe_json()))
+        self.assertFalse(vc.is_session_reply(arm_state(1)))
 
     def test_error_hierarchy(self):
         self.assertTrue(issubclass(vc.VersionMismatch, vc.ProtocolError))
@@ -183,10 +345,11 @@ class ClientTest(unittest.TestCase):
         try:
             with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as arm:
                 self.assertEqual(arm.describe()["name"], "pa10")
-                self.assertEqual(arm.describe()["protocol"], 1)
+                self.assertEqual(arm.describe()["protocol"], 2)
                 self.assertEqual(arm.joints, 7)
                 self.assertEqual(arm.joint_names[4], "E2")
                 self.assertEqual(arm.velocity_max, [2.0] * 7)
+                self.assertTrue(1 <= arm.cookie < 2 ** 53)
                 first = arm.read(PATIENCE_S)
                 previous = first
                 for _ in range(10):
@@ -203,6 +366,15 @@ class ClientTest(unittest.TestCase):
                 self.assertGreater(latest.seq, previous.seq)
                 self.assertGreater(arm.read(PATIENCE_S).seq, latest.seq)  # the queue was drained
 
+                # a renewal's reply is skipped by read
+                skipped = arm.skipped
+                self.assertTrue(arm.keep_alive())
+                give_up = time.monotonic() + PATIENCE_S
+                while arm.skipped == skipped:
+                    arm.read(PATIENCE_S)
+                    self.assertLess(time.monotonic(), give_up, "the renewal was never answered")
+
+                latest = arm.read_latest(PATIENCE_S)
                 qd = [0.1, -0.2, 0.3, -0.4, 0.5, -0.6, 0.7]
                 self.assertTrue(arm.write(vc.VELOCITY, qd, latest.seq))
                 self.assertTrue(arm.write(vc.VELOCITY, qd, latest.seq))  # duplicate: ignored
@@ -231,44 +403,219 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(len(counters), 1, lines)
         self.assertIn(" accepted=2 ", counters[0])
         self.assertIn(" duplicate=1 ", counters[0])
+        self.assertIn(" describes=1", counters[0])
 
-    def test_states_before_the_reply_and_keep_alive_replies_are_skipped(self):
-        peer = Peer(arm_state(1), describe_json())
+    def test_sessions_of_the_endpoint(self):
+        """Without the cookie a request gets a 72-byte challenge and nothing else; with it, a
+        describe request gets the JSON but no state: states go to subscribers only, and a command
+        from a source that never subscribed is refused."""
+        server = ArmServer()
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        device = ("127.0.0.1", server.port)
         try:
-            arm = vc.Arm("127.0.0.1", peer.port, timeout=PATIENCE_S)
-            peer.thread.join()
-            self.assertEqual(vc.decode(peer.request)[:2], (vc.KIND_ARM, vc.TYPE_DESCRIBE))
-            peer.send(describe_json())
-            peer.send(arm_state(5))
-            peer.send(arm_state(6))
+            sock.bind(("127.0.0.1", 0))
+            sock.sendto(vc.encode_describe_request(vc.KIND_ARM, 0), device)
+            answer = receive_all(sock, 0.5)
+            self.assertEqual([len(d) for d in answer], [72], answer)
+            kind, cookie, result = vc.parse_session_reply(answer[0])
+            self.assertEqual((kind, result), (vc.KIND_ARM, vc.SESSION_CHALLENGE))
+            self.assertTrue(1 <= cookie < 2 ** 53)
+
+            # a wrong cookie (or a subscribe request without one): the same challenge, nothing else
+            for request in (vc.encode_describe_request(vc.KIND_ANY, cookie ^ 1),
+                            vc.encode_subscribe_request(vc.KIND_ARM, 0, vc.SUBSCRIBE)):
+                sock.sendto(request, device)
+                self.assertEqual(receive_all(sock, 0.5), [answer[0]])
+
+            # the cookie brings the describe reply, and no state: no subscription yet
+            sock.sendto(vc.encode_describe_request(vc.KIND_ANY, cookie), device)
+            answer = receive_all(sock, 0.5)
+            self.assertEqual(len(answer), 1, [d[:80] for d in answer])
+            self.assertEqual(json.loads(answer[0].decode())["kind"], "arm")
+            # a command from a source that never subscribed is refused
+            sock.sendto(vc.encode(vc.KIND_ARM, vc.TYPE_COMMAND, 0, 0, [vc.HOLD] + [0.0] * 7), device)
+            self.assertEqual(receive_all(sock, 0.5), [])
+
+            # subscribed: states come; unsubscribed: they stop right after the reply
+            sock.sendto(vc.encode_subscribe_request(vc.KIND_ARM, cookie, vc.SUBSCRIBE), device)
+            sock.settimeout(PATIENCE_S)
+            self.assertEqual(vc.parse_session_reply(sock.recv(65536)), (vc.KIND_ARM, cookie, vc.SESSION_SUBSCRIBED))
+            state = vc.decode(sock.recv(65536))
+            self.assertEqual(state[:2], (vc.KIND_ARM, vc.TYPE_STATE))
+            sock.sendto(vc.encode_subscribe_request(vc.KIND_ARM, cookie, vc.UNSUBSCRIBE), device)
+            while True:
+                data = sock.recv(65536)
+                if vc.is_session_reply(data):
+                    break
+                self.assertEqual(vc.decode(data)[:2], (vc.KIND_ARM, vc.TYPE_STATE))
+            self.assertEqual(vc.parse_session_reply(data), (vc.KIND_ARM, cookie, vc.SESSION_UNSUBSCRIBED))
+            self.assertEqual(receive_all(sock, 0.5), [])
+        finally:
+            sock.close()
+            lines = server.stop()
+        self.assertFalse([line for line in lines if line.startswith("command ")], lines)
+        counters = [line for line in lines if line.startswith("counters ")]
+        self.assertEqual(len(counters), 1, lines)
+        self.assertIn(" accepted=0 refused=1 ", counters[0])  # the command of a non-subscriber
+        self.assertIn(" describes=1", counters[0])
+
+    def test_owner_keeps_the_arm_while_it_renews(self):
+        """The first accepted command makes its client the owner; renewals keep it the owner past
+        the owner timeout (1 s, wall clock); a closed owner gives the arm up (it unsubscribes);
+        an owner silent for the timeout loses it."""
+        server = ArmServer()
+
+        def state_with(arm, not_owner):
+            """The first state (newest first) whose not-owner bit is as asked."""
+            give_up = time.monotonic() + PATIENCE_S
+            while True:
+                s = arm.read_latest(PATIENCE_S)
+                if bool(s.status & vc.STATUS_NOT_OWNER) == not_owner:
+                    return s
+                self.assertLess(time.monotonic(), give_up, "the not-owner bit never became %s" % not_owner)
+
+        def accepted(count):
+            """Waits until the server printed `count` accepted commands."""
+            give_up = time.monotonic() + PATIENCE_S
+            while len([line for line in list(server.lines) if line.startswith("command ")]) < count:
+                self.assertLess(time.monotonic(), give_up, "the server never accepted command %d" % count)
+                time.sleep(0.01)
+
+        first_qd, refused_qd, second_qd = [0.1] * 7, [0.2] * 7, [0.3] * 7
+        try:
+            with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as second:
+                with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as first:
+                    s = first.read_latest(PATIENCE_S)
+                    first_seq = s.seq
+                    self.assertTrue(first.write(vc.VELOCITY, first_qd, s.seq))
+                    accepted(1)
+                    state_with(second, not_owner=True)
+                    # the owner renews but sends no command for longer than the owner timeout
+                    until = time.monotonic() + 1.5
+                    while time.monotonic() < until:
+                        self.assertTrue(first.keep_alive())
+                        self.assertFalse(first.read_latest(PATIENCE_S).status & vc.STATUS_NOT_OWNER)
+                        time.sleep(0.1)
+                    self.assertTrue(second.write(vc.VELOCITY, refused_qd, second.read_latest(PATIENCE_S).seq))
+                    for _ in range(10):  # refused: the first still owns the arm
+                        self.assertTrue(second.read(PATIENCE_S).status & vc.STATUS_NOT_OWNER)
+                # the first closed: unsubscribed, the arm is free at once
+                s = state_with(second, not_owner=False)
+                second_seq = s.seq
+                self.assertTrue(second.write(vc.VELOCITY, second_qd, s.seq))
+                accepted(2)
+                # the second owner falls silent: after the owner timeout a third takes over
+                with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as third:
+                    s = state_with(third, not_owner=False)
+                    third_seq = s.seq
+                    self.assertTrue(third.write(vc.HOLD, [], s.seq))
+                    accepted(3)
+                    state_with(second, not_owner=True)
+        finally:
+            lines = server.stop()
+        commands = [parse_command(line) for line in lines if line.startswith("command ")]
+        self.assertEqual(commands, [(first_seq, vc.VELOCITY, first_qd), (second_seq, vc.VELOCITY, second_qd),
+                                    (third_seq, vc.HOLD, [0.0] * 7)], lines)
+
+    def test_states_before_the_reply_and_later_replies_are_skipped(self):
+        device = FakeDevice(describe=[arm_state(1), describe_json()])
+        try:
+            arm = vc.Arm("127.0.0.1", device.port, timeout=PATIENCE_S)
+            source = ("127.0.0.1", arm.local_port)
+            cookie = device.cookie(source)
+            self.assertEqual(arm.cookie, cookie)
+            # describe without a cookie, then describe and subscribe with it
+            self.assertEqual(device.requests_of(vc.TYPE_DESCRIBE)[:2],
+                             [(source, vc.KIND_ARM, 0, 0), (source, vc.KIND_ARM, cookie, 0)])
+            self.assertEqual(device.requests_of(vc.TYPE_SUBSCRIBE)[0], (source, vc.KIND_ARM, cookie, vc.SUBSCRIBE))
+            self.assertEqual(device.subscribers, {source})
+            device.publish(describe_json())
+            device.publish(vc.encode(vc.KIND_ARM, vc.TYPE_SESSION, 0, 0, [cookie, vc.SESSION_SUBSCRIBED]))
+            device.publish(arm_state(5))
+            device.publish(arm_state(6))
             time.sleep(0.05)
             self.assertEqual(arm.read_latest(PATIENCE_S).seq, 6)
+            self.assertGreaterEqual(arm.skipped, 2)  # (more if a request was resent)
             with self.assertRaises(vc.VlabTimeout):
                 arm.read(0.05)
-            peer.send(arm_state(7, joints=6))
+            device.publish(arm_state(7, joints=6))
             with self.assertRaisesRegex(vc.ProtocolError, "bad length"):
                 arm.read(PATIENCE_S)
-            peer.send(vc.encode(vc.KIND_WRENCH, vc.TYPE_STATE, 8, 0, [0] * 8))
+            device.publish(vc.encode(vc.KIND_WRENCH, vc.TYPE_STATE, 8, 0, [0] * 8))
             with self.assertRaisesRegex(vc.ProtocolError, "wrong device kind"):
                 arm.read(PATIENCE_S)
+            device.publish(vc.encode(vc.KIND_ARM, vc.TYPE_SESSION, 0, 0, [cookie, vc.SESSION_SUBSCRIBED, 0]))
+            with self.assertRaisesRegex(vc.ProtocolError, "wrong message type"):  # 80 bytes: no session reply
+                arm.read(PATIENCE_S)
+
+            # renewals, and closing unsubscribes
+            self.assertTrue(arm.keep_alive())
             arm.close()
+            arm.close()  # twice: nothing more
+            device.wait_for(lambda: device.requests_of(vc.TYPE_SUBSCRIBE)[-1][3] == vc.UNSUBSCRIBE,
+                            "the unsubscribe request")
+            renew, leave = device.requests_of(vc.TYPE_SUBSCRIBE)[-2:]
+            self.assertEqual(renew, (source, vc.KIND_ARM, cookie, vc.SUBSCRIBE))
+            self.assertEqual(leave, (source, vc.KIND_ARM, cookie, vc.UNSUBSCRIBE))
+            device.wait_for(lambda: not device.subscribers, "the client's leave")
         finally:
-            peer.close()
+            device.close()
+
+    def test_lost_and_rate_limited_requests_are_resent(self):
+        # lost: the first three describe requests (resent every 0.25 s); limited: the first two with
+        # the cookie are refused by the rate limit, the third is answered
+        for faults, resends in (({"drop": 3}, 3), ({"limited": 2}, 2)):
+            device = FakeDevice(**faults)
+            try:
+                begin = time.monotonic()
+                with vc.Arm("127.0.0.1", device.port, timeout=PATIENCE_S) as arm:
+                    self.assertGreaterEqual(time.monotonic() - begin, 0.25 * resends - 0.01, faults)
+                    self.assertEqual(arm.joints, 7)
+                    self.assertIn(("127.0.0.1", arm.local_port), device.subscribers)
+                    with_cookie = [r for r in device.requests_of(vc.TYPE_DESCRIBE) if r[2] == arm.cookie]
+                    self.assertGreaterEqual(len(with_cookie), 1 + faults.get("limited", 0), device.requests)
+            finally:
+                device.close()
+
+    def test_refused_or_missing_subscription(self):
+        device = FakeDevice(full=True)
+        try:
+            with self.assertRaisesRegex(vc.ProtocolError, "refused the subscription: its subscriber table is full"):
+                vc.Arm("127.0.0.1", device.port, timeout=PATIENCE_S)
+        finally:
+            device.close()
+        device = FakeDevice(subscribes=False)
+        try:
+            begin = time.monotonic()
+            with self.assertRaisesRegex(vc.VlabTimeout, "127.0.0.1:%d: no subscription within 0.6 s" % device.port):
+                vc.Arm("127.0.0.1", device.port, timeout=0.6)
+            self.assertGreaterEqual(time.monotonic() - begin, 0.59)
+            # the subscribe request was resent, every 0.25 s
+            self.assertGreaterEqual(len(device.requests_of(vc.TYPE_SUBSCRIBE)), 2)
+        finally:
+            device.close()
+        device = FakeDevice(describe=[])
+        try:
+            with self.assertRaisesRegex(vc.VlabTimeout, "no describe reply within"):
+                vc.Arm("127.0.0.1", device.port, timeout=0.6)
+        finally:
+            device.close()
 
     def test_faulty_replies(self):
-        cases = [(b'{"kind": "arm", "protocol": 1,', vc.ProtocolError, "not valid JSON"),
+        v1_state = arm_state(0)[:8] + struct.pack("<d", 1) + arm_state(0)[16:]
+        cases = [(b'{"kind": "arm", "protocol": 2,', vc.ProtocolError, "not valid JSON"),
                  (b"\xab" * 64, vc.ProtocolError, "bad magic"),
-                 (describe_json(protocol=2), vc.VersionMismatch, "protocol version 2, this client speaks version 1"),
+                 (describe_json(protocol=1), vc.VersionMismatch, "protocol version 1, this client speaks version 2"),
                  (describe_json(kind="wrench"), vc.ProtocolError, 'not "arm"'),
                  (describe_json(joints=[]), vc.ProtocolError, '"joints"'),
-                 (arm_state(0)[:8] + struct.pack("<d", 2) + arm_state(0)[16:], vc.VersionMismatch, "version 2")]
+                 (v1_state, vc.VersionMismatch, "version 1")]
         for reply, error, message in cases:
-            peer = Peer(reply)
+            device = FakeDevice(describe=reply)
             try:
                 with self.assertRaisesRegex(error, message):
-                    vc.Arm("127.0.0.1", peer.port, timeout=PATIENCE_S)
+                    vc.Arm("127.0.0.1", device.port, timeout=PATIENCE_S)
             finally:
-                peer.close()
+                device.close()
 
     def test_silence_is_a_timeout_naming_the_endpoint(self):
         silent = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -276,7 +623,8 @@ class ClientTest(unittest.TestCase):
         port = silent.getsockname()[1]
         try:
             begin = time.monotonic()
-            with self.assertRaisesRegex(vc.VlabTimeout, "127.0.0.1:%d: no describe reply" % port):
+            with self.assertRaisesRegex(vc.VlabTimeout, "127.0.0.1:%d: no answer within 0.3 s .*protocol version 2"
+                                        % port):
                 vc.Arm("127.0.0.1", port, timeout=0.3)
             self.assertGreaterEqual(time.monotonic() - begin, 0.29)
             with self.assertRaises(TimeoutError):  # also the builtin
@@ -370,18 +718,18 @@ class LayoutDeviceTest(unittest.TestCase):
                               ("webcam", "device kind 'webcam' is not one of arm, wrench"), (99, "99")):
             with self.assertRaisesRegex(ValueError, message):
                 vc.LayoutDevice(kind, "127.0.0.1", 50010)
-        gripper = {"name": "g", "kind": "gripper", "protocol": 1}
+        gripper = {"name": "g", "kind": "gripper", "protocol": 2}
         cases = [(dict(gripper), "has no layout"),
                  (dict(gripper, layout={"state": ["status", "marker[count]"]}), "'marker\\[count\\]' has no whole"),
                  (dict(gripper, layout={"state": ["x", "x"]}), "names 'x' twice"),
                  (dict(gripper, layout={"state": ["x", 3]}), "holds 3, not a field name")]
         for reply, message in cases:
-            peer = Peer(json.dumps(reply).encode())
+            device = FakeDevice(describe=json.dumps(reply).encode(), kind=vc.KIND_GRIPPER)
             try:
                 with self.assertRaisesRegex(vc.ProtocolError, message):
-                    vc.LayoutDevice("gripper", "127.0.0.1", peer.port, timeout=PATIENCE_S)
+                    vc.LayoutDevice("gripper", "127.0.0.1", device.port, timeout=PATIENCE_S)
             finally:
-                peer.close()
+                device.close()
 
     def test_kind_codes_are_the_protocol_pages(self):
         # docs/protocol.md, "Devices and ports": | kind | code | ... |
@@ -390,6 +738,64 @@ class LayoutDeviceTest(unittest.TestCase):
         table = text[text.index("## Devices and ports"):]
         rows = re.findall(r"^\| (\w+) \| (\d+) \|", table[:table.index("\n\n", table.index("| kind |"))], re.M)
         self.assertEqual({int(code): name for name, code in rows}, vc.KIND_NAMES)
+
+
+class SimTest(unittest.TestCase):
+    """Sim against the lab's sim device (vlab serve, realtime): each operation answers a state the
+    sim device sent (the state sent again after an operation has a seq of its own); a paused owner
+    that renews keeps the pause past the owner timeout, one that falls silent loses the sim and the
+    lab resumes."""
+
+    def read_until_mode(self, sim, mode):
+        """The states read up to and with the first one in `mode`."""
+        states = [sim.read(PATIENCE_S)]
+        while states[-1].mode != mode:
+            self.assertLess(len(states), 5000, "the sim never went to mode %d" % mode)
+            states.append(sim.read(PATIENCE_S))
+        return states
+
+    def test_pause_step_resume_and_a_silent_owner(self):
+        if not VLAB:
+            self.skipTest("no --vlab given")
+        lab = Lab()
+        try:
+            with vc.Sim("127.0.0.1", lab.sim_port, timeout=PATIENCE_S) as sim, \
+                    vc.Arm("127.0.0.1", lab.arm_port, timeout=PATIENCE_S) as arm:
+                a = arm.read(PATIENCE_S)
+                self.assertTrue(arm.write(vc.HOLD, [], a.seq))  # the lab's period 0 waits for a controller
+                s = sim.read_latest(PATIENCE_S)
+                self.assertEqual((s.mode, s.clock), (0, 2))
+                self.assertTrue(sim.write(vc.SIM_PAUSE, 0, s.seq))
+                paused = self.read_until_mode(sim, 1)[-1]
+
+                # paused, the owner renews for longer than the owner timeout: no state, still paused
+                until = time.monotonic() + 1.5
+                while time.monotonic() < until:
+                    self.assertTrue(sim.keep_alive())
+                    with self.assertRaises(vc.VlabTimeout):
+                        sim.read(0.2)
+
+                self.assertTrue(sim.write(vc.SIM_STEP, 5, paused.seq))
+                stepped = self.read_until_mode(sim, 1)
+                seqs = [paused.seq] + [x.seq for x in stepped]
+                self.assertEqual(seqs, list(range(paused.seq, paused.seq + len(seqs))))  # one per state sent
+                self.assertEqual(stepped[-1].periods, paused.periods + 5)
+                self.assertAlmostEqual(stepped[-1].sim_time, paused.sim_time + 5 * 0.002, places=9)
+                with self.assertRaises(vc.VlabTimeout):
+                    sim.read(0.3)
+                self.assertTrue(sim.write(vc.SIM_RESUME, 0, stepped[-1].seq))
+                self.read_until_mode(sim, 0)
+
+                # paused again, the owner falls silent: the lab resumes after the owner timeout
+                s = sim.read_latest(PATIENCE_S)
+                self.assertTrue(sim.write(vc.SIM_PAUSE, 0, s.seq))
+                self.read_until_mode(sim, 1)
+                silent_since = time.monotonic()
+                resumed = sim.read(PATIENCE_S)
+                self.assertEqual(resumed.mode, 0)
+                self.assertGreater(time.monotonic() - silent_since, 0.9)
+        finally:
+            lab.stop()
 
 
 class ExampleTest(unittest.TestCase):
@@ -426,7 +832,7 @@ class ExampleTest(unittest.TestCase):
         finally:
             silent.close()
         self.assertEqual(result.returncode, 2)
-        self.assertIn("no describe reply", result.stderr)
+        self.assertIn("no answer within", result.stderr)
 
 
 if __name__ == "__main__":
@@ -434,7 +840,10 @@ if __name__ == "__main__":
     parser.add_argument("--server", required=True)
     parser.add_argument("--joint-control", default=None)
     parser.add_argument("--yoyosim", default=None)
+    parser.add_argument("--vlab", default=None)
     args, rest = parser.parse_known_args()
     SERVER, JOINT_CONTROL = args.server, args.joint_control
-    YOYOSIM = os.path.abspath(args.yoyosim) if args.yoyosim else None  # it runs from the source root
+    # (they run from the source root)
+    YOYOSIM = os.path.abspath(args.yoyosim) if args.yoyosim else None
+    VLAB = os.path.abspath(args.vlab) if args.vlab else None
     unittest.main(argv=[sys.argv[0], "-v"] + rest)

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Tests the Camera class of bridge/python/vlab_client.py against a real camera device
-(tests/camera/test_camera_server, C++ CameraServer) over loopback.
+(tests/camera/test_camera_server, C++ CameraServer) over loopback, and the camera's
+sessions (frames go to subscribers only).
 
     camera_python_test.py --server PATH [unittest args]
 
@@ -8,7 +9,9 @@ Timeouts are seconds, never tight: the tests must pass on a loaded machine.
 """
 
 import argparse
+import json
 import os
+import socket
 import subprocess
 import sys
 import threading
@@ -22,9 +25,9 @@ import vlab_client as vc  # noqa: E402
 
 SERVER = None  # test_camera_server binary (--server)
 
-# docs/protocol_camera.md, "A worked example": the last chunk of a 4x2 raw frame
+# docs/protocol_camera.md, "A worked example": the last chunk of a 4x2 raw frame (protocol version 2)
 WORKED_EXAMPLE_HEX = (
-    "000080501093d541000000000000f03f0000000000001040000000000000f03f"
+    "000080501093d54100000000000000400000000000001040000000000000f03f"
     "0000000000001c40000000000000d03f0000000000003040000000000000f03f"
     "0000000000000040000000000000104000000000000000400000000000000000"
     "000000000000384000000000000030400000000000002040000000000000f03f"
@@ -97,8 +100,8 @@ class ChunkCodecTest(unittest.TestCase):
             vc.decode_chunk(bytes(good[:-1]))
         self.assertEqual(e.exception.reason, "bad length")
         b = bytearray(good)
-        b[8:16] = vc.struct.pack("<d", 2)
-        with self.assertRaises(vc.VersionMismatch):
+        b[8:16] = vc.struct.pack("<d", 1)
+        with self.assertRaisesRegex(vc.VersionMismatch, "protocol version 1, this client speaks version 2"):
             vc.decode_chunk(bytes(b))
 
 
@@ -190,8 +193,55 @@ class CameraClientTest(unittest.TestCase):
             with self.assertRaises(vc.ProtocolError) as e:
                 vc.Arm("127.0.0.1", server.port, timeout=5.0)
             self.assertIn('kind "camera", not "arm"', str(e.exception))
+            # (an arm cannot subscribe to a camera: a camera client does, and the server ends)
+            with vc.Camera("127.0.0.1", server.port, timeout=5.0) as camera:
+                self.assertEqual(camera.read(timeout=5.0).id, 0)
         finally:
-            server.stop()  # (the arm's describe request subscribed it: it sent its frame and ended)
+            server.stop()
+
+    def test_frames_go_to_subscribers_only(self):
+        """A describe request without the cookie gets a 72-byte challenge and nothing else; with
+        it, the JSON and no chunk; a subscribe request of kind 4 with it brings the frames."""
+        w, h = 32, 24
+        server = CameraServer("--frames", 2, "--width", w, "--height", h, "--fps", 10)
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        device = ("127.0.0.1", server.port)
+
+        def receive_all(quiet_s):
+            sock.settimeout(quiet_s)
+            out = []
+            while True:
+                try:
+                    out.append(sock.recv(65536))
+                except socket.timeout:
+                    return out
+
+        try:
+            sock.bind(("127.0.0.1", 0))
+            sock.sendto(vc.encode_describe_request(vc.KIND_CAMERA, 0), device)
+            answer = receive_all(0.5)
+            self.assertEqual([len(d) for d in answer], [72])
+            kind, cookie, result = vc.parse_session_reply(answer[0])
+            self.assertEqual((kind, result), (vc.KIND_CAMERA, vc.SESSION_CHALLENGE))
+            sock.sendto(vc.encode_describe_request(vc.KIND_ANY, cookie), device)
+            answer = receive_all(0.5)
+            self.assertEqual(len(answer), 1)
+            self.assertEqual(json.loads(answer[0].decode())["kind"], "camera")
+            self.assertTrue(server.proc.poll() is None and not server.lines, "no frame without a subscriber")
+
+            sock.sendto(vc.encode_subscribe_request(vc.KIND_CAMERA, cookie, vc.SUBSCRIBE), device)
+            sock.settimeout(5.0)
+            self.assertEqual(vc.parse_session_reply(sock.recv(65536)), (vc.KIND_CAMERA, cookie, vc.SESSION_SUBSCRIBED))
+            chunks = [vc.decode_chunk(sock.recv(65536)) for _ in range(2)]
+            self.assertEqual([(c.frame_id, c.index, c.count) for c in chunks], [(0, 0, 1), (1, 0, 1)])
+            self.assertEqual(bytes(chunks[1].data), pattern(1, 3 * w * h))
+            sock.sendto(vc.encode_subscribe_request(vc.KIND_CAMERA, cookie, vc.UNSUBSCRIBE), device)
+            self.assertEqual(vc.parse_session_reply(sock.recv(65536)),
+                             (vc.KIND_CAMERA, cookie, vc.SESSION_UNSUBSCRIBED))
+        finally:
+            sock.close()
+            frames = server.stop()
+        self.assertEqual(frames, {0: "whole", 1: "whole"})
 
 
 if __name__ == "__main__":
