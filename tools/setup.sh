@@ -1,6 +1,7 @@
 # Shared set-up for run.sh and test.sh (sourced, not executed).
 # Installs the Debian packages vlab needs that are missing (and only those),
-# then configures and builds into build/ incrementally.
+# then configures and builds into build/ incrementally. ./test.sh also installs
+# the packages only the tests need (VLAB_TEST_APT_PACKAGES); ./run.sh does not.
 
 VLAB_APT_PACKAGES=(
   build-essential cmake pkg-config
@@ -10,6 +11,9 @@ VLAB_APT_PACKAGES=(
   libgtest-dev
   libopencv-dev libopencv-contrib-dev
 )
+
+# for the tests only: Octave runs the MATLAB/Octave example (tests/serve/octave_client_test.sh)
+VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)
 
 vlab_missing_packages() {
   local pkg missing=()
@@ -61,6 +65,9 @@ vlab_build() {
 }
 
 vlab_setup() {
+  if [ "$(basename "$0")" = test.sh ]; then
+    VLAB_APT_PACKAGES+=("${VLAB_TEST_APT_PACKAGES[@]}")
+  fi
   vlab_install_packages
   vlab_build
 }
