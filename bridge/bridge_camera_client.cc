@@ -9,7 +9,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bridge/bridge_camera_socket.h"
 #include "bridge/bridge_protocol.h"
 
 namespace vlab::bridge {

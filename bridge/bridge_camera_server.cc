@@ -10,7 +10,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bridge/bridge_camera_socket.h"
 
 namespace vlab::bridge {
 

@@ -1,5 +1,6 @@
 #include "bridge/bridge_udp.h"
 
+#include <fcntl.h>
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -34,6 +35,26 @@ bool WaitReadable(const int* fds, int count, double timeout_s) {
     ready = ::ppoll(p, static_cast<nfds_t>(n), limit, nullptr);
   } while (ready < 0 && errno == EINTR);
   return ready > 0;
+}
+
+namespace {
+
+int Granted(int fd, int option) {
+  int value = 0;
+  socklen_t length = sizeof(value);
+  return ::getsockopt(fd, SOL_SOCKET, option, &value, &length) == 0 ? value : -1;
+}
+
+}  // namespace
+
+int SetSocketBuffer(int fd, int option, int bytes) {
+  ::setsockopt(fd, SOL_SOCKET, option, &bytes, sizeof(bytes));
+  // the kernel reports twice the usable size it granted
+  if (Granted(fd, option) < 2L * bytes) {
+    const int force = option == SO_RCVBUF ? SO_RCVBUFFORCE : SO_SNDBUFFORCE;
+    ::setsockopt(fd, SOL_SOCKET, force, &bytes, sizeof(bytes));  // fails without CAP_NET_ADMIN: fine
+  }
+  return Granted(fd, option);
 }
 
 std::string EndpointText(const Endpoint& e) {
@@ -88,6 +109,11 @@ std::unique_ptr<UdpSocket> UdpSocket::Bind(const std::string& address, int port)
   std::unique_ptr<UdpSocket> s(new UdpSocket());
   boost::system::error_code ec;
   s->socket_.open(at.protocol(), ec);
+  // close-on-exec: a program the lab starts (an external controller) must not
+  // hold the lab's ports, nor read what is sent to them
+  if (!ec && ::fcntl(s->socket_.native_handle(), F_SETFD, FD_CLOEXEC) != 0) {
+    ec = boost::system::error_code(errno, boost::system::system_category());
+  }
   if (!ec) s->socket_.bind(at, ec);
   if (ec) throw NetworkError("cannot bind UDP " + EndpointText(at) + ": " + ec.message());
   s->socket_.non_blocking(true, ec);

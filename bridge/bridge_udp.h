@@ -21,6 +21,16 @@ inline constexpr int kMaxWaitFds = 64;
 /// (sockets' fd(), at most kMaxWaitFds) is readable; false on timeout.
 bool WaitReadable(const int* fds, int count, double timeout_s);
 
+/// Asks for a `bytes`-byte buffer (option SO_RCVBUF or SO_SNDBUF) on socket
+/// `fd`: first within the system limit (net.core.rmem_max / wmem_max), then,
+/// if the kernel granted less and the process may (CAP_NET_ADMIN), with
+/// SO_RCVBUFFORCE / SO_SNDBUFFORCE. Returns the size the kernel reports
+/// (Linux doubles the request to account for its bookkeeping), or -1.
+/// Camera streams need it (a raw 640x480 frame is 16 chunks of 60 kB sent
+/// back to back; the default 208 KiB holds about three), and so does a
+/// device that must ride out a burst of datagrams.
+int SetSocketBuffer(int fd, int option, int bytes);
+
 /// "ADDR:PORT" of an endpoint, for messages.
 std::string EndpointText(const Endpoint& endpoint);
 

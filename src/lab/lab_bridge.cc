@@ -1,5 +1,7 @@
 #include "lab/lab_bridge.h"
 
+#include <sys/socket.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -16,6 +18,8 @@ namespace {
 constexpr double kSpinSeconds = 200e-6;
 // at most this many devices are served on endpoints of their own
 constexpr std::size_t kMaxServed = 16;
+// receive buffer asked for per device socket (the kernel caps it at net.core.rmem_max unless privileged)
+constexpr int kReceiveBufferBytes = 4 << 20;
 
 // the commands of this role go through ApplyCommands, and its owner is released on lockstep timeouts
 bool Applied(CommandRole role) {
@@ -60,6 +64,8 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     } catch (const bridge::NetworkError& e) {
       throw InputError(c.where + ": device '" + c.name + "': " + e.what());
     }
+    // room for a burst (a flood, or the lab descheduled for a while) before the kernel drops datagrams
+    bridge::SetSocketBuffer(d.socket->fd(), SO_RCVBUF, kReceiveBufferBytes);
     bridge::EndpointConfig ec;
     ec.name = device->name();
     device->ConfigureEndpoint(control_hz, &ec);

@@ -5,6 +5,8 @@
 // check_command) and output-only kinds, over real loopback sockets.
 #include "bridge/bridge_endpoint.h"
 
+#include <fcntl.h>
+
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -340,6 +342,12 @@ TEST_F(EndpointTest, ACommandMustAnswerAPublishedStateWithinTheWindow) {
   EXPECT_FALSE(Send(e, *client_, base, 200, {0, 0, 0, 0}, 0));
   EXPECT_EQ(e.counters().duplicate, 1);
   EXPECT_EQ(e.counters().accepted, 2);
+}
+
+TEST(UdpSocketTest, IsClosedOnExec) {
+  // a program the lab starts must not inherit its ports
+  auto socket = UdpSocket::Bind("127.0.0.1", 0);
+  EXPECT_NE(::fcntl(socket->fd(), F_GETFD) & FD_CLOEXEC, 0);
 }
 
 }  // namespace
