@@ -3,10 +3,11 @@
 // starts the program with its placeholders expanded, runs lockstep and keeps
 // the program's output in controller.log; the same scenario twice gives the same log bit for
 // bit; a controller that fails ends the run at once with its exit status and
-// last line (the output folder says why); a program that cannot run and an unknown placeholder are bad
-// input (exit 2, nothing written). Placeholder expansion itself is checked
-// directly.
+// last line (the output folder says why); the program inherits none of the lab's descriptors; a
+// program that cannot run and an unknown placeholder are bad input (exit 2, nothing written).
+// Placeholder expansion itself is checked directly.
 #include <filesystem>
+#include <map>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -175,6 +176,35 @@ TEST(ExternalController, WithHelperEndsItsHelperAndReportsItsFailure) {
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("ended with exit status 2"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("usage: with_helper.sh"), std::string::npos) << r.err;
+}
+
+// the program gets /dev/null, its log and its end of the exit pipe: no socket of the served
+// devices, no file of the output folder (log.csv, the images' video), nothing the lab inherited
+TEST(ExternalController, GetsOnlyItsOwnDescriptors) {
+  TempDir dir;
+  // the shell's own descriptors and their targets, into controller.log (find runs beside it)
+  const std::string images = "\noutputs:\n  images:\n    - {camera: overview, every: 0.05, width: 64, height: 48, "
+                             "profile: fast, video: o.mp4}\n";
+  WriteFile(dir / "s.yaml",
+            Scenario(R"(["sh", "-c", "find /proc/$$/fd -mindepth 1 -printf '%f %l\\n'; true"])", 0.1) + images);
+  const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string listing = ReadFile(dir / "out/controller.log");
+  std::map<int, std::string> targets;
+  for (const std::string& line : Lines(listing)) {
+    const std::size_t space = line.find(' ');
+    ASSERT_NE(space, std::string::npos) << listing;
+    targets[std::stoi(line.substr(0, space))] = line.substr(space + 1);
+  }
+  ASSERT_EQ(targets.size(), 4u) << listing;
+  EXPECT_EQ(targets[0], "/dev/null") << listing;
+  const std::string log = targets[1];
+  EXPECT_EQ(log.substr(log.size() - std::min<std::size_t>(log.size(), 15)), "/controller.log") << listing;
+  EXPECT_EQ(targets[2], log) << listing;
+  EXPECT_EQ(targets[3].rfind("pipe:", 0), 0u) << listing;
+  EXPECT_EQ(listing.find("socket:"), std::string::npos) << listing;
+  EXPECT_EQ(listing.find("log.csv"), std::string::npos) << listing;
+  EXPECT_EQ(listing.find(".mp4"), std::string::npos) << listing;
 }
 
 TEST(ExternalController, BadCommandsAreBadInput) {
