@@ -15,7 +15,8 @@
 int main(int argc, char** argv) {
   CLI::App app{"vlab " VLAB_VERSION ": a virtual robotics lab on MuJoCo.\n"
                "Exit codes: 0 success; 1 a check failed, the run diverged or raised a MuJoCo warning the\n"
-               "scenario does not allow; 2 bad input (file, key, option, output folder)."};
+               "scenario does not allow, or it was interrupted (SIGINT, SIGTERM: what ran is written, result\n"
+               "'interrupted'); 2 bad input (file, key, option, output folder)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("vlab ") + VLAB_VERSION);
 
