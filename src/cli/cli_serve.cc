@@ -67,6 +67,12 @@ int ServeCommand(const ServeArgs& args) {
       std::printf("%s\n", line.c_str());
       std::fflush(stdout);
     };
+    if (!args.quiet) {
+      options.on_waiting = [](const std::string& message) {
+        std::fprintf(stderr, "vlab serve: %s\n", message.c_str());
+        std::fflush(stderr);
+      };
+    }
     const lab::RunResult r = lab->Run(options);
     for (const auto& d : r.served) {
       if (args.quiet) break;

@@ -57,6 +57,10 @@ class RunSession {
   bool Commands(long k, double t_k);
   // true once a stop signal came: the run's failure then says which, and when
   bool Interrupted();
+  // vlab serve: says once which devices period 0 waits for
+  void NoteWaiting();
+  // vlab serve in lockstep: why the run had no controller ("" when a command arrived)
+  std::string NoController() const;
   void WriteOutputs();
 
   Lab::Impl& s_;

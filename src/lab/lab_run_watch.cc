@@ -5,7 +5,7 @@
 
 namespace vlab::lab {
 
-std::string Verdict(const RunResult& r, bool diverged) {
+std::string Verdict(const RunResult& r, bool diverged, const std::string& no_controller) {
   if (r.periods == 0 && !diverged) return "no control period was simulated: nothing was checked";
   for (const auto& w : r.warnings) {
     if (diverged && IsDivergenceWarning(WarningIndex(w.name))) {
@@ -18,6 +18,7 @@ std::string Verdict(const RunResult& r, bool diverged) {
              FormatDouble(w.first_time_s) + " s): " + w.message;
     }
   }
+  if (!no_controller.empty()) return no_controller;
   for (const auto& c : r.checks) {
     if (!c.pass) {
       return "check '" + c.config.name + "' failed: " + ReduceName(c.config.reduce) + std::string("(") + c.config.signal +

@@ -51,11 +51,9 @@ class WarningWatch {
   double first_[mjNWARNING] = {0};
 };
 
-// The first reason a run fails, in order: divergence, a warning the scenario
-// does not allow, a failed check; "" when it passes.
-std::string Verdict(const RunResult& r, bool diverged);
-
-
-
+// The first reason a run fails, in order: no period simulated, divergence, a
+// warning the scenario does not allow, `no_controller` (why a served run had no
+// controller; "" when it had one or needed none), a failed check; "" when it passes.
+std::string Verdict(const RunResult& r, bool diverged, const std::string& no_controller);
 
 }  // namespace vlab::lab

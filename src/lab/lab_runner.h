@@ -51,6 +51,11 @@ struct RunOptions {
   std::optional<ClockMode> clock;
   /// Called once the served devices are bound, before the first period.
   std::function<void(const std::vector<ServedDevice>&)> on_serving;
+  /// Served runs that vlab does not start the controller of (vlab serve),
+  /// lockstep or realtime: called once when period 0 begins waiting for the
+  /// controllers, with one line naming the devices waited for, their addresses,
+  /// the clock and the start timeout.
+  std::function<void(const std::string& message)> on_waiting;
   /// Called with the state at t = 0 and at the end of every period, after the
   /// log row and before the states are published (renderers, image outputs,
   /// cameras). It reads the state and must not change it: mjv_updateScene

@@ -1,7 +1,9 @@
-// How a `vlab serve` run ends, with real processes and signals: SIGINT during a
-// lockstep run with examples/joint_control ends it with every period that ran
-// written (more signals while it writes change nothing); a signal ends the wait
-// for a controller and a paused run at once.
+// How a `vlab serve` run starts and ends, with real processes and signals:
+// SIGINT during a lockstep run with examples/joint_control ends it with every
+// period that ran written (more signals while it writes change nothing); a
+// signal ends the wait for a controller and a paused run at once; a lockstep run
+// in which no command ever arrived fails and says why, after saying on stderr
+// whom it waits for.
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -74,6 +76,10 @@ TEST(ServeLifecycle, SignalEndsTheWaitForAController) {
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   serve.Signal(SIGINT);
   ASSERT_EQ(serve.Wait(30), 1) << serve.Output() << serve.Errors();  // -1: still waiting after 30 s
+  EXPECT_NE(serve.Errors().find("vlab serve: waiting for a controller on pa10 127.0.0.1:" + Port(arm) +
+                                " (lockstep, start timeout 600 s)"),
+            std::string::npos)
+      << serve.Errors();
   EXPECT_NE(serve.Errors().find("vlab: interrupted by SIGINT at t = 0 s"), std::string::npos) << serve.Errors();
   EXPECT_EQ(ExpectInterruptedOutput(tmp / "out", "SIGINT", 0.002), 0);  // the initial row only
 }
@@ -97,6 +103,41 @@ TEST(ServeLifecycle, SigtermEndsAPausedRun) {
   serve.Signal(SIGTERM);
   ASSERT_EQ(serve.Wait(30), 1) << serve.Output() << serve.Errors();  // -1: still paused after 30 s
   EXPECT_EQ(ExpectInterruptedOutput(tmp / "out", "SIGTERM", 0.002), static_cast<long>(state.periods));
+}
+
+// lockstep with nobody to answer: the run goes on after the start timeout, and fails
+// because no command arrived; other clocks are not judged by it
+TEST(ServeLifecycle, NoControllerIsNotAPass) {
+  TempDir tmp;
+  WriteFile(tmp / "s.yaml", LockstepScenario(0.3, 0.2));
+  const int arm = FreeUdpPort(), sim = FreeUdpPort();
+  const std::string ports = " --port pa10=" + Port(arm) + " --port sim=" + Port(sim);
+  ProcessResult r = RunVlab("serve '" + (tmp / "s.yaml") + "'" + ports + " --out '" + (tmp / "a") + "'", 60);
+  ASSERT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_NE(r.err.find("vlab serve: waiting for a controller on pa10 127.0.0.1:" + Port(arm) +
+                       " (lockstep, start timeout 0.3 s)\n"),
+            std::string::npos)
+      << r.err;
+  const std::string why = "no controller connected: no command arrived in the run";
+  EXPECT_NE(r.err.find("vlab: " + why + " (lockstep; commanded devices: pa10 127.0.0.1:" + Port(arm) + ")"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find("lifecycle: FAIL"), std::string::npos) << r.out;
+  const nlohmann::json a = nlohmann::json::parse(ReadFile(tmp / "a/summary.json"));
+  EXPECT_EQ(a.at("result"), "fail");
+  EXPECT_EQ(a.at("failure").get<std::string>().rfind(why, 0), 0u) << a.at("failure");
+  EXPECT_EQ(Lines(ReadFile(tmp / "a/log.csv")).size(), 2u + 100u);  // the run itself went to its end
+
+  // --quiet: no waiting line; the verdict is the same
+  r = RunVlab("serve '" + (tmp / "s.yaml") + "'" + ports + " -q --out '" + (tmp / "b") + "'", 60);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.err.find("waiting"), std::string::npos) << r.err;
+  // realtime and fast runs are not judged by it
+  r = RunVlab("serve '" + (tmp / "s.yaml") + "'" + ports + " --clock realtime --out '" + (tmp / "c") + "'", 60);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = RunVlab("serve '" + (tmp / "s.yaml") + "'" + ports + " --clock fast --out '" + (tmp / "d") + "'", 60);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
 }
 
 }  // namespace
