@@ -147,6 +147,9 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   // outputs: a staging folder renamed into place whole; the video staged beside its final name
   const std::string out_dir =
       a.out_dir.empty() ? "out/" + scenario.name + "/render/" + a.camera : a.out_dir;
+  // SIGINT, SIGTERM from here on: the run ends at its next period and its frames are kept (a
+  // signal before the run starts ends it at t = 0), never with the staging folder left behind
+  InstallStopSignals();
   std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
   std::unique_ptr<render::VideoFile> video;
   if (!a.video.empty()) {
@@ -187,7 +190,6 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     std::error_code ec;
     std::filesystem::remove_all(staging, ec);
   });
-  InstallStopSignals();  // SIGINT, SIGTERM: the run ends at the next period; its frames are kept
   const lab::RunResult r = lab->Run(run);
   bar.Finish();
   if (r.exit_code != 0 && !r.interrupted_by) {
