@@ -70,14 +70,14 @@ TEST(CliRender, WritesFramesAndVideo) {
 // so and the video closed; exit 1
 TEST(CliRender, InterruptKeepsTheFramesRendered) {
   TempDir dir;
-  // 1000 s at a frame per period: far more frames than the second before the signal renders
+  // 1000 s at a frame per period: far more frames than the two seconds before the signal render
   WriteFile(dir / "s.yaml", std::string("scene: ") + VLAB_SOURCE_DIR +
                                 "/scenes/pa10.xml\nduration: 1000\ncontrol_period: 0.002\ndevices:\n"
                                 "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n");
   const ProcessResult r = RunVlab("render " + (dir / "s.yaml") + " --camera overview --every 0.002 --width 64 "
                                   "--height 48 --profile fast -q --out " + (dir / "frames") + " --video " +
                                   (dir / "frames/v.mp4"),
-                                  1, "INT");
+                                  2, "INT");
   ASSERT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("vlab: interrupted by SIGINT at t = "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("frames rendered before it are kept"), std::string::npos) << r.err;
