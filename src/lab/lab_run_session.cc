@@ -28,27 +28,6 @@ std::string ControllerFailure(ExternalController& c, double t) {
          (last.empty() ? "" : ": " + last);
 }
 
-// a controller's commands (the sim device's are the run's own)
-bool ControllerRole(CommandRole role) {
-  return role == CommandRole::kWaited || role == CommandRole::kWaitedFromStart || role == CommandRole::kDriven;
-}
-
-const Device* DeviceNamed(const std::vector<std::unique_ptr<Device>>& devices, const std::string& name) {
-  for (const auto& d : devices) {
-    if (d->name() == name) return d.get();
-  }
-  return nullptr;
-}
-
-// "pa10 127.0.0.1:50010, jr3 ..."
-std::string Endpoints(const std::vector<const ServedDevice*>& served) {
-  std::string text;
-  for (const ServedDevice* d : served) {
-    text += (text.empty() ? "" : ", ") + d->name + " " + d->address + ":" + std::to_string(d->port);
-  }
-  return text;
-}
-
 // The sim device's state at period k.
 bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, const LabBridge* bridge) {
   bridge::SimStateMsg m;
@@ -161,20 +140,9 @@ void RunSession::NoteWaiting() {
   if (!options_.on_waiting || external_ || !bridge_ || clock_->mode() == ClockMode::kFast || bridge_->Answered(0)) {
     return;
   }
-  // whom period 0 waits for (LabBridge::Answered): an owner of every served arm, else of any commanded device
-  const std::vector<ServedDevice> served = bridge_->Devices();
-  std::vector<const ServedDevice*> from_start, any;
-  for (const ServedDevice& d : served) {
-    const Device* device = DeviceNamed(s_.devices, d.name);
-    if (device && device->command_role() == CommandRole::kWaitedFromStart) from_start.push_back(&d);
-    if (device && device->command_role() == CommandRole::kWaited) any.push_back(&d);
-  }
-  const std::string whom = from_start.size() > 1 ? "controllers on " + Endpoints(from_start)
-                           : !from_start.empty() ? "a controller on " + Endpoints(from_start)
-                           : any.size() > 1      ? "a controller on any of " + Endpoints(any)
-                                                 : "a controller on " + Endpoints(any);
-  options_.on_waiting("waiting for " + whom + " (" + clock_->name() + ", start timeout " +
-                      FormatDouble(s_.scenario.lockstep.start_timeout_s) + " s)");
+  const std::string line =
+      WaitingLine(bridge_->Devices(), s_.device_ptrs, clock_->name(), s_.scenario.lockstep.start_timeout_s);
+  if (!line.empty()) options_.on_waiting(line);
 }
 
 bool RunSession::Interrupted() {
@@ -187,17 +155,7 @@ bool RunSession::Interrupted() {
 
 std::string RunSession::NoController() const {
   if (!bridge_ || external_ || clock_->mode() != ClockMode::kLockstep) return "";
-  std::vector<const ServedDevice*> commanded;
-  long accepted = 0;
-  for (const ServedDevice& d : result_.served) {
-    const Device* device = DeviceNamed(s_.devices, d.name);
-    if (!device || !ControllerRole(device->command_role())) continue;
-    commanded.push_back(&d);
-    accepted += d.counters.accepted;
-  }
-  if (commanded.empty() || accepted > 0) return "";
-  return "no controller connected: no command arrived in the run (lockstep; commanded devices: " +
-         Endpoints(commanded) + ")";
+  return NoControllerReason(result_.served, s_.device_ptrs);
 }
 
 bool RunSession::Commands(long k, double t_k) {
