@@ -68,7 +68,7 @@ void WriteFileAtomic(const std::string& path, const std::vector<std::uint8_t>& b
   const fs::path target(path);
   const fs::path temp =
       target.parent_path() / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()));
-  std::FILE* f = std::fopen(temp.c_str(), "wb");
+  std::FILE* f = std::fopen(temp.c_str(), "wbe");  // e: close-on-exec
   if (!f) throw std::runtime_error("file '" + path + "': cannot write (folder missing or not writable)");
   const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
   const bool closed = std::fclose(f) == 0;

@@ -1,6 +1,6 @@
 // The vlab command line: one function per subcommand, called by main().
-// Each returns the process exit code: 0 success, 1 a check failed or the run
-// diverged, 2 bad input.
+// Each returns the process exit code: 0 success, 1 a check failed, the run
+// diverged or was interrupted (SIGINT, SIGTERM), 2 bad input.
 #pragma once
 
 #include <functional>
@@ -65,6 +65,9 @@ Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.
 int WithErrorReport(const std::function<int()>& body);
+
+/// A run's verdict for its result line: "pass", "FAIL" or "INTERRUPTED".
+const char* Verdict(const lab::RunResult& result);
 
 /// After a run into out_dir: "plot: PATH" for each plot written, "plot skipped: why"
 /// for each one the run skipped (stdout).

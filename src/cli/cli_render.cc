@@ -6,9 +6,10 @@
 // The run is the scenario's own (same controller, same trajectory; rendering
 // reads the state only), shortened to end right after the last frame. Its
 // checks and image outputs are not evaluated or written: this command renders.
+// SIGINT or SIGTERM ends the run at the next period: the frames rendered so far
+// are kept (frames.csv, render.json saying so, the video closed), exit code 1.
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "core/core_signals.h"
 #include "lab/devices/device_camera.h"
 #include "lab/lab_log.h"
 #include "core/core_mujoco.h"
@@ -47,9 +49,6 @@ struct RenderArgs {
   std::string profile = "quality";
   bool quiet = false;
 };
-
-volatile bool g_interrupted = false;
-void OnSignal(int) { g_interrupted = true; }
 
 // a frame is due when t reaches n * every, up to rounding of the period sums
 constexpr double kDueTolerance_s = 1e-9;
@@ -148,6 +147,9 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   // outputs: a staging folder renamed into place whole; the video staged beside its final name
   const std::string out_dir =
       a.out_dir.empty() ? "out/" + scenario.name + "/render/" + a.camera : a.out_dir;
+  // SIGINT, SIGTERM from here on: the run ends at its next period and its frames are kept (a
+  // signal before the run starts ends it at t = 0), never with the staging folder left behind
+  InstallStopSignals();
   std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
   std::unique_ptr<render::VideoFile> video;
   if (!a.video.empty()) {
@@ -168,7 +170,7 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   double render_s = 0;
   lab::RunOptions run;
   run.clock = ClockMode::kFast;  // offline: as fast as rendering allows, whatever the scenario's clock
-  run.interrupt = &g_interrupted;
+  run.interrupt = &g_stop_requested;
   ProgressBar bar(!a.quiet);
   run.progress = [&bar](double f) { bar.Update(f); };
   run.observe = [&](double t, const mjModel*, mjData* d) {
@@ -188,11 +190,9 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     std::error_code ec;
     std::filesystem::remove_all(staging, ec);
   });
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
   const lab::RunResult r = lab->Run(run);
   bar.Finish();
-  if (r.exit_code != 0) {
+  if (r.exit_code != 0 && !r.interrupted_by) {
     std::fprintf(stderr, "vlab: %s; no images written\n", r.failure.c_str());
     return 1;
   }
@@ -207,12 +207,13 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     if (a.depth) files["depth"] = "depth_NNNNNN.png: 16-bit, mm along the optical axis, 0: nothing drawn";
     if (a.segmentation) files["segmentation"] = "seg_NNNNNN.png: 16-bit, geom id + 1, 0: no geom";
     if (video) files["video"] = a.video;
-    const nlohmann::json meta = {
+    nlohmann::json meta = {
         {"scenario", scenario.name}, {"scene", scenario.scene}, {"camera", a.camera},
         {"width", width}, {"height", height}, {"profile", render::ProfileName(profile)},
         {"every_s", every}, {"frames", times.size()}, {"files", files},
         {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
         {"gl_renderer", renderer->gl_renderer()}, {"render_wall_s", render_s}, {"mujoco", vlab::MujocoVersion()}};
+    if (r.interrupted_by) meta["interrupted"] = r.failure;  // the frames before it are all there
     std::ofstream json(out->File("render.json"));
     json << meta.dump(2) << "\n";
     if (!csv || !json) throw std::runtime_error("output folder '" + out_dir + "': write failed");
@@ -225,6 +226,10 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
               scenario.name.c_str(), times.size(), width, height, a.camera.c_str(), render::ProfileName(profile),
               lab::FormatDouble(every).c_str(), out_dir.c_str(), video ? "; video " : "",
               video ? a.video.c_str() : "", fps, renderer->gl_renderer().c_str());
+  if (r.interrupted_by) {
+    std::fprintf(stderr, "vlab: %s; the %zu frames rendered before it are kept\n", r.failure.c_str(), times.size());
+    return 1;
+  }
   return 0;
 }
 
@@ -233,7 +238,8 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
 Subcommand AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "render", "Render a scenario's camera offscreen: PNG frames (RGB, depth, segmentation) and MP4 video");
+      "render", "Render a scenario's camera offscreen: PNG frames (RGB, depth, segmentation) and MP4 video "
+                "(interrupted: the frames rendered so far are kept, exit 1)");
   cmd->add_option("scenario", args->scenario, "Scenario file (YAML); the .yaml extension may be left out")
       ->required();
   cmd->add_option("--camera", args->camera, "MJCF camera to render")->required();

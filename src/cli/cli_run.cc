@@ -1,6 +1,5 @@
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -9,6 +8,7 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "core/core_signals.h"
 #include "lab/lab_log.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
@@ -16,9 +16,6 @@
 namespace vlab::cli {
 
 namespace {
-
-volatile bool g_interrupted = false;
-void OnSignal(int) { g_interrupted = true; }
 
 double Now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -49,6 +46,10 @@ void ProgressBar::Update(double fraction) {
 void ProgressBar::Finish() {
   if (drawn_) std::fprintf(stderr, "\r%*s\r", 48, "");
   drawn_ = false;
+}
+
+const char* Verdict(const lab::RunResult& result) {
+  return result.interrupted_by ? "INTERRUPTED" : result.exit_code == 0 ? "pass" : "FAIL";
 }
 
 void PrintPlots(const lab::Scenario& scenario, const std::string& out_dir, const lab::RunResult& result) {
@@ -83,12 +84,12 @@ int RunCommand(const RunArgs& args) {
     }
     const std::string out_dir = args.out_dir.empty() ? "out/" + scenario.name : args.out_dir;
 
-    std::signal(SIGINT, OnSignal);
-    std::signal(SIGTERM, OnSignal);
+    // SIGINT, SIGTERM: the run stops at the next period and writes what ran (exit 1)
+    InstallStopSignals();
     ProgressBar bar(!args.quiet);
     lab::RunOptions options;
     options.out_dir = out_dir;
-    options.interrupt = &g_interrupted;
+    options.interrupt = &g_stop_requested;
     options.progress = [&bar](double f) { bar.Update(f); };
     const lab::RunResult r = lab->Run(options);
     bar.Finish();
@@ -102,7 +103,7 @@ int RunCommand(const RunArgs& args) {
     }
     const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
     std::printf("%s: %s, %.2f s simulated in %.2f s (%.0fx real time); output in %s/\n", scenario.name.c_str(),
-                r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, rtf, out_dir.c_str());
+                Verdict(r), r.sim_time_s, r.loop_wall_s, rtf, out_dir.c_str());
     PrintPlots(scenario, out_dir, r);
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;

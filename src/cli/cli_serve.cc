@@ -1,6 +1,5 @@
 // vlab serve: run a scenario with its devices served over UDP.
 // vlab devices: list a scenario's devices, endpoints and layouts.
-#include <csignal>
 #include <cstdio>
 #include <iostream>
 
@@ -8,15 +7,13 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "core/core_signals.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 
 namespace vlab::cli {
 
 namespace {
-
-volatile bool g_stop = false;
-void OnSignal(int) { g_stop = true; }
 
 lab::BridgeOptions MakeBridgeOptions(const ServeArgs& args) {
   lab::BridgeOptions options;
@@ -53,11 +50,11 @@ int ServeCommand(const ServeArgs& args) {
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
     const std::string out_dir = args.out_dir.empty() ? "out/" + scenario.name : args.out_dir;
 
-    std::signal(SIGINT, OnSignal);
-    std::signal(SIGTERM, OnSignal);
+    // SIGINT, SIGTERM: the run stops at the next period (a wait for a controller at once) and writes what ran
+    InstallStopSignals();
     lab::RunOptions options;
     options.out_dir = out_dir;
-    options.interrupt = &g_stop;
+    options.interrupt = &g_stop_requested;
     options.serve = &bridge;
     if (!args.clock.empty()) options.clock = ParseClockMode(args.clock, "--clock");
     options.on_serving = [&scenario, &options](const std::vector<lab::ServedDevice>& devices) {
@@ -70,6 +67,12 @@ int ServeCommand(const ServeArgs& args) {
       std::printf("%s\n", line.c_str());
       std::fflush(stdout);
     };
+    if (!args.quiet) {
+      options.on_waiting = [](const std::string& message) {
+        std::fprintf(stderr, "vlab serve: %s\n", message.c_str());
+        std::fflush(stderr);
+      };
+    }
     const lab::RunResult r = lab->Run(options);
     for (const auto& d : r.served) {
       if (args.quiet) break;
@@ -82,7 +85,7 @@ int ServeCommand(const ServeArgs& args) {
                   c.sessions.subscribed, c.sessions.challenges);
     }
     std::printf("%s: %s, %.2f s simulated in %.2f s, clock %s; output in %s/\n", scenario.name.c_str(),
-                r.exit_code == 0 ? "pass" : "FAIL", r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), out_dir.c_str());
+                Verdict(r), r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), out_dir.c_str());
     PrintPlots(scenario, out_dir, r);
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;

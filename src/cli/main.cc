@@ -15,7 +15,8 @@
 int main(int argc, char** argv) {
   CLI::App app{"vlab " VLAB_VERSION ": a virtual robotics lab on MuJoCo.\n"
                "Exit codes: 0 success; 1 a check failed, the run diverged or raised a MuJoCo warning the\n"
-               "scenario does not allow; 2 bad input (file, key, option, output folder)."};
+               "scenario does not allow, or it was interrupted (SIGINT, SIGTERM: what ran is written, result\n"
+               "'interrupted'); 2 bad input (file, key, option, output folder)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("vlab ") + VLAB_VERSION);
 
@@ -33,7 +34,8 @@ int main(int argc, char** argv) {
 
   vlab::cli::ServeArgs serve;
   CLI::App* serve_cmd =
-      app.add_subcommand("serve", "Run a scenario with its devices served over UDP (lockstep or realtime clock)");
+      app.add_subcommand("serve", "Run a scenario with its devices served over UDP (lockstep or realtime clock); "
+                                  "a lockstep run that no controller sent a command to fails");
   vlab::cli::ServeArgs devices;
   CLI::App* devices_cmd = app.add_subcommand("devices", "List a scenario's devices, UDP endpoints and layouts");
   for (auto [cmd, a] : {std::pair{serve_cmd, &serve}, std::pair{devices_cmd, &devices}}) {
@@ -45,7 +47,8 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"fast", "lockstep", "realtime"}));
   }
   serve_cmd->add_option("--out", serve.out_dir, "Output folder (default: out/<scenario name>); an existing one is replaced only if vlab wrote it or it is empty");
-  serve_cmd->add_flag("-q,--quiet", serve.quiet, "Only the start line and the result line");
+  serve_cmd->add_flag("-q,--quiet", serve.quiet,
+                      "Only the start line and the result line (no line saying whom it waits for, no counters)");
   serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
 

@@ -16,6 +16,15 @@ double WallNow() {
 
 namespace {
 
+// the stop flag of a clock's config: set once a stop was asked for
+bool Stopped(const volatile std::sig_atomic_t* stop) { return stop && *stop != 0; }
+
+// how long one poll of a wait may last: the time left, in slices when a stop flag is watched
+// (a signal does not end the command source's wait: it retries on EINTR)
+double Slice(double left_s, const volatile std::sig_atomic_t* stop) {
+  return stop ? std::min(left_s, kStopCheck_s) : left_s;
+}
+
 // fast: never waits.
 class FastClock final : public Clock {
  public:
@@ -33,7 +42,7 @@ class FastClock final : public Clock {
 // lockstep: waits for the commands that answer period k.
 class LockstepClock final : public Clock {
  public:
-  explicit LockstepClock(const LockstepConfig& c) : config_(c) {}
+  LockstepClock(const LockstepConfig& c, const volatile std::sig_atomic_t* stop) : config_(c), stop_(stop) {}
   ClockMode mode() const override { return ClockMode::kLockstep; }
 
   PeriodStart BeginPeriod(std::int64_t k, CommandSource* source) override {
@@ -42,12 +51,13 @@ class LockstepClock final : public Clock {
     const double limit = k == 0 ? config_.start_timeout_s : config_.timeout_s;
     const double deadline = WallNow() + limit;
     while (!source->Answered(k)) {
+      if (Stopped(stop_)) return PeriodStart::kStopped;
       const double left = deadline - WallNow();
       if (left <= 0) {
         ++stats_.timeouts;
         return config_.on_timeout == OnTimeout::kFail ? PeriodStart::kFail : PeriodStart::kTimedOut;
       }
-      source->Poll(left);
+      source->Poll(Slice(left, stop_));
     }
     return PeriodStart::kReady;
   }
@@ -55,6 +65,7 @@ class LockstepClock final : public Clock {
 
  private:
   LockstepConfig config_;
+  const volatile std::sig_atomic_t* stop_;
   ClockStats stats_;
 };
 
@@ -62,8 +73,9 @@ class LockstepClock final : public Clock {
 // monotonic clock; the time until then is spent receiving commands.
 class RealtimeClock final : public Clock {
  public:
-  RealtimeClock(double period_s, double factor, double start_timeout_s, std::int64_t periods)
-      : period_s_(period_s), factor_(factor), start_timeout_s_(start_timeout_s) {
+  RealtimeClock(double period_s, double factor, double start_timeout_s, std::int64_t periods,
+                const volatile std::sig_atomic_t* stop)
+      : period_s_(period_s), factor_(factor), start_timeout_s_(start_timeout_s), stop_(stop) {
     // the kernel may otherwise wake a sleeping thread up to 50 us late (timer slack)
     prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
     stats_.lateness_s.reserve(static_cast<std::size_t>(std::max<std::int64_t>(periods, 0)) + 1);
@@ -75,7 +87,10 @@ class RealtimeClock final : public Clock {
     if (k == 0 && source) {
       // the wall clock starts once the controllers are there (or after the start timeout)
       const double until = WallNow() + start_timeout_s_;
-      while (!source->Answered(0) && WallNow() < until) source->Poll(until - WallNow());
+      while (!source->Answered(0) && WallNow() < until) {
+        if (Stopped(stop_)) return PeriodStart::kStopped;
+        source->Poll(Slice(until - WallNow(), stop_));
+      }
     }
     if (!anchored_) {
       anchor_ = WallNow();
@@ -88,10 +103,11 @@ class RealtimeClock final : public Clock {
     // begun after its own period had already ended: the previous one overran
     if (now > deadline + step) ++stats_.missed_deadlines;
     while (now < deadline) {
+      if (Stopped(stop_)) return PeriodStart::kStopped;
       if (source) {
-        source->Poll(deadline - now);
+        source->Poll(Slice(deadline - now, stop_));
       } else {
-        SleepUntil(deadline);
+        SleepUntil(std::min(deadline, now + Slice(deadline - now, stop_)));
       }
       now = WallNow();
     }
@@ -115,6 +131,7 @@ class RealtimeClock final : public Clock {
   double period_s_;
   double factor_;
   double start_timeout_s_;
+  const volatile std::sig_atomic_t* stop_;
   bool anchored_ = false;
   double anchor_ = 0;
   std::int64_t anchor_k_ = 0;
@@ -128,9 +145,10 @@ std::unique_ptr<Clock> MakeClock(const ClockConfig& c, std::int64_t periods) {
     case ClockMode::kFast:
       return std::make_unique<FastClock>();
     case ClockMode::kLockstep:
-      return std::make_unique<LockstepClock>(c.lockstep);
+      return std::make_unique<LockstepClock>(c.lockstep, c.stop);
     case ClockMode::kRealtime:
-      return std::make_unique<RealtimeClock>(c.period_s, c.realtime.factor, c.lockstep.start_timeout_s, periods);
+      return std::make_unique<RealtimeClock>(c.period_s, c.realtime.factor, c.lockstep.start_timeout_s, periods,
+                                             c.stop);
   }
   return nullptr;  // unreachable: every mode is handled above
 }

@@ -12,9 +12,11 @@
 //             clock starts when period 0 is answered (the controllers are
 //             there), or after the lockstep start timeout
 // While a clock waits, it lets the command source receive (Poll), so commands
-// are timestamped when they arrive.
+// are timestamped when they arrive. With a stop flag (ClockConfig::stop) every
+// wait is cut into slices of at most kStopCheck_s and ends once the flag is set.
 #pragma once
 
+#include <csignal>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -49,12 +51,18 @@ struct RealtimeConfig {
   double factor = 1.0;  ///< simulated seconds per wall second
 };
 
+/// Longest a clock waits without looking at its stop flag, s.
+inline constexpr double kStopCheck_s = 0.05;
+
 /// Everything a clock is made from.
 struct ClockConfig {
   ClockMode mode = ClockMode::kFast;
   double period_s = 0.002;  ///< control period, s
   LockstepConfig lockstep;
   RealtimeConfig realtime;  ///< (realtime also waits for period 0 up to lockstep.start_timeout_s)
+  /// Non-zero (a signal's number, g_stop_requested of core_signals.h) ends every
+  /// wait within kStopCheck_s: BeginPeriod returns kStopped. nullptr: never.
+  const volatile std::sig_atomic_t* stop = nullptr;
 };
 
 /// What a clock waits on: the lab's bridge, or nothing (fast).
@@ -76,7 +84,10 @@ struct ClockStats {
   std::int64_t timeouts = 0;          ///< lockstep: periods that began without their commands
 };
 
-enum class PeriodStart { kReady, kTimedOut, kFail };
+/// How a wait for a period ended: it may begin (with its commands, or without
+/// them after a timeout), the run must fail (lockstep on_timeout: fail), or the
+/// stop flag was set (the period does not begin).
+enum class PeriodStart { kReady, kTimedOut, kFail, kStopped };
 
 class Clock {
  public:

@@ -1,25 +1,43 @@
-// SIGINT and SIGTERM as a stop request for a server program's loop (vlab-kinsim,
-// vlab-yoyosim): the handler only sets a flag the loop reads.
+// SIGINT and SIGTERM as a stop request for a program's loop (vlab run, serve and
+// render; vlab-kinsim, vlab-yoyosim): the handler only records which signal came,
+// and the loop reads it.
 #pragma once
 
 #include <signal.h>
 
 #include <csignal>
+#include <string>
 
 namespace vlab {
 
-/// Set to 1 by SIGINT or SIGTERM once InstallStopSignals() ran.
+/// The number of the first SIGINT or SIGTERM since InstallStopSignals() ran (0:
+/// none yet). Later signals leave it as it is: the first one says why a run stopped,
+/// and a second one while the program finishes its files changes nothing.
 inline volatile std::sig_atomic_t g_stop_requested = 0;
 
-/// SIGINT and SIGTERM set g_stop_requested. Without SA_RESTART: the signal also
-/// interrupts a blocking wait (a period's sleep, a receive), so the loop ends at once.
+/// SIGINT and SIGTERM set g_stop_requested (once). Without SA_RESTART: a blocking
+/// call that the kernel does not restart (a sleep, poll) returns EINTR; loops that
+/// retry on EINTR must read g_stop_requested themselves, so waits are sliced
+/// (the clocks of core_clock.h look at it at least every kStopCheck_s).
 inline void InstallStopSignals() {
   struct sigaction action {};
-  action.sa_handler = [](int) { g_stop_requested = 1; };
+  action.sa_handler = [](int signal_number) {
+    if (g_stop_requested == 0) g_stop_requested = signal_number;
+  };
+  // one handler at a time: a second signal waits for the first one's handler (which then wins)
   sigemptyset(&action.sa_mask);
+  sigaddset(&action.sa_mask, SIGINT);
+  sigaddset(&action.sa_mask, SIGTERM);
   action.sa_flags = 0;
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+}
+
+/// "SIGINT", "SIGTERM", or "signal N".
+inline std::string StopSignalName(int signal_number) {
+  if (signal_number == SIGINT) return "SIGINT";
+  if (signal_number == SIGTERM) return "SIGTERM";
+  return "signal " + std::to_string(signal_number);
 }
 
 }  // namespace vlab

@@ -1,15 +1,19 @@
 // External controllers started by the lab (see lab_external.h).
 #include "lab/lab_external.h"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
-#include <cstdio>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +22,54 @@
 #include "core/core_errors.h"
 
 namespace vlab::lab {
+
+namespace {
+
+// the program's descriptors: stdin, stdout, stderr, the exit pipe; the exec error pipe
+// sits above them until exec closes it
+constexpr int kExitFd = 3;
+constexpr int kExecErrorFd = 4;
+
+// closes every descriptor from `lowest` on, between fork and exec (async-signal-safe calls
+// only): close_range (Linux 5.9), else the descriptors /proc lists, else all up to the limit
+void CloseFrom(int lowest) {
+#ifdef SYS_close_range
+  if (::syscall(SYS_close_range, static_cast<unsigned>(lowest), ~0U, 0) == 0) return;
+#endif
+  const int dir = ::open("/proc/self/fd", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir >= 0) {
+    alignas(dirent64) char buffer[4096];
+    ssize_t n;
+    while ((n = ::getdents64(dir, buffer, sizeof(buffer))) > 0) {
+      for (ssize_t at = 0; at < n;) {
+        const auto* entry = reinterpret_cast<const dirent64*>(buffer + at);
+        at += entry->d_reclen;
+        int fd = 0;
+        const char* c = entry->d_name;
+        for (; *c >= '0' && *c <= '9'; ++c) fd = fd * 10 + (*c - '0');
+        if (*c == '\0' && c != entry->d_name && fd >= lowest && fd != dir) ::close(fd);
+      }
+    }
+    ::close(dir);
+    return;
+  }
+  rlimit limit{};
+  const rlim_t most = ::getrlimit(RLIMIT_NOFILE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY
+                          ? std::min<rlim_t>(limit.rlim_cur, 1 << 20)
+                          : 1 << 16;
+  for (int fd = lowest; fd < static_cast<int>(most); ++fd) ::close(fd);
+}
+
+// waitpid, resumed after a signal (a second Ctrl-C while the run finishes)
+pid_t WaitFor(pid_t pid, int* status, int options) {
+  pid_t done;
+  do {
+    done = ::waitpid(pid, status, options);
+  } while (done < 0 && errno == EINTR);
+  return done;
+}
+
+}  // namespace
 
 std::vector<std::string> ExpandCommand(const std::vector<std::string>& command,
                                        const std::map<std::string, std::string>& values, const std::string& where) {
@@ -129,10 +181,24 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
     ::setpgid(0, 0);
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (::getppid() != parent) ::_exit(127);
-    ::dup2(null, 0);
-    ::dup2(log, 1);
-    ::dup2(log, 2);
-    ::fcntl(exit_pipe[1], F_SETFD, 0);  // held open until the program (and its children) exit
+    // the descriptors it keeps, first above the ones they go to (so that none overwrites another)
+    int keep[4] = {null, log, exit_pipe[1], error_pipe[1]};
+    for (int& fd : keep) {
+      fd = ::fcntl(fd, F_DUPFD_CLOEXEC, kExecErrorFd + 1);
+      if (fd < 0) {
+        const int error = errno;
+        (void)!::write(error_pipe[1], &error, sizeof(error));
+        ::_exit(127);
+      }
+    }
+    ::dup2(keep[0], 0);
+    ::dup2(keep[1], 1);
+    ::dup2(keep[1], 2);
+    ::dup2(keep[2], kExitFd);  // held open until the program (and its children) exit
+    ::dup2(keep[3], kExecErrorFd);
+    ::fcntl(kExecErrorFd, F_SETFD, FD_CLOEXEC);  // closed by a successful exec
+    // nothing else of the lab's: its sockets, log.csv, images, video
+    CloseFrom(kExecErrorFd + 1);
     sigset_t none;
     sigemptyset(&none);
     ::sigprocmask(SIG_SETMASK, &none, nullptr);
@@ -140,7 +206,7 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
     ::signal(SIGTERM, SIG_DFL);
     ::execvp(args[0], args.data());
     const int error = errno;
-    (void)!::write(error_pipe[1], &error, sizeof(error));
+    (void)!::write(kExecErrorFd, &error, sizeof(error));
     ::_exit(127);
   }
   const int fork_error = errno;
@@ -162,7 +228,7 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
   } while (n < 0 && errno == EINTR);
   ::close(error_pipe[0]);
   if (n == static_cast<ssize_t>(sizeof(exec_error))) {
-    ::waitpid(pid, &c->status_, 0);
+    WaitFor(pid, &c->status_, 0);
     c->reaped_ = true;
     throw InputError("controller.command: cannot run '" + argv[0] + "': " + std::strerror(exec_error));
   }
@@ -176,7 +242,7 @@ ExternalController::~ExternalController() {
 }
 
 bool ExternalController::Exited() {
-  if (!reaped_ && pid_ > 0 && ::waitpid(pid_, &status_, WNOHANG) == pid_) reaped_ = true;
+  if (!reaped_ && pid_ > 0 && WaitFor(pid_, &status_, WNOHANG) == pid_) reaped_ = true;
   return reaped_;
 }
 
@@ -191,7 +257,7 @@ void ExternalController::Stop(double grace_s) {
     }
     if (!Exited()) {
       ::kill(-pid_, SIGKILL);
-      ::waitpid(pid_, &status_, 0);
+      WaitFor(pid_, &status_, 0);
       reaped_ = true;
     }
   }

@@ -14,6 +14,9 @@
 //           every process it started have closed their copy of it: the lab
 //           waits on it together with its sockets, so a controller that dies
 //           does not leave the lockstep clock waiting
+// The program gets only descriptors 0 (/dev/null), 1 and 2 (the log) and 3
+// (its end of the exit pipe); every other descriptor of the lab (the served
+// devices' sockets, log.csv, images, a video) is closed before exec.
 // The program runs in its own process group, which Stop() ends (SIGTERM,
 // then SIGKILL after a grace period); it also gets SIGTERM if vlab dies.
 // Threading: one thread. Errors: Start() throws InputError naming the program

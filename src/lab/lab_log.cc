@@ -14,7 +14,7 @@ std::string FormatDouble(double value) {
 }
 
 std::unique_ptr<CsvLog> CsvLog::Open(const std::string& path, std::vector<std::string> columns) {
-  std::FILE* file = std::fopen(path.c_str(), "wb");
+  std::FILE* file = std::fopen(path.c_str(), "wbe");  // e: not inherited by a controller
   if (!file) throw std::runtime_error("log '" + path + "': cannot create file: " + std::strerror(errno));
   return std::unique_ptr<CsvLog>(new CsvLog(file, path, std::move(columns)));
 }

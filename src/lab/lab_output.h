@@ -2,9 +2,10 @@
 //
 // A run writes into a hidden staging folder beside its output folder
 // (out/.NAME.partial-PID) and renames it into place when everything is written.
-// An error, a MuJoCo abort or an interrupt removes the staging folder, so a
-// reader never sees a half-written out/NAME/; a previous complete out/NAME/
-// stays until the new one replaces it.
+// An error or a MuJoCo abort removes the staging folder (an interrupted run is
+// written whole, for the periods that ran), so a reader never sees a
+// half-written out/NAME/; a previous complete out/NAME/ stays until the new one
+// replaces it.
 //
 // vlab replaces only what it wrote: every output folder carries a marker file
 // (kOutputMarker), and an existing folder is replaced only when it has the

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/core_mujoco.h"
+#include "core/core_signals.h"
 #include "lab/lab_plot.h"
 
 namespace vlab::lab {
@@ -63,7 +64,9 @@ void RunSession::Prepare() {
   if (external_) external_serve_ = ExternalBridgeOptions(sc);
   const BridgeOptions* serve = external_ ? &external_serve_ : options_.serve;
   const ClockMode mode = external_ ? ExternalClock(sc, options_.clock) : options_.clock.value_or(sc.clock);
-  clock_ = MakeClock(ScenarioClock(sc, mode), periods_);
+  ClockConfig clock = ScenarioClock(sc, mode);
+  clock.stop = options_.interrupt;  // a stop signal ends the clock's waits
+  clock_ = MakeClock(clock, periods_);
   result_.clock = clock_->mode();
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
@@ -129,12 +132,36 @@ void RunSession::Start() {
   for (auto& device : s_.devices) device->Deliver(0.0, d_);
   Publish(0);
   RenderAfterPublish(0.0);
+  NoteWaiting();
   t_loop_ = t_progress_ = WallClock::now();
+}
+
+void RunSession::NoteWaiting() {
+  if (!options_.on_waiting || external_ || !bridge_ || clock_->mode() == ClockMode::kFast || bridge_->Answered(0)) {
+    return;
+  }
+  const std::string line =
+      WaitingLine(bridge_->Devices(), s_.device_ptrs, clock_->name(), s_.scenario.lockstep.start_timeout_s);
+  if (!line.empty()) options_.on_waiting(line);
+}
+
+bool RunSession::Interrupted() {
+  if (!options_.interrupt || *options_.interrupt == 0) return false;
+  result_.interrupted_by = *options_.interrupt;
+  result_.failure = "interrupted by " + StopSignalName(result_.interrupted_by) + " at t = " + FormatDouble(k_ * period_) +
+                    " s, after " + std::to_string(k_) + " of " + std::to_string(periods_) + " periods";
+  return true;
+}
+
+std::string RunSession::NoController() const {
+  if (!bridge_ || external_ || clock_->mode() != ClockMode::kLockstep) return "";
+  return NoControllerReason(result_.served, s_.device_ptrs);
 }
 
 bool RunSession::Commands(long k, double t_k) {
   // the clock lets the period begin; commands: the newest of each device
   const PeriodStart start = clock_->BeginPeriod(k, bridge_.get());
+  if (start == PeriodStart::kStopped && Interrupted()) return false;
   if (controller_ && bridge_->peer_gone() && controller_->Exited() && !controller_->Succeeded()) {
     result_.failure = ControllerFailure(*controller_, t_k);
     return false;
@@ -164,9 +191,7 @@ bool RunSession::Period() {
   // period k runs from t_k = k T to t_k+1; times are exact multiples of T
   const double t_k = k_ * period_;
   const double t_next = (k_ + 1) * period_;
-  if (options_.interrupt && *options_.interrupt) {
-    throw std::runtime_error("interrupted at t = " + FormatDouble(t_k) + " s; nothing written");
-  }
+  if (Interrupted()) return false;  // the periods run so far are written
   // 0. the sim device: pause, resume, step, reset, pace
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
   if (paused_) {
@@ -224,13 +249,13 @@ RunResult RunSession::Finish() {
   TakeMujocoWarningTexts();  // their content is in the reports: mju_warningText
   result_.warnings = warnings_.Reports(s_.scenario.allow_warnings);
   result_.checks = checks_->Results();
-  if (result_.failure.empty()) result_.failure = Verdict(result_, diverged_);
-  result_.exit_code = result_.failure.empty() ? 0 : 1;
-  result_.clock_stats = clock_->stats();
   if (bridge_) {
     result_.served = bridge_->Devices();
     result_.latencies_s = bridge_->latencies();
   }
+  if (result_.failure.empty()) result_.failure = Verdict(result_, diverged_, NoController());
+  result_.exit_code = result_.failure.empty() ? 0 : 1;
+  result_.clock_stats = clock_->stats();
   if (out_) WriteOutputs();
   result_.total_wall_s = Seconds(t_start_, WallClock::now());
   return result_;
@@ -251,6 +276,11 @@ void RunSession::WriteOutputs() {
     try {
       WritePlot(out_->File(""), plot);
     } catch (const std::runtime_error& e) {
+      // an interrupted run keeps its verdict: a plot of a CSV that was not written yet is skipped
+      if (result_.interrupted_by) {
+        result_.plots_skipped.push_back(plot.file + ": the run was interrupted: " + e.what());
+        continue;
+      }
       if (result_.failure.empty()) result_.failure = e.what();
       result_.exit_code = 1;
     }

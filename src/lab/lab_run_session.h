@@ -3,7 +3,9 @@
 // external controller; nothing is written before all of it is valid), Period
 // (one control period: the sim device, the clock, commands, physics, samples,
 // log row, publish) and Finish (the controller's verdict, checks, plots,
-// summary, the output folder committed). Not a public header.
+// summary, the output folder committed). An interrupt (RunOptions::interrupt)
+// ends the periods at a period boundary; Finish then writes what ran. Not a
+// public header.
 #pragma once
 
 #include <chrono>
@@ -35,7 +37,7 @@ class RunSession {
   /// Row 0 and the states of t = 0.
   void Start();
   /// Runs period k (or waits while paused). False when the run must stop
-  /// early: a failure (result().failure) or a divergence.
+  /// early: a failure (result().failure), a divergence or an interrupt.
   bool Period();
   /// Ends the run: the controller's verdict, the result, and the output folder.
   RunResult Finish();
@@ -53,6 +55,12 @@ class RunSession {
   void RenderAfterPublish(double t);
   // the commands of period k: the wire's, the built-in controller's; false on a failure
   bool Commands(long k, double t_k);
+  // true once a stop signal came: the run's failure then says which, and when
+  bool Interrupted();
+  // vlab serve: says once which devices period 0 waits for
+  void NoteWaiting();
+  // vlab serve in lockstep: why the run had no controller ("" when a command arrived)
+  std::string NoController() const;
   void WriteOutputs();
 
   Lab::Impl& s_;

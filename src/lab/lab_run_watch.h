@@ -1,5 +1,6 @@
 // What decides a run's verdict besides its checks: MuJoCo's warnings, watched
-// after every step, and the order in which failures are reported.
+// after every step, whether a served run had a controller, and the order in
+// which failures are reported.
 #pragma once
 
 #include <string>
@@ -51,11 +52,19 @@ class WarningWatch {
   double first_[mjNWARNING] = {0};
 };
 
-// The first reason a run fails, in order: divergence, a warning the scenario
-// does not allow, a failed check; "" when it passes.
-std::string Verdict(const RunResult& r, bool diverged);
+// vlab serve: the line that says whom period 0 waits for, by LabBridge::Answered's rule (an
+// owner of every served arm, else of any served commanded device): "waiting for a controller
+// on pa10 127.0.0.1:50010 (lockstep, start timeout 30 s)"; "" when it waits for nobody.
+std::string WaitingLine(const std::vector<ServedDevice>& served, const std::vector<Device*>& devices,
+                        const std::string& clock, double start_timeout_s);
 
+// vlab serve in lockstep: why the run had no controller when no served commanded device
+// accepted a command ("no controller connected: ..."); "" when one did, or none is served.
+std::string NoControllerReason(const std::vector<ServedDevice>& served, const std::vector<Device*>& devices);
 
-
+// The first reason a run fails, in order: no period simulated, divergence, a
+// warning the scenario does not allow, `no_controller` (why a served run had no
+// controller; "" when it had one or needed none), a failed check; "" when it passes.
+std::string Verdict(const RunResult& r, bool diverged, const std::string& no_controller);
 
 }  // namespace vlab::lab

@@ -10,6 +10,7 @@
 // Sensors and logging read the state and never change it.
 #pragma once
 
+#include <csignal>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -30,8 +31,14 @@ struct RunOptions {
   std::string out_dir;  ///< where to write log.csv and summary.json ("" = nothing written)
   /// Called about every 0.1 s of wall time with the fraction of the run done.
   std::function<void(double fraction)> progress;
-  /// Set from a signal handler to stop the run early (counted as an error).
-  const volatile bool* interrupt = nullptr;
+  /// The number of a signal that asks the run to stop (0 while none came;
+  /// g_stop_requested of core_signals.h). The run ends at the next period
+  /// boundary (a clock's wait, a pause, within kStopCheck_s) and writes what ran:
+  /// log.csv up to the last whole period, summary.json with result
+  /// `interrupted`, the plots and images (RunResult::interrupted_by, exit code 1).
+  /// Once the run loop has ended it is no longer read: a signal while the files
+  /// are written changes nothing.
+  const volatile std::sig_atomic_t* interrupt = nullptr;
   /// Record what the run computed, for replay (the physics benchmark).
   bool record = false;
   /// Replay a recording of the same scenario: the controller's commands and
@@ -44,6 +51,11 @@ struct RunOptions {
   std::optional<ClockMode> clock;
   /// Called once the served devices are bound, before the first period.
   std::function<void(const std::vector<ServedDevice>&)> on_serving;
+  /// Served runs that vlab does not start the controller of (vlab serve),
+  /// lockstep or realtime: called once when period 0 begins waiting for the
+  /// controllers, with one line naming the devices waited for, their addresses,
+  /// the clock and the start timeout.
+  std::function<void(const std::string& message)> on_waiting;
   /// Called with the state at t = 0 and at the end of every period, after the
   /// log row and before the states are published (renderers, image outputs,
   /// cameras). It reads the state and must not change it: mjv_updateScene
@@ -66,8 +78,10 @@ struct WarningReport {
 };
 
 struct RunResult {
-  int exit_code = 0;     ///< 0 all checks pass, 1 a check failed or the run diverged
+  int exit_code = 0;     ///< 0 all checks pass, 1 a check failed, the run diverged or was interrupted
   std::string failure;   ///< one line when exit_code != 0
+  /// The signal that interrupted the run (RunOptions::interrupt), 0 when none did.
+  int interrupted_by = 0;
   std::vector<CheckResult> checks;
   std::vector<WarningReport> warnings;
   long steps = 0;        ///< physics steps taken

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "core/core_signals.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_stats.h"
 
@@ -72,12 +73,12 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                         {"refused_full", c.sessions.refused_full},
                         {"describes_limited", c.sessions.describes_limited}}}});
   }
-  return {
+  json summary = {
       {"scenario", sc.name},
       {"file", sc.file},
       {"description", sc.description},
       {"scene", sc.scene},
-      {"result", r.exit_code == 0 ? "pass" : "fail"},
+      {"result", r.interrupted_by ? "interrupted" : r.exit_code == 0 ? "pass" : "fail"},
       {"exit_code", r.exit_code},
       {"failure", r.failure},
       {"seed", sc.seed},
@@ -102,6 +103,12 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
         {"loop_wall_s", r.loop_wall_s}, {"total_wall_s", r.total_wall_s},
         {"steps_per_s", r.loop_wall_s > 0 ? r.steps / r.loop_wall_s : 0.0}, {"realtime_factor", rtf}}},
   };
+  // which signal stopped the run, and where: the log holds the periods up to sim_time_s
+  if (r.interrupted_by) {
+    summary["interrupted"] = {
+        {"signal", StopSignalName(r.interrupted_by)}, {"sim_time_s", r.sim_time_s}, {"periods", r.periods}};
+  }
+  return summary;
 }
 
 }  // namespace vlab::lab

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/lab_log.h"
+#include "test_run_output.h"
 #include "test_util.h"
 
 namespace vlab::lab {
@@ -20,6 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using vlab::testing::Entries;
+using vlab::testing::ExpectInterruptedOutput;
 using vlab::testing::Lines;
 using vlab::testing::ReadFile;
 using vlab::testing::SplitCsv;
@@ -273,15 +275,22 @@ TEST(CliTest, MujocoErrorExits1AndLeavesNothing) {
   EXPECT_FALSE(fs::exists(VLAB_SOURCE_DIR "/MUJOCO_LOG.TXT"));
 }
 
-// Ctrl-C (SIGINT) stops a long run cleanly: exit 1, one line, nothing written
-TEST(CliTest, InterruptStopsCleanlyAndWritesNothing) {
+// Ctrl-C (SIGINT) stops a long run at a period boundary: exit 1, one line naming the
+// signal and the time, and the output folder written whole for the periods that ran
+TEST(CliTest, InterruptKeepsEveryPeriodThatRan) {
   TempDir tmp;
   // 2000 s of simulation take tens of seconds: the signal comes after 1 s
   const auto r = RunVlab("run scenes/pa10_reach -q --duration 2000 --out '" + (tmp / "runs/out") + "'", 1, "INT");
   ASSERT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_TRUE(Has(r.err, "interrupted at t = ")) << r.err;
+  EXPECT_TRUE(Has(r.err, "vlab: interrupted by SIGINT at t = ")) << r.err;
   EXPECT_EQ(Lines(r.err).size(), 1u) << r.err;
-  EXPECT_TRUE(Entries(tmp / "runs").empty()) << "no output folder, no staging folder";
+  EXPECT_TRUE(Has(r.out, "pa10_reach: INTERRUPTED")) << r.out;
+  EXPECT_EQ(Entries(tmp / "runs"), std::set<std::string>{"out"}) << "no staging folder left";
+  EXPECT_EQ(Entries(tmp / "runs/out"), (std::set<std::string>{"log.csv", "summary.json", ".vlab-output"}));
+  EXPECT_GT(ExpectInterruptedOutput(tmp / "runs/out", "SIGINT", 0.002), 0);
+  // the checks are evaluated over what ran, and the verdict stays "interrupted"
+  const nlohmann::json s = nlohmann::json::parse(ReadFile(tmp / "runs/out/summary.json"));
+  EXPECT_FALSE(s.at("checks").empty());
 }
 
 // a MuJoCo warning fails the run and is reported, unless the scenario allows it

@@ -3,16 +3,22 @@
 // starts the program with its placeholders expanded, runs lockstep and keeps
 // the program's output in controller.log; the same scenario twice gives the same log bit for
 // bit; a controller that fails ends the run at once with its exit status and
-// last line (the output folder says why); a program that cannot run and an unknown placeholder are bad
-// input (exit 2, nothing written). Placeholder expansion itself is checked
-// directly.
+// last line (the output folder says why); SIGTERM on vlab run keeps every period that ran and
+// stops the controller; the program inherits none of the lab's descriptors; a program that cannot
+// run and an unknown placeholder are bad input (exit 2, nothing written). Placeholder expansion
+// itself is checked directly.
+#include <signal.h>
+
+#include <cerrno>
 #include <filesystem>
+#include <map>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
 #include "lab/lab_external.h"
+#include "test_run_output.h"
 #include "test_util.h"
 
 namespace vlab::testing {
@@ -175,6 +181,66 @@ TEST(ExternalController, WithHelperEndsItsHelperAndReportsItsFailure) {
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("ended with exit status 2"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("usage: with_helper.sh"), std::string::npos) << r.err;
+}
+
+// SIGTERM on vlab run: the run stops at a period boundary and writes every period that ran,
+// and the plots of what there is; the controller it started is stopped as at the end of a run,
+// and reaped
+TEST(ExternalController, SigtermKeepsTheRunAndStopsTheController) {
+  TempDir dir;
+  const std::string plots = "\noutputs:\n  plots:\n    - {file: q.png, y: [pa10.q.S1]}\n"
+                            "    - {file: c.png, csv: c.csv, x: t, y: [v]}\n";
+  WriteFile(dir / "s.yaml", Scenario(R"(["sh", "-c", "echo $$ > {out}/controller.pid; exec {bin}/examples/joint_control --arm {pa10} --duration 100000 --quiet"])",
+                                     100000) + plots);
+  const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"), 2, "TERM");
+  ASSERT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("vlab: interrupted by SIGTERM at t = "), std::string::npos) << r.err;
+  EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"s.yaml", "out"})) << "no staging folder";
+  EXPECT_GT(ExpectInterruptedOutput(dir / "out", "SIGTERM", 0.002), 0);
+  const auto summary = nlohmann::json::parse(ReadFile(dir / "out/summary.json"));
+  EXPECT_EQ(summary["clock"], "lockstep");
+  EXPECT_EQ(summary["controller"]["outcome"], "killed by signal 15");  // the lab's SIGTERM, not the test's
+  // the log's plot is drawn; the plot of a CSV the controller never wrote is skipped, not a failure
+  EXPECT_TRUE(std::filesystem::exists(dir / "out/q.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/c.png"));
+  ASSERT_EQ(summary["plots_skipped"].size(), 1u) << summary["plots_skipped"];
+  const std::string skipped = summary["plots_skipped"][0];
+  EXPECT_EQ(skipped.rfind("c.png: ", 0), 0u) << skipped;
+  EXPECT_NE(skipped.find("interrupted"), std::string::npos) << skipped;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out/controller.log"));
+  const pid_t pid = std::stoi(ReadFile(dir / "out/controller.pid"));
+  errno = 0;
+  EXPECT_EQ(::kill(pid, 0), -1) << "the controller is gone";
+  EXPECT_EQ(errno, ESRCH);
+}
+
+// the program gets /dev/null, its log and its end of the exit pipe: no socket of the served
+// devices, no file of the output folder (log.csv, the images' video), nothing the lab inherited
+TEST(ExternalController, GetsOnlyItsOwnDescriptors) {
+  TempDir dir;
+  // the shell's own descriptors and their targets, into controller.log (find runs beside it)
+  const std::string images = "\noutputs:\n  images:\n    - {camera: overview, every: 0.05, width: 64, height: 48, "
+                             "profile: fast, video: o.mp4}\n";
+  WriteFile(dir / "s.yaml",
+            Scenario(R"(["sh", "-c", "find /proc/$$/fd -mindepth 1 -printf '%f %l\\n'; true"])", 0.1) + images);
+  const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string listing = ReadFile(dir / "out/controller.log");
+  std::map<int, std::string> targets;
+  for (const std::string& line : Lines(listing)) {
+    const std::size_t space = line.find(' ');
+    ASSERT_NE(space, std::string::npos) << listing;
+    targets[std::stoi(line.substr(0, space))] = line.substr(space + 1);
+  }
+  ASSERT_EQ(targets.size(), 4u) << listing;
+  EXPECT_EQ(targets[0], "/dev/null") << listing;
+  const std::string log = targets[1];
+  EXPECT_EQ(log.substr(log.size() - std::min<std::size_t>(log.size(), 15)), "/controller.log") << listing;
+  EXPECT_EQ(targets[2], log) << listing;
+  EXPECT_EQ(targets[3].rfind("pipe:", 0), 0u) << listing;
+  EXPECT_EQ(listing.find("socket:"), std::string::npos) << listing;
+  EXPECT_EQ(listing.find("log.csv"), std::string::npos) << listing;
+  EXPECT_EQ(listing.find(".mp4"), std::string::npos) << listing;
 }
 
 TEST(ExternalController, BadCommandsAreBadInput) {

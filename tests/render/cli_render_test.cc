@@ -66,6 +66,38 @@ TEST(CliRender, WritesFramesAndVideo) {
   EXPECT_GT(hi, 1000);
 }
 
+// SIGINT: the frames rendered before it are kept, whole, with frames.csv, render.json saying
+// so and the video closed; exit 1
+TEST(CliRender, InterruptKeepsTheFramesRendered) {
+  TempDir dir;
+  // 1000 s at a frame per period: far more frames than the two seconds before the signal render
+  WriteFile(dir / "s.yaml", std::string("scene: ") + VLAB_SOURCE_DIR +
+                                "/scenes/pa10.xml\nduration: 1000\ncontrol_period: 0.002\ndevices:\n"
+                                "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n");
+  const ProcessResult r = RunVlab("render " + (dir / "s.yaml") + " --camera overview --every 0.002 --width 64 "
+                                  "--height 48 --profile fast -q --out " + (dir / "frames") + " --video " +
+                                  (dir / "frames/v.mp4"),
+                                  2, "INT");
+  ASSERT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("vlab: interrupted by SIGINT at t = "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("frames rendered before it are kept"), std::string::npos) << r.err;
+  EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"s.yaml", "frames"})) << "no staging folder";
+  const auto meta = nlohmann::json::parse(ReadFile(dir / "frames/render.json"));
+  EXPECT_NE(meta.value("interrupted", "").find("interrupted by SIGINT"), std::string::npos) << meta.dump();
+  const int frames = meta["frames"];
+  ASSERT_GT(frames, 0);
+  const std::vector<std::string> times = Lines(ReadFile(dir / "frames/frames.csv"));
+  EXPECT_EQ(times.size(), static_cast<std::size_t>(frames) + 1);
+  // every frame is there and readable, and the video holds them all
+  std::size_t pngs = 0;
+  for (const std::string& name : Entries(dir / "frames")) pngs += name.rfind("rgb_", 0) == 0 ? 1 : 0;
+  EXPECT_EQ(pngs, static_cast<std::size_t>(frames));
+  char last[32];
+  std::snprintf(last, sizeof(last), "rgb_%06d.png", frames - 1);
+  ExpectPng(dir / ("frames/" + std::string(last)), CV_8UC3, 64, 48);
+  EXPECT_EQ(VideoFrames(dir / "frames/v.mp4", 64, 48), frames);
+}
+
 TEST(CliRender, ReplacesTheOutputFolderWhole) {
   TempDir dir;
   const std::string base = "render scenes/pa10_reach --camera overview --every 0.02 --width 160 --height 120 "

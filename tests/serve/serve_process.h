@@ -46,14 +46,20 @@ class ServeProcess {
     }
     return false;
   }
+  /// Sends it a signal (SIGINT, SIGTERM).
+  void Signal(int signal_number) {
+    if (pid_ > 0 && !reaped_) kill(pid_, signal_number);
+  }
   /// Waits for the exit (kills it after timeout_s); returns the exit code, -1 if killed.
-  int Wait(double timeout_s = 60) {
+  /// With `resend`, sends that signal every 10 ms while it has not exited.
+  int Wait(double timeout_s = 60, int resend = 0) {
     for (int i = 0; i < timeout_s * 100; ++i) {
       int status = 0;
       if (waitpid(pid_, &status, WNOHANG) == pid_) {
         reaped_ = true;
         return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
       }
+      if (resend != 0) kill(pid_, resend);
       usleep(10000);
     }
     kill(pid_, SIGKILL);
