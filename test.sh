@@ -5,6 +5,6 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 cd "$here"
 source tools/setup.sh
-vlab_setup
+vlab_setup --tests
 cd build
 exec ctest --output-on-failure -j "$(nproc)" "$@"

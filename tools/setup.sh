@@ -64,8 +64,9 @@ vlab_build() {
   fi
 }
 
+# vlab_setup [--tests]: --tests (./test.sh) also installs the packages only the tests need
 vlab_setup() {
-  if [ "$(basename "$0")" = test.sh ]; then
+  if [ "${1:-}" = --tests ]; then
     VLAB_APT_PACKAGES+=("${VLAB_TEST_APT_PACKAGES[@]}")
   fi
   vlab_install_packages
