@@ -62,6 +62,8 @@ std::string DescribeJson(const SimDescription& d) {
   j["modes"] = {{"running", 0}, {"paused", 1}};
   j["clocks"] = {{"fast", 0}, {"lockstep", 1}, {"realtime", 2}};
   j["devices"] = d.devices;
+  j["owner_timeout_s"] = d.owner_timeout_s;
+  j["on_owner_lost"] = d.on_owner_lost;
   return j.dump();
 }
 

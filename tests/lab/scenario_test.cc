@@ -130,6 +130,12 @@ TEST(ScenarioTest, RejectsBadValues) {
   EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\nchecks: [{name: c, signal: t, reduce: median, max: 1}]\n")
                 .find("unknown reduction 'median'"),
             std::string::npos);
+  EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\ndevices: [{name: s, kind: sim, on_owner_lost: wait}]\n")
+                .find("devices[0].on_owner_lost: must be resume or stay_paused, not 'wait'"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\ndevices: [{name: s, kind: sim, owner_timeout: 0}]\n")
+                .find("devices[0].owner_timeout: must be > 0 and <= 3600 s"),
+            std::string::npos);
   std::string text = kValid;
   text.replace(text.find("initial: [0.1, -0.2]"), 20, "initial: [0.1]");
   EXPECT_NE(ErrorOf(text).find("devices[0].initial: needs one value per joint"), std::string::npos);

@@ -49,8 +49,10 @@ void SimControl::EncodeState(double, double t, std::uint32_t, std::vector<double
 
 std::string SimControl::DescribeJson(const bridge::DeviceDescription& common) const {
   bridge::SimDescription desc;
-  desc.devices = devices_;
   static_cast<bridge::DeviceDescription&>(desc) = common;
+  desc.devices = devices_;
+  desc.owner_timeout_s = owner_timeout_s_;
+  desc.on_owner_lost = on_owner_lost_ == OnOwnerLost::kResume ? "resume" : "stay_paused";
   return bridge::DescribeJson(desc);
 }
 
