@@ -6,9 +6,10 @@
 //   vlab::bridge::CameraClient::Frame frame;
 //   camera.ReceiveLatest(1.0, &frame);   // id, time_s, width, height, pose, rgb
 //
-// Connecting sends a describe request, which also subscribes the client; it
-// then sends a describe request every keepalive_s while it receives, so the
-// subscription never lapses. Incomplete frames are dropped (FrameAssembler);
+// Connecting makes a session (docs/protocol.md, "Sessions": the cookie, the
+// describe reply, a subscription); it then renews the subscription every
+// keepalive_s while it receives, so it never lapses, and ends it on
+// destruction. Incomplete frames are dropped (FrameAssembler);
 // a frame is never returned torn. Malformed chunks are refused and counted
 // (counters()), not thrown: a camera stream survives a stray datagram.
 //
@@ -38,7 +39,7 @@ struct CameraClientOptions {
   double timeout_s = 1.0;               ///< Connect waits this long for the describe reply, s
   std::string bind_address = "0.0.0.0";  ///< local address (port: any free one)
   int receive_buffer_bytes = 8 << 20;   ///< SO_RCVBUF asked for (forced where permitted)
-  double keepalive_s = 1.0;             ///< a describe request this often while receiving, s
+  double keepalive_s = 1.0;             ///< renew the subscription this often while receiving, s
   bool decode = true;                   ///< fill Frame::rgb (JPEG decoded with OpenCV)
   AssemblerConfig assembler;
 };

@@ -4,7 +4,7 @@
 // or a video file), so that a client cannot tell them apart but by the pictures.
 //
 // Ports
-//   input   describe requests (and any other datagram) from clients (Poll)
+//   input   describe and subscribe requests (and any other datagram) from clients (Poll)
 //   output  every frame, chunked, to every subscriber (Send / SendImage);
 //           describe replies (JSON) to the requester
 //   rate    driven by its owner: Poll whenever its socket is readable (or

@@ -4,7 +4,7 @@
 // answer with the same bytes and the same rules.
 //
 // Ports
-//   input   datagrams from clients: commands, describe requests (Handle)
+//   input   datagrams from clients: commands, describe and subscribe requests (Handle)
 //   output  state datagrams to every subscriber, once per control period
 //           (Publish); describe replies (JSON) to the requester
 //   rate    driven by its owner: Handle whenever a datagram arrives,

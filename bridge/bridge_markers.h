@@ -114,7 +114,7 @@ DecodeError ParseMarkersCommand(const Header& h, const std::vector<double>& payl
 ///   input   command [dictionary, id, side_m] x k    (AddMarkers)
 ///   output  state per camera frame: [count, described, unknown, records]
 ///
-/// Connect subscribes (describe request); the device sends one state per
+/// Connect makes a session (cookie, describe reply, subscription); the device sends one state per
 /// camera frame it processed. A client that only reads must call KeepAlive()
 /// now and then (every few seconds) to stay subscribed. Not thread-safe.
 class MarkersClient : public DeviceClient {

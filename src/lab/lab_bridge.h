@@ -1,7 +1,7 @@
 // The lab's side of the wire: serves its devices over UDP under `vlab serve`.
 //
 // Ports (one UDP socket per served device, on the port its scenario gives)
-//   input   commands, describe requests (any time; received while the clock
+//   input   commands, describe and subscribe requests (any time; received while the clock
 //           waits, timestamped on arrival)
 //   output  every control period: each served device's state to its
 //           subscribers (seq k = the state at t_k, sent as soon as it is

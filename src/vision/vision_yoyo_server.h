@@ -4,17 +4,18 @@
 // device (same layout, same status bit, same rules).
 //
 // Ports
-//   input   datagrams from clients (Poll): describe requests (they subscribe)
+//   input   datagrams from clients (Poll): describe and subscribe requests
 //   output  one state per camera frame to every subscriber (Publish):
 //           [status, x, y, z, vz, string_force, spin], seq = frame id,
 //           time = the frame's exposure time (s, the camera's clock);
 //           describe replies (JSON) to the requester
 //   rate    driven by its owner (the vision program): Poll between frames,
 //           Publish once per frame
-// Rules: bridge::DeviceEndpoint's. Any well-formed datagram subscribes its
-// sender; a subscriber silent for subscriber_timeout_s is dropped when a new
-// one comes; at most max_subscribers. The yoyo kind takes no commands: a
-// command (of any kind) or a state datagram is refused and counted.
+// Rules: bridge::DeviceEndpoint's. A client subscribes with the cookie
+// handshake (docs/protocol.md, "Sessions"); a subscriber silent for
+// subscriber_timeout_s is dropped; at most max_subscribers, and a newcomer to
+// a full table is refused. The yoyo kind takes no commands: a command (of any
+// kind) or a state datagram is refused and counted.
 // Never throws and never blocks in Poll or Publish. Not thread-safe.
 #pragma once
 

@@ -3,7 +3,7 @@
 // delivered after its latency as chunked frames (bridge/bridge_camera_server.h).
 //
 // Ports
-//   input   describe requests and subscriptions (any datagram) on its port
+//   input   describe and subscribe requests on its port (docs/protocol.md, "Sessions")
 //   output  frames to every subscriber: id, exposure stamp (the simulated time
 //           of the state rendered), width, height, encoding, the camera's pose
 //           in the world (OpenCV frame: x right, y down, z forward)
@@ -73,7 +73,7 @@ class SimCamera final : public Device, public OwnTransport {
   /// Closes its socket and restarts its schedule (a run without serving).
   void Unserve() override;
   int fd() const override { return server_->fd(); }
-  /// A non-blocking pass over what arrived (describe requests subscribe their senders).
+  /// A non-blocking pass over what arrived (describe and subscribe requests).
   void PollRequests() override { server_->Poll(0.0); }
   int port() const override { return server_->port(); }
   std::string address() const override { return server_->config().bind_address; }
