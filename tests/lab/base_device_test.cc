@@ -275,9 +275,10 @@ TEST(BaseServeTest, LockstepCommandsOverUdpMoveTheBase) {
   vlab::testing::WriteFile(dir.path() + "/base.xml", kBaseXml);
   vlab::testing::WriteFile(dir.path() + "/base.yaml", R"(
 scene: base.xml
-duration: 1.0
+duration: 1.2
 control_period: 0.01
 clock: lockstep
+lockstep: {timeout: 0.05}
 devices:
   - {name: nomad, kind: base, joints: [bx, by, byaw], actuators: [vx, vy, wz], port: 0}
   - {name: feet, kind: feet, sensors: [t1, t2, t3, t4], port: 0}
@@ -301,16 +302,24 @@ checks:
   EXPECT_EQ(base.state_length(), 7);
   EXPECT_EQ(feet.state_length(), 4);
   EXPECT_EQ(base.describe()["kind"], "base");
-  bridge::Device::State s = base.Read(5.0);
-  while (s.seq < 100) {
-    base.Write({1, 0.5, 0, 0}, s.seq);  // world x at 0.5 m/s
+  bridge::Device::State s = base.Read(5.0), at_1s;
+  std::uint32_t silent_status = 0;
+  while (s.seq < 120) {
+    if (s.seq == 100) at_1s = s;
+    // periods 100-105 unanswered: the lab waits 0.05 s for each, and the watchdog holds the base
+    if (s.seq < 100 || s.seq >= 106) base.Write({1, 0.5, 0, 0}, s.seq);  // world x at 0.5 m/s
     s = base.Read(5.0);
+    if (s.seq > 104 && s.seq <= 106) silent_status |= static_cast<std::uint32_t>(s.values[0]);
   }
   run.join();
   EXPECT_EQ(result.exit_code, 0) << result.failure;
-  EXPECT_EQ(result.periods, 100);
-  EXPECT_NEAR(s.values[kX], 0.125 + 0.5 * 0.5, 0.02);  // odometry x after the ramp and 0.5 s at speed
-  EXPECT_NEAR(s.values[kVx], 0.5, 0.01);
+  EXPECT_EQ(result.periods, 120);
+  EXPECT_NEAR(at_1s.values[kX], 0.125 + 0.5 * 0.5, 0.02);  // odometry x after the ramp and 0.5 s at speed
+  EXPECT_NEAR(at_1s.values[kVx], 0.5, 0.01);
+  // the endpoint's bits are in the base's status word, as in an arm's
+  EXPECT_EQ(silent_status & (bridge::kStatusWatchdog | bridge::kStatusHolding),
+            bridge::kStatusWatchdog | bridge::kStatusHolding);
+  EXPECT_EQ(static_cast<std::uint32_t>(s.values[0]) & bridge::kStatusWatchdog, 0u) << "commands end the hold";
 }
 
 }  // namespace

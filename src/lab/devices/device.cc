@@ -4,9 +4,16 @@
 #include <cmath>
 
 #include "bridge/bridge_describe.h"
+#include "bridge/bridge_layouts.h"
 #include "lab/lab_yaml.h"
 
 namespace vlab::lab {
+
+// the commanded kinds served through this generic path start their state with the status word
+static_assert(bridge::StateIndex(bridge::DeviceKind::kBase, "status") == 0 &&
+                  bridge::StateIndex(bridge::DeviceKind::kGripper, "status") == 0 &&
+                  bridge::StateIndex(bridge::DeviceKind::kPoint, "status") == 0,
+              "status word first");
 
 void ReadCommandInput(MapReader& r, CommandInputConfig* input) {
   input->watchdog_periods = r.Integer("watchdog_periods", input->watchdog_periods);
@@ -17,8 +24,13 @@ void ReadCommandInput(MapReader& r, CommandInputConfig* input) {
 
 void Device::EncodeState(double seq, double t, std::uint32_t endpoint_bits, std::vector<double>* scratch,
                          std::vector<unsigned char>* out) const {
-  (void)endpoint_bits;  // the arm's status word carries them; the other kinds' status words do not (yet)
   State(scratch);
+  // a commanded kind's state starts with its status word: the endpoint's bits (refused, watchdog) join it
+  if (command_length() > 0 && endpoint_bits != 0 && !scratch->empty()) {
+    const double word = (*scratch)[0];
+    const std::uint32_t own = word >= 0 && word <= 4294967295.0 ? static_cast<std::uint32_t>(word) : 0;
+    (*scratch)[0] = static_cast<double>(own | endpoint_bits);
+  }
   bridge::Header h;
   h.kind = static_cast<int>(kind());
   h.type = static_cast<int>(bridge::MessageType::kState);
