@@ -278,7 +278,7 @@ scene: base.xml
 duration: 1.2
 control_period: 0.01
 clock: lockstep
-lockstep: {timeout: 0.05}
+lockstep: {timeout: 0.05, release_after: 100}  # the controller keeps the base through its silence
 devices:
   - {name: nomad, kind: base, joints: [bx, by, byaw], actuators: [vx, vy, wz], port: 0}
   - {name: feet, kind: feet, sensors: [t1, t2, t3, t4], port: 0}
