@@ -69,6 +69,7 @@ bool DeviceEndpoint::CheckArmLimits(const ArmCommandMsg& c) const {
 DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const Endpoint& from,
                                                  long period, UdpSocket& socket) {
   ++counters_.received;
+  ReleaseSilentOwner();  // first: an owner back after its timeout is an owner no more
   const bool from_owner = owner_ && *owner_ == from;
   auto refuse = [&](long* reason) {
     ++*reason;
@@ -117,9 +118,8 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   // commands come from subscribers only: a proven address, which states reach
   if (!sessions_.Touch(from)) return refuse(&counters_.refused_not_subscribed);
 
-  // one owner at a time; an owner silent for too long gives the input up. A
-  // new owner takes over with its first ACCEPTED command only.
-  ReleaseSilentOwner();
+  // one owner at a time; an owner silent for too long gave the input up (above).
+  // A new owner takes over with its first ACCEPTED command only.
   if (owner_ && !from_owner) return refuse(&counters_.refused_not_owner);
   if (from_owner) owner_heard_s_ = sessions_.Now();  // any datagram shows the owner is alive
   // the seq answers a state this device published, newer than the last accepted

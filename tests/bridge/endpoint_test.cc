@@ -317,6 +317,16 @@ TEST_F(EndpointTest, ASilentOwnerIsReleasedOnTheWallClockAndARenewingOneIsNot) {
   EXPECT_FALSE(e.has_owner());
   EXPECT_EQ(e.counters().owners_released, 1);
   EXPECT_TRUE(Send(e, *other_, base, 0, {0, 0, 0, 0}, 0));  // the other takes over
+  EXPECT_TRUE(e.has_owner());
+  // the other falls silent too, then comes back: its first command after the timeout
+  // makes it the owner afresh (a fresh seq history), as anyone's would
+  // (no period in between: the release happens as the command arrives)
+  now += 1.01;
+  EXPECT_TRUE(Send(e, *other_, base, 0, {0, 0, 0, 0}, 0));
+  EXPECT_TRUE(e.has_owner());
+  EXPECT_FALSE(Send(e, *client_, base, 0, {0, 0, 0, 0}, 0));  // the first client is not the owner
+  EXPECT_EQ(e.counters().refused_not_owner, 2);
+  EXPECT_EQ(e.counters().owners_released, 2);
   // an owner that unsubscribes gives its input up at once
   Bytes leave;
   EncodeSubscribeRequest(DeviceKind::kBase, Subscribe(e, *other_), 0, &leave);

@@ -230,6 +230,7 @@ void CheckAfterHandle(const DeviceEndpoint& ep, DeviceEndpoint::Received receive
   Check(h.kind == static_cast<int>(ep.config().kind) && h.type == static_cast<int>(MessageType::kCommand),
         "accepted something other than a command of its kind");
   Check(h.seq == ep.last_accepted_seq(), "accepted, but last_accepted_seq is not the command's seq");
+  Check(ep.has_owner(), "accepted, but the device has no owner");
 }
 
 // the datagram as `from` sends it: cookie 1 in a request becomes from's real cookie
