@@ -265,6 +265,29 @@ TEST_F(Pa10Dynamics, CoriolisEqualsChristoffelTermOfIndependentH) {
 
 using Pa10Scene = vlab::test::MujocoTest;
 
+// mjcf/pa10/README.md "Joints and actuators": armature = the link-referenced motor inertia
+// column (copied: 1e-12), and "Damping 0, frictionloss 0" (exactly 0: joint friction is not
+// public and the lab adds its own servo; a damping of 0.2 N m s/rad, 10x the scenario's
+// measured orientation error, was caught by no unit test before this one).
+TEST_F(Pa10Scene, JointArmatureDampingAndFrictionAreTheReadmeValues) {
+  struct Row { const char* joint; double armature; };
+  const Row rows[] = {{"S1", 0.75},    {"S2", 0.75},    {"S3", 0.2125}, {"E1", 0.2125},
+                      {"E2", 0.00575}, {"W1", 0.00575}, {"W2", 0.00575}};
+  for (const char* scene : {"scenes/pa10.xml", "scenes/pa10_yoyo.xml"}) {
+    SCOPED_TRACE(scene);
+    const mjModel* model = LoadModel(scene);
+    for (const Row& row : rows) {
+      SCOPED_TRACE(row.joint);
+      const int j = mj_name2id(model, mjOBJ_JOINT, row.joint);
+      ASSERT_GE(j, 0);
+      const int dof = model->jnt_dofadr[j];
+      EXPECT_NEAR(model->dof_armature[dof], row.armature, 1e-12);
+      EXPECT_EQ(model->dof_damping[dof], 0.0);
+      EXPECT_EQ(model->dof_frictionloss[dof], 0.0);
+    }
+  }
+}
+
 TEST_F(Pa10Scene, SimulatesFiveSecondsWithZeroTorqueQuietly) {
   const mjModel* model = LoadModel("scenes/pa10.xml");
   EXPECT_DOUBLE_EQ(model->opt.timestep, 0.001);

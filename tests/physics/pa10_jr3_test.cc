@@ -199,6 +199,11 @@ TEST_F(Pa10Jr3, SubtreeBeyondTheMeasuringPlaneIsTheToolSideHalfAndTheTool) {
   EXPECT_EQ(m->site_bodyid[site_], tool_side_);
   EXPECT_EQ(m->body_parentid[tool_], tool_side_);
   EXPECT_EQ(m->body_parentid[tool_side_], mj_name2id(m, mjOBJ_BODY, "jr3_body"));
+  // README "JR3 67M25A sensor": the JR3 is a child of link 7 at the flange face
+  const int jr3_body = mj_name2id(m, mjOBJ_BODY, "jr3_body");
+  ASSERT_GE(jr3_body, 0);
+  EXPECT_EQ(m->body_parentid[jr3_body], mj_name2id(m, mjOBJ_BODY, "pa10_link7")) << "the JR3 is mounted on "
+      << mj_id2name(m, mjOBJ_BODY, m->body_parentid[jr3_body]);
   std::vector<int> subtree;
   for (int b = 1; b < m->nbody; ++b) {
     for (int a = b; a > 0; a = m->body_parentid[a]) {
