@@ -119,7 +119,9 @@ TEST_F(YoyoTest, DescentAccelerationIsTheClosedForm) {
   const double error = (measured - expected) / expected;
   std::printf("descent: a measured %.9f m/s^2, closed form %.9f, relative error %.2e; max |d' + r theta'| %.2e m/s\n",
               measured, expected, error, run.max_coupling_error);
-  EXPECT_LT(std::abs(error), 0.01);
+  // closed form to 1e-4 (measured 6.4e-9: the semi-implicit step's error is linear in t and
+  // leaves the curvature alone); 1e-4 of a is a 1.1e-4 error in J (d ln a / d ln J = -0.905)
+  EXPECT_LT(std::abs(error), 1e-4);
   // winding: the string leaves the axle at r, d' = -r theta' (to 1e-4 of the speed reached;
   // what is left is the tail of the start-up jerk, ~1e-6 m/s)
   EXPECT_LT(run.max_coupling_error, 1e-4 * yoyo_.Descent() * run.time.back());
@@ -137,7 +139,8 @@ TEST_F(YoyoTest, StringTensionIsTheClosedForm) {
   const double mean = sum / run.tension.size();
   std::printf("tension: mean %.9f N, closed form %.9f N (weight %.6f N), worst relative error %.2e\n", mean,
               expected, yoyo_.mass * yoyo_.gravity, worst);
-  EXPECT_LT(worst, 0.01);
+  // closed form to 1e-4 (measured 6.3e-6 at worst: the tail of the start-up jerk)
+  EXPECT_LT(worst, 1e-4);
   // and the readout is the force that decelerates the fall measured from d(t): T = m (g - d'')
   const double newton = yoyo_.mass * (yoyo_.gravity - FitAcceleration(run));
   EXPECT_NEAR(mean, newton, 1e-3 * newton);
