@@ -2,9 +2,12 @@
 // random poses 0.3-0.5 m in front of a 640 x 480 webcam (the cube scene's
 // fovy), rendered with vlab_render's fast profile, detected and located by
 // vlab_vision. Every marker reported valid is compared with the true pose of
-// its face: the median position error must be <= 3 mm, the median rotation
-// error <= 0.5 deg, and no valid pose may be flipped (the other IPPE solution:
-// the marker's normal mirrored about the line of sight).
+// its face. The renders are noise-free, so the bounds are what this measures
+// with a margin: position error median <= 0.2 mm and 90 % <= 0.5 mm, rotation
+// error median <= 0.1 deg and 90 % <= 0.3 deg (a 0.5 % scale error, 2 mm at
+// 0.4 m, fails); and no valid pose may be flipped (the other IPPE solution: the
+// marker's normal mirrored about the line of sight). The noisy end-to-end path
+// (JPEG frames, vision_program_test.cc) keeps its 3 mm / 1 deg per pose.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -120,8 +123,11 @@ TEST_F(VisionAccuracy, RandomCubePosesAtThirtyToFiftyCentimetres) {
   RecordProperty("median_rotation_error_deg", std::to_string(median_deg));
   EXPECT_GE(detected, faces_visible * 8 / 10);  // most faces turned to the camera are found
   EXPECT_GE(valid, kPoses / 2);
-  EXPECT_LE(median_mm, 3.0);
-  EXPECT_LE(median_deg, 0.5);
+  // measured on noise-free renders: median 0.04 mm, 90 % 0.22 mm; 0.032 deg, 0.108 deg
+  EXPECT_LE(median_mm, 0.2);                       // 5x the measured median
+  EXPECT_LE(Quantile(position_mm, 0.9), 0.5);      // 2.3x the measured 90 %
+  EXPECT_LE(median_deg, 0.1);                      // 3x the measured median
+  EXPECT_LE(Quantile(rotation_deg, 0.9), 0.3);     // 2.8x the measured 90 %
   EXPECT_EQ(flipped, 0);
   // the flag is what keeps flips out: some detections were flipped, and flagged
   EXPECT_GT(invalid_flips, 0);
