@@ -170,7 +170,9 @@ TEST_F(Head, EachEyeCanBeDrivenToLookAtAPoint) {
     for (int camera : {left_, right_}) {
       const double error = GazeError(m(), d(), camera, target);
       worst_deg = std::max(worst_deg, error / kDeg);
-      EXPECT_LT(error, 0.5 * kDeg) << "trial " << trial << " camera " << camera;
+      // the 8 Hz servo's transient is gone after 1.5 s (e^-75); what is left measures 1.2e-6
+      // deg at worst: 1e-4 deg is 80x that, and 1/100 of the solver's own 0.01 deg tolerance
+      EXPECT_LT(error, 1e-4 * kDeg) << "trial " << trial << " camera " << camera;
     }
   }
   std::cout << "  worst gaze error after driving: " << worst_deg << " deg\n";
@@ -218,7 +220,7 @@ TEST_F(Head, BothEyesFollowAMovingBall) {
   }
   mean_deg /= samples;
   std::cout << "  tracking gaze error: mean " << mean_deg << " deg, worst " << worst_deg << " deg\n";
-  EXPECT_LT(worst_deg, 0.5);
+  EXPECT_LT(worst_deg, 0.05);  // measured worst 0.022 deg (mean 0.012) x 2.3
 }
 
 }  // namespace
