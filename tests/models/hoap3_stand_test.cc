@@ -112,7 +112,9 @@ TEST_F(Hoap3Stand, StandsThirtySecondsOnItsFsrs) {
   const RunStats s = Run(
       30.0, [&](double) { return q_stand_; }, [](double t) { return t > 1.0; });
   Report(s);
-  EXPECT_LT(s.worst_force_error, 0.02);
+  // standing still the FSRs carry the weight: measured 1.9e-5 of m g after settling, x 10
+  // (the squat below accelerates the COM and keeps its 2 %)
+  EXPECT_LT(s.worst_force_error, 2e-4);
   EXPECT_GT(s.min_margin_m, 0.02);
   EXPECT_LT(s.max_cop_com_m, 1e-3);
   EXPECT_EQ(s.foreign_contacts, 0);
