@@ -145,7 +145,8 @@ int BenchCommand(const BenchArgs& args) {
 
     const double ratio = all.replayed / all.bare;
     const double ratio_one = single.replayed / single.bare;
-    std::printf("  on the CPUs allowed (%s), the log writer free to run beside the loop:\n", CpuList(allowed).c_str());
+    std::printf("  on the CPUs allowed (%s), the log writer %s:\n", CpuList(allowed).c_str(),
+                allowed.size() > 1 ? "free to run beside the loop" : "sharing the one CPU with the loop");
     std::printf("    a. bare mj_step, recorded controls           %9.0f steps/s  (%.0fx real time)\n", all.bare,
                 all.bare * m->opt.timestep);
     std::printf("    b. lab: servo + JR3 8 kHz + log.csv + checks %9.0f steps/s  ratio b/a %.3f\n", all.replayed,

@@ -287,7 +287,7 @@ int BenchBridge(const BenchArgs& args) {
       }
       if (ls.exit_code != 0) std::printf("    (lockstep run: %s)\n", ls.failure.c_str());
     }
-    if (layouts.back().lab_cpus.empty()) {
+    if (allowed.size() > 1) {
       std::printf("  (unpinned is not judged: the echo and the lockstep run may each land on one core or on two)\n");
     }
 
