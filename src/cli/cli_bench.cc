@@ -27,39 +27,13 @@
 #include <unistd.h>
 
 #include "cli/cli_commands.h"
+#include "cli/cli_cpus.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 
 namespace vlab::cli {
 
 namespace {
-
-// the CPUs this process may run on, ascending
-std::vector<int> AllowedCpus() {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  std::vector<int> cpus;
-  if (sched_getaffinity(0, sizeof(set), &set) != 0) return cpus;
-  for (int c = 0; c < CPU_SETSIZE; ++c) {
-    if (CPU_ISSET(c, &set)) cpus.push_back(c);
-  }
-  return cpus;
-}
-
-std::string CpuList(const std::vector<int>& cpus) {
-  std::string text;
-  for (int c : cpus) text += (text.empty() ? "" : ",") + std::to_string(c);
-  return text;
-}
-
-// pins the calling thread, and the threads it starts later (the log writer), to `cpus`
-void PinTo(const std::vector<int>& cpus) {
-  if (cpus.empty()) return;
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  for (int c : cpus) CPU_SET(c, &set);
-  sched_setaffinity(0, sizeof(set), &set);
-}
 
 // best of --repeat, steps per second: a (bare replay) and b (lab replay)
 struct Rates {

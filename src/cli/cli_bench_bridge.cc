@@ -36,6 +36,7 @@
 #include "bridge/bridge_udp.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "cli/cli_cpus.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 #include "lab/lab_stats.h"
@@ -49,34 +50,6 @@ using lab::Percentile;
 
 // how long the lab spins before it sleeps, s (LabBridge::Poll's kSpinSeconds)
 constexpr double kLabSpinSeconds = 200e-6;
-
-// the CPUs this process may run on, ascending
-std::vector<int> AllowedCpus() {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  std::vector<int> cpus;
-  if (sched_getaffinity(0, sizeof(set), &set) != 0) return cpus;
-  for (int c = 0; c < CPU_SETSIZE; ++c) {
-    if (CPU_ISSET(c, &set)) cpus.push_back(c);
-  }
-  return cpus;
-}
-
-std::string CpuList(const std::vector<int>& cpus) {
-  std::string text;
-  for (int c : cpus) text += (text.empty() ? "" : ",") + std::to_string(c);
-  return text;
-}
-
-// pins the calling thread, and the threads and processes it starts later, to
-// `cpus` (empty: left as it is)
-void PinTo(const std::vector<int>& cpus) {
-  if (cpus.empty()) return;
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  for (int c : cpus) CPU_SET(c, &set);
-  sched_setaffinity(0, sizeof(set), &set);
-}
 
 // where the lab (this process) and its peer (a child process) run
 struct Layout {

@@ -53,8 +53,12 @@ int main(int argc, char** argv) {
   devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
 
   vlab::cli::BenchArgs bench;
-  CLI::App* bench_cmd = app.add_subcommand("bench", "Measure performance against a baseline in the same run");
-  bench_cmd->add_option("what", bench.what, "Benchmark: physics | bridge | render")
+  CLI::App* bench_cmd = app.add_subcommand(
+      "bench", "Measure performance against a baseline in the same run; prints the CPUs used first");
+  bench_cmd->add_option("what", bench.what,
+                        "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
+                        "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
+                        "| render")
       ->required()
       ->check(CLI::IsMember({"physics", "bridge", "render"}));
   bench_cmd->add_option("--scenario", bench.scenario,
