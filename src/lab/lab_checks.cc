@@ -62,6 +62,8 @@ void CheckSet::Add(double t, const double* row) {
       const long k = static_cast<long>(std::floor((t - checks_[i].from_s) / checks_[i].window_s));
       if (k != a.window) {
         CloseWindow(checks_[i].reduce, a);
+        // a whole sub-window without a sample (window shorter than the log's period) has no extreme
+        if (k > a.window + 1) a.windowed = std::nan(""), ++a.whole_windows;
         a.window = k;
         a.window_extreme = v;
       } else {

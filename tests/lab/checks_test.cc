@@ -199,6 +199,10 @@ TEST(CheckSetTest, WindowedReductionsFailWithoutAWholeWindowOrWithNaN) {
   const auto none = Evaluate({Windowed("long", "min_of_window_max", 10)}, kSeries);
   EXPECT_TRUE(std::isnan(none[0].value));
   EXPECT_FALSE(none[0].pass);
+  // 0.5 s windows over samples 1 s apart: every other one is empty, which fails
+  const auto gaps = Evaluate({Windowed("short", "min_of_window_max", 0.5)}, kSeries);
+  EXPECT_TRUE(std::isnan(gaps[0].value));
+  EXPECT_FALSE(gaps[0].pass);
   std::vector<double> series = kSeries;
   series[2] = kNaN;  // in the second window
   const auto r = Evaluate({Windowed("tops", "min_of_window_max", 2), Windowed("bottoms", "max_of_window_min", 2)},
