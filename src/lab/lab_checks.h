@@ -1,8 +1,9 @@
 // Checks: pass/fail rules over logged signals, evaluated while the run goes.
 //
 // Each check reduces one signal over a time window [from, to] (max, min, mean,
-// rms, final or max_abs) and compares the result with its bounds. A check whose
-// window holds no sample fails with value NaN.
+// rms, final or max_abs, or per sub-window: min_of_window_max, max_of_window_min)
+// and compares the result with its bounds. A check whose window holds no sample
+// (or no whole sub-window) fails with value NaN.
 #pragma once
 
 #include <limits>
@@ -35,9 +36,16 @@ class CheckSet {
     int column = 0;
     double max = -std::numeric_limits<double>::infinity();
     double min = std::numeric_limits<double>::infinity();
-    double max_abs = 0.0, sum = 0.0, sum_sq = 0.0, last = 0.0;
+    double max_abs = 0.0, sum = 0.0, sum_sq = 0.0, last = 0.0, last_t = 0.0;
     long count = 0;
+    // sub-windows: the one being filled, its extreme, and the reduction over the whole ones
+    long window = -1;
+    double window_extreme = 0.0;
+    double windowed = std::numeric_limits<double>::quiet_NaN();
+    long whole_windows = 0;
   };
+  /// Folds the sub-window being filled into the windowed reduction.
+  static void CloseWindow(Reduce reduce, Accumulator& a);
   std::vector<CheckConfig> checks_;
   std::vector<Accumulator> acc_;
 };

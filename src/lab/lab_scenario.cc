@@ -147,13 +147,21 @@ CheckConfig ReadCheck(const std::string& file, const YAML::Node& node, const std
   c.name = r.String("name");
   c.signal = r.String("signal");
   const std::string reduce = r.String("reduce", "max");
-  if (!ReduceFromName(reduce, &c.reduce)) r.Fail("reduce", "unknown reduction '" + reduce + "' (known: max, min, mean, rms, final, max_abs)");
+  if (!ReduceFromName(reduce, &c.reduce)) r.Fail("reduce", "unknown reduction '" + reduce + "' (known: max, min, mean, rms, final, max_abs, min_of_window_max, max_of_window_min)");
   c.min = r.Number("min", c.min);
   c.max = r.Number("max", c.max);
   if (!r.Has("min") && !r.Has("max")) r.Fail("max", "a check needs a bound: min, max or both");
   c.from_s = r.Number("from", c.from_s);
   c.to_s = r.Number("to", c.to_s);
   if (c.to_s < c.from_s) r.Fail("to", "must be >= from");
+  const bool windowed = c.reduce == Reduce::kMinOfWindowMax || c.reduce == Reduce::kMaxOfWindowMin;
+  if (windowed) {
+    if (!r.Has("window")) r.Fail("window", "reduce '" + reduce + "' needs a window (s, > 0)");
+    c.window_s = r.Number("window", 0.0);
+    if (!(c.window_s > 0.0) || !std::isfinite(c.window_s)) r.Fail("window", "must be a finite number of seconds > 0");
+  } else if (r.Has("window")) {
+    r.Fail("window", "only for reduce min_of_window_max or max_of_window_min");
+  }
   r.Finish();
   return c;
 }
@@ -182,12 +190,17 @@ const char* ReduceName(Reduce reduce) {
       return "final";
     case Reduce::kMaxAbs:
       return "max_abs";
+    case Reduce::kMinOfWindowMax:
+      return "min_of_window_max";
+    case Reduce::kMaxOfWindowMin:
+      return "max_of_window_min";
   }
   return "?";
 }
 
 bool ReduceFromName(const std::string& name, Reduce* reduce) {
-  for (Reduce k : {Reduce::kMax, Reduce::kMin, Reduce::kMean, Reduce::kRms, Reduce::kFinal, Reduce::kMaxAbs}) {
+  for (Reduce k : {Reduce::kMax, Reduce::kMin, Reduce::kMean, Reduce::kRms, Reduce::kFinal, Reduce::kMaxAbs,
+                   Reduce::kMinOfWindowMax, Reduce::kMaxOfWindowMin}) {
     if (name == ReduceName(k)) {
       *reduce = k;
       return true;

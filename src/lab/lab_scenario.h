@@ -24,8 +24,12 @@ namespace vlab::lab {
 /// The built-in controllers (the `controller.type` key).
 enum class ControllerType { kNone, kJointPd, kTaskSpace, kExternal };
 /// How a check reduces its signal to one value (the `reduce` key).
-enum class Reduce { kMax, kMin, kMean, kRms, kFinal, kMaxAbs };
-/// "max", "min", "mean", "rms", "final", "max_abs"; and back (false for anything else).
+/// kMinOfWindowMax: the window [from, to] cut into consecutive windows of `window` s,
+/// the maximum in each, then the smallest of those maxima (e.g. every swing reaches a
+/// height); kMaxOfWindowMin likewise with minima and the largest of them.
+enum class Reduce { kMax, kMin, kMean, kRms, kFinal, kMaxAbs, kMinOfWindowMax, kMaxOfWindowMin };
+/// "max", "min", "mean", "rms", "final", "max_abs", "min_of_window_max",
+/// "max_of_window_min"; and back (false for anything else).
 const char* ReduceName(Reduce reduce);
 bool ReduceFromName(const std::string& name, Reduce* reduce);
 /// "none", "joint_pd", "task_space", "external".
@@ -75,6 +79,7 @@ struct CheckConfig {
   double max = std::numeric_limits<double>::infinity();   ///< value must be <= max
   double from_s = 0.0;
   double to_s = std::numeric_limits<double>::infinity();
+  double window_s = 0.0;       ///< sub-window length, s (> 0 only for the *_of_window_* reductions)
   std::string where;
 };
 

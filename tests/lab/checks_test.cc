@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/core_errors.h"
+#include "test_util.h"
 
 namespace vlab::lab {
 namespace {
@@ -32,6 +33,13 @@ CheckConfig Check(const std::string& name, const std::string& reduce, double fro
   c.from_s = from_s;
   c.to_s = to_s;
   c.where = "case.yaml:12";
+  return c;
+}
+
+CheckConfig Windowed(const std::string& name, const std::string& reduce, double window_s, double from_s = 0.0,
+                     double to_s = kInf) {
+  CheckConfig c = Check(name, reduce, from_s, to_s);
+  c.window_s = window_s;
   return c;
 }
 
@@ -158,6 +166,86 @@ TEST(CheckSetTest, ExtremeValuesReduceToThemselves) {
   const auto minus_inf = Evaluate({max_check}, {-kInf});
   EXPECT_EQ(minus_inf[0].value, -kInf);
   EXPECT_FALSE(minus_inf[0].pass);
+}
+
+TEST(CheckSetTest, WindowedReductionsTakeWholeSubWindowsOnly) {
+  // x = 3, -1 | 4, -1.5 | 5, -9 | 2.5, 6 at t = 0..7, windows of 2 s from 0: the last,
+  // [6, 8), ends after the last sample and is left out
+  const auto r = Evaluate({Windowed("tops", "min_of_window_max", 2), Windowed("bottoms", "max_of_window_min", 2),
+                           // [1, 3.5) holds -1, 4, -1.5; [3.5, 6) holds 5, -9; [6, 8.5) is not whole
+                           Windowed("shifted", "min_of_window_max", 2.5, 1, 6),
+                           // to = 5.5 ends the second window [3, 5) whole and cuts [5, 7)
+                           Windowed("cut", "max_of_window_min", 2, 1, 5.5),
+                           // [0, 7) ends at to and at the last sample: whole; t = 7 opens [7, 14)
+                           Windowed("one", "min_of_window_max", 7, 0, 7)},
+                          kSeries);
+  EXPECT_EQ(r[0].value, 3.0);   // maxima 3, 4, 5
+  EXPECT_EQ(r[1].value, -1.0);  // minima -1, -1.5, -9
+  EXPECT_EQ(r[2].value, 4.0);   // maxima 4, 5
+  EXPECT_EQ(r[3].value, -1.0);  // minima of {-1, 4}, {-1.5, 5}: -1, -1.5
+  EXPECT_EQ(r[4].value, 5.0);   // max of 3, -1, 4, -1.5, 5, -9, 2.5
+  EXPECT_EQ(r[0].samples, 8);   // every sample of the window is counted, whole sub-window or not
+  for (const auto& c : r) EXPECT_TRUE(c.pass) << c.config.name;
+  // a swing that stays low in one window fails a bound the others meet
+  CheckConfig tops = Windowed("tops", "min_of_window_max", 2);
+  tops.min = 3.5;
+  EXPECT_FALSE(Evaluate({tops}, kSeries)[0].pass);
+  tops.min = 3.0;
+  EXPECT_TRUE(Evaluate({tops}, kSeries)[0].pass);
+}
+
+TEST(CheckSetTest, WindowedReductionsFailWithoutAWholeWindowOrWithNaN) {
+  // 8 s of samples, 10 s windows: no whole window
+  const auto none = Evaluate({Windowed("long", "min_of_window_max", 10)}, kSeries);
+  EXPECT_TRUE(std::isnan(none[0].value));
+  EXPECT_FALSE(none[0].pass);
+  // 0.5 s windows over samples 1 s apart: every other one is empty, which fails
+  const auto gaps = Evaluate({Windowed("short", "min_of_window_max", 0.5)}, kSeries);
+  EXPECT_TRUE(std::isnan(gaps[0].value));
+  EXPECT_FALSE(gaps[0].pass);
+  std::vector<double> series = kSeries;
+  series[2] = kNaN;  // in the second window
+  const auto r = Evaluate({Windowed("tops", "min_of_window_max", 2), Windowed("bottoms", "max_of_window_min", 2)},
+                          series);
+  for (const auto& c : r) {
+    EXPECT_TRUE(std::isnan(c.value)) << c.config.name;
+    EXPECT_FALSE(c.pass) << c.config.name;
+  }
+}
+
+// Loads a scenario whose one check is `check` and returns the error message ("" if none).
+std::string CheckError(const std::string& check) {
+  vlab::testing::TempDir dir;
+  vlab::testing::WriteFile(dir / "s.yaml", "scene: x.xml\nduration: 1\nchecks:\n  - " + check + "\n");
+  try {
+    LoadScenario(dir / "s.yaml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CheckSetTest, WindowedReductionsNeedAPositiveWindow) {
+  EXPECT_EQ(CheckError("{name: c, signal: x, reduce: min_of_window_max, window: 2.5, min: 1}"), "");
+  const std::string missing = CheckError("{name: c, signal: x, reduce: min_of_window_max, min: 1}");
+  EXPECT_NE(missing.find("s.yaml:4"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("window"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("needs a window"), std::string::npos) << missing;
+  for (const char* bad : {"0", "-1e-9", "-1"}) {
+    const std::string m =
+        CheckError(std::string("{name: c, signal: x, reduce: max_of_window_min, window: ") + bad + ", max: 1}");
+    EXPECT_NE(m.find("s.yaml:4: checks[0].window: must be a finite number of seconds > 0"), std::string::npos)
+        << bad << ": " << m;
+  }
+  for (const char* bad : {".nan", ".inf"}) {  // refused by the number reader already
+    const std::string m =
+        CheckError(std::string("{name: c, signal: x, reduce: max_of_window_min, window: ") + bad + ", max: 1}");
+    EXPECT_NE(m.find("s.yaml:4: checks[0].window: expected a finite number"), std::string::npos) << bad << ": " << m;
+  }
+  const std::string stray = CheckError("{name: c, signal: x, reduce: max, window: 2, max: 1}");
+  EXPECT_NE(stray.find("window: only for reduce min_of_window_max or max_of_window_min"), std::string::npos) << stray;
+  const std::string unknown = CheckError("{name: c, signal: x, reduce: window_max, max: 1}");
+  EXPECT_NE(unknown.find("min_of_window_max, max_of_window_min"), std::string::npos) << unknown;
 }
 
 TEST(CheckSetTest, UnknownSignalNamesCheckAndSignal) {
