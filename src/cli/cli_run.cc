@@ -96,7 +96,7 @@ int RunCommand(const RunArgs& args) {
 
     if (!args.quiet) {
       for (const auto& c : r.checks) {
-        std::printf("  %s  %-28s %s(%s) = %s  (%s)\n", c.pass ? "pass" : "FAIL", c.config.name.c_str(),
+        std::printf("  %s  %-28s %s(%s) = %s  (%s)\n", c.skipped ? "skip" : c.pass ? "pass" : "FAIL", c.config.name.c_str(),
                     lab::ReduceName(c.config.reduce), c.config.signal.c_str(), lab::FormatDouble(c.value).c_str(),
                     Bound(c.config).c_str());
       }

@@ -3,7 +3,9 @@
 // Each check reduces one signal over a time window [from, to] (max, min, mean,
 // rms, final or max_abs, or per sub-window: min_of_window_max, max_of_window_min)
 // and compares the result with its bounds. A check whose window holds no sample
-// (or no whole sub-window) fails with value NaN.
+// (or no whole sub-window) fails with value NaN, unless the window starts after
+// the run's end (a run shortened with --duration, or interrupted): then it is
+// skipped, not failed, and says so.
 #pragma once
 
 #include <limits>
@@ -19,6 +21,7 @@ struct CheckResult {
   double value = 0.0;  ///< the reduced signal
   long samples = 0;    ///< samples inside the window
   bool pass = false;
+  bool skipped = false;  ///< its window starts after the run's end: not evaluated (pass stays true)
 };
 
 class CheckSet {
@@ -28,8 +31,8 @@ class CheckSet {
   CheckSet(const std::vector<CheckConfig>& checks, const std::vector<std::string>& columns);
   /// Feeds one row of the log (columns as given at construction) at time t.
   void Add(double time_s, const double* row);
-  /// Final verdicts.
-  std::vector<CheckResult> Results() const;
+  /// Final verdicts of a run that ended at end_s (simulated time).
+  std::vector<CheckResult> Results(double end_s = std::numeric_limits<double>::infinity()) const;
 
  private:
   struct Accumulator {

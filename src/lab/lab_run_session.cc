@@ -248,7 +248,7 @@ RunResult RunSession::Finish() {
   result_.sim_time_s = k_ * period_;
   TakeMujocoWarningTexts();  // their content is in the reports: mju_warningText
   result_.warnings = warnings_.Reports(s_.scenario.allow_warnings);
-  result_.checks = checks_->Results();
+  result_.checks = checks_->Results(k_ * period_);
   if (bridge_) {
     result_.served = bridge_->Devices();
     result_.latencies_s = bridge_->latencies();

@@ -41,6 +41,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
     checks.push_back({{"name", c.config.name}, {"signal", c.config.signal}, {"reduce", ReduceName(c.config.reduce)},
                       {"value", number(c.value)}, {"bound", bound}, {"window_s", window},
                       {"samples", c.samples}, {"pass", c.pass}});
+    if (c.skipped) checks.back()["skipped"] = "its window starts after the run's end";
   }
   json warnings = json::array();
   for (const auto& w : r.warnings) {

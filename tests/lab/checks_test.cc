@@ -270,5 +270,32 @@ TEST(CheckSetTest, ReadsItsOwnColumn) {
   EXPECT_EQ(set.Results()[0].value, 7.0);
 }
 
+TEST(CheckSetTest, AWindowAfterTheRunsEndIsSkippedOneWithinItFails) {
+  // a run shortened to 7 s: a check from 10 s is skipped (passes, says so); one from 5 s to
+  // 6.5 s whose samples are all there is evaluated; one from 6.5 s to 6.9 s holds no sample
+  // inside the run and fails
+  CheckConfig late = Check("late", "max", 10.0);
+  late.max = 0;  // would fail if evaluated
+  CheckConfig seen = Check("seen", "max", 5.0, 6.5);
+  seen.max = -5;  // x = -9 at 5 s: fails
+  CheckConfig empty = Check("empty", "max", 6.5, 6.9);
+  empty.max = 100;
+  CheckSet set({late, seen, empty}, kColumns);
+  for (std::size_t i = 0; i < kSeries.size(); ++i) {
+    const double row[2] = {static_cast<double>(i), kSeries[i]};
+    set.Add(row[0], row);
+  }
+  const std::vector<CheckResult> r = set.Results(7.0);
+  EXPECT_TRUE(r[0].skipped);
+  EXPECT_TRUE(r[0].pass);
+  EXPECT_EQ(r[0].samples, 0);
+  EXPECT_FALSE(r[1].skipped);
+  EXPECT_FALSE(r[1].pass);
+  EXPECT_FALSE(r[2].skipped);
+  EXPECT_FALSE(r[2].pass) << "a window inside the run without a sample fails";
+  // a run that ended after every window (no end given): nothing is skipped, and the late check fails
+  EXPECT_FALSE(set.Results()[0].skipped);
+}
+
 }  // namespace
 }  // namespace vlab::lab

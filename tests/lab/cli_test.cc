@@ -64,7 +64,7 @@ TEST(CliTest, DefaultScenarioPassesAndWritesOutputs) {
   EXPECT_EQ(s.at("exit_code"), 0);
   EXPECT_EQ(s.at("seed"), 7);
   EXPECT_EQ(s.at("versions").at("mujoco"), "2.2.2");
-  ASSERT_EQ(s.at("checks").size(), 4u);
+  ASSERT_EQ(s.at("checks").size(), 6u);
   for (const auto& c : s.at("checks")) {
     EXPECT_TRUE(c.at("value").is_number()) << c.dump();
     EXPECT_TRUE(c.at("bound").contains("max")) << c.dump();
