@@ -4,6 +4,8 @@
 #pragma once
 
 #include <chrono>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "bridge/bridge_protocol.h"
@@ -92,5 +94,31 @@ inline int PlayHandshake(bridge::UdpSocket& socket, bridge::Endpoint* client, br
   }
   return good;
 }
+
+/// A device played by a test, datagram by datagram: it receives the client's
+/// datagrams on a loopback port and answers to whoever sent the last one.
+class FakeDevice {
+ public:
+  explicit FakeDevice(double patience_s = 5.0)
+      : socket_(bridge::UdpSocket::Bind("127.0.0.1", 0)), patience_s_(patience_s) {}
+  int port() const { return socket_->local_port(); }
+  /// The client's next datagram (empty when none came within the patience).
+  std::vector<unsigned char> Receive() {
+    std::vector<unsigned char> buffer(65536);
+    const long n = socket_->Receive(buffer.data(), buffer.size(), &client_, patience_s_);
+    buffer.resize(n < 0 ? 0 : static_cast<std::size_t>(n));
+    return buffer;
+  }
+  void Send(const std::vector<unsigned char>& bytes) { socket_->SendTo(bytes.data(), bytes.size(), client_); }
+  void Send(const std::string& text) { Send(std::vector<unsigned char>(text.begin(), text.end())); }
+  /// The device's side of the client's handshake (PlayHandshake, cookie 77).
+  int Handshake(bridge::DeviceKind kind) { return PlayHandshake(*socket_, &client_, kind, 77, patience_s_); }
+  const bridge::Endpoint& client() const { return client_; }
+
+ private:
+  std::unique_ptr<bridge::UdpSocket> socket_;
+  double patience_s_;
+  bridge::Endpoint client_;
+};
 
 }  // namespace vlab::testing

@@ -27,31 +27,15 @@ constexpr int kGrasped = StateIndex(DeviceKind::kGripper, "grasped");
 constexpr int kOpening = StateIndex(DeviceKind::kGripper, "opening");
 
 // a device played by the test: answers the describe request, sends states, reads commands
-class Peer {
- public:
-  Peer() : socket_(UdpSocket::Bind("127.0.0.1", 0)) {}
-  int port() const { return socket_->local_port(); }
-  Bytes Receive() {
-    Bytes buffer(65536);
-    const long n = socket_->Receive(buffer.data(), buffer.size(), &client_, kPatience_s);
-    buffer.resize(n < 0 ? 0 : static_cast<std::size_t>(n));
-    return buffer;
-  }
-  void Send(const Bytes& bytes) { socket_->SendTo(bytes.data(), bytes.size(), client_); }
-  void Send(const std::string& text) { Send(Bytes(text.begin(), text.end())); }
-  int Handshake(DeviceKind kind) { return testing::PlayHandshake(*socket_, &client_, kind, 77); }
-  void SendState(DeviceKind kind, double seq, const std::vector<double>& values) {
-    Bytes packet;
-    EncodePacket(Header{static_cast<int>(kind), static_cast<int>(MessageType::kState), seq, 0.01 * seq,
-                        static_cast<int>(values.size())},
-                 values.data(), static_cast<int>(values.size()), &packet);
-    Send(packet);
-  }
+using Peer = testing::FakeDevice;
 
- private:
-  std::unique_ptr<UdpSocket> socket_;
-  Endpoint client_;
-};
+void SendState(Peer& peer, DeviceKind kind, double seq, const std::vector<double>& values) {
+  Bytes packet;
+  EncodePacket(Header{static_cast<int>(kind), static_cast<int>(MessageType::kState), seq, 0.01 * seq,
+                      static_cast<int>(values.size())},
+               values.data(), static_cast<int>(values.size()), &packet);
+  peer.Send(packet);
+}
 
 std::string Describe(const std::string& kind, const json& layout) {
   DeviceDescription d;
@@ -91,7 +75,7 @@ TEST(ClientDeviceTest, AGrippersValuesByNameAndByTheTablesIndices) {
   Device gripper = Connect(peer, DeviceKind::kGripper, Describe("gripper", LayoutJson(DeviceKind::kGripper))).get();
   EXPECT_EQ(gripper.state_length(), 5);
   EXPECT_EQ(gripper.command_names(), (std::vector<std::string>{"mode", "value"}));
-  peer.SendState(DeviceKind::kGripper, 7, {0, 0.05, -0.01, 3.5, 1});
+  SendState(peer, DeviceKind::kGripper, 7, {0, 0.05, -0.01, 3.5, 1});
   const Device::State s = gripper.Read(kPatience_s);
   EXPECT_EQ(s.seq, 7);
   EXPECT_EQ(s.values[kGrasped], 1.0);
@@ -149,7 +133,7 @@ TEST(ClientDeviceTest, FeetValuesAreNamedAfterTheirSensors) {
   Device feet = Connect(peer, DeviceKind::kFeet, Describe("feet", LayoutJson(DeviceKind::kFeet, sensors))).get();
   EXPECT_EQ(feet.state_names(), sensors);
   EXPECT_EQ(feet.command_length(), 0);
-  peer.SendState(DeviceKind::kFeet, 0, {10, 20, 30, 40});
+  SendState(peer, DeviceKind::kFeet, 0, {10, 20, 30, 40});
   const Device::State s = feet.Read(kPatience_s);
   EXPECT_EQ(feet.Field(s, "lf_front"), 30.0);
   EXPECT_TRUE(Contains(ThrownMessage<std::invalid_argument>([&] { feet.WriteFields({{"x", 1}}, 0); }),

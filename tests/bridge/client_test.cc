@@ -133,26 +133,7 @@ class ArmServer {
 };
 
 // A scripted peer: the test itself plays the device, datagram by datagram.
-class Peer {
- public:
-  Peer() : socket_(UdpSocket::Bind("127.0.0.1", 0)) {}
-  int port() const { return socket_->local_port(); }
-  // waits for the client's next datagram (a describe request while connecting)
-  Bytes Receive() {
-    Bytes buffer(65536);
-    const long n = socket_->Receive(buffer.data(), buffer.size(), &client_, kPatience_s);
-    buffer.resize(n < 0 ? 0 : static_cast<std::size_t>(n));
-    return buffer;
-  }
-  void Send(const Bytes& bytes) { socket_->SendTo(bytes.data(), bytes.size(), client_); }
-  void Send(const std::string& text) { Send(Bytes(text.begin(), text.end())); }
-  const Endpoint& client() const { return client_; }
-  int Handshake(DeviceKind kind) { return testing::PlayHandshake(*socket_, &client_, kind, 77); }
-
- private:
-  std::unique_ptr<UdpSocket> socket_;
-  Endpoint client_;
-};
+using Peer = testing::FakeDevice;
 
 Bytes StatePacket(long k, int joints = 7) {
   ArmStateMsg m = ScriptedState(k);
