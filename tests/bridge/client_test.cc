@@ -399,9 +399,11 @@ TEST(FixedRateLoopTest, KeepsItsAverageRate) {
   EXPECT_EQ(loop.iterations(), 40);
   // never early: deadline 40 is 0.2 s after the start
   EXPECT_GE(elapsed, 0.2 - 1e-3);
-  // and not late unless the machine made it overrun (then deadlines were skipped)
+  // and not late unless the machine made it overrun (then deadlines were skipped):
+  // with every deadline met, only the last wake-up's latency is added, so 1.5x
+  // the interval is far from the bound
   if (loop.overruns() == 0) {
-    EXPECT_LT(elapsed, 0.2 + 1.0);
+    EXPECT_LT(elapsed, 1.5 * 0.2);
   }
 }
 
