@@ -23,6 +23,7 @@ struct RunArgs {
   bool list_signals = false;
   double duration_s = 0;  ///< > 0 overrides the scenario's duration
   long long seed = -1;    ///< >= 0 overrides the scenario's seed
+  int rt_priority = -1;   ///< >= 0 overrides the scenario's realtime.priority
 };
 int RunCommand(const RunArgs& args);
 
@@ -35,6 +36,7 @@ struct ServeArgs {
   double duration_s = 0;
   bool json = false;               ///< devices: print the describe JSON too
   bool quiet = false;              ///< serve: no per-device counter lines
+  int rt_priority = -1;            ///< >= 0 overrides the scenario's realtime.priority
 };
 int ServeCommand(const ServeArgs& args);
 int DevicesCommand(const ServeArgs& args);
@@ -62,6 +64,8 @@ Subcommand AddCameraCommand(CLI::App& app);  // cli_camera.cc
 Subcommand AddVisionCommand(CLI::App& app);  // cli_vision.cc
 Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
 
+/// Prints one line about realtime priority (RunOptions::on_realtime) on stderr.
+void PrintRealtime(const std::string& line);
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.
 int WithErrorReport(const std::function<int()>& body);

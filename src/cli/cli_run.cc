@@ -60,6 +60,11 @@ void PrintPlots(const lab::Scenario& scenario, const std::string& out_dir, const
   for (const std::string& why : result.plots_skipped) std::printf("plot skipped: %s\n", why.c_str());
 }
 
+void PrintRealtime(const std::string& line) {
+  std::fprintf(stderr, "vlab: %s\n", line.c_str());
+  std::fflush(stderr);
+}
+
 int WithErrorReport(const std::function<int()>& body) {
   try {
     return body();
@@ -91,6 +96,8 @@ int RunCommand(const RunArgs& args) {
     options.out_dir = out_dir;
     options.interrupt = &g_stop_requested;
     options.progress = [&bar](double f) { bar.Update(f); };
+    if (args.rt_priority >= 0) options.realtime_priority = args.rt_priority;
+    if (!args.quiet) options.on_realtime = PrintRealtime;
     const lab::RunResult r = lab->Run(options);
     bar.Finish();
 

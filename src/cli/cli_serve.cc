@@ -67,6 +67,8 @@ int ServeCommand(const ServeArgs& args) {
       std::printf("%s\n", line.c_str());
       std::fflush(stdout);
     };
+    if (args.rt_priority >= 0) options.realtime_priority = args.rt_priority;
+    if (!args.quiet) options.on_realtime = PrintRealtime;
     if (!args.quiet) {
       options.on_waiting = [](const std::string& message) {
         std::fprintf(stderr, "vlab serve: %s\n", message.c_str());

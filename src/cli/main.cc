@@ -31,6 +31,11 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   run_cmd->add_option("--seed", run.seed, "Override the scenario's seed (>= 0)");
   run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
+  const char* rt_help =
+      "SCHED_FIFO priority (1-99) of the control thread in lockstep and realtime runs, with memory locked, "
+      "when permitted (root, CAP_SYS_NICE or ulimit -r); 0: normal priority (default: the scenario's "
+      "realtime.priority); what was granted is printed and recorded in summary.json";
+  run_cmd->add_option("--rt-priority", run.rt_priority, rt_help)->check(CLI::Range(0, 99));
 
   vlab::cli::ServeArgs serve;
   CLI::App* serve_cmd =
@@ -50,6 +55,7 @@ int main(int argc, char** argv) {
   serve_cmd->add_flag("-q,--quiet", serve.quiet,
                       "Only the start line and the result line (no line saying whom it waits for, no counters)");
   serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
+  serve_cmd->add_option("--rt-priority", serve.rt_priority, rt_help)->check(CLI::Range(0, 99));
   devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
 
   vlab::cli::BenchArgs bench;

@@ -49,6 +49,9 @@ struct LockstepConfig {
 /// Realtime clock: periods paced to the wall clock.
 struct RealtimeConfig {
   double factor = 1.0;  ///< simulated seconds per wall second
+  /// SCHED_FIFO priority of the lab's control thread in lockstep and realtime
+  /// runs, when the user may have it (core_realtime.h); 0: normal priority.
+  int priority = 0;
 };
 
 /// Longest a clock waits without looking at its stop flag, s.

@@ -4,6 +4,7 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <sched.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
@@ -147,7 +148,7 @@ std::string ExecutableDir() {
 }
 
 std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<std::string>& argv,
-                                                              const std::string& log_path) {
+                                                              const std::string& log_path, int realtime_priority) {
   if (argv.empty() || argv[0].empty()) throw InputError("controller.command: no program named");
   std::unique_ptr<ExternalController> c(new ExternalController());
   c->program_ = argv[0];
@@ -204,6 +205,16 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
     ::sigprocmask(SIG_SETMASK, &none, nullptr);
     ::signal(SIGINT, SIG_DFL);
     ::signal(SIGTERM, SIG_DFL);
+    if (realtime_priority > 0) {
+      // inherited through exec and by the program's own children; a refusal is
+      // reported (as -errno, before any exec error) and the program runs anyway
+      sched_param param{};
+      param.sched_priority = realtime_priority;
+      if (::sched_setscheduler(0, SCHED_FIFO, &param) != 0) {
+        const int refused = -errno;
+        (void)!::write(kExecErrorFd, &refused, sizeof(refused));
+      }
+    }
     ::execvp(args[0], args.data());
     const int error = errno;
     (void)!::write(kExecErrorFd, &error, sizeof(error));
@@ -221,13 +232,32 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
   }
   c->pid_ = pid;
   ::setpgid(pid, pid);  // also here: no race with the first kill
-  int exec_error = 0;
+  // until exec closes the pipe: a scheduling refusal (-errno), then an exec error (errno)
+  int exec_error = 0, sched_error = 0;
   ssize_t n;
-  do {
-    n = ::read(error_pipe[0], &exec_error, sizeof(exec_error));
-  } while (n < 0 && errno == EINTR);
+  for (;;) {
+    int value = 0;
+    do {
+      n = ::read(error_pipe[0], &value, sizeof(value));
+    } while (n < 0 && errno == EINTR);
+    if (n != static_cast<ssize_t>(sizeof(value))) break;
+    if (value < 0) {
+      sched_error = -value;
+    } else {
+      exec_error = value;
+      break;
+    }
+  }
   ::close(error_pipe[0]);
-  if (n == static_cast<ssize_t>(sizeof(exec_error))) {
+  c->realtime_.requested = realtime_priority;
+  if (realtime_priority > 0 && exec_error == 0) {
+    // after the exec: what the program runs at
+    c->realtime_.granted = ProcessRealtimePriority(pid) == realtime_priority;
+    if (!c->realtime_.granted) {
+      c->realtime_.reason = sched_error != 0 ? RealtimeRefusal(realtime_priority, sched_error) : "not in force after exec";
+    }
+  }
+  if (exec_error != 0) {
     WaitFor(pid, &c->status_, 0);
     c->reaped_ = true;
     throw InputError("controller.command: cannot run '" + argv[0] + "': " + std::strerror(exec_error));

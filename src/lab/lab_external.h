@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "core/core_realtime.h"
 #include "lab/lab_bridge.h"
 #include "lab/lab_scenario.h"
 
@@ -66,8 +67,11 @@ class ExternalController {
   /// /dev/null and stdout and stderr appended to log_path ("": a temporary
   /// file, removed with this object). Throws InputError
   /// when the program cannot be executed (missing, not executable).
+  /// realtime_priority > 0: the program (and every process it starts) runs
+  /// SCHED_FIFO at that priority when the user may have it (core_realtime.h);
+  /// refused, it runs at normal priority and realtime() says why.
   static std::unique_ptr<ExternalController> Start(const std::vector<std::string>& argv,
-                                                   const std::string& log_path);
+                                                   const std::string& log_path, int realtime_priority = 0);
   ~ExternalController();
   ExternalController(const ExternalController&) = delete;
   ExternalController& operator=(const ExternalController&) = delete;
@@ -87,6 +91,8 @@ class ExternalController {
   /// The last non-empty line the program wrote (for error messages).
   std::string LastLogLine() const;
   const std::string& program() const { return program_; }
+  /// What the realtime_priority of Start() got, read off the program after its exec.
+  const RealtimeGrant& realtime() const { return realtime_; }
 
  private:
   ExternalController() = default;
@@ -96,6 +102,7 @@ class ExternalController {
   bool reaped_ = false;
   bool stopped_ = false;  // ended by Stop() rather than by itself
   std::string program_;
+  RealtimeGrant realtime_;
   std::string log_path_;
   bool log_is_temporary_ = false;
 };

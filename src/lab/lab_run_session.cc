@@ -96,7 +96,8 @@ void RunSession::Prepare() {
     controller_ = ExternalController::Start(
         ExpandCommand(sc.controller.command, CommandValues(sc, bridge_->Devices(), out_ ? out_->File("") : ""),
                       sc.controller.where),
-        log_path);
+        log_path, sc.controller.realtime_priority);
+    result_.controller.realtime = controller_->realtime();
     bridge_->WatchPeerExit(controller_->exit_fd());
   }
   if (options_.record) {
@@ -133,7 +134,24 @@ void RunSession::Start() {
   Publish(0);
   RenderAfterPublish(0.0);
   NoteWaiting();
+  RequestPriority();
   t_loop_ = t_progress_ = WallClock::now();
+}
+
+void RunSession::RequestPriority() {
+  // the threads made before this one (the log writer) keep normal priority
+  const int priority = options_.realtime_priority.value_or(s_.scenario.realtime.priority);
+  if (clock_->mode() != ClockMode::kFast) {
+    result_.realtime = RequestRealtime(priority);
+  } else if (priority > 0) {
+    result_.realtime.requested = priority;
+    result_.realtime.reason = "not used: the fast clock has no deadlines";
+  }
+  if (!options_.on_realtime) return;
+  if (priority > 0) options_.on_realtime(result_.realtime.Line());
+  if (result_.controller.realtime.requested > 0) {
+    options_.on_realtime("controller: " + result_.controller.realtime.Line());
+  }
 }
 
 void RunSession::NoteWaiting() {
@@ -237,12 +255,14 @@ bool RunSession::Period() {
 
 RunResult RunSession::Finish() {
   result_.loop_wall_s = Seconds(t_loop_, WallClock::now());
+  DropRealtime(result_.realtime);  // the outputs are written at normal priority
   if (controller_) {
     controller_->Stop(kControllerGrace_s);
     if (!controller_->Succeeded() && result_.failure.empty()) {
       result_.failure = ControllerFailure(*controller_, k_ * period_);
     }
-    result_.controller = {controller_->program(), controller_->Outcome()};
+    result_.controller.program = controller_->program();
+    result_.controller.outcome = controller_->Outcome();
   }
   result_.periods = k_;
   result_.sim_time_s = k_ * period_;

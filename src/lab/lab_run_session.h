@@ -59,6 +59,8 @@ class RunSession {
   bool Interrupted();
   // vlab serve: says once which devices period 0 waits for
   void NoteWaiting();
+  // lockstep and realtime: the control thread on SCHED_FIFO when asked and permitted
+  void RequestPriority();
   // vlab serve in lockstep: why the run had no controller ("" when a command arrived)
   std::string NoController() const;
   void WriteOutputs();

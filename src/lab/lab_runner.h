@@ -22,6 +22,7 @@
 #include "lab/lab_bridge.h"
 #include "lab/lab_checks.h"
 #include "core/core_clock.h"
+#include "core/core_realtime.h"
 #include "core/core_mujoco.h"
 #include "lab/lab_scenario.h"
 
@@ -61,6 +62,12 @@ struct RunOptions {
   /// cameras). It reads the state and must not change it: mjv_updateScene
   /// wants a non-const mjData, nothing else may write through it.
   std::function<void(double t, const mjModel* m, mjData* d)> observe;
+  /// SCHED_FIFO priority of the control thread (0: normal) instead of the
+  /// scenario's realtime.priority; lockstep and realtime runs only.
+  std::optional<int> realtime_priority;
+  /// Called once before period 0 with what each realtime priority asked for got
+  /// (the lab's, and an external controller's), one line each.
+  std::function<void(const std::string& line)> on_realtime;
 };
 
 /// What a recorded run computed.
@@ -91,6 +98,8 @@ struct RunResult {
   double total_wall_s = 0.0;  ///< wall time including writing outputs
   Recording recording;  ///< if RunOptions::record
   ClockMode clock = ClockMode::kFast;  ///< the clock that ran
+  /// The control thread's realtime priority: asked for, granted, and why not.
+  RealtimeGrant realtime;
   ClockStats clock_stats;
   std::vector<ServedDevice> served;  ///< served devices with their counters (vlab serve)
   std::vector<double> latencies_s;   ///< command arrival-to-apply latencies (vlab serve)
@@ -101,6 +110,7 @@ struct RunResult {
   struct {
     std::string program;
     std::string outcome;
+    RealtimeGrant realtime;  ///< its controller.realtime_priority, read off the program
   } controller;
 };
 

@@ -7,6 +7,7 @@
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "core/core_realtime.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/lab_yaml.h"
 
@@ -81,6 +82,10 @@ ControllerConfig ReadController(MapReader r) {
     c.type = ControllerType::kExternal;
     c.command = r.Strings("command", {});
     if (c.command.empty() || c.command[0].empty()) r.Fail("command", "expected [PROGRAM, ARGUMENT, ...]");
+    c.realtime_priority = r.Integer("realtime_priority", 0);
+    if (c.realtime_priority < 0 || c.realtime_priority > kMaxRealtimePriority) {
+      r.Fail("realtime_priority", "must be 0 (normal priority) to 99 (SCHED_FIFO)");
+    }
     r.Finish();
     return c;
   }
@@ -287,6 +292,10 @@ Scenario LoadScenario(const std::string& path) {
   MapReader realtime = r.Map("realtime");
   s.realtime.factor = realtime.Number("factor", s.realtime.factor);
   if (!(s.realtime.factor > 0 && s.realtime.factor <= 1000)) realtime.Fail("factor", "must be in (0, 1000]");
+  s.realtime.priority = realtime.Integer("priority", s.realtime.priority);
+  if (s.realtime.priority < 0 || s.realtime.priority > kMaxRealtimePriority) {
+    realtime.Fail("priority", "must be 0 (normal priority) to 99 (SCHED_FIFO)");
+  }
   realtime.Finish();
   s.keyframe = r.String("keyframe", "");
   if (r.Has("keyframe")) s.keyframe_where = YamlWhere(path, root["keyframe"]);

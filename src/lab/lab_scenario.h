@@ -65,6 +65,9 @@ struct ControllerConfig {
   // external: a program `vlab run` starts, with {DEVICE}, {bin}, {scenario_dir}
   // and {duration} expanded (lab_external.h); `vlab serve` does not start it
   std::vector<std::string> command;
+  /// SCHED_FIFO priority the program (and what it starts) runs at, when the
+  /// user may have it; 0: normal priority
+  int realtime_priority = 0;
   // joint_pd and task_space
   control::TimeScalingType timing = control::TimeScalingType::kQuintic;  ///< quintic | trapezoidal
   double start_s = 0.0;            ///< hold until this time, then follow the path

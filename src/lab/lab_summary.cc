@@ -74,6 +74,10 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                         {"refused_full", c.sessions.refused_full},
                         {"describes_limited", c.sessions.describes_limited}}}});
   }
+  const auto grant = [](const RealtimeGrant& g) {
+    return json{{"requested", g.requested}, {"granted", g.granted}, {"memory_locked", g.memory_locked},
+                {"reason", g.reason}};
+  };
   json summary = {
       {"scenario", sc.name},
       {"file", sc.file},
@@ -89,6 +93,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"timestep_s", m->opt.timestep},
       {"checks", checks},
       {"clock_stats", clock},
+      {"realtime_priority", {{"lab", grant(r.realtime)}, {"controller", grant(r.controller.realtime)}}},
       {"bridge", {{"devices", served}, {"command_latency_s", Distribution(r.latencies_s)}}},
       {"controller", {{"type", ControllerTypeName(sc.controller.type)},
                       {"program", r.controller.program},

@@ -7,11 +7,13 @@
 // stops the controller; the program inherits none of the lab's descriptors; a program that cannot
 // run and an unknown placeholder are bad input (exit 2, nothing written). Placeholder expansion
 // itself is checked directly.
+#include <sched.h>
 #include <signal.h>
 
 #include <cerrno>
 #include <filesystem>
 #include <map>
+#include <thread>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -241,6 +243,51 @@ TEST(ExternalController, GetsOnlyItsOwnDescriptors) {
   EXPECT_EQ(listing.find("socket:"), std::string::npos) << listing;
   EXPECT_EQ(listing.find("log.csv"), std::string::npos) << listing;
   EXPECT_EQ(listing.find(".mp4"), std::string::npos) << listing;
+}
+
+// what the kernel allows this process, asked without the code under test
+bool FifoPermitted() {
+  bool permitted = false;
+  std::thread probe([&] {
+    sched_param p{};
+    p.sched_priority = 1;
+    permitted = ::sched_setscheduler(0, SCHED_FIFO, &p) == 0;  // this thread only
+  });
+  probe.join();
+  return permitted;
+}
+
+TEST(ExternalController, RunsAtItsRealtimePriorityWhenPermittedAndTheRunRecordsIt) {
+  TempDir dir;
+  // the program prints its own rt_priority and policy (fields 40 and 41 of /proc/PID/stat)
+  std::string text = Scenario(R"(["sh", "-c", "read -r s < /proc/$$/stat; set -- $s; shift 39; echo \"$1 $2\""])", 0.1);
+  text.replace(text.find("  type: external\n"), 17, "  type: external\n  realtime_priority: 7\n");
+  WriteFile(dir / "s.yaml", text + "realtime: {priority: 9}\n");
+  const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " --out " + (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const bool permitted = FifoPermitted();
+  // SCHED_FIFO is policy 1
+  EXPECT_EQ(Lines(ReadFile(dir / "out/controller.log")).at(0), permitted ? "7 1" : "0 0");
+  const nlohmann::json rt = nlohmann::json::parse(ReadFile(dir / "out/summary.json"))["realtime_priority"];
+  EXPECT_EQ(rt["controller"]["requested"], 7);
+  EXPECT_EQ(rt["controller"]["granted"], permitted) << rt.dump();
+  EXPECT_EQ(rt["lab"]["requested"], 9);
+  EXPECT_EQ(rt["lab"]["granted"], permitted) << rt.dump();
+  // printed once each, on stderr
+  const std::string lab_line = permitted ? "vlab: realtime priority 9 granted (SCHED_FIFO" : "vlab: realtime priority 9 not granted: ";
+  EXPECT_NE(r.err.find(lab_line), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(permitted ? "vlab: controller: realtime priority 7 granted" : "vlab: controller: realtime priority 7 not granted"),
+            std::string::npos)
+      << r.err;
+  if (!permitted) EXPECT_NE(rt["lab"]["reason"].get<std::string>().find("rtprio"), std::string::npos) << rt.dump();
+
+  // --rt-priority 0 overrides the scenario: the lab runs at normal priority, the controller still asks
+  const ProcessResult off = RunVlab("run " + (dir / "s.yaml") + " -q --rt-priority 0 --out " + (dir / "off"));
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  const nlohmann::json rt_off = nlohmann::json::parse(ReadFile(dir / "off/summary.json"))["realtime_priority"];
+  EXPECT_EQ(rt_off["lab"]["requested"], 0);
+  EXPECT_EQ(rt_off["lab"]["granted"], false);
+  EXPECT_EQ(off.err.find("realtime priority"), std::string::npos) << "-q prints nothing: " << off.err;
 }
 
 TEST(ExternalController, BadCommandsAreBadInput) {

@@ -1,0 +1,94 @@
+// Realtime scheduling when permitted (src/core/core_realtime.h): what a thread
+// asks for is what it gets when the machine allows SCHED_FIFO, and a refusal
+// says why; either way the caller goes on. Whether this machine allows it is
+// probed independently (sched_setscheduler on a scratch thread), so the test
+// asserts the right outcome as root (CI), with CAP_SYS_NICE or an rtprio limit,
+// and without any of them.
+#include <pthread.h>
+#include <sched.h>
+
+#include <cerrno>
+#include <stdexcept>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "core/core_realtime.h"
+
+namespace vlab {
+namespace {
+
+// the kernel's answer for this process, asked without the code under test
+bool FifoPermitted(int priority) {
+  bool permitted = false;
+  std::thread probe([&] {
+    sched_param p{};
+    p.sched_priority = priority;
+    permitted = ::sched_setscheduler(0, SCHED_FIFO, &p) == 0;  // 0: this thread only
+  });
+  probe.join();
+  return permitted;
+}
+
+int ThreadPolicy(int* priority) {
+  int policy = 0;
+  sched_param p{};
+  ::pthread_getschedparam(::pthread_self(), &policy, &p);
+  *priority = p.sched_priority;
+  return policy;
+}
+
+TEST(Realtime, GrantedExactlyWhenTheKernelPermitsAndDroppedAfter) {
+  const bool permitted = FifoPermitted(20);
+  std::thread worker([&] {
+    const RealtimeGrant g = RequestRealtime(20);
+    int priority = -1;
+    const int policy = ThreadPolicy(&priority);
+    EXPECT_EQ(g.requested, 20);
+    EXPECT_EQ(g.granted, permitted) << g.Line();
+    if (permitted) {
+      EXPECT_EQ(policy, SCHED_FIFO);
+      EXPECT_EQ(priority, 20);
+      EXPECT_EQ(g.Line().rfind("realtime priority 20 granted (SCHED_FIFO", 0), 0u) << g.Line();
+    } else {
+      EXPECT_EQ(policy, SCHED_OTHER);
+      EXPECT_FALSE(g.memory_locked);
+      EXPECT_NE(g.reason.find("rtprio"), std::string::npos) << g.reason;  // says what would grant it
+      EXPECT_NE(g.Line().find("running at normal priority"), std::string::npos) << g.Line();
+    }
+    DropRealtime(g);
+    EXPECT_EQ(ThreadPolicy(&priority), SCHED_OTHER);
+    EXPECT_EQ(priority, 0);
+  });
+  worker.join();
+}
+
+TEST(Realtime, ZeroAsksForNothingAndOutOfRangeIsRefused) {
+  std::thread worker([] {
+    const RealtimeGrant g = RequestRealtime(0);
+    EXPECT_FALSE(g.granted);
+    EXPECT_TRUE(g.reason.empty());
+    EXPECT_EQ(g.Line(), "realtime priority not requested");
+    int priority = -1;
+    EXPECT_EQ(ThreadPolicy(&priority), SCHED_OTHER);
+    EXPECT_THROW(RequestRealtime(100), std::invalid_argument);
+    EXPECT_THROW(RequestRealtime(-1), std::invalid_argument);
+    EXPECT_FALSE(SetThreadRealtime(0));
+    EXPECT_FALSE(SetThreadRealtime(100));
+  });
+  worker.join();
+}
+
+TEST(Realtime, AThreadsPriorityIsReadBackPerProcess) {
+  EXPECT_EQ(ProcessRealtimePriority(0), 0);  // this process's main thread: normal priority
+  EXPECT_EQ(ProcessRealtimePriority(0x7ffffff0), -1);  // no such process
+}
+
+TEST(Realtime, ARefusalNamesWhatWouldGrantIt) {
+  const std::string why = RealtimeRefusal(50, EPERM);
+  EXPECT_NE(why.find("root, CAP_SYS_NICE or an rtprio limit >= 50"), std::string::npos) << why;
+  EXPECT_NE(why.find("ulimit -r is "), std::string::npos) << why;
+}
+
+}  // namespace
+}  // namespace vlab
