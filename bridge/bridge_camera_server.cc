@@ -13,11 +13,34 @@
 
 namespace vlab::bridge {
 
-struct CameraServer::Jpeg {
+struct FrameEncoder::Jpeg {
   cv::Mat bgr;
   std::vector<uchar> bytes;
   std::vector<int> params;
 };
+
+FrameEncoder::FrameEncoder(CameraEncoding encoding, int jpeg_quality) : encoding_(encoding), jpeg_(new Jpeg) {
+  jpeg_->params = {cv::IMWRITE_JPEG_QUALITY, jpeg_quality};
+}
+
+FrameEncoder::~FrameEncoder() = default;
+
+bool FrameEncoder::Encode(int width, int height, const std::uint8_t* rgb, std::vector<std::uint8_t>* out) {
+  const std::size_t raw_bytes = 3u * static_cast<std::size_t>(width) * height;
+  if (encoding_ == CameraEncoding::kRaw) {
+    out->assign(rgb, rgb + raw_bytes);
+    return true;
+  }
+  try {
+    const cv::Mat view(height, width, CV_8UC3, const_cast<std::uint8_t*>(rgb));
+    cv::cvtColor(view, jpeg_->bgr, cv::COLOR_RGB2BGR);
+    if (!cv::imencode(".jpg", jpeg_->bgr, jpeg_->bytes, jpeg_->params) || jpeg_->bytes.empty()) return false;
+  } catch (const cv::Exception&) {
+    return false;  // (never with a valid image; counted by the caller, never thrown)
+  }
+  out->assign(jpeg_->bytes.begin(), jpeg_->bytes.end());
+  return true;
+}
 
 std::string CameraDescribeJson(const CameraDescription& d, const std::string& address, int port,
                                std::size_t chunk_bytes) {
@@ -68,7 +91,8 @@ void Check(bool ok, const std::string& what) {
 
 }  // namespace
 
-CameraServer::CameraServer(const CameraServerConfig& config) : config_(config), jpeg_(new Jpeg) {}
+CameraServer::CameraServer(const CameraServerConfig& config)
+    : config_(config), encoder_(new FrameEncoder(config.description.encoding, config.description.jpeg_quality)) {}
 CameraServer::~CameraServer() = default;
 
 std::unique_ptr<CameraServer> CameraServer::Create(const CameraServerConfig& config) {
@@ -99,7 +123,6 @@ std::unique_ptr<CameraServer> CameraServer::Create(const CameraServerConfig& con
   s->chunk_.resize(ChunkDatagramBytes(config.chunk_bytes));
   s->payload_.reserve(kMaxPacketValues);
   s->drop_state_ = config.test_drop_seed;
-  s->jpeg_->params = {cv::IMWRITE_JPEG_QUALITY, d.jpeg_quality};
   return s;
 }
 
@@ -260,20 +283,12 @@ bool CameraServer::SendImage(std::int64_t id, double time_s, const std::uint8_t*
     h.frame_bytes = 3u * static_cast<std::size_t>(d.width) * d.height;
     return SendBytes(h, rgb);
   }
-  bool encoded = false;
-  try {
-    const cv::Mat view(d.height, d.width, CV_8UC3, const_cast<std::uint8_t*>(rgb));
-    cv::cvtColor(view, jpeg_->bgr, cv::COLOR_RGB2BGR);
-    encoded = cv::imencode(".jpg", jpeg_->bgr, jpeg_->bytes, jpeg_->params) && !jpeg_->bytes.empty();
-  } catch (const cv::Exception&) {
-    encoded = false;  // (never with a valid image; counted, never thrown)
-  }
-  if (!encoded) {
+  if (!encoder_->Encode(d.width, d.height, rgb, &encoded_)) {
     ++counters_.refused_frames;
     return false;
   }
-  h.frame_bytes = jpeg_->bytes.size();
-  return SendBytes(h, jpeg_->bytes.data());
+  h.frame_bytes = encoded_.size();
+  return SendBytes(h, encoded_.data());
 }
 
 }  // namespace vlab::bridge

@@ -89,6 +89,26 @@ struct CameraServerCounters {
   long subscribers_dropped = 0;  ///< silent subscribers dropped
 };
 
+/// Encodes RGB8 images (rows top-down) as a camera sends them: raw bytes, or a
+/// JPEG file at a quality. Keeps its buffers between frames. One thread at a
+/// time; separate encoders may run on separate threads (the lab encodes on a
+/// camera's render worker, off its control thread).
+class FrameEncoder {
+ public:
+  FrameEncoder(CameraEncoding encoding, int jpeg_quality);
+  ~FrameEncoder();
+  FrameEncoder(const FrameEncoder&) = delete;
+  FrameEncoder& operator=(const FrameEncoder&) = delete;
+  /// width x height x 3 bytes of rgb into *out (resized). False only when
+  /// the JPEG encoder fails (never for a valid image).
+  bool Encode(int width, int height, const std::uint8_t* rgb, std::vector<std::uint8_t>* out);
+
+ private:
+  CameraEncoding encoding_;
+  struct Jpeg;
+  std::unique_ptr<Jpeg> jpeg_;
+};
+
 class CameraServer {
  public:
   /// Validates the configuration and binds the socket. Throws
@@ -140,8 +160,8 @@ class CameraServer {
   std::vector<unsigned char> receive_buffer_;
   std::vector<unsigned char> chunk_;
   std::vector<double> payload_;
-  struct Jpeg;
-  std::unique_ptr<Jpeg> jpeg_;  // encoder buffers (OpenCV)
+  std::unique_ptr<FrameEncoder> encoder_;  // SendImage's
+  std::vector<std::uint8_t> encoded_;
 };
 
 }  // namespace vlab::bridge

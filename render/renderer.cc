@@ -1,10 +1,16 @@
 #include "render/renderer.h"
 
+#include <dirent.h>
+#include <sched.h>
+
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 
 #include "core/core_errors.h"
@@ -120,6 +126,24 @@ struct Renderer::Impl {
 };
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+int SetRasterizerPriority(int priority) {
+  DIR* tasks = ::opendir("/proc/self/task");
+  if (!tasks) return 0;
+  int changed = 0;
+  while (const dirent* e = ::readdir(tasks)) {
+    if (e->d_name[0] == '.') continue;
+    std::ifstream comm(std::string("/proc/self/task/") + e->d_name + "/comm");
+    std::string name;
+    std::getline(comm, name);
+    if (name.rfind("llvmpipe-", 0) != 0) continue;
+    sched_param param{};
+    param.sched_priority = priority;
+    if (::sched_setscheduler(std::atoi(e->d_name), priority > 0 ? SCHED_FIFO : SCHED_OTHER, &param) == 0) ++changed;
+  }
+  ::closedir(tasks);
+  return changed;
+}
+
 Renderer::~Renderer() = default;
 int Renderer::width() const { return impl_->options.width; }
 int Renderer::height() const { return impl_->options.height; }
@@ -135,6 +159,10 @@ std::unique_ptr<Renderer> Renderer::Create(const mjModel* m, const Options& opti
                           std::to_string(max_h) + " of " + scene + " (raise <visual><global offwidth=\"...\" " +
                           "offheight=\"...\"/> in the scene)");
   }
+  // one creation at a time in the process: MuJoCo loads its GL function pointers
+  // (process-global) in mjr_makeContext, and offsamples is set on the shared model below
+  static std::mutex create_mutex;
+  std::lock_guard<std::mutex> lock(create_mutex);
   auto impl = std::make_unique<Impl>();
   Impl& r = *impl;
   r.m = m;

@@ -1,8 +1,11 @@
 // Offscreen rendering of MJCF cameras on OSMesa (no GPU, no display).
 //
 // One Renderer owns one OSMesa GL context and one mjrContext for one model.
-// MuJoCo's GL function pointers are process-global: create and use every
-// Renderer of a process from the same thread. Rendering reads mjData and never
+// Threads: create, use and destroy a Renderer on one thread. Renderers on
+// different threads may draw at the same time and draw the same pixels as one
+// thread would (Mesa dispatches MuJoCo's process-global GL function pointers to
+// the calling thread's current context; tests/render/renderer_threads_test.cc);
+// creation is serialised inside Create. Rendering reads mjData and never
 // changes it (mjv_updateScene takes a non-const pointer; nothing is written).
 //
 // Images are W x H with rows top-down (image row 0 is the top of the view),
@@ -68,6 +71,15 @@ Intrinsics CameraIntrinsics(const mjModel* m, int camera, int width, int height)
 /// Id of the MJCF camera `name`; throws InputError naming it and listing the
 /// model's cameras when there is none of that name.
 int CameraId(const mjModel* m, const std::string& name);
+
+/// Mesa's llvmpipe draws with a pool of rasterizer threads ("llvmpipe-N"), one
+/// pool per process, made with the first GL context and shared by every
+/// renderer. A renderer on a realtime thread waits for them, so they must run
+/// at its priority or a busy machine stalls it: puts every such thread of this
+/// process on SCHED_FIFO at `priority` (1..99), or back to normal priority (0).
+/// Returns how many threads it changed (0 when there are none yet, or when not
+/// permitted).
+int SetRasterizerPriority(int priority);
 
 class Renderer {
  public:

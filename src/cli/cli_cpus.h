@@ -14,5 +14,9 @@ std::string CpuList(const std::vector<int>& cpus);
 /// Pins the calling thread, and the threads and processes it starts later (a
 /// log writer, a child), to `cpus` (empty: left as it is).
 void PinTo(const std::vector<int>& cpus);
+/// Starts `n` processes that spin on the CPU at normal priority (a competing
+/// load), ended with this process if it dies; StopCpuHogs ends and reaps them.
+std::vector<int> StartCpuHogs(int n);
+void StopCpuHogs(const std::vector<int>& pids);
 
 }  // namespace vlab::cli

@@ -222,10 +222,11 @@ std::vector<ServedDevice> LabBridge::Devices() const {
   for (const Served& d : devices_) {
     const char* kind = bridge::KindName(static_cast<int>(d.device->kind()));
     if (const OwnTransport* t = d.device->own_transport()) {
-      out.push_back({d.device->name(), kind, t->address(), t->port(), t->describe_json(), t->counters()});
+      out.push_back(
+          {d.device->name(), kind, t->address(), t->port(), t->describe_json(), t->counters(), t->frames()});
     } else {
       out.push_back({d.device->name(), kind, d.socket->local_endpoint().address().to_string(), d.socket->local_port(),
-                     d.endpoint->config().describe_json, d.endpoint->counters()});
+                     d.endpoint->config().describe_json, d.endpoint->counters(), {}});
     }
   }
   return out;

@@ -44,6 +44,7 @@ struct ServedDevice {
   int port = 0;
   std::string describe_json;
   bridge::EndpointCounters counters;
+  FrameCounters frames;  ///< a camera's frames (zeros for other kinds)
 };
 
 class LabBridge final : public CommandSource {

@@ -125,6 +125,8 @@ void RunSession::RenderAfterPublish(double t) {
 }
 
 void RunSession::Start() {
+  // first: the threads started from here on (a camera's render worker) inherit it
+  RequestPriority();
   // row 0: the initial state, with the controller's view of it
   if (s_.controller) s_.RunController(0.0, options_, &replay_at_, &result_, controller_columns_);
   EmitRow(0.0);
@@ -134,12 +136,11 @@ void RunSession::Start() {
   Publish(0);
   RenderAfterPublish(0.0);
   NoteWaiting();
-  RequestPriority();
   t_loop_ = t_progress_ = WallClock::now();
 }
 
 void RunSession::RequestPriority() {
-  // the threads made before this one (the log writer) keep normal priority
+  // the threads made before (the log writer, in Prepare) keep normal priority
   const int priority = options_.realtime_priority.value_or(s_.scenario.realtime.priority);
   if (clock_->mode() != ClockMode::kFast) {
     result_.realtime = RequestRealtime(priority);

@@ -279,7 +279,9 @@ TEST(ExternalController, RunsAtItsRealtimePriorityWhenPermittedAndTheRunRecordsI
   EXPECT_NE(r.err.find(permitted ? "vlab: controller: realtime priority 7 granted" : "vlab: controller: realtime priority 7 not granted"),
             std::string::npos)
       << r.err;
-  if (!permitted) EXPECT_NE(rt["lab"]["reason"].get<std::string>().find("rtprio"), std::string::npos) << rt.dump();
+  if (!permitted) {
+    EXPECT_NE(rt["lab"]["reason"].get<std::string>().find("rtprio"), std::string::npos) << rt.dump();
+  }
 
   // --rt-priority 0 overrides the scenario: the lab runs at normal priority, the controller still asks
   const ProcessResult off = RunVlab("run " + (dir / "s.yaml") + " -q --rt-priority 0 --out " + (dir / "off"));

@@ -49,6 +49,13 @@ enum class CommandRole {
 };
 
 /// A device that serves itself on its own socket (a camera's chunked frames).
+/// Frames of a device that streams them (a camera).
+struct FrameCounters {
+  long sent = 0;     ///< frames sent to at least one subscriber
+  long late = 0;     ///< sent after their stamp + latency (realtime: the worker was late)
+  long dropped = 0;  ///< not rendered: the ring of frames in flight was full
+};
+
 class OwnTransport {
  public:
   virtual ~OwnTransport() = default;
@@ -65,6 +72,8 @@ class OwnTransport {
   virtual std::string address() const = 0;
   virtual std::string describe_json() const = 0;
   virtual bridge::EndpointCounters counters() const = 0;
+  /// A streaming device's frames (a camera's): sent, late, dropped; zeros for others.
+  virtual FrameCounters frames() const { return {}; }
 };
 
 class Device {

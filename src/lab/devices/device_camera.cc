@@ -1,10 +1,18 @@
 #include "lab/devices/device_camera.h"
 
+#include <pthread.h>
+#include <sched.h>
+
+#include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <stdexcept>
 
 #include "bridge/bridge_errors.h"
 #include "core/core_errors.h"
+#include "core/core_realtime.h"
 #include "lab/lab_log.h"
 #include "lab/lab_yaml.h"
 
@@ -81,12 +89,11 @@ std::unique_ptr<SimCamera> SimCamera::Create(const DeviceContext& context, const
     throw InputError(who + ": " + e.what());
   }
   cam->noise_ = sensors::CameraNoiseState(context.seed);
-  cam->queue_.resize(static_cast<std::size_t>(cam->model_->FramesInFlight()) + 2);
-  for (Pending& p : cam->queue_) p.rgb.resize(static_cast<std::size_t>(mc.width) * mc.height * 3);
+  // the frames in flight, and room for a worker a few frames behind (realtime)
+  cam->queue_.resize(static_cast<std::size_t>(cam->model_->FramesInFlight()) + 4);
+  for (Pending& p : cam->queue_) p.frame.data.reserve(static_cast<std::size_t>(mc.width) * mc.height * 3);
   return cam;
 }
-
-SimCamera::~SimCamera() = default;
 
 void SimCamera::Serve(const std::string& address, int port, const std::string& server, const std::string& clock) {
   bridge::CameraServerConfig sc;
@@ -113,6 +120,7 @@ void SimCamera::Serve(const std::string& address, int port, const std::string& s
   d.latency_s = config_.latency_s;
   d.noise = config_.noise;
   d.pose = m_->cam_bodyid[camera_] == 0 ? "fixed" : "moving";
+  realtime_ = clock == "realtime";
   try {
     server_ = bridge::CameraServer::Create(sc);
   } catch (const bridge::NetworkError& e) {
@@ -122,40 +130,147 @@ void SimCamera::Serve(const std::string& address, int port, const std::string& s
   }
 }
 
-void SimCamera::MakeRenderer() {
-  render::Renderer::Options o;
-  o.width = config_.width;
-  o.height = config_.height;
-  o.profile = config_.profile;
-  o.scene = scene_;
-  renderer_ = render::Renderer::Create(m_, o);
-  ideal_.width = config_.width;
-  ideal_.height = config_.height;
+// ---- the worker: renders, models the lens and sensor, encodes ----
+
+struct SimCamera::Worker {
+  std::thread thread;
+  std::mutex mutex;
+  std::condition_variable wake;  // to the worker: a frame was queued, or stop
+  std::condition_variable done;  // to the control thread: a frame is done, or the worker is ready
+  long queued = 0;               // (mutex) frames handed to the worker
+  long finished = 0;             // (mutex) frames it has done
+  std::size_t at = 0;            // (mutex) ring index of the next frame it renders
+  bool ready = false;            // (mutex) renderer made, warm-up drawn (or error set)
+  bool stop = false;             // (mutex)
+  std::string error;             // (mutex) why the renderer could not be made
+  long rendered = 0;             // (mutex)
+  mjData* warm = nullptr;        // the state of the warm-up draw (control thread's, read before ready)
+};
+
+SimCamera::SimCamera(const DeviceConfig& config) : Device(config) {}
+
+long SimCamera::frames_rendered() const {
+  if (!worker_) return 0;
+  std::lock_guard<std::mutex> lock(worker_->mutex);
+  return worker_->rendered;
 }
+
+void SimCamera::StartWorker(mjData* d) {
+  if (worker_) return;
+  for (Pending& p : queue_) {
+    if (!p.state) p.state = mj_makeData(m_);
+  }
+  worker_ = std::make_unique<Worker>();
+  worker_->warm = d;
+  worker_->thread = std::thread([this] { WorkerMain(); });
+  // the GL context and the first draw are paid here, before the run
+  std::unique_lock<std::mutex> lock(worker_->mutex);
+  worker_->done.wait(lock, [this] { return worker_->ready; });
+  if (!worker_->error.empty()) {
+    const std::string error = worker_->error;
+    lock.unlock();
+    StopWorker();
+    throw std::runtime_error(error);
+  }
+}
+
+void SimCamera::StopWorker() {
+  if (!worker_) return;
+  {
+    std::lock_guard<std::mutex> lock(worker_->mutex);
+    worker_->stop = true;
+  }
+  worker_->wake.notify_one();
+  worker_->thread.join();
+  worker_.reset();
+}
+
+void SimCamera::WorkerMain() {
+  Worker& w = *worker_;
+  // serving a realtime loop: one priority below the control thread it was started from
+  int policy = 0, priority = 0;
+  sched_param param{};
+  if (::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO) {
+    priority = std::max(kMinRealtimePriority, param.sched_priority - 1);
+    SetThreadRealtime(priority);
+  }
+  // everything GL lives and dies on this thread
+  std::unique_ptr<render::Renderer> renderer;
+  render::RgbImage ideal;
+  ideal.width = config_.width;
+  ideal.height = config_.height;
+  bridge::FrameEncoder encoder(config_.encoding, config_.jpeg_quality);
+  std::vector<std::uint8_t> rgb(static_cast<std::size_t>(config_.width) * config_.height * 3);
+  try {
+    render::Renderer::Options o;
+    o.width = config_.width;
+    o.height = config_.height;
+    o.profile = config_.profile;
+    o.scene = scene_;
+    renderer = render::Renderer::Create(m_, o);
+    // the rasterizer threads it waits for: at its priority, wherever they were made
+    if (priority > 0) render::SetRasterizerPriority(priority);
+    renderer->Render(w.warm, camera_, &ideal);
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(w.mutex);
+    w.error = who() + ": " + e.what();
+  }
+  {
+    std::lock_guard<std::mutex> lock(w.mutex);
+    w.ready = true;
+    w.warm = nullptr;
+  }
+  w.done.notify_all();
+  if (!renderer) return;
+
+  std::unique_lock<std::mutex> lock(w.mutex);
+  for (;;) {
+    w.wake.wait(lock, [&w] { return w.stop || w.finished < w.queued; });
+    if (w.finished == w.queued) break;  // stop, and nothing left to do
+    Pending& p = queue_[w.at];
+    lock.unlock();
+    bool ok = false;
+    try {
+      renderer->Render(p.state, camera_, &ideal);
+      // the lens, the sensor's noise (seeded, drawn in frame order), the encoding
+      model_->Apply(ideal.pixels.data(), rgb.data(), &noise_);
+      ok = encoder.Encode(config_.width, config_.height, rgb.data(), &p.frame.data);
+    } catch (const std::exception&) {
+      ok = false;  // (never for a valid camera and size: both were checked at creation)
+    }
+    lock.lock();
+    p.ok = ok;
+    p.done = true;
+    ++w.rendered;
+    ++w.finished;
+    w.at = (w.at + 1) % queue_.size();
+    w.done.notify_all();
+  }
+  lock.unlock();
+  renderer.reset();
+  if (priority > 0) render::SetRasterizerPriority(0);  // (the pool outlives this camera)
+}
+
+void SimCamera::Drain() {
+  if (!worker_) return;
+  std::unique_lock<std::mutex> lock(worker_->mutex);
+  worker_->done.wait(lock, [this] { return worker_->finished == worker_->queued; });
+}
+
+bool SimCamera::WaitDone(Pending& p, bool wait) {
+  std::unique_lock<std::mutex> lock(worker_->mutex);
+  if (wait) worker_->done.wait(lock, [&p] { return p.done; });
+  return p.done;
+}
+
+// ---- the control thread ----
 
 void SimCamera::BeforeRun(mjData* d) {
-  if (!server_ || renderer_) return;
-  MakeRenderer();
-  renderer_->Render(d, camera_, &ideal_);
-}
-
-void SimCamera::RenderFrame(std::int64_t id, double t, mjData* d, Pending* slot) {
-  if (!renderer_) MakeRenderer();
-  renderer_->Render(d, camera_, &ideal_);
-  model_->Apply(ideal_.pixels.data(), slot->rgb.data(), &noise_);
-  slot->id = id;
-  slot->stamp = t;
-  // the OpenCV camera frame: MuJoCo's camera axes with y and z flipped
-  const mjtNum* x = d->cam_xmat + 9 * camera_;
-  Eigen::Matrix3d r;
-  r << x[0], -x[1], -x[2], x[3], -x[4], -x[5], x[6], -x[7], -x[8];
-  slot->pose.valid = true;
-  slot->pose.p_WC = Eigen::Vector3d(d->cam_xpos[3 * camera_], d->cam_xpos[3 * camera_ + 1], d->cam_xpos[3 * camera_ + 2]);
-  slot->pose.q_WC = Eigen::Quaterniond(r).normalized();
-  ++rendered_;
+  if (server_) StartWorker(d);
 }
 
 void SimCamera::Unserve() {
+  StopWorker();  // (it finishes what was queued first)
   server_.reset();
   t_prev_ = -1;
   due_ = {0, 0};
@@ -163,44 +278,77 @@ void SimCamera::Unserve() {
   id_base_ = next_id_ = 0;
 }
 
+SimCamera::~SimCamera() {
+  StopWorker();
+  for (Pending& p : queue_) {
+    if (p.state) mj_deleteData(p.state);
+  }
+}
+
 void SimCamera::Deliver(double t, mjData* d) {
   if (!server_) return;
   server_->Poll(0.0);
+  const double t_before = t_prev_;  // the previous period end: frames due by then are late
   if (t < t_prev_) {  // the sim device reset the time: a new schedule, ids go on increasing
+    Drain();
     t_prev_ = -1;
     head_ = count_ = 0;
+    if (worker_) worker_->at = 0;  // (idle: nothing queued)
     id_base_ = next_id_;
   }
-  // frames due: rendered from this state (skipped while nobody listens); a frame
-  // stamped t is delivered at t only without latency, and then rendered now
+  // frames due: copied from this state (skipped while nobody listens); a frame
+  // stamped t is delivered at t only without latency, and then queued now
   due_ = model_->DueForRender(t_prev_, t);
   due_t_ = t;
   t_prev_ = t;
-  if (config_.latency_s <= kSameTime_s) RenderDue(d);
-  // frames delivered: their latency has passed
-  while (count_ > 0 && queue_[head_].stamp + config_.latency_s <= t + kSameTime_s) {
-    const Pending& p = queue_[head_];
-    server_->SendImage(p.id, p.stamp, p.rgb.data(), p.pose);
+  if (config_.latency_s <= kSameTime_s) QueueDue(d);
+  // frames delivered: their latency has passed, and (realtime) the worker has done them
+  while (count_ > 0) {
+    Pending& p = queue_[head_];
+    const bool due = p.frame.time_s + config_.latency_s <= t + kSameTime_s;
+    if (!due || !WaitDone(p, !realtime_)) break;
+    if (p.frame.time_s + config_.latency_s <= t_before + kSameTime_s) ++late_;
+    if (p.ok) server_->Send(p.frame);
     head_ = (head_ + 1) % queue_.size();
     --count_;
   }
 }
 
 void SimCamera::AfterPublish(mjData* d) {
-  if (server_) RenderDue(d);
+  if (server_) QueueDue(d);
 }
 
-void SimCamera::RenderDue(mjData* d) {
+void SimCamera::QueueDue(mjData* d) {
   for (std::int64_t i = due_.first; i < due_.end; ++i) {
     if (server_->subscribers() == 0) continue;
-    if (count_ == queue_.size()) {  // cannot happen with FramesInFlight() + 2 slots; never block
-      head_ = (head_ + 1) % queue_.size();
-      --count_;
+    if (!worker_) StartWorker(d);
+    if (count_ == queue_.size()) {  // the ring is full (realtime, a worker far behind): this frame is lost
+      ++dropped_;
+      continue;
     }
     Pending& slot = queue_[(head_ + count_) % queue_.size()];
-    RenderFrame(id_base_ + i, due_t_, d, &slot);
+    // (the worker is not reading this slot: it is free)
+    mj_copyData(slot.state, m_, d);
+    slot.frame.id = id_base_ + i;
+    slot.frame.time_s = due_t_;
+    slot.frame.width = config_.width;
+    slot.frame.height = config_.height;
+    slot.frame.encoding = config_.encoding;
+    // the OpenCV camera frame: MuJoCo's camera axes with y and z flipped
+    const mjtNum* x = d->cam_xmat + 9 * camera_;
+    Eigen::Matrix3d r;
+    r << x[0], -x[1], -x[2], x[3], -x[4], -x[5], x[6], -x[7], -x[8];
+    slot.frame.pose.valid = true;
+    slot.frame.pose.p_WC = Eigen::Vector3d(d->cam_xpos[3 * camera_], d->cam_xpos[3 * camera_ + 1], d->cam_xpos[3 * camera_ + 2]);
+    slot.frame.pose.q_WC = Eigen::Quaterniond(r).normalized();
     next_id_ = id_base_ + i + 1;
     ++count_;
+    {
+      std::lock_guard<std::mutex> lock(worker_->mutex);
+      slot.done = false;
+      ++worker_->queued;
+    }
+    worker_->wake.notify_one();
   }
   due_.first = due_.end;
 }

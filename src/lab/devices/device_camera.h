@@ -11,6 +11,15 @@
 //           in a control period is rendered from the state that closes the
 //           period (within one control period of its nominal stamp) and sent
 //           at the first period end at or after stamp + latency
+// Threading: a served camera renders and encodes on its own worker thread,
+// with its own GL context, from a copy of the state taken at the frame's
+// stamp (mj_copyData); the control thread only copies the state and sends the
+// chunks. In lockstep and fast runs a frame whose delivery time has come is
+// waited for, so the frame of stamp t has the same bytes and goes out in the
+// same period whatever the load; in realtime runs the control thread never
+// waits: a frame not ready in time goes out at the first period end after it
+// is (counted late). A worker of a SCHED_FIFO control thread runs one
+// priority below it (core_realtime.h).
 // Rendering reads the state and never changes it; nothing is rendered while
 // nobody subscribes. Under `vlab run` (nothing served) the device is idle.
 // It serves itself (OwnTransport): its frames travel in chunks on its own
@@ -64,7 +73,11 @@ class SimCamera final : public Device, public OwnTransport {
 
   const sensors::CameraModel& model() const { return *model_; }
   const bridge::CameraServer* server() const { return server_.get(); }
-  long frames_rendered() const { return rendered_; }
+  long frames_rendered() const;
+  /// Frames delivered after their stamp + latency (realtime: the worker was late).
+  long frames_late() const { return late_; }
+  /// Frames not rendered because the ring of frames in flight was full (realtime only).
+  long frames_dropped() const { return dropped_; }
 
   // OwnTransport: binds its socket (address, port) and makes the describe reply;
   // the renderer is made by BeforeRun (or the first frame), on the thread that runs the lab
@@ -72,6 +85,7 @@ class SimCamera final : public Device, public OwnTransport {
   bool served() const override { return server_ != nullptr; }
   /// Closes its socket and restarts its schedule (a run without serving).
   void Unserve() override;
+  /// Unserves and stops the worker.
   int fd() const override { return server_->fd(); }
   /// A non-blocking pass over what arrived (describe and subscribe requests).
   void PollRequests() override { server_->Poll(0.0); }
@@ -79,6 +93,7 @@ class SimCamera final : public Device, public OwnTransport {
   std::string address() const override { return server_->config().bind_address; }
   std::string describe_json() const override { return server_->describe_json(); }
   bridge::EndpointCounters counters() const override { return server_->counters().endpoint; }
+  FrameCounters frames() const override { return {server_->counters().frames_sent, late_, dropped_}; }
 
   // Device
   OwnTransport* own_transport() override { return this; }
@@ -97,16 +112,22 @@ class SimCamera final : public Device, public OwnTransport {
   void AfterPublish(mjData* d) override;
 
  private:
+  // a frame in flight: queued by the control thread (state copied), rendered and
+  // encoded by the worker (done), sent by the control thread once its time has come
   struct Pending {
-    std::int64_t id = -1;
-    double stamp = 0;
-    bridge::CameraPose pose;
-    std::vector<std::uint8_t> rgb;  // the webcam image (after the lens and noise)
+    mjData* state = nullptr;  // the state at the stamp (owned; made with the ring)
+    bridge::CameraFrame frame;
+    bool done = false;  // (mutex_) the worker has filled frame
+    bool ok = false;    // (with done) the encoder succeeded
   };
-  explicit SimCamera(const DeviceConfig& config) : Device(config) {}
-  void RenderFrame(std::int64_t id, double t, mjData* d, Pending* slot);
-  void MakeRenderer();
-  void RenderDue(mjData* d);  // the frames of due_, from the state at due_t_
+  struct Worker;
+  explicit SimCamera(const DeviceConfig& config);
+  void QueueDue(mjData* d);  // the frames of due_, from the state at due_t_
+  void StartWorker(mjData* d);
+  void StopWorker();
+  void WorkerMain();
+  void Drain();  // waits until the worker has done every queued frame
+  bool WaitDone(Pending& p, bool wait);  // true when done (waiting for it when `wait`)
 
   std::string scene_;
   const mjModel* m_ = nullptr;
@@ -114,17 +135,18 @@ class SimCamera final : public Device, public OwnTransport {
   CameraParams config_;
   std::unique_ptr<sensors::CameraModel> model_;
   sensors::CameraNoiseState noise_;
-  std::unique_ptr<render::Renderer> renderer_;
-  render::RgbImage ideal_;
   std::unique_ptr<bridge::CameraServer> server_;
-  std::vector<Pending> queue_;  // ring of frames rendered, not yet delivered
+  bool realtime_ = false;  // served on the realtime clock: delivery never waits for the worker
+  std::vector<Pending> queue_;  // ring of frames queued, not yet delivered
   std::size_t head_ = 0, count_ = 0;
+  std::unique_ptr<Worker> worker_;
+  long late_ = 0;
+  long dropped_ = 0;
   double t_prev_ = -1;
   sensors::FrameRange due_{0, 0};  // frames due at due_t_, not rendered yet
   double due_t_ = 0;
   std::int64_t id_base_ = 0;  // frame ids keep increasing across a reset of the simulated time
   std::int64_t next_id_ = 0;
-  long rendered_ = 0;
 };
 
 }  // namespace vlab::lab

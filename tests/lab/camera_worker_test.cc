@@ -1,0 +1,197 @@
+// The webcam's render worker (src/lab/devices/device_camera.h, "Threading"),
+// driven period by period as the lab drives it: a served camera renders and
+// encodes on its own thread from a copy of the state at the frame's stamp.
+// - lockstep: the frame of stamp s goes out in the period whose end is the first
+//   at or after s + latency, with exactly the pixels a renderer on the test's
+//   thread draws of that state, whether or not two threads compete for the CPU;
+// - realtime: every frame goes out, in order, with the same pixels; the control
+//   thread never waits for the worker, and a frame sent after its period is
+//   counted late (checked against what the test saw after each period).
+#include <atomic>
+#include <cmath>
+#include <future>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "bridge/bridge_camera_client.h"
+#include "core/core_mujoco.h"
+#include "lab/devices/device_camera.h"
+#include "render/renderer.h"
+
+namespace vlab::lab {
+namespace {
+
+// a ball falling past a camera that looks at it from the side: every frame differs
+constexpr const char* kSceneXml = R"(
+<mujoco>
+  <visual><global offwidth="640" offheight="480"/></visual>
+  <worldbody>
+    <light pos="0 -2 3" dir="0 0.5 -1"/>
+    <geom type="plane" size="2 2 0.1" rgba="0.8 0.8 0.8 1"/>
+    <body name="ball" pos="0 0 1.2"><freejoint/><geom type="sphere" size="0.05" rgba="1 0 0 1"/></body>
+    <camera name="side" pos="0 -1.5 0.7" xyaxes="1 0 0 0 0 1" fovy="60"/>
+  </worldbody>
+</mujoco>)";
+
+constexpr double kPeriod = 0.002;
+constexpr int kWidth = 160, kHeight = 120;
+
+struct Harness {
+  explicit Harness(const std::string& clock, double latency) {
+    m = LoadModelFromString("camera_worker_test", kSceneXml);
+    d = mj_makeData(m.get());
+    mj_forward(m.get(), d);
+    DeviceConfig config;
+    config.name = "webcam";
+    config.kind = bridge::DeviceKind::kCamera;
+    CameraParams& p = config.EditParams<CameraParams>();
+    p.camera = "side";
+    p.width = kWidth;
+    p.height = kHeight;
+    p.fps = 25;
+    p.latency_s = latency;
+    p.encoding = bridge::CameraEncoding::kRaw;  // no noise, no distortion: the pixels are the render's
+    DeviceContext context;
+    context.model = m.get();
+    context.control_period_s = kPeriod;
+    context.scene = "camera_worker_test";
+    camera = SimCamera::Create(context, config);
+    camera->Serve("127.0.0.1", 0, "test", clock);
+    // subscribe while the test thread answers for the lab
+    auto connected = std::async(std::launch::async, [this] {
+      bridge::CameraClientOptions o;
+      o.timeout_s = 5;
+      return std::make_unique<bridge::CameraClient>(bridge::CameraClient::Connect("127.0.0.1", camera->port(), o));
+    });
+    while (connected.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready) camera->PollRequests();
+    client = connected.get();
+    camera->BeforeRun(d);
+  }
+  ~Harness() {
+    camera.reset();
+    mj_deleteData(d);
+  }
+  ModelPtr m;
+  mjData* d = nullptr;
+  std::unique_ptr<SimCamera> camera;
+  std::unique_ptr<bridge::CameraClient> client;
+};
+
+struct Sent {
+  std::vector<long> frames_after_period;  // server frames counter after each period's Deliver
+  std::vector<std::vector<std::uint8_t>> reference;  // the test thread's render of each frame's state
+  std::vector<bridge::CameraClient::Frame> received;
+};
+
+// runs `periods` periods of free fall as the lab does (Deliver before the states go out,
+// AfterPublish after), rendering a reference of each frame's state on this thread
+Sent Drive(Harness& h, int periods) {
+  Sent out;
+  render::Renderer::Options o;
+  o.width = kWidth;
+  o.height = kHeight;
+  o.log_renderer = false;
+  auto renderer = render::Renderer::Create(h.m.get(), o);
+  render::RgbImage image;
+  const int cam = render::CameraId(h.m.get(), "side");
+  const int steps = static_cast<int>(std::lround(kPeriod / h.m->opt.timestep));
+  long next_frame = 0;  // frame n is stamped at the first period end at or after n / fps
+  for (int k = 0; k <= periods; ++k) {
+    const double t = k * kPeriod;
+    if (k > 0) {
+      for (int s = 0; s < steps; ++s) mj_step(h.m.get(), h.d);
+    }
+    h.camera->Deliver(t, h.d);
+    out.frames_after_period.push_back(h.camera->server()->counters().frames);
+    h.camera->AfterPublish(h.d);
+    while (next_frame / 25.0 <= t + 1e-9) {
+      renderer->Render(h.d, cam, &image);
+      out.reference.push_back(image.pixels);
+      ++next_frame;
+    }
+  }
+  for (;;) {
+    try {
+      out.received.push_back(h.client->Receive(0.5));
+    } catch (const bridge::TimeoutError&) {
+      break;
+    }
+  }
+  return out;
+}
+
+// the period index whose end is the first at or after stamp + latency
+long DuePeriod(double stamp, double latency) { return static_cast<long>(std::ceil((stamp + latency) / kPeriod - 1e-9)); }
+
+void ExpectFramesAreTheRendersOfTheirStates(const Sent& s) {
+  ASSERT_GE(s.received.size(), 10u);
+  for (std::size_t i = 0; i < s.received.size(); ++i) {
+    const auto& f = s.received[i];
+    EXPECT_EQ(f.id, static_cast<std::int64_t>(i));
+    ASSERT_LT(static_cast<std::size_t>(f.id), s.reference.size());
+    EXPECT_TRUE(f.rgb == s.reference[f.id]) << "frame " << f.id << ": not the render of its state";
+  }
+  EXPECT_NE(s.reference[0], s.reference[5]) << "the ball did not move: the test could not fail";
+}
+
+TEST(CameraWorkerTest, LockstepSendsEachFrameInItsPeriodWithItsStatesPixelsUnderLoad) {
+  constexpr int kPeriods = 300;  // 0.6 s: 16 frames
+  constexpr double kLatency = 0.01;
+  std::vector<long> quiet_sent;
+  for (const bool loaded : {false, true}) {
+    // two threads that compete for both cores while the worker renders
+    std::atomic<bool> stop{false};
+    std::vector<std::thread> hogs;
+    if (loaded) {
+      for (int i = 0; i < 2; ++i) {
+        hogs.emplace_back([&stop] {
+          volatile double x = 0;
+          while (!stop.load(std::memory_order_relaxed)) x = x + 1;
+        });
+      }
+    }
+    Harness h("lockstep", kLatency);
+    const Sent s = Drive(h, kPeriods);
+    stop = true;
+    for (auto& t : hogs) t.join();
+    ExpectFramesAreTheRendersOfTheirStates(s);
+    ASSERT_EQ(s.received.size(), s.reference.size() - 1) << "every frame due by the end was sent";
+    // sent in the period it became due, not a period later
+    for (const auto& f : s.received) {
+      const long due = DuePeriod(f.time_s, kLatency);
+      ASSERT_LE(due, kPeriods);
+      EXPECT_GE(s.frames_after_period[due], f.id + 1) << "frame " << f.id << " not sent by period " << due;
+      if (due > 0) {
+        EXPECT_LE(s.frames_after_period[due - 1], f.id) << "frame " << f.id << " sent early";
+      }
+    }
+    EXPECT_EQ(h.camera->frames_late(), 0);
+    if (!loaded) quiet_sent = s.frames_after_period;
+    if (loaded) {
+      EXPECT_EQ(s.frames_after_period, quiet_sent) << "the load changed which period sent a frame";
+    }
+  }
+}
+
+TEST(CameraWorkerTest, RealtimeNeverWaitsSendsEveryFrameInOrderAndCountsTheLateOnes) {
+  constexpr int kPeriods = 300;
+  constexpr double kLatency = 0.0;  // due the moment it is stamped: a frame can only be on time if
+                                    // the worker finished it before Deliver looked
+  Harness h("realtime", kLatency);
+  const Sent s = Drive(h, kPeriods);
+  ExpectFramesAreTheRendersOfTheirStates(s);
+  // each frame sent once, in order; the ones sent after their due period are the late ones
+  long late = 0;
+  for (const auto& f : s.received) {
+    const long due = DuePeriod(f.time_s, kLatency);
+    const bool on_time = s.frames_after_period[due] >= f.id + 1;
+    if (!on_time) ++late;
+  }
+  EXPECT_EQ(h.camera->frames_late(), late);
+  EXPECT_EQ(h.camera->frames_dropped(), 0);
+}
+
+}  // namespace
+}  // namespace vlab::lab
