@@ -58,11 +58,12 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("what", bench.what,
                         "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
                         "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
-                        "| render")
+                        "| render | task (a task script vs the built-in task_space controller, period time)")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge", "render"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render", "task"}));
   bench_cmd->add_option("--scenario", bench.scenario,
-                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge)");
+                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge, "
+                        "scenes/pa10_reach_task for task)");
   bench_cmd->add_option("--duration", bench.duration_s,
                         "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5)");
   bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
@@ -119,6 +120,7 @@ int main(int argc, char** argv) {
   if (bench_cmd->parsed()) {
     if (bench.what == "bridge") return vlab::cli::BenchBridge(bench);
     if (bench.what == "render") return vlab::cli::BenchRender(bench);
+    if (bench.what == "task") return vlab::cli::BenchTask(bench);
     return vlab::cli::BenchCommand(bench);
   }
   for (const auto& sub : more) {

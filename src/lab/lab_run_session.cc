@@ -126,6 +126,7 @@ void RunSession::RenderAfterPublish(double t) {
 void RunSession::Start() {
   // row 0: the initial state, with the controller's view of it
   if (s_.controller) s_.RunController(0.0, options_, &replay_at_, &result_, controller_columns_);
+  if (s_.task) s_.task->Restart();  // a lab run again starts its programs anew
   if (s_.task && !s_.task->Update(0.0, controller_columns_)) result_.failure = s_.task->error();
   EmitRow(0.0);
   if (options_.observe) options_.observe(0.0, m_, d_);

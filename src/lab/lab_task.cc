@@ -134,9 +134,12 @@ class LabDevices final : public task::Devices {
 }  // namespace
 
 struct TaskController::Impl {
+  const mjModel* model = nullptr;
+  task::RuntimeConfig config;
   std::unique_ptr<LabDevices> devices;
   std::unique_ptr<task::Runtime> runtime;
   std::vector<std::string> arms;
+  bool used = false;  // Update ran since the runtime was made
 };
 
 TaskController::TaskController(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -165,13 +168,23 @@ std::unique_ptr<TaskController> TaskController::Create(const mjModel* model, con
     rc.programs.push_back(p);
     if (!e.robot.empty()) impl->arms.push_back(e.robot);
   }
+  impl->model = model;
+  impl->config = rc;
   impl->runtime = task::Runtime::Create(rc, model, impl->devices.get());
   return std::unique_ptr<TaskController>(new TaskController(std::move(impl)));
 }
 
 std::vector<std::string> TaskController::Columns() const { return impl_->runtime->Columns(); }
 std::vector<std::string> TaskController::arms() const { return impl_->arms; }
-bool TaskController::Update(double t_s, double* columns) { return impl_->runtime->Step(t_s, columns); }
+void TaskController::Restart() {
+  if (!impl_->used) return;
+  impl_->runtime = task::Runtime::Create(impl_->config, impl_->model, impl_->devices.get());
+  impl_->used = false;
+}
+bool TaskController::Update(double t_s, double* columns) {
+  impl_->used = true;
+  return impl_->runtime->Step(t_s, columns);
+}
 const std::string& TaskController::error() const { return impl_->runtime->error(); }
 
 }  // namespace vlab::lab

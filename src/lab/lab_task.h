@@ -32,6 +32,10 @@ class TaskController {
                                                 const std::vector<Device*>& devices);
   ~TaskController();
 
+  /// Starts the programs again from their first line (a fresh runtime, the
+  /// scripts loaded again): each run of a lab starts its programs anew.
+  void Restart();
+
   std::vector<std::string> Columns() const;
   /// The arm devices the programs command (one owner at a time).
   std::vector<std::string> arms() const;

@@ -50,10 +50,11 @@ void TrapezoidTiming(double d, double v, double a, double* duration_s, double* a
   }
 }
 
-MotionPlanner::MotionPlanner(control::RobotModel* model, double period_s) : model_(model), period_s_(period_s) {}
+MotionPlanner::MotionPlanner(control::RobotModel* model, double period_s)
+    : model_(model), period_s_(period_s), zero_(Eigen::VectorXd::Zero(model->dof())) {}
 
 Frame MotionPlanner::ToolPose(const Eigen::VectorXd& q) const {
-  model_->SetState(q, Eigen::VectorXd::Zero(q.size()));
+  model_->SetState(q, zero_);
   const control::Pose tip = model_->TipPose();
   Frame f;
   const Eigen::Quaterniond q_tip(tip.R_W);
@@ -127,7 +128,6 @@ Plan MotionPlanner::Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, 
   for (int i = 0; i < N; ++i) {
     const double s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_).s;
     plan.q.push_back(i == N - 1 ? q1 : Eigen::VectorXd(q0 + s * (q1 - q0)));
-    plan.tool_W.push_back(ToolPose(plan.q.back()));
   }
   return plan;
 }
@@ -139,13 +139,17 @@ Plan MotionPlanner::Cartesian(const Eigen::VectorXd& q0, double T, double frac, 
   control::TimeScaling scaling{control::TimeScalingType::kTrapezoidal, std::clamp(frac, 1e-3, 0.5)};
   Plan plan;
   plan.duration_s = T;
-  Eigen::VectorXd q = q0;
+  Eigen::VectorXd q = q0, guess;
+  plan.q.reserve(N);
+  plan.tool_W.reserve(N);
   for (int i = 0; i < N; ++i) {
     const double s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_).s;
     const Frame goal = pose_at(s);
     int it;
     double pe, re;
-    q = Solve(q, goal, &it, &pe, &re);
+    // Newton from the linear extrapolation of the last two samples: one step usually does
+    guess = i >= 2 ? Eigen::VectorXd(2 * plan.q[i - 1] - plan.q[i - 2]) : q;
+    q = Solve(guess, goal, &it, &pe, &re);
     if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
       throw std::invalid_argument(Percent(i, N) + ": out of reach (" + Fmt(pe * 1e3) + " mm and " + Fmt(re / kDeg) +
                                   " deg away)");

@@ -50,7 +50,7 @@ struct MotionLimits {
 /// A planned move: one joint reference per period.
 struct Plan {
   std::vector<Eigen::VectorXd> q;  ///< chain joints, rad, sample i at (i + 1)·period after the start
-  std::vector<Frame> tool_W;       ///< planned tool pose of each sample (world)
+  std::vector<Frame> tool_W;       ///< planned tool pose of each sample (world); empty for joint moves
   double duration_s = 0;
 };
 
@@ -94,6 +94,7 @@ class MotionPlanner {
   control::RobotModel* model_;
   double period_s_;
   Frame tool_;
+  Eigen::VectorXd zero_;  // joint velocities of every evaluation (kinematics only)
 };
 
 /// Duration (s) and acceleration fraction of a trapezoidal speed profile over

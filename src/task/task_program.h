@@ -58,6 +58,9 @@ struct Robot {
   double guard_force_N = 0;
   Eigen::Vector3d guard_bias_N = Eigen::Vector3d::Zero();
   Channel* default_wrench = nullptr;
+  // the planned tool position of the log, and the q_ref it belongs to
+  Eigen::Vector3d tool_ref_W = Eigen::Vector3d::Zero();
+  Eigen::VectorXd tool_ref_q;
 };
 
 struct Program {

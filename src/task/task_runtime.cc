@@ -237,9 +237,17 @@ bool Runtime::Step(double t_s, double* columns) {
   if (columns) {
     for (auto& p : s.programs) {
       if (!p->robot) continue;
+      Robot& r = *p->robot;
       *columns++ = p->ended ? 0 : WaitingLine(p->co);
-      const Frame tool = p->robot->planner->ToolPose(p->robot->q_ref);
-      for (int i = 0; i < 3; ++i) *columns++ = tool.p[i];
+      // the planned tool position: the plan's own sample, else forward kinematics once per change
+      if (r.next > 0 && r.next <= r.plan.tool_W.size() && r.plan.q[r.next - 1] == r.q_ref) {
+        r.tool_ref_W = r.plan.tool_W[r.next - 1].p;
+        r.tool_ref_q = r.q_ref;
+      } else if (r.tool_ref_q.size() != r.q_ref.size() || r.tool_ref_q != r.q_ref) {
+        r.tool_ref_W = r.planner->ToolPose(r.q_ref).p;
+        r.tool_ref_q = r.q_ref;
+      }
+      for (int i = 0; i < 3; ++i) *columns++ = r.tool_ref_W[i];
     }
   }
   return true;
