@@ -69,6 +69,14 @@ TEST(TaskCli, GuardedMoveStopsAtTheTable) {
   EXPECT_NE(r.out.find("pass  stopped_at_the_table"), std::string::npos) << r.out;
 }
 
+// docs/tasks.md's tutorial, steps 1-4, as written there
+TEST(TaskCli, TutorialStepsRun) {
+  TempDir out;
+  const ProcessResult r = RunVlab("run tests/data/task/tutorial.yaml --out '" + out.path() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("touched at\tvec3(0.6"), std::string::npos) << r.out;
+}
+
 TEST(TaskCli, SyntaxErrorIsExit2BeforeAnythingRuns) {
   TempDir out;
   const ProcessResult r = RunVlab("run tests/data/task/syntax_error.yaml --out '" + out.path() + "/run'");
