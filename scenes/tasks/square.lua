@@ -1,8 +1,8 @@
 -- square.lua: the PA10 traces a 0.20 m square in a horizontal plane, tool
--- pointing down, turning its tool by 45 deg on one side; then a circular arc
--- and back home. Runs unchanged in the lab (scenes/pa10_task.yaml), under
--- vlab run as an external controller (scenes/pa10_task_external.yaml) and
--- against vlab-kinsim (vlab task ... --arm HOST:PORT).
+-- pointing down, turning its tool by 45 deg on one side; then a circular arc,
+-- a self-motion of the elbow with the tool held, and back home. In the lab:
+-- scenes/pa10_task.yaml; over UDP: vlab task scenes/tasks/square.lua --arm
+-- HOST:PORT --scene scenes/pa10.xml --tip tool.
 local home = joints()                          -- the start posture, deg
 print("start at", pose())
 speed(0.2)                                     -- m/s along straight lines
@@ -18,5 +18,8 @@ movec(vec3(0.55, 0.0, 0.60), arc_end)          -- circular arc through a via poi
 local reached = wait(function() return (pose().pos - arc_end.pos):norm() < 0.002 end, 2.0)
 assert(reached, "the arm did not reach the arc's end")
 shared.done = true
+local held = pose()
+selfmove{joint = 3, by = 40, t = 3}                 -- S3 by 40 deg: the elbow swings, the tool stays
+print("tool moved", (pose().pos - held.pos):norm() * 1000, "mm during selfmove")
 movej(home)
 print("done at", pose())
