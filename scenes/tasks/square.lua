@@ -18,8 +18,11 @@ movec(vec3(0.55, 0.0, 0.60), arc_end)          -- circular arc through a via poi
 local reached = wait(function() return (pose().pos - arc_end.pos):norm() < 0.002 end, 2.0)
 assert(reached, "the arm did not reach the arc's end")
 shared.done = true
+wait(0.5)                                      -- let the servo settle after the arc
 local held = pose()
 selfmove{joint = 3, by = 40, t = 3}                 -- S3 by 40 deg: the elbow swings, the tool stays
 print("tool moved", (pose().pos - held.pos):norm() * 1000, "mm during selfmove")
+assert((pose().pos - held.pos):norm() < 1e-4, "selfmove: the tool moved 0.1 mm or more")
+assert(pose().rot:angle(held.rot) < 0.0573, "selfmove: the tool turned 1 mrad (0.0573 deg) or more")
 movej(home)
 print("done at", pose())
