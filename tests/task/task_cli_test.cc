@@ -23,6 +23,10 @@ TEST(TaskCli, HelloRunsAsAnExternalControllerWithTheSameMotion) {
   const ProcessResult r = RunVlab("run scenes/pa10_task_hello_external --out '" + ex.path() + "'");
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(ReadFile(ex / "controller.log").find("vlab task: "), std::string::npos);
+  // lockstep is exact: a second run over UDP writes the same log, byte for byte
+  TempDir ex2;
+  ASSERT_EQ(RunVlab("run scenes/pa10_task_hello_external --out '" + ex2.path() + "'").exit_code, 0);
+  EXPECT_EQ(ReadFile(ex / "log.csv"), ReadFile(ex2 / "log.csv"));
   // lockstep over UDP gives the arm the same commands as in process: the same joint columns
   const std::vector<std::string> a = Lines(ReadFile(in / "log.csv")), b = Lines(ReadFile(ex / "log.csv"));
   ASSERT_EQ(a.size(), b.size());

@@ -3,6 +3,7 @@
 // the sandbox, the instruction budget, errors with file:line, seeded random
 // numbers, sorted pairs, waits, guarded moves, limits before a move, and two
 // robot programs synchronising through a signal.
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -73,6 +74,32 @@ class FakeWrench final : public Channel {
   std::vector<std::string> names_ = {"Fx", "Fy", "Fz", "Mx", "My", "Mz", "filter", "saturated"}, none_;
 };
 
+// a gripper that closes at 0.1 m/s toward its set-point and reports a grasp at 0.05 m
+class FakeGripper final : public Channel {
+ public:
+  const std::string& name() const override { return name_; }
+  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kGripper; }
+  const std::vector<std::string>& state_names() const override { return state_; }
+  const std::vector<std::string>& command_names() const override { return command_; }
+  bool Read(std::vector<double>* v) override {
+    v->assign({0, opening, 0, 0, opening <= 0.05 + 1e-12 ? 1.0 : 0.0});
+    return true;
+  }
+  bool Write(const std::vector<double>& v, std::string*) override {
+    commands.push_back(v);
+    const double goal = v[0] == 0 ? v[1] : 0.05;  // force mode: closes on a 5 cm object
+    opening += std::clamp(goal - opening, -0.1 * kPeriod, 0.1 * kPeriod);
+    return true;
+  }
+  double opening = 0.08;
+  std::vector<std::vector<double>> commands;
+
+ private:
+  std::string name_ = "gripper";
+  std::vector<std::string> state_ = {"status", "opening", "opening_velocity", "force", "grasped"};
+  std::vector<std::string> command_ = {"mode", "value"};
+};
+
 class FakeDevices final : public Devices {
  public:
   Channel* Find(const std::string& name) override {
@@ -95,7 +122,7 @@ class RuntimeTest : public test::MujocoTest {
     ready << 0, 0.523599, 0, 1.047198, 0, 1.570796, 0;
     arm_ = std::make_unique<FakeArm>("pa10", ready);
     arm2_ = std::make_unique<FakeArm>("pa10b", ready);
-    devices_.channels = {{"pa10", arm_.get()}, {"pa10b", arm2_.get()}, {"jr3", &wrench_}};
+    devices_.channels = {{"pa10", arm_.get()}, {"pa10b", arm2_.get()}, {"jr3", &wrench_}, {"gripper", &gripper_}};
   }
   // a runtime of one program per script (robot "pa10", then "pa10b", then none)
   std::unique_ptr<Runtime> Make(const std::vector<std::pair<std::string, std::string>>& scripts,
@@ -131,6 +158,7 @@ class RuntimeTest : public test::MujocoTest {
   mjModel* model_ = nullptr;
   std::unique_ptr<FakeArm> arm_, arm2_;
   FakeWrench wrench_;
+  FakeGripper gripper_;
   FakeDevices devices_;
   testing::TempDir dir_;
   std::vector<std::string> printed_;
@@ -272,6 +300,31 @@ TEST_F(RuntimeTest, TwoRobotProgramsSynchroniseThroughASignal) {
   for (int k = 0; k < 250; ++k) EXPECT_EQ(b[k][0], 0.0) << k;
   EXPECT_LT(b[250][0], 0.0);
   EXPECT_NEAR(arm2_->q()[0], -10 * M_PI / 180, 1e-12);
+}
+
+// gripper(name) and device(name): commands by field name, re-sent every period
+// until changed; states by field name
+TEST_F(RuntimeTest, GripperAndDevicesByName) {
+  auto r = Make({{"", "local g = gripper('gripper')\n"
+                      "print(g:opening(), g:grasped())\n"
+                      "g:close(20)\n"
+                      "local ok = wait(function() return g:grasped() end, 1.0)\n"
+                      "print(ok, device('gripper'):get('opening'), device('gripper'):read().grasped)\n"
+                      "device('gripper'):send{mode = 0, value = 0.07}\n"
+                      "wait(0.1)\n"
+                      "print(g:opening())\n"
+                      "local ok2, e = pcall(device, 'camera')\n"
+                      "print(e)\n"}});
+  ASSERT_TRUE(RunFor(*r, 1000)) << r->error();
+  // 0.08 -> 0.05 at 0.1 m/s: 0.3 s = 150 periods; then toward 0.07 for 0.1 s (50 periods): 0.06
+  ASSERT_EQ(printed_.size(), 4u);
+  EXPECT_EQ(printed_[0], "main.lua@0: 0.08\tfalse");
+  EXPECT_EQ(printed_[1], "main.lua@150: true\t0.05\t1.0");
+  EXPECT_NEAR(std::stod(printed_[2].substr(14)), 0.06, 1e-12) << printed_[2];
+  EXPECT_NE(printed_[3].find("main.lua:9: device: no device named 'camera'"), std::string::npos) << printed_[3];
+  EXPECT_EQ(gripper_.commands.front(), (std::vector<double>{1, 20}));
+  EXPECT_EQ(gripper_.commands.back(), (std::vector<double>{0, 0.07}));
+  EXPECT_EQ(gripper_.commands.size(), 201u);  // one per period from the close on (periods 0..200)
 }
 
 }  // namespace
