@@ -364,14 +364,14 @@ int DeviceGet(lua_State* L) {
 }
 int DeviceRead(lua_State* L) {
   Channel* c = DeviceArg(L);
-  std::vector<double>* v = new std::vector<double>();
-  const bool ok = c->Read(v);
+  // (the Lua calls below raise only on memory exhaustion)
+  std::vector<double> v;
+  const bool ok = c->Read(&v);
   lua_createtable(L, 0, static_cast<int>(c->state_names().size()));
-  for (std::size_t i = 0; ok && i < v->size() && i < c->state_names().size(); ++i) {
-    lua_pushnumber(L, (*v)[i]);
+  for (std::size_t i = 0; ok && i < v.size() && i < c->state_names().size(); ++i) {
+    lua_pushnumber(L, v[i]);
     lua_setfield(L, -2, c->state_names()[i].c_str());
   }
-  delete v;
   return 1;
 }
 int DeviceSend(lua_State* L) {

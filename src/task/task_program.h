@@ -77,7 +77,6 @@ struct Program {
   Devices* devices = nullptr;
   Blackboard* board = nullptr;
   std::map<std::string, std::vector<double>> device_commands;  ///< re-sent every period
-  std::string error;               ///< set by a binding that fails outside Lua's error path
 };
 
 /// Registers the robot and device functions and runs the prelude (wait,
