@@ -45,6 +45,7 @@ int Task(const TaskArgs& a) {
   if (a.tip_site.empty()) throw InputError("task: --tip SITE is required (the site at the tool flange)");
   if (!(a.timeout_s > 0)) throw InputError("task: --timeout must be > 0 s");
   if (a.seed < 0) throw InputError("task: --seed must be >= 0");
+  task::CheckSyntax(a.script);  // before any device is contacted: exit 2, nothing has run
   ModelPtr model = LoadModel(a.scene);
   task::UdpDevices devices;
   devices.AddArm(a.arm, a.timeout_s);

@@ -86,6 +86,16 @@ int WaitingLine(lua_State* co) {
 
 }  // namespace
 
+void CheckSyntax(const std::string& script) {
+  if (!std::filesystem::is_regular_file(script)) throw InputError("script: no file '" + script + "'");
+  lua_State* L = luaL_newstate();
+  if (!L) throw std::runtime_error("task: cannot create a Lua state");
+  std::string error;
+  if (luaL_loadfilex(L, script.c_str(), "t") != LUA_OK) error = lua_tostring(L, -1);
+  lua_close(L);
+  if (!error.empty()) throw InputError(error + " (syntax error: nothing has run)");
+}
+
 struct Runtime::Impl {
   RuntimeConfig config;
   Devices* devices = nullptr;

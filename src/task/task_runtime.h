@@ -49,6 +49,10 @@ struct RuntimeConfig {
   std::function<void(const std::string&, double, const std::string&)> print;
 };
 
+/// Compiles `script` without running it: InputError "FILE:LINE: message
+/// (syntax error: nothing has run)" on a syntax error, or naming a missing file.
+void CheckSyntax(const std::string& script);
+
 class Runtime {
  public:
   /// Loads every script (a syntax error: InputError "FILE:LINE: message",

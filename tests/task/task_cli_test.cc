@@ -90,6 +90,14 @@ TEST(TaskCli, SyntaxErrorIsExit2BeforeAnythingRuns) {
   EXPECT_FALSE(std::filesystem::exists(out / "run"));  // nothing written
 }
 
+// vlab task compiles the script before it contacts a device (none listens on port 9 here)
+TEST(TaskCli, VlabTaskSyntaxErrorIsExit2BeforeConnecting) {
+  const ProcessResult r =
+      RunVlab("task tests/data/task/syntax_error.lua --arm 127.0.0.1:9 --scene scenes/pa10.xml --tip tool", 30);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("tests/data/task/syntax_error.lua:4: ')' expected"), std::string::npos) << r.err;
+}
+
 TEST(TaskCli, RuntimeErrorIsExit1WithTracebackAndTheLogKept) {
   TempDir out;
   const ProcessResult r = RunVlab("run tests/data/task/runtime_error.yaml --out '" + out.path() + "'");
