@@ -11,6 +11,8 @@ VLAB_APT_PACKAGES=(
   libgtest-dev
   libopencv-dev libopencv-contrib-dev
 )
+# the robot task language embeds Lua 5.4 (src/task/)
+VLAB_APT_PACKAGES+=(liblua5.4-dev)
 
 # for the tests only: Octave runs the MATLAB/Octave example (tests/serve/octave_client_test.sh)
 VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)

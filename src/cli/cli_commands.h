@@ -52,6 +52,7 @@ int BenchCommand(const BenchArgs& args);
 int BenchBridge(const BenchArgs& args);
 int BenchRender(const BenchArgs& args);
 int BenchRealtime(const BenchArgs& args);  // cli_bench_realtime.cc
+int BenchTask(const BenchArgs& args);  // cli_bench_task.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.
@@ -64,6 +65,7 @@ Subcommand AddRenderCommand(CLI::App& app);  // cli_render.cc
 Subcommand AddCameraCommand(CLI::App& app);  // cli_camera.cc
 Subcommand AddVisionCommand(CLI::App& app);  // cli_vision.cc
 Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
+Subcommand AddTaskCommand(CLI::App& app);    // cli_task.cc
 
 /// Prints one line about realtime priority (RunOptions::on_realtime) on stderr.
 void PrintRealtime(const std::string& line);

@@ -65,11 +65,13 @@ int main(int argc, char** argv) {
                         "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
                         "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
                         "| render | realtime (1 kHz beside 2 and 4 served 640x480 cameras: quiet, under 2 CPU hogs, "
-                        "and under them at realtime priority when permitted)")
+                        "and under them at realtime priority when permitted) "
+                        "| task (a task script vs the built-in task_space controller, period time)")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task"}));
   bench_cmd->add_option("--scenario", bench.scenario,
-                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge)");
+                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge, "
+                        "scenes/pa10_reach_task for task)");
   bench_cmd->add_option("--duration", bench.duration_s,
                         "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5); "
                         "realtime: of each run (default 10)");
@@ -78,7 +80,8 @@ int main(int argc, char** argv) {
 
   // subcommands that define themselves in their own files
   const std::vector<vlab::cli::Subcommand> more = {vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app),
-                                                   vlab::cli::AddVisionCommand(app), vlab::cli::AddCubesCommand(app)};
+                                                   vlab::cli::AddVisionCommand(app), vlab::cli::AddCubesCommand(app),
+                                                   vlab::cli::AddTaskCommand(app)};
 
   try {
     app.parse(argc, argv);
@@ -127,6 +130,7 @@ int main(int argc, char** argv) {
     if (bench.what == "bridge") return vlab::cli::BenchBridge(bench);
     if (bench.what == "render") return vlab::cli::BenchRender(bench);
     if (bench.what == "realtime") return vlab::cli::BenchRealtime(bench);
+    if (bench.what == "task") return vlab::cli::BenchTask(bench);
     return vlab::cli::BenchCommand(bench);
   }
   for (const auto& sub : more) {

@@ -129,6 +129,8 @@ void RunSession::Start() {
   RequestPriority();
   // row 0: the initial state, with the controller's view of it
   if (s_.controller) s_.RunController(0.0, options_, &replay_at_, &result_, controller_columns_);
+  if (s_.task) s_.task->Restart();  // a lab run again starts its programs anew
+  if (s_.task && !s_.task->Update(0.0, controller_columns_)) result_.failure = s_.task->error();
   EmitRow(0.0);
   if (options_.observe) options_.observe(0.0, m_, d_);
   for (auto& device : s_.devices) device->BeforeRun(d_);
@@ -202,6 +204,11 @@ bool RunSession::Commands(long k, double t_k) {
     if (k > 0) s_.RunController(t_k, options_, &replay_at_, &result_, controller_columns_);
     s_.controller_arm->Command(s_.controller_command);
   }
+  // the task programs: a script error ends the run (the log keeps the periods before)
+  if (s_.task && k > 0 && !s_.task->Update(t_k, controller_columns_)) {
+    result_.failure = s_.task->error();
+    return false;
+  }
   for (auto& dev : s_.devices) dev->BeginPeriod(*d_, t_k);  // point devices command their arms
   return true;
 }
@@ -211,6 +218,7 @@ bool RunSession::Period() {
   const double t_k = k_ * period_;
   const double t_next = (k_ + 1) * period_;
   if (Interrupted()) return false;  // the periods run so far are written
+  if (s_.task && !result_.failure.empty()) return false;  // a task program failed in period 0
   // 0. the sim device: pause, resume, step, reset, pace
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
   if (paused_) {

@@ -90,6 +90,19 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
   const ControllerConfig& cc = scenario.controller;
   if (cc.type == ControllerType::kExternal) {
     ExpandCommand(cc.command, CommandValues(scenario, {}), cc.where);  // placeholders checked now
+  } else if (cc.type == ControllerType::kTask) {
+    for (const TaskProgramEntry& e : cc.programs) {
+      for (const Device* device : impl->device_ptrs) {
+        const auto* arm = dynamic_cast<const SimArm*>(device);
+        if (arm && arm->name() == e.robot && !arm->driver().empty()) {
+          throw InputError(e.where + ": robot: arm '" + e.robot + "' is driven by device '" + arm->driver() +
+                           "': one owner at a time");
+        }
+      }
+    }
+    impl->task = TaskController::Create(m, scenario, impl->device_ptrs);
+    impl->controller_columns = impl->task->Columns().size();
+    for (auto& c : impl->task->Columns()) impl->columns.push_back(c);
   } else if (cc.type != ControllerType::kNone) {
     for (Device* device : impl->device_ptrs) {
       if (device->name() == cc.arm) impl->controller_arm = dynamic_cast<SimArm*>(device);

@@ -64,6 +64,17 @@ void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* 
 
 std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, const std::string& clock_name) {
   std::unique_ptr<LabBridge> bridge = LabBridge::Create(scenario, options, device_ptrs, clock_name);
+  if (task) {
+    for (const ServedDevice& sd : bridge->Devices()) {
+      for (const std::string& arm : task->arms()) {
+        if (sd.name == arm) {
+          throw InputError(scenario.controller.where + ": controller: arm '" + sd.name +
+                           "' is served over UDP and commanded by a task program: one owner at a time "
+                           "(remove the device's port)");
+        }
+      }
+    }
+  }
   if (controller) {
     for (const ServedDevice& sd : bridge->Devices()) {
       if (sd.name == scenario.controller.arm) {

@@ -16,6 +16,7 @@
 #include "lab/lab_bridge.h"
 #include "lab/lab_controller.h"
 #include "lab/lab_runner.h"
+#include "lab/lab_task.h"
 
 namespace vlab::lab {
 
@@ -34,6 +35,7 @@ struct Lab::Impl {
   std::size_t controller_columns = 0;  // log columns the controller writes
   std::vector<std::string> columns;
   bridge::ArmCommand controller_command;  // the built-in controller's command of the period
+  std::unique_ptr<TaskController> task;    // the task-language controller (type task), or null
 
   void ResetState();
   /// mj_resetData, or mj_resetDataKeyframe of the scenario's keyframe (at time 0).

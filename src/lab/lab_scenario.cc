@@ -70,6 +70,32 @@ ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& nod
   return o;
 }
 
+// type: task, programs: [{robot, script, tip_site, base_body, wrench}, ...]
+ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
+  c.type = ControllerType::kTask;
+  const double budget = r.Number("instruction_budget", static_cast<double>(c.instruction_budget));
+  if (!(budget >= 1000 && budget <= 1e12)) r.Fail("instruction_budget", "must be between 1000 and 1e12");
+  c.instruction_budget = static_cast<long>(budget);
+  const YAML::Node programs = r.Sequence("programs");
+  if (programs.size() == 0) r.Fail("programs", "needs at least one program: {robot: ARM, script: FILE.lua, tip_site: SITE}");
+  const std::filesystem::path dir = std::filesystem::path(r.file()).parent_path();
+  for (std::size_t i = 0; i < programs.size(); ++i) {
+    MapReader p(r.file(), programs[i], r.Child("programs") + "[" + std::to_string(i) + "]");
+    TaskProgramEntry e;
+    e.where = YamlWhere(r.file(), programs[i]) + ": " + p.path();
+    e.robot = p.String("robot", "");
+    e.script = (dir / p.String("script")).lexically_normal().string();
+    e.tip_site = p.String("tip_site", "");
+    e.base_body = p.String("base_body", e.base_body);
+    e.wrench = p.String("wrench", "");
+    if (!e.robot.empty() && e.tip_site.empty()) p.Fail("tip_site", "required with a robot (the site at the tool flange)");
+    p.Finish();
+    c.programs.push_back(e);
+  }
+  r.Finish();
+  return c;
+}
+
 ControllerConfig ReadController(MapReader r) {
   ControllerConfig c;
   c.where = YamlWhere(r.file(), r.node());
@@ -89,6 +115,7 @@ ControllerConfig ReadController(MapReader r) {
     r.Finish();
     return c;
   }
+  if (type == "task") return ReadTaskController(r, c);
   c.arm = r.String("arm");
   const std::string timing = r.String("timing", "quintic");
   if (timing != "quintic" && timing != "trapezoidal") r.Fail("timing", "must be quintic or trapezoidal");
@@ -139,7 +166,7 @@ ControllerConfig ReadController(MapReader r) {
       c.joint.push_back(wp);
     }
   } else {
-    r.Fail("type", "unknown controller type '" + type + "' (known: none, joint_pd, task_space, external)");
+    r.Fail("type", "unknown controller type '" + type + "' (known: none, joint_pd, task_space, external, task)");
   }
   r.Finish();
   return c;
@@ -224,6 +251,8 @@ const char* ControllerTypeName(ControllerType type) {
       return "task_space";
     case ControllerType::kExternal:
       return "external";
+    case ControllerType::kTask:
+      return "task";
   }
   return "?";
 }

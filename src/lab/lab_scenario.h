@@ -22,7 +22,7 @@
 namespace vlab::lab {
 
 /// The built-in controllers (the `controller.type` key).
-enum class ControllerType { kNone, kJointPd, kTaskSpace, kExternal };
+enum class ControllerType { kNone, kJointPd, kTaskSpace, kExternal, kTask };
 /// How a check reduces its signal to one value (the `reduce` key).
 /// kMinOfWindowMax: the window [from, to] cut into consecutive windows of `window` s,
 /// the maximum in each, then the smallest of those maxima (e.g. every swing reaches a
@@ -32,7 +32,7 @@ enum class Reduce { kMax, kMin, kMean, kRms, kFinal, kMaxAbs, kMinOfWindowMax, k
 /// "max_of_window_min"; and back (false for anything else).
 const char* ReduceName(Reduce reduce);
 bool ReduceFromName(const std::string& name, Reduce* reduce);
-/// "none", "joint_pd", "task_space", "external".
+/// "none", "joint_pd", "task_space", "external", "task".
 const char* ControllerTypeName(ControllerType type);
 
 struct CartesianWaypoint {
@@ -44,6 +44,16 @@ struct CartesianWaypoint {
 struct JointWaypoint {
   std::vector<double> q;  ///< rad
   double duration_s = 1.0;
+};
+
+/// One robot program of a `task` controller (src/task/task_runtime.h).
+struct TaskProgramEntry {
+  std::string robot;                ///< arm device it commands ("": none)
+  std::string script;               ///< .lua file, resolved relative to the scenario file
+  std::string base_body = "world";  ///< chain from this body ...
+  std::string tip_site;             ///< ... to this site
+  std::string wrench;               ///< default wrench of guarded moves ("": the only one)
+  std::string where;                ///< "FILE:LINE" of the entry
 };
 
 struct ControllerConfig {
@@ -68,6 +78,9 @@ struct ControllerConfig {
   /// SCHED_FIFO priority the program (and what it starts) runs at, when the
   /// user may have it; 0: normal priority
   int realtime_priority = 0;
+  // task: robot programs in the task language, resumed in this order each period
+  std::vector<TaskProgramEntry> programs;
+  long instruction_budget = 10'000'000;  ///< Lua VM instructions per resume
   // joint_pd and task_space
   control::TimeScalingType timing = control::TimeScalingType::kQuintic;  ///< quintic | trapezoidal
   double start_s = 0.0;            ///< hold until this time, then follow the path

@@ -8,8 +8,8 @@ copy into OUT_DIR with the controller taken out, so the lab's devices hold (an a
 its initial position until a first command, docs/scenarios.md), runs it with `vlab run`
 and asserts that at least one check fails on samples it saw: a check that the lab's own
 ground truth decides (docs/testing.md). The copy differs from the scenario only in:
-- no `controller:` block, and no check on a `controller.*` signal (those columns are
-  the controller's own and are gone with it);
+- no `controller:` block, and no check on a `controller.*` or `task.*` signal (those
+  columns are the controller's own, or a task program's, and are gone with it);
 - no `outputs:` block (its plots may read a CSV the controller writes); log.csv stays;
 - `scene:` as an absolute path, so the copy loads the same scene;
 - a realtime clock becomes the fast clock (cases/yoyo/stage3): the realtime clock only
@@ -41,7 +41,7 @@ def held_copy(text, scenario_dir):
             if line.startswith("scene:"):
                 scene = line.split(":", 1)[1].split("#", 1)[0].strip().strip("\"'")
                 line = "scene: " + json.dumps(str((scenario_dir / scene).resolve()))
-        if skipping or re.search(r"signal:\s*controller\.", line):
+        if skipping or re.search(r"signal:\s*(controller|task)\.", line):
             continue
         if re.match(r"^clock:\s*realtime\b", line):
             line = "clock: fast  # held copy of a realtime scenario: nothing outside to keep pace with"

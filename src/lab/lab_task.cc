@@ -1,0 +1,190 @@
+#include "lab/lab_task.h"
+
+#include <cstdio>
+#include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "bridge/bridge_layouts.h"
+#include "core/core_errors.h"
+#include "lab/devices/device_arm.h"
+#include "task/task_runtime.h"
+
+namespace vlab::lab {
+
+namespace {
+
+// "q[7]" -> q[0] .. q[6]; "x" -> x
+std::vector<std::string> Expand(const nlohmann::json& fields) {
+  std::vector<std::string> out;
+  if (!fields.is_array()) return out;
+  for (const auto& f : fields) {
+    const std::string s = f.get<std::string>();
+    const auto open = s.find('[');
+    if (open == std::string::npos || s.back() != ']') {
+      out.push_back(s);
+      continue;
+    }
+    const int n = std::stoi(s.substr(open + 1, s.size() - open - 2));
+    for (int i = 0; i < n; ++i) out.push_back(s.substr(0, open) + "[" + std::to_string(i) + "]");
+  }
+  return out;
+}
+
+// a lab device as the task runtime sees it: its wire payloads, in process
+class LabChannel final : public task::Channel {
+ public:
+  explicit LabChannel(Device* d) : device_(d) {
+    nlohmann::json layout;
+    if (auto* arm = dynamic_cast<SimArm*>(d)) {
+      layout = bridge::LayoutJson(bridge::DeviceKind::kArm, arm->dof());
+      joints_ = arm->joint_names();
+    } else {
+      const nlohmann::json facts = nlohmann::json::parse(d->DescribeFacts(), nullptr, false);
+      if (facts.is_object() && facts.contains("layout")) {
+        layout = facts["layout"];
+      } else if (bridge::FindKindLayout(static_cast<int>(d->kind())) &&
+                 bridge::FindKindLayout(static_cast<int>(d->kind()))->float64) {
+        layout = bridge::LayoutJson(d->kind());
+      }
+    }
+    if (layout.is_object()) {
+      state_names_ = Expand(layout.value("state", nlohmann::json::array()));
+      command_names_ = Expand(layout.value("command", nlohmann::json::array()));
+    }
+    if (!dynamic_cast<SimArm*>(d) && static_cast<int>(command_names_.size()) != d->command_length()) {
+      command_names_.clear();
+    }
+  }
+  const std::string& name() const override { return device_->name(); }
+  bridge::DeviceKind kind() const override { return device_->kind(); }
+  const std::vector<std::string>& state_names() const override { return state_names_; }
+  const std::vector<std::string>& command_names() const override { return command_names_; }
+  std::vector<std::string> joint_names() const override { return joints_; }
+  bool Read(std::vector<double>* values) override {
+    // the state datagram the device would send now, decoded as a client would
+    device_->EncodeState(0, 0, 0, &scratch_, &bytes_);
+    bridge::Header header;
+    if (bridge::DecodePacket(bytes_.data(), bytes_.size(), &header, values) != bridge::DecodeError::kNone) {
+      values->clear();
+    }
+    return !values->empty();
+  }
+  bool Write(const std::vector<double>& values, std::string* why) override {
+    if (auto* arm = dynamic_cast<SimArm*>(device_)) {
+      // an arm takes its typed command: [mode, one value per joint]
+      if (static_cast<int>(values.size()) != 1 + arm->dof()) {
+        *why = "expected " + std::to_string(1 + arm->dof()) + " values, got " + std::to_string(values.size());
+        return false;
+      }
+      arm_command_.mode = static_cast<bridge::ArmMode>(static_cast<int>(values[0]));
+      arm_command_.value = Eigen::Map<const Eigen::VectorXd>(values.data() + 1, arm->dof());
+      if (!arm->Command(arm_command_)) {
+        *why = "refused by the arm (a position beyond a joint limit, or not finite)";
+        return false;
+      }
+      return true;
+    }
+    if (static_cast<int>(values.size()) != device_->command_length()) {
+      *why = "expected " + std::to_string(device_->command_length()) + " values, got " + std::to_string(values.size());
+      return false;
+    }
+    for (double v : values) {
+      if (!std::isfinite(v)) {
+        *why = "a value is not finite";
+        return false;
+      }
+    }
+    const bridge::CommandCheck check = device_->CheckCommand(values);
+    if (check != bridge::CommandCheck::kAccept) {
+      *why = "refused by the device's command check (code " + std::to_string(static_cast<int>(check)) + ")";
+      return false;
+    }
+    device_->Command(values);
+    return true;
+  }
+
+ private:
+  Device* device_;
+  bridge::ArmCommand arm_command_;
+  std::vector<double> scratch_;
+  std::vector<unsigned char> bytes_;
+  std::vector<std::string> state_names_, command_names_, joints_;
+};
+
+class LabDevices final : public task::Devices {
+ public:
+  explicit LabDevices(const std::vector<Device*>& devices) {
+    for (Device* d : devices) {
+      channels_.emplace(d->name(), std::make_unique<LabChannel>(d));
+      names_.push_back(d->name());
+    }
+  }
+  task::Channel* Find(const std::string& name) override {
+    const auto it = channels_.find(name);
+    return it == channels_.end() ? nullptr : it->second.get();
+  }
+  std::vector<std::string> Names() const override { return names_; }
+
+ private:
+  std::map<std::string, std::unique_ptr<LabChannel>> channels_;
+  std::vector<std::string> names_;
+};
+
+}  // namespace
+
+struct TaskController::Impl {
+  const mjModel* model = nullptr;
+  task::RuntimeConfig config;
+  std::unique_ptr<LabDevices> devices;
+  std::unique_ptr<task::Runtime> runtime;
+  std::vector<std::string> arms;
+  bool used = false;  // Update ran since the runtime was made
+};
+
+TaskController::TaskController(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+TaskController::~TaskController() = default;
+
+std::unique_ptr<TaskController> TaskController::Create(const mjModel* model, const Scenario& scenario,
+                                                       const std::vector<Device*>& devices) {
+  auto impl = std::make_unique<Impl>();
+  impl->devices = std::make_unique<LabDevices>(devices);
+  task::RuntimeConfig rc;
+  rc.period_s = scenario.control_period_s;
+  rc.seed = scenario.seed;
+  rc.instruction_budget = scenario.controller.instruction_budget;
+  rc.print = [](const std::string& who, double t, const std::string& text) {
+    std::printf("[%s t=%.3f] %s\n", who.c_str(), t, text.c_str());
+    std::fflush(stdout);
+  };
+  for (const TaskProgramEntry& e : scenario.controller.programs) {
+    task::ProgramConfig p;
+    p.script = e.script;
+    p.robot = e.robot;
+    p.base_body = e.base_body;
+    p.tip_site = e.tip_site;
+    p.wrench = e.wrench;
+    p.where = e.where;
+    rc.programs.push_back(p);
+    if (!e.robot.empty()) impl->arms.push_back(e.robot);
+  }
+  impl->model = model;
+  impl->config = rc;
+  impl->runtime = task::Runtime::Create(rc, model, impl->devices.get());
+  return std::unique_ptr<TaskController>(new TaskController(std::move(impl)));
+}
+
+std::vector<std::string> TaskController::Columns() const { return impl_->runtime->Columns(); }
+std::vector<std::string> TaskController::arms() const { return impl_->arms; }
+void TaskController::Restart() {
+  if (!impl_->used) return;
+  impl_->runtime = task::Runtime::Create(impl_->config, impl_->model, impl_->devices.get());
+  impl_->used = false;
+}
+bool TaskController::Update(double t_s, double* columns) {
+  impl_->used = true;
+  return impl_->runtime->Step(t_s, columns);
+}
+const std::string& TaskController::error() const { return impl_->runtime->error(); }
+
+}  // namespace vlab::lab

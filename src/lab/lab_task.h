@@ -1,0 +1,53 @@
+// The `task` controller: robot programs in the task language (src/task/)
+// run in the lab's process, one period at a time, on the devices' own state
+// and command payloads (the bytes they would send and take over UDP).
+//
+// Ports
+//   input   every device's state payload (Device::State) at the period start
+//   output  position commands of the programs' arms and the commands the
+//           scripts send to other devices (Device::CheckCommand, Command),
+//           applied before the period's physics
+//   log     task.ROBOT.line, task.ROBOT.tool.x|y|z (task_runtime.h)
+// A script error stops the run with exit 1, the log kept up to the period
+// before; a syntax error is an InputError when the lab is created.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "lab/devices/device.h"
+#include "lab/lab_scenario.h"
+
+namespace vlab::lab {
+
+class TaskController {
+ public:
+  /// Binds the programs to `devices` (which must outlive it); loads the
+  /// scripts. Throws InputError naming the program entry, or the script's
+  /// file:line of a syntax error.
+  static std::unique_ptr<TaskController> Create(const mjModel* model, const Scenario& scenario,
+                                                const std::vector<Device*>& devices);
+  ~TaskController();
+
+  /// Starts the programs again from their first line (a fresh runtime, the
+  /// scripts loaded again): each run of a lab starts its programs anew.
+  void Restart();
+
+  std::vector<std::string> Columns() const;
+  /// The arm devices the programs command (one owner at a time).
+  std::vector<std::string> arms() const;
+  /// One period at t_s: resumes the programs, commands the devices, writes
+  /// the log columns. False when a program failed: error() says where.
+  bool Update(double t_s, double* columns);
+  const std::string& error() const;
+
+ private:
+  struct Impl;
+  explicit TaskController(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vlab::lab

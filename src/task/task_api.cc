@@ -1,0 +1,537 @@
+// The task language's robot, device, waiting and blackboard functions (the
+// Lua side of task_program.h). Blocking commands are Lua functions of the
+// prelude below: they start something here, then yield once per period
+// until it is done.
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include <lua.hpp>
+
+#include "task/task_lua.h"
+#include "task/task_program.h"
+
+namespace vlab::task {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr const char* kProgramKey = "vlab.program";
+
+// the runtime's own Lua code: blocking commands and waits
+constexpr const char* kPrelude = R"lua(
+local yield, moving, outcome, clock, periods, take = coroutine.yield, _moving, _outcome, _now, _periods, _take_signal
+_moving, _outcome, _now, _periods, _take_signal = nil, nil, nil, nil, nil
+function sync() yield() end
+function wait(a, timeout)
+  if type(a) == "number" then
+    for _ = 1, periods(a) do yield() end
+    return true
+  elseif type(a) == "function" then
+    local t_end = timeout and (clock() + periods(timeout) * PERIOD - PERIOD / 2)
+    while true do
+      local v = a()
+      if v then return v end
+      if t_end and clock() >= t_end then return nil end
+      yield()
+    end
+  end
+  error("wait: expected seconds or a condition function, got " .. type(a), 2)
+end
+local function await() while moving() do yield() end return outcome() end
+local mj, ml, mc, sm = _movej, _movel, _movec, _selfmove
+_movej, _movel, _movec, _selfmove = nil, nil, nil, nil
+function movej(target, options) mj(target, options) return await() end
+function movel(target, options) ml(target, options) return await() end
+function movec(via, target, options) mc(via, target, options) return await() end
+function selfmove(options) sm(options) return await() end
+local raise = _signal
+_signal = nil
+function signal(name) raise(name) end
+function wait_signal(name, timeout)
+  return wait(function() return take(name) end, timeout)
+end
+function gripper(name)
+  local d = device(name)
+  local g = {}
+  function g:open(width) d:send{mode = 0, value = width} end
+  function g:close(force) d:send{mode = 1, value = force} end
+  function g:grasped() return d:get("grasped") > 0.5 end
+  function g:opening() return d:get("opening") end
+  function g:force() return d:get("force") end
+  return g
+end
+)lua";
+
+Program* P(lua_State* L) { return ProgramOf(L); }
+
+Robot& NeedRobot(lua_State* L, const char* what) {
+  Program* p = P(L);
+  if (!p->robot) ScriptError(L, "%s: this program has no robot (scenario: programs[].robot)", what);
+  return *p->robot;
+}
+
+double Number(lua_State* L, int i, const char* what) {
+  if (!lua_isnumber(L, i)) ScriptError(L, "%s: argument %d must be a number, got %s", what, i, luaL_typename(L, i));
+  const double v = lua_tonumber(L, i);
+  if (!std::isfinite(v)) ScriptError(L, "%s: argument %d is not finite", what, i);
+  return v;
+}
+
+// options table field as a number (or `fallback` when absent)
+double Option(lua_State* L, int options, const char* key, double fallback, const char* what) {
+  if (lua_isnoneornil(L, options)) return fallback;
+  lua_getfield(L, options, key);
+  double v = fallback;
+  if (!lua_isnil(L, -1)) {
+    if (!lua_isnumber(L, -1)) ScriptError(L, "%s: option %s must be a number, got %s", what, key, luaL_typename(L, -1));
+    v = lua_tonumber(L, -1);
+    if (!std::isfinite(v)) ScriptError(L, "%s: option %s is not finite", what, key);
+  }
+  lua_pop(L, 1);
+  return v;
+}
+
+void CheckOptions(lua_State* L, int options, const char* what, const char* const* known) {
+  if (lua_isnoneornil(L, options)) return;
+  if (!lua_istable(L, options)) ScriptError(L, "%s: options must be a table, got %s", what, luaL_typename(L, options));
+  lua_pushnil(L);
+  while (lua_next(L, options)) {
+    lua_pop(L, 1);
+    bool ok = lua_type(L, -1) == LUA_TSTRING;
+    const char* key = ok ? lua_tostring(L, -1) : "?";
+    bool found = false;
+    for (const char* const* k = known; *k; ++k) found = found || !std::strcmp(*k, key);
+    if (!found) ScriptError(L, "%s: unknown option '%s'", what, key);
+  }
+}
+
+// the limits of one move: the settings, overridden by the options v, a, w, alpha
+MotionLimits MoveLimits(lua_State* L, const Robot& r, int options, const char* what) {
+  MotionLimits l = r.limits;
+  l.speed_mps = Option(L, options, "v", l.speed_mps, what);
+  l.accel_mps2 = Option(L, options, "a", l.accel_mps2, what);
+  l.rot_speed_rps = Option(L, options, "w", l.rot_speed_rps / kDeg, what) * kDeg;
+  l.joint_speed_rps = Option(L, options, "jv", l.joint_speed_rps / kDeg, what) * kDeg;
+  if (!(l.speed_mps > 0 && l.accel_mps2 > 0 && l.rot_speed_rps > 0 && l.joint_speed_rps > 0)) {
+    ScriptError(L, "%s: speeds and accelerations must be > 0", what);
+  }
+  return l;
+}
+
+// the world frame of a target given in the script's base frame
+Frame ToWorld(const Robot& r, const Frame& f) {
+  Frame w;
+  w.p = r.base_W.p + r.base_W.q * f.p;
+  w.q = (r.base_W.q * f.q).normalized();
+  return w;
+}
+
+void Start(Robot& r, Plan&& plan) {
+  r.plan = std::move(plan);
+  r.next = 0;
+  r.moving = !r.plan.q.empty();
+  r.outcome = "done";
+  r.guard = nullptr;
+}
+
+// the guard option of a move: force = N (and wrench = NAME)
+void SetGuard(lua_State* L, Robot& r, int options, const char* what) {
+  const double force = Option(L, options, "force", 0, what);
+  if (force <= 0) return;
+  Channel* w = r.default_wrench;
+  if (!lua_isnoneornil(L, options)) {
+    lua_getfield(L, options, "wrench");
+    if (lua_isstring(L, -1)) {
+      w = P(L)->devices->Find(lua_tostring(L, -1));
+      if (!w || w->kind() != bridge::DeviceKind::kWrench) {
+        ScriptError(L, "%s: no wrench device named '%s'", what, lua_tostring(L, -1));
+      }
+    }
+    lua_pop(L, 1);
+  }
+  if (!w) ScriptError(L, "%s: a guarded move (force = ...) needs a wrench device (option wrench = NAME)", what);
+  std::vector<double> v;
+  Eigen::Vector3d bias = Eigen::Vector3d::Zero();
+  if (w->Read(&v) && v.size() >= 3) bias = {v[0], v[1], v[2]};
+  r.guard = w;
+  r.guard_force_N = force;
+  r.guard_bias_N = bias;
+}
+
+// runs a planner call; its std::invalid_argument becomes a script error
+template <class F>
+void PlanOrFail(lua_State* L, Robot& r, const char* what, F plan_fn) {
+  char error[512] = "";
+  try {
+    Start(r, plan_fn());
+  } catch (const std::exception& e) {
+    std::snprintf(error, sizeof error, "%s", e.what());
+  }
+  if (error[0]) ScriptError(L, "%s: %s", what, error);
+}
+
+int MoveJ(lua_State* L) {
+  Robot& r = NeedRobot(L, "movej");
+  static const char* const known[] = {"v", "a", "w", "jv", "t", nullptr};
+  CheckOptions(L, 2, "movej", known);
+  const MotionLimits limits = MoveLimits(L, r, 2, "movej");
+  const double t = Option(L, 2, "t", 0, "movej");
+  if (const Frame* f = ToFrame(L, 1)) {
+    const Frame goal = ToWorld(r, *f);
+    PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, r.planner->Ik(r.q_ref, goal), limits, t); });
+    return 0;
+  }
+  if (!lua_istable(L, 1)) ScriptError(L, "movej: expected a table of joint angles (deg) or a frame, got %s", luaL_typename(L, 1));
+  const int n = r.model->dof();
+  if (static_cast<int>(lua_rawlen(L, 1)) != n) {
+    ScriptError(L, "movej: expected %d joint angles (deg), got %d", n, static_cast<int>(lua_rawlen(L, 1)));
+  }
+  Eigen::VectorXd q(n);
+  for (int i = 0; i < n; ++i) {
+    lua_rawgeti(L, 1, i + 1);
+    if (!lua_isnumber(L, -1)) ScriptError(L, "movej: joint %d must be a number (deg)", i + 1);
+    q[i] = lua_tonumber(L, -1) * kDeg;
+    lua_pop(L, 1);
+  }
+  PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, q, limits, t); });
+  return 0;
+}
+
+int MoveL(lua_State* L) {
+  Robot& r = NeedRobot(L, "movel");
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", nullptr};
+  CheckOptions(L, 2, "movel", known);
+  const Frame goal = ToWorld(r, CheckFrame(L, 1, "movel"));
+  const MotionLimits limits = MoveLimits(L, r, 2, "movel");
+  const double t = Option(L, 2, "t", 0, "movel");
+  PlanOrFail(L, r, "movel", [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
+  SetGuard(L, r, 2, "movel");
+  return 0;
+}
+
+int MoveC(lua_State* L) {
+  Robot& r = NeedRobot(L, "movec");
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", nullptr};
+  CheckOptions(L, 3, "movec", known);
+  Eigen::Vector3d via;
+  if (const Frame* f = ToFrame(L, 1)) {
+    via = ToWorld(r, *f).p;
+  } else {
+    Frame point;
+    point.p = CheckVec3(L, 1, "movec");
+    via = ToWorld(r, point).p;
+  }
+  const Frame goal = ToWorld(r, CheckFrame(L, 2, "movec"));
+  const MotionLimits limits = MoveLimits(L, r, 3, "movec");
+  const double t = Option(L, 3, "t", 0, "movec");
+  PlanOrFail(L, r, "movec", [&] { return r.planner->Arc(r.q_ref, via, goal, limits, t); });
+  SetGuard(L, r, 3, "movec");
+  return 0;
+}
+
+int SelfMove(lua_State* L) {
+  Robot& r = NeedRobot(L, "selfmove");
+  static const char* const known[] = {"joint", "by", "t", nullptr};
+  if (!lua_istable(L, 1)) ScriptError(L, "selfmove: expected {joint = N, by = DEG, t = S}");
+  CheckOptions(L, 1, "selfmove", known);
+  const int joint = static_cast<int>(Option(L, 1, "joint", 3, "selfmove")) - 1;
+  const double by = Option(L, 1, "by", 0, "selfmove") * kDeg;
+  const double t = Option(L, 1, "t", 0, "selfmove");
+  if (!(t > 0)) ScriptError(L, "selfmove: t (s) must be given and > 0");
+  PlanOrFail(L, r, "selfmove", [&] { return r.planner->Self(r.q_ref, joint, by, t); });
+  return 0;
+}
+
+int Moving(lua_State* L) {
+  lua_pushboolean(L, P(L)->robot && P(L)->robot->moving);
+  return 1;
+}
+int Outcome(lua_State* L) {
+  lua_pushstring(L, P(L)->robot ? P(L)->robot->outcome.c_str() : "done");
+  return 1;
+}
+
+int Joints(lua_State* L) {
+  Robot& r = NeedRobot(L, "joints");
+  lua_createtable(L, static_cast<int>(r.q_meas.size()), 0);
+  for (int i = 0; i < r.q_meas.size(); ++i) {
+    lua_pushnumber(L, r.q_meas[i] / kDeg);
+    lua_rawseti(L, -2, i + 1);
+  }
+  return 1;
+}
+
+int Pose(lua_State* L) {  // measured tool pose in the base frame
+  Robot& r = NeedRobot(L, "pose");
+  const Frame w = r.planner->ToolPose(r.q_meas);
+  Frame b;
+  b.q = (r.base_W.q.conjugate() * w.q).normalized();
+  b.p = r.base_W.q.conjugate() * (w.p - r.base_W.p);
+  PushFrame(L, b);
+  return 1;
+}
+
+template <bool kForce>
+int WrenchPart(lua_State* L) {
+  Program* p = P(L);
+  Channel* w = p->robot ? p->robot->default_wrench : nullptr;
+  if (lua_isstring(L, 1)) w = p->devices->Find(lua_tostring(L, 1));
+  if (!w || w->kind() != bridge::DeviceKind::kWrench) {
+    ScriptError(L, "%s: no wrench device%s%s", kForce ? "force" : "torque", lua_isstring(L, 1) ? " named " : "",
+                lua_isstring(L, 1) ? lua_tostring(L, 1) : "");
+  }
+  std::vector<double> v;
+  const bool ok = w->Read(&v) && v.size() >= 6;
+  const Eigen::Vector3d out = ok ? Eigen::Vector3d(v[kForce ? 0 : 3], v[kForce ? 1 : 4], v[kForce ? 2 : 5])
+                                 : Eigen::Vector3d::Zero();
+  v = std::vector<double>();
+  PushVec3(L, out);
+  return 1;
+}
+
+int SetSpeed(lua_State* L) {
+  Robot& r = NeedRobot(L, "speed");
+  const double v = Number(L, 1, "speed");
+  if (!(v > 0)) ScriptError(L, "speed: must be > 0 m/s");
+  r.limits.speed_mps = v;
+  if (!lua_isnoneornil(L, 2)) r.limits.rot_speed_rps = Number(L, 2, "speed") * kDeg;
+  return 0;
+}
+int SetAccel(lua_State* L) {
+  Robot& r = NeedRobot(L, "accel");
+  const double a = Number(L, 1, "accel");
+  if (!(a > 0)) ScriptError(L, "accel: must be > 0 m/s^2");
+  r.limits.accel_mps2 = a;
+  if (!lua_isnoneornil(L, 2)) r.limits.rot_accel_rps2 = Number(L, 2, "accel") * kDeg;
+  return 0;
+}
+int SetJointSpeed(lua_State* L) {
+  Robot& r = NeedRobot(L, "jspeed");
+  const double v = Number(L, 1, "jspeed");
+  if (!(v > 0)) ScriptError(L, "jspeed: must be > 0 deg/s");
+  r.limits.joint_speed_rps = v * kDeg;
+  if (!lua_isnoneornil(L, 2)) r.limits.joint_accel_rps2 = Number(L, 2, "jspeed") * kDeg;
+  return 0;
+}
+int SetTool(lua_State* L) {
+  Robot& r = NeedRobot(L, "tool");
+  r.planner->set_tool(CheckFrame(L, 1, "tool"));
+  return 0;
+}
+int SetBase(lua_State* L) {
+  Robot& r = NeedRobot(L, "base");
+  r.base_W = CheckFrame(L, 1, "base");
+  return 0;
+}
+
+int Now(lua_State* L) {
+  lua_pushnumber(L, P(L)->t_s);
+  return 1;
+}
+int Periods(lua_State* L) {  // whole periods in a duration (s)
+  const double s = Number(L, 1, "wait");
+  if (s < 0) ScriptError(L, "wait: the time must be >= 0 s, got %g", s);
+  lua_pushinteger(L, static_cast<lua_Integer>(std::llround(s / P(L)->period_s)));
+  return 1;
+}
+
+// ---- devices by name: device(NAME) -> {get, read, send}
+Channel* DeviceArg(lua_State* L) {
+  luaL_checktype(L, 1, LUA_TTABLE);
+  lua_getfield(L, 1, "name");
+  Channel* c = P(L)->devices->Find(lua_tostring(L, -1) ? lua_tostring(L, -1) : "");
+  lua_pop(L, 1);
+  if (!c) ScriptError(L, "device: not a device object (use d:get(...), not d.get(...))");
+  return c;
+}
+int DeviceGet(lua_State* L) {
+  Channel* c = DeviceArg(L);
+  const char* field = luaL_checkstring(L, 2);
+  double value = 0;
+  int found = -2;
+  {
+    std::vector<double> v;
+    if (c->Read(&v)) {
+      found = IndexOf(c->state_names(), field);
+      if (found >= 0) value = v[found];
+    }
+  }
+  if (found == -2) ScriptError(L, "device '%s' has sent no state yet (reading '%s')", c->name().c_str(), field);
+  if (found < 0) ScriptError(L, "device '%s' has no state field '%s'", c->name().c_str(), field);
+  lua_pushnumber(L, value);
+  return 1;
+}
+int DeviceRead(lua_State* L) {
+  Channel* c = DeviceArg(L);
+  // (the Lua calls below raise only on memory exhaustion)
+  std::vector<double> v;
+  const bool ok = c->Read(&v);
+  lua_createtable(L, 0, static_cast<int>(c->state_names().size()));
+  for (std::size_t i = 0; ok && i < v.size() && i < c->state_names().size(); ++i) {
+    lua_pushnumber(L, v[i]);
+    lua_setfield(L, -2, c->state_names()[i].c_str());
+  }
+  return 1;
+}
+int DeviceSend(lua_State* L) {
+  Channel* c = DeviceArg(L);
+  luaL_checktype(L, 2, LUA_TTABLE);
+  const std::vector<std::string>& names = c->command_names();
+  if (names.empty()) ScriptError(L, "device '%s' takes no commands", c->name().c_str());
+  Program* p = P(L);
+  std::vector<double>& command = p->device_commands[c->name()];
+  command.assign(names.size(), 0.0);
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    lua_getfield(L, 2, names[i].c_str());
+    if (!lua_isnumber(L, -1)) {
+      p->device_commands.erase(c->name());
+      ScriptError(L, "device '%s': command field '%s' must be a number", c->name().c_str(), names[i].c_str());
+    }
+    command[i] = lua_tonumber(L, -1);
+    lua_pop(L, 1);
+  }
+  return 0;
+}
+int Device(lua_State* L) {
+  const char* name = luaL_checkstring(L, 1);
+  Channel* c = P(L)->devices->Find(name);
+  if (!c) ScriptError(L, "device: no device named '%s'", name);
+  if (c->kind() == bridge::DeviceKind::kArm && P(L)->robot && c == P(L)->robot->arm) {
+    ScriptError(L, "device: '%s' is this program's robot: use movej/movel and joints()", name);
+  }
+  lua_createtable(L, 0, 4);
+  lua_pushstring(L, name);
+  lua_setfield(L, -2, "name");
+  static const luaL_Reg methods[] = {{"get", DeviceGet}, {"read", DeviceRead}, {"send", DeviceSend}, {nullptr, nullptr}};
+  luaL_setfuncs(L, methods, 0);
+  return 1;
+}
+
+// ---- blackboard
+int SharedIndex(lua_State* L) {
+  const char* key = luaL_checkstring(L, 2);
+  Blackboard* b = P(L)->board;
+  const auto it = b->values.find(key);
+  if (it == b->values.end()) {
+    lua_pushnil(L);
+    return 1;
+  }
+  const SharedValue& v = it->second;
+  switch (v.type) {
+    case SharedValue::kNumber: lua_pushnumber(L, v.number); break;
+    case SharedValue::kString: lua_pushlstring(L, v.text.data(), v.text.size()); break;
+    case SharedValue::kBoolean: lua_pushboolean(L, v.number != 0); break;
+    case SharedValue::kVec3: PushVec3(L, v.frame.p); break;
+    case SharedValue::kQuat: PushQuat(L, v.frame.q); break;
+    case SharedValue::kFrame: PushFrame(L, v.frame); break;
+  }
+  return 1;
+}
+int SharedNewIndex(lua_State* L) {
+  const char* key = luaL_checkstring(L, 2);
+  Blackboard* b = P(L)->board;
+  if (lua_isnil(L, 3)) {
+    b->values.erase(key);
+    return 0;
+  }
+  SharedValue v;
+  if (lua_type(L, 3) == LUA_TNUMBER) {
+    v.type = SharedValue::kNumber;
+    v.number = lua_tonumber(L, 3);
+  } else if (lua_type(L, 3) == LUA_TSTRING) {
+    v.type = SharedValue::kString;
+    v.text = lua_tostring(L, 3);
+  } else if (lua_type(L, 3) == LUA_TBOOLEAN) {
+    v.type = SharedValue::kBoolean;
+    v.number = lua_toboolean(L, 3);
+  } else if (const Eigen::Vector3d* p = ToVec3(L, 3)) {
+    v.type = SharedValue::kVec3;
+    v.frame.p = *p;
+  } else if (const Eigen::Quaterniond* q = ToQuat(L, 3)) {
+    v.type = SharedValue::kQuat;
+    v.frame.q = *q;
+  } else if (const Frame* f = ToFrame(L, 3)) {
+    v.type = SharedValue::kFrame;
+    v.frame = *f;
+  } else {
+    const char* type = luaL_typename(L, 3);
+    v = SharedValue();
+    ScriptError(L, "shared.%s: a %s cannot be shared (numbers, strings, booleans, vec3, quat, frame)", key, type);
+  }
+  b->values[key] = std::move(v);
+  return 0;
+}
+int Signal(lua_State* L) {
+  const char* name = luaL_checkstring(L, 1);
+  ++P(L)->board->signals[name];
+  return 0;
+}
+int TakeSignal(lua_State* L) {  // true (and one signal taken) when `name` was raised
+  const char* name = luaL_checkstring(L, 1);
+  auto& signals = P(L)->board->signals;
+  const auto it = signals.find(name);
+  const bool raised = it != signals.end() && it->second > 0;
+  if (raised) --it->second;
+  lua_pushboolean(L, raised);
+  return 1;
+}
+
+}  // namespace
+
+Program* ProgramOf(lua_State* L) {
+  lua_getfield(L, LUA_REGISTRYINDEX, kProgramKey);
+  auto* p = static_cast<Program*>(lua_touserdata(L, -1));
+  lua_pop(L, 1);
+  return p;
+}
+
+void AdvanceMotion(Robot* r) {
+  if (!r->moving) return;
+  if (r->guard) {
+    std::vector<double> w;
+    if (r->guard->Read(&w) && w.size() >= 3 &&
+        (Eigen::Vector3d(w[0], w[1], w[2]) - r->guard_bias_N).norm() > r->guard_force_N) {
+      r->moving = false;
+      r->outcome = "contact";
+      return;
+    }
+  }
+  r->q_ref = r->plan.q[r->next++];
+  if (r->next >= r->plan.q.size()) r->moving = false;
+}
+
+void OpenApi(Program* p) {
+  lua_State* L = p->L;
+  lua_pushlightuserdata(L, p);
+  lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
+  static const luaL_Reg functions[] = {
+      {"_movej", MoveJ},         {"_movel", MoveL},          {"_movec", MoveC},        {"_selfmove", SelfMove},
+      {"_moving", Moving},       {"_outcome", Outcome},      {"_now", Now},            {"_periods", Periods},
+      {"_signal", Signal},       {"_take_signal", TakeSignal}, {"now", Now},           {"joints", Joints},
+      {"pose", Pose},            {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
+      {"speed", SetSpeed},       {"accel", SetAccel},        {"jspeed", SetJointSpeed}, {"tool", SetTool},
+      {"base", SetBase},         {"device", Device},         {nullptr, nullptr}};
+  lua_pushglobaltable(L);
+  luaL_setfuncs(L, functions, 0);
+  lua_pop(L, 1);
+  lua_pushnumber(L, p->period_s);
+  lua_setglobal(L, "PERIOD");
+  lua_pushstring(L, p->config.robot.c_str());
+  lua_setglobal(L, "ROBOT");
+  // shared: a proxy of the blackboard
+  lua_newtable(L);
+  lua_newtable(L);
+  lua_pushcfunction(L, SharedIndex);
+  lua_setfield(L, -2, "__index");
+  lua_pushcfunction(L, SharedNewIndex);
+  lua_setfield(L, -2, "__newindex");
+  lua_setmetatable(L, -2);
+  lua_setglobal(L, "shared");
+  if (luaL_loadbufferx(L, kPrelude, std::strlen(kPrelude), "=vlab", "t") != LUA_OK) {
+    throw std::logic_error(std::string("task prelude: ") + lua_tostring(L, -1));
+  }
+  lua_call(L, 0, 0);
+}
+
+}  // namespace vlab::task

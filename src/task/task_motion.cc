@@ -1,0 +1,264 @@
+#include "task/task_motion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "control/time_scaling.h"
+#include "control/trajectory.h"
+
+namespace vlab::task {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kTolPos_m = 1e-9;
+constexpr double kTolRot_rad = 1e-9;
+constexpr int kMaxIterations = 200;
+constexpr double kDamping = 1e-6;
+constexpr double kMaxStep_rad = 0.3;  // per Newton step (norm), keeps far targets on the near branch
+
+std::string Fmt(double v, const char* format = "%.4g") {
+  char b[32];
+  std::snprintf(b, sizeof b, format, v);
+  return b;
+}
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& r) {
+  Eigen::Matrix3d S;
+  S << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+  return S;
+}
+
+std::string Percent(int i, int n) { return "at " + Fmt(100.0 * (i + 1) / n, "%.0f") + "% of the path"; }
+
+}  // namespace
+
+void TrapezoidTiming(double d, double v, double a, double* duration_s, double* accel_fraction) {
+  if (d <= 0) {
+    *duration_s = 0;
+    *accel_fraction = 0.5;
+    return;
+  }
+  if (d >= v * v / a) {
+    *duration_s = d / v + v / a;
+    *accel_fraction = (v / a) / *duration_s;
+  } else {
+    *duration_s = 2.0 * std::sqrt(d / a);
+    *accel_fraction = 0.5;
+  }
+}
+
+MotionPlanner::MotionPlanner(control::RobotModel* model, double period_s)
+    : model_(model), period_s_(period_s), zero_(Eigen::VectorXd::Zero(model->dof())) {}
+
+Frame MotionPlanner::ToolPose(const Eigen::VectorXd& q) const {
+  model_->SetState(q, zero_);
+  const control::Pose tip = model_->TipPose();
+  Frame f;
+  const Eigen::Quaterniond q_tip(tip.R_W);
+  f.p = tip.p_W + q_tip * tool_.p;
+  f.q = (q_tip * tool_.q).normalized();
+  return f;
+}
+
+Eigen::VectorXd MotionPlanner::Solve(const Eigen::VectorXd& q_start, const Frame& goal_W, int* iterations,
+                                     double* pos_err, double* rot_err) const {
+  Eigen::VectorXd q = q_start;
+  const int n = model_->dof();
+  for (*iterations = 0; *iterations < kMaxIterations; ++*iterations) {
+    const Frame x = ToolPose(q);  // also sets the model's state for the Jacobian
+    Eigen::Matrix<double, 6, 1> e;
+    e.head<3>() = goal_W.p - x.p;
+    e.tail<3>() = control::RotationVector((goal_W.q * x.q.conjugate()).toRotationMatrix());
+    *pos_err = e.head<3>().norm();
+    *rot_err = e.tail<3>().norm();
+    if (*pos_err < kTolPos_m && *rot_err < kTolRot_rad) return q;
+    Eigen::MatrixXd J = model_->Jacobian();  // tip site, world
+    const Eigen::Vector3d r = x.p - model_->TipPose().p_W;
+    J.topRows(3) -= Skew(r) * J.bottomRows(3);  // the tool point: v = v_tip + ω × r
+    const Eigen::Matrix<double, 6, 6> JJt = J * J.transpose() + kDamping * kDamping * Eigen::Matrix<double, 6, 6>::Identity();
+    Eigen::VectorXd dq = J.transpose() * JJt.ldlt().solve(e);
+    if (dq.norm() > kMaxStep_rad) dq *= kMaxStep_rad / dq.norm();
+    q += dq;
+    (void)n;
+  }
+  return q;
+}
+
+Eigen::VectorXd MotionPlanner::Ik(const Eigen::VectorXd& q0, const Frame& goal_W) const {
+  int it;
+  double pe, re;
+  const Eigen::VectorXd q = Solve(q0, goal_W, &it, &pe, &re);
+  if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
+    throw std::invalid_argument("out of reach: the closest pose found is " + Fmt(pe * 1e3) + " mm and " +
+                                Fmt(re / kDeg) + " deg away (" + std::to_string(it) + " iterations)");
+  }
+  CheckLimits(q, "at the target");
+  return q;
+}
+
+void MotionPlanner::CheckLimits(const Eigen::VectorXd& q, const std::string& where) const {
+  for (int i = 0; i < q.size(); ++i) {
+    const double lo = model_->lower_limits()[i], hi = model_->upper_limits()[i];
+    if (!std::isfinite(q[i]) || q[i] < lo - 1e-9 || q[i] > hi + 1e-9) {
+      const bool below = q[i] < lo;
+      throw std::invalid_argument(where + ": joint " + model_->joint_names()[i] + " = " + Fmt(q[i] / kDeg) +
+                                  " deg is beyond its " + (below ? "lower" : "upper") + " limit " +
+                                  Fmt((below ? lo : hi) / kDeg) + " deg");
+    }
+  }
+}
+
+Plan MotionPlanner::Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, const MotionLimits& limits,
+                          double duration_s) const {
+  if (q1.size() != model_->dof()) {
+    throw std::invalid_argument("expected " + std::to_string(model_->dof()) + " joint values, got " +
+                                std::to_string(q1.size()));
+  }
+  CheckLimits(q1, "the target");
+  double T = duration_s, frac = 0.25;
+  if (T <= 0) TrapezoidTiming((q1 - q0).cwiseAbs().maxCoeff(), limits.joint_speed_rps, limits.joint_accel_rps2, &T, &frac);
+  const int N = std::max(1, static_cast<int>(std::ceil(T / period_s_ - 1e-9)));
+  T = N * period_s_;
+  control::TimeScaling scaling{control::TimeScalingType::kTrapezoidal, std::clamp(frac, 1e-3, 0.5)};
+  Plan plan;
+  plan.duration_s = T;
+  for (int i = 0; i < N; ++i) {
+    const double s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_).s;
+    plan.q.push_back(i == N - 1 ? q1 : Eigen::VectorXd(q0 + s * (q1 - q0)));
+  }
+  return plan;
+}
+
+template <class PoseAt>
+Plan MotionPlanner::Cartesian(const Eigen::VectorXd& q0, double T, double frac, PoseAt pose_at) const {
+  const int N = std::max(1, static_cast<int>(std::ceil(T / period_s_ - 1e-9)));
+  T = N * period_s_;
+  control::TimeScaling scaling{control::TimeScalingType::kTrapezoidal, std::clamp(frac, 1e-3, 0.5)};
+  Plan plan;
+  plan.duration_s = T;
+  Eigen::VectorXd q = q0, guess;
+  plan.q.reserve(N);
+  plan.tool_W.reserve(N);
+  for (int i = 0; i < N; ++i) {
+    const double s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_).s;
+    const Frame goal = pose_at(s);
+    int it;
+    double pe, re;
+    // Newton from the linear extrapolation of the last two samples: one step usually does
+    guess = i >= 2 ? Eigen::VectorXd(2 * plan.q[i - 1] - plan.q[i - 2]) : q;
+    q = Solve(guess, goal, &it, &pe, &re);
+    if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
+      throw std::invalid_argument(Percent(i, N) + ": out of reach (" + Fmt(pe * 1e3) + " mm and " + Fmt(re / kDeg) +
+                                  " deg away)");
+    }
+    CheckLimits(q, Percent(i, N));
+    plan.q.push_back(q);
+    plan.tool_W.push_back(goal);
+  }
+  return plan;
+}
+
+Plan MotionPlanner::Linear(const Eigen::VectorXd& q0, const Frame& goal_W, const MotionLimits& limits,
+                           double duration_s) const {
+  const Frame start = ToolPose(q0);
+  const Eigen::Quaterniond q1 = start.q.dot(goal_W.q) < 0 ? Eigen::Quaterniond(-goal_W.q.coeffs()) : goal_W.q;
+  double T = duration_s, frac = 0.25;
+  if (T <= 0) {
+    double T_lin, f_lin, T_rot, f_rot;
+    TrapezoidTiming((goal_W.p - start.p).norm(), limits.speed_mps, limits.accel_mps2, &T_lin, &f_lin);
+    TrapezoidTiming(start.q.angularDistance(q1), limits.rot_speed_rps, limits.rot_accel_rps2, &T_rot, &f_rot);
+    T = std::max(T_lin, T_rot);
+    frac = T_lin >= T_rot ? f_lin : f_rot;
+  }
+  return Cartesian(q0, T, frac, [&](double s) {
+    Frame f;
+    f.p = start.p + s * (goal_W.p - start.p);
+    f.q = start.q.slerp(s, q1);
+    return f;
+  });
+}
+
+Plan MotionPlanner::Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via, const Frame& goal_W,
+                        const MotionLimits& limits, double duration_s) const {
+  const Frame start = ToolPose(q0);
+  const Eigen::Vector3d a = via - start.p, b = goal_W.p - start.p;
+  const Eigen::Vector3d n = a.cross(b);
+  if (n.norm() < 1e-9 || a.norm() < 1e-6 || b.norm() < 1e-6) {
+    throw std::invalid_argument("the start, via and goal points are on one line (or coincide): no circle through them");
+  }
+  // circumcentre of start, via, goal
+  const Eigen::Vector3d c = start.p + (b.squaredNorm() * n.cross(a) + a.squaredNorm() * b.cross(n)) / (2 * n.squaredNorm());
+  const double r = (start.p - c).norm();
+  const Eigen::Vector3d u = (start.p - c) / r, w = n.normalized().cross(u);
+  auto angle_of = [&](const Eigen::Vector3d& p) {
+    double t = std::atan2((p - c).dot(w), (p - c).dot(u));
+    return t < 0 ? t + 2 * M_PI : t;
+  };
+  const double theta = angle_of(goal_W.p);  // via lies between 0 and theta by the normal's orientation
+  const Eigen::Quaterniond q1 = start.q.dot(goal_W.q) < 0 ? Eigen::Quaterniond(-goal_W.q.coeffs()) : goal_W.q;
+  double T = duration_s, frac = 0.25;
+  if (T <= 0) {
+    double T_lin, f_lin, T_rot, f_rot;
+    TrapezoidTiming(r * theta, limits.speed_mps, limits.accel_mps2, &T_lin, &f_lin);
+    TrapezoidTiming(start.q.angularDistance(q1), limits.rot_speed_rps, limits.rot_accel_rps2, &T_rot, &f_rot);
+    T = std::max(T_lin, T_rot);
+    frac = T_lin >= T_rot ? f_lin : f_rot;
+  }
+  Plan plan = Cartesian(q0, T, frac, [&](double s) {
+    Frame f;
+    f.p = c + r * (u * std::cos(theta * s) + w * std::sin(theta * s));
+    f.q = start.q.slerp(s, q1);
+    return f;
+  });
+  plan.tool_W.back().p = goal_W.p;  // equal up to rounding
+  return plan;
+}
+
+Plan MotionPlanner::Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const {
+  const int n = model_->dof();
+  if (n != 7) throw std::invalid_argument("selfmove needs a chain of 7 joints (one redundant), this one has " + std::to_string(n));
+  if (joint < 0 || joint >= n) throw std::invalid_argument("joint " + std::to_string(joint + 1) + " is not a joint of the chain (1.." + std::to_string(n) + ")");
+  if (!(duration_s > 0)) throw std::invalid_argument("t must be > 0 s");
+  const Frame held = ToolPose(q0);
+  const int N = std::max(1, static_cast<int>(std::ceil(duration_s / period_s_ - 1e-9)));
+  const double T = N * period_s_;
+  const control::TimeScaling quintic{control::TimeScalingType::kQuintic, 0.25};
+  Plan plan;
+  plan.duration_s = T;
+  Eigen::VectorXd q = q0;
+  for (int i = 0; i < N; ++i) {
+    const double qj = q0[joint] + delta * control::EvaluateTimeScaling(quintic, T, (i + 1) * period_s_).s;
+    // Newton on the square system [J_tool; e_jᵀ] dq = [pose error; qj − q_j]
+    double pe = 1, re = 1, je = 1;
+    for (int it = 0; it < kMaxIterations && !(pe < kTolPos_m && re < kTolRot_rad && je < kTolRot_rad); ++it) {
+      const Frame x = ToolPose(q);
+      Eigen::Matrix<double, 7, 1> e;
+      e.head<3>() = held.p - x.p;
+      e.segment<3>(3) = control::RotationVector((held.q * x.q.conjugate()).toRotationMatrix());
+      e[6] = qj - q[joint];
+      pe = e.head<3>().norm();
+      re = e.segment<3>(3).norm();
+      je = std::abs(e[6]);
+      Eigen::MatrixXd J = model_->Jacobian();
+      J.topRows(3) -= Skew(x.p - model_->TipPose().p_W) * J.bottomRows(3);
+      Eigen::Matrix<double, 7, 7> A;
+      A.topRows(6) = J;
+      A.row(6).setZero();
+      A(6, joint) = 1.0;
+      q += A.colPivHouseholderQr().solve(e);
+    }
+    if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10 && je < kTolRot_rad * 10)) {
+      throw std::invalid_argument(Percent(i, N) + ": the tool pose cannot be held while joint " +
+                                  model_->joint_names()[joint] + " moves (a singular configuration?)");
+    }
+    CheckLimits(q, Percent(i, N));
+    plan.q.push_back(q);
+    plan.tool_W.push_back(held);
+  }
+  return plan;
+}
+
+}  // namespace vlab::task

@@ -1,0 +1,105 @@
+// The motion generator of one robot program: plans a whole move before it
+// starts (so that a target out of reach or a joint limit on the way is an
+// error before the arm moves), then hands out one joint reference per control
+// period.
+//
+// Ports
+//   input   the chain's joint reference at the start of a move (the previous
+//           plan's end, or the measured joints before the first move)
+//   output  q_ref (chain order, rad), one per period: the arm device's
+//           position command; the planned tool pose of each sample
+//   rate    one sample per control period `period_s`; sample i of a plan is
+//           the reference for the end of the i-th period after its start
+// Plans (all frames are the tool frame in the world W; the caller composes
+// base and tool frames):
+//   joint      straight line in joint space, trapezoidal speed (JointTrajectory)
+//   linear     straight line of the tool point, orientation by SLERP
+//              (CartesianTrajectory), trapezoidal speed along the path
+//   arc        circular arc through a via point to a goal; orientation by
+//              SLERP from start to goal
+//   self       null-space motion: one joint driven by a quintic while the tool
+//              pose is held (7-DOF arm: the elbow swings about the
+//              shoulder-wrist line)
+// Inverse kinematics: each Cartesian sample is solved by Newton steps
+// q += J⁺·e (damped least squares, λ = 1e-6) from the previous sample, to
+// 1e-9 m and 1e-9 rad; a sample that does not converge, or a joint beyond its
+// limits, fails the plan with std::invalid_argument saying where on the path.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "control/robot_model.h"
+#include "task/task_values.h"
+
+namespace vlab::task {
+
+/// Speeds and accelerations of moves (the script's speed()/accel() settings).
+struct MotionLimits {
+  double speed_mps = 0.1;          ///< tool linear speed, m/s
+  double accel_mps2 = 0.5;         ///< tool linear acceleration, m/s²
+  double rot_speed_rps = 0.7854;   ///< tool angular speed, rad/s (45°/s)
+  double rot_accel_rps2 = 3.1416;  ///< tool angular acceleration, rad/s² (180°/s²)
+  double joint_speed_rps = 0.5236;  ///< joint speed, rad/s (30°/s)
+  double joint_accel_rps2 = 1.5708;  ///< joint acceleration, rad/s² (90°/s²)
+};
+
+/// A planned move: one joint reference per period.
+struct Plan {
+  std::vector<Eigen::VectorXd> q;  ///< chain joints, rad, sample i at (i + 1)·period after the start
+  std::vector<Frame> tool_W;       ///< planned tool pose of each sample (world); empty for joint moves
+  double duration_s = 0;
+};
+
+class MotionPlanner {
+ public:
+  /// `model` is the robot's chain (owned by the caller, outlives the planner);
+  /// `tool` the tip site -> tool transform.
+  MotionPlanner(control::RobotModel* model, double period_s);
+
+  void set_tool(const Frame& tip_T_tool) { tool_ = tip_T_tool; }
+  const Frame& tool() const { return tool_; }
+
+  /// Tool pose (world) at chain joints q.
+  Frame ToolPose(const Eigen::VectorXd& q) const;
+  /// Joints that put the tool at `goal_W`, by Newton steps from q0. Throws
+  /// std::invalid_argument ("out of reach: 12.3 mm and 2.1 deg away after
+  /// 200 iterations", "joint S2 beyond its limits ...").
+  Eigen::VectorXd Ik(const Eigen::VectorXd& q0, const Frame& goal_W) const;
+
+  /// Plans; every function throws std::invalid_argument naming the problem.
+  Plan Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, const MotionLimits& limits,
+             double duration_s = 0) const;
+  Plan Linear(const Eigen::VectorXd& q0, const Frame& goal_W, const MotionLimits& limits,
+              double duration_s = 0) const;
+  Plan Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via_W, const Frame& goal_W,
+           const MotionLimits& limits, double duration_s = 0) const;
+  /// Moves chain joint `joint` by `delta` rad over `duration_s` with the tool held.
+  Plan Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const;
+
+  /// Throws unless every joint of q is within its limits ("at 40% of the
+  /// path: joint E1 = 172.1 deg beyond its limit 170 deg").
+  void CheckLimits(const Eigen::VectorXd& q, const std::string& where) const;
+
+ private:
+  // samples of a Cartesian path: pose(s) for s of a trapezoid in time
+  template <class PoseAt>
+  Plan Cartesian(const Eigen::VectorXd& q0, double duration_s, double accel_fraction, PoseAt pose_at) const;
+  Eigen::VectorXd Solve(const Eigen::VectorXd& q_start, const Frame& goal_W, int* iterations, double* pos_err,
+                        double* rot_err) const;
+
+  control::RobotModel* model_;
+  double period_s_;
+  Frame tool_;
+  Eigen::VectorXd zero_;  // joint velocities of every evaluation (kinematics only)
+};
+
+/// Duration (s) and acceleration fraction of a trapezoidal speed profile over
+/// distance `d` with peak speed v and acceleration a (a triangle when d <
+/// v²/a): T = d/v + v/a, or 2·sqrt(d/a).
+void TrapezoidTiming(double d, double v, double a, double* duration_s, double* accel_fraction);
+
+}  // namespace vlab::task

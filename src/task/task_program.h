@@ -1,0 +1,93 @@
+// One robot program's private state inside the runtime (not a public header):
+// its Lua state and coroutine, its robot (arm channel, chain, motion planner,
+// the running plan) and the blackboard it shares with the other programs.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "control/robot_model.h"
+#include "task/task_channel.h"
+#include "task/task_motion.h"
+#include "task/task_runtime.h"
+#include "task/task_sandbox.h"
+#include "task/task_values.h"
+
+struct lua_State;
+
+namespace vlab::task {
+
+/// A value of the blackboard, copied in and out by value.
+struct SharedValue {
+  enum Type { kNumber, kString, kBoolean, kVec3, kQuat, kFrame } type = kNumber;
+  double number = 0;
+  std::string text;
+  Frame frame;            ///< kFrame; kVec3 uses frame.p, kQuat frame.q
+};
+
+/// What every program of a runtime shares.
+struct Blackboard {
+  std::map<std::string, SharedValue> values;
+  std::map<std::string, long> signals;  ///< raised and not yet taken
+};
+
+/// The robot a program commands.
+struct Robot {
+  Channel* arm = nullptr;
+  std::unique_ptr<control::RobotModel> model;
+  std::unique_ptr<MotionPlanner> planner;
+  std::vector<int> arm_index;      ///< chain joint i is arm joint arm_index[i]
+  int arm_dof = 0;
+  std::vector<double> state;       ///< the arm's newest state payload
+  Eigen::VectorXd q_meas, q_ref;   ///< chain joints, rad
+  std::vector<double> command;     ///< [mode, arm joints...]
+  bool started = false;            ///< q_ref set from a first state
+  Frame base_W;                    ///< world <- the script's base frame
+  MotionLimits limits;
+  // the running move
+  Plan plan;
+  std::size_t next = 0;
+  bool moving = false;
+  std::string outcome = "done";    ///< of the last move: "done" or "contact"
+  // guard of the running move
+  Channel* guard = nullptr;
+  double guard_force_N = 0;
+  Eigen::Vector3d guard_bias_N = Eigen::Vector3d::Zero();
+  Channel* default_wrench = nullptr;
+  // the planned tool position of the log, and the q_ref it belongs to
+  Eigen::Vector3d tool_ref_W = Eigen::Vector3d::Zero();
+  Eigen::VectorXd tool_ref_q;
+};
+
+struct Program {
+  ProgramConfig config;
+  std::string label;               ///< robot name, or the script's file name
+  int index = 0;
+  SandboxConfig sandbox;
+  lua_State* L = nullptr;
+  lua_State* co = nullptr;
+  bool ended = false;
+  double t_s = 0;                  ///< simulated time of the current period
+  double period_s = 0.002;
+  std::unique_ptr<Robot> robot;    ///< null for a program without a robot
+  Devices* devices = nullptr;
+  Blackboard* board = nullptr;
+  std::map<std::string, std::vector<double>> device_commands;  ///< re-sent every period
+};
+
+/// Registers the robot and device functions and runs the prelude (wait,
+/// blocking moves) in the program's state.
+void OpenApi(Program* program);
+
+/// The program of a Lua state (set by OpenApi).
+Program* ProgramOf(lua_State* L);
+
+/// The next joint reference of the program's robot: advances the running
+/// plan, stops it when its guard trips. Never throws.
+void AdvanceMotion(Robot* robot);
+
+}  // namespace vlab::task

@@ -1,0 +1,177 @@
+// The task language's motion planner against the geometric definitions of
+// its moves, on the PA10 (scenes/pa10.xml, tool site "tool"): every planned
+// sample is checked through an independent forward kinematics (a second
+// RobotModel on the same model).
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "control/robot_model.h"
+#include "mujoco_fixture.h"
+#include "task/task_motion.h"
+
+namespace vlab::task {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kPeriod = 0.002;
+
+class MotionTest : public test::MujocoTest {
+ protected:
+  void SetUp() override {
+    model_ = LoadModel(std::string(VLAB_SOURCE_DIR) + "/scenes/pa10.xml");
+    chain_ = control::RobotModel::Create(model_, {"world", "tool"});
+    fk_ = control::RobotModel::Create(model_, {"world", "tool"});
+    planner_ = std::make_unique<MotionPlanner>(chain_.get(), kPeriod);
+    q0_.resize(7);
+    q0_ << 0, 30 * kDeg, 0, 60 * kDeg, 0, 90 * kDeg, 0;  // the "ready" pose of scenes/pa10_reach.yaml
+  }
+  // the tool pose of q by the independent chain
+  Frame Fk(const Eigen::VectorXd& q) {
+    fk_->SetState(q, Eigen::VectorXd::Zero(7));
+    const control::Pose p = fk_->TipPose();
+    Frame f;
+    f.p = p.p_W;
+    f.q = Eigen::Quaterniond(p.R_W);
+    return f;
+  }
+  static Frame Pose(double x, double y, double z, const Eigen::Quaterniond& q) {
+    Frame f;
+    f.p = {x, y, z};
+    f.q = q;
+    return f;
+  }
+  static Eigen::Quaterniond Down(double yaw_deg = 0) {  // tool z down, turned about the world z
+    return Eigen::Quaterniond(Eigen::AngleAxisd(yaw_deg * kDeg, Eigen::Vector3d::UnitZ()) *
+                              Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  }
+
+  mjModel* model_ = nullptr;  // owned by the fixture
+  std::unique_ptr<control::RobotModel> chain_, fk_;
+  std::unique_ptr<MotionPlanner> planner_;
+  Eigen::VectorXd q0_;
+};
+
+// movel: p(s) on the segment start -> goal; R(s) = slerp(R0, R1, s) with the
+// same s (the path parameter read off the position); ends exactly at the goal.
+TEST_F(MotionTest, LinearIsStraightWithSlerpOrientation) {
+  const Frame start = Fk(q0_);
+  const Frame goal = Pose(0.55, 0.15, 0.55, Down(60));
+  MotionLimits limits;
+  limits.speed_mps = 0.2;
+  const Plan plan = planner_->Linear(q0_, goal, limits);
+  ASSERT_GT(plan.q.size(), 100u);
+  const Eigen::Vector3d d = goal.p - start.p;
+  double max_line = 0, max_slerp = 0, last_s = 0;
+  for (const Eigen::VectorXd& q : plan.q) {
+    const Frame x = Fk(q);
+    const double s = (x.p - start.p).dot(d) / d.squaredNorm();
+    max_line = std::max(max_line, (x.p - (start.p + s * d)).norm());
+    max_slerp = std::max(max_slerp, x.q.angularDistance(start.q.slerp(s, goal.q)));
+    EXPECT_GE(s, last_s - 1e-12);  // monotonic along the line
+    last_s = s;
+  }
+  // issue 15: straight line within 0.1 mm; SLERP within 1 mrad (the planner solves to 1e-8)
+  EXPECT_LT(max_line, 1e-4);
+  EXPECT_LT(max_slerp, 1e-3);
+  EXPECT_LT((Fk(plan.q.back()).p - goal.p).norm(), 1e-8);
+  EXPECT_LT(Fk(plan.q.back()).q.angularDistance(goal.q), 1e-8);
+  // trapezoid: T = d/v + v/a (0.2 m/s, 0.5 m/s^2), unless the rotation takes longer
+  const double T_lin = d.norm() / 0.2 + 0.2 / 0.5;
+  const double T_rot = start.q.angularDistance(goal.q) / limits.rot_speed_rps + limits.rot_speed_rps / limits.rot_accel_rps2;
+  EXPECT_NEAR(plan.duration_s, std::max(T_lin, T_rot), kPeriod);
+}
+
+// movec: every sample at the circumradius from the circumcentre, in the plane
+// of the three points, through the via point, ending at the goal.
+TEST_F(MotionTest, ArcKeepsRadiusAndPassesTheViaPoint) {
+  const Eigen::VectorXd q1 = planner_->Ik(q0_, Pose(0.50, -0.10, 0.55, Down()));
+  const Frame start = Fk(q1);
+  const Eigen::Vector3d via(0.55, 0.0, 0.60), end(0.50, 0.10, 0.55);
+  // circumcentre by hand: (0.475, 0, 0.525), r = sqrt(0.025^2 * 2 + 0.1^2)
+  const Eigen::Vector3d c(0.475, 0.0, 0.525);
+  const double r = std::sqrt(2 * 0.025 * 0.025 + 0.01);
+  const Eigen::Vector3d n = (via - start.p).cross(end - start.p).normalized();
+  const Plan plan = planner_->Arc(q1, via, Pose(end.x(), end.y(), end.z(), Down(30)), MotionLimits());
+  double max_radius = 0, max_plane = 0, min_via = 1;
+  for (const Eigen::VectorXd& q : plan.q) {
+    const Eigen::Vector3d p = Fk(q).p;
+    max_radius = std::max(max_radius, std::abs((p - c).norm() - r));
+    max_plane = std::max(max_plane, std::abs((p - c).dot(n)));
+    min_via = std::min(min_via, (p - via).norm());
+  }
+  EXPECT_LT(max_radius, 1e-4);  // 0.1 mm, as the straight line
+  EXPECT_LT(max_plane, 1e-4);
+  // a sample every period at <= 0.1 m/s: within 0.2 mm of any point of the path
+  EXPECT_LT(min_via, 2e-4);
+  EXPECT_LT((Fk(plan.q.back()).p - end).norm(), 1e-8);
+}
+
+// movej: every sample on the joint-space segment; a frame target by IK lands on the frame.
+TEST_F(MotionTest, JointMoveIsStraightInJointSpaceAndIkHitsTheFrame) {
+  const Frame goal = Pose(0.4, 0.3, 0.6, Down(-30));
+  const Eigen::VectorXd q1 = planner_->Ik(q0_, goal);
+  EXPECT_LT((Fk(q1).p - goal.p).norm(), 1e-8);
+  EXPECT_LT(Fk(q1).q.angularDistance(goal.q), 1e-8);
+  const Plan plan = planner_->Joint(q0_, q1, MotionLimits());
+  const Eigen::VectorXd d = q1 - q0_;
+  for (const Eigen::VectorXd& q : plan.q) {
+    const double s = (q - q0_).dot(d) / d.squaredNorm();
+    EXPECT_LT((q - (q0_ + s * d)).norm(), 1e-12);
+  }
+  EXPECT_EQ(plan.q.back(), q1);
+}
+
+// selfmove: the tool held within 0.1 mm / 1 mrad while the elbow swings >= 20 deg
+// about the shoulder-wrist line (issue 15).
+TEST_F(MotionTest, SelfMotionHoldsTheToolWhileTheElbowSwings) {
+  const Frame held = Fk(q0_);
+  const Plan plan = planner_->Self(q0_, 2, 40 * kDeg, 2.0);  // S3 by 40 deg
+  double max_p = 0, max_r = 0;
+  for (const Eigen::VectorXd& q : plan.q) {
+    const Frame x = Fk(q);
+    max_p = std::max(max_p, (x.p - held.p).norm());
+    max_r = std::max(max_r, x.q.angularDistance(held.q));
+  }
+  EXPECT_LT(max_p, 1e-4);
+  EXPECT_LT(max_r, 1e-3);
+  // the elbow (link 4's origin) about the axis shoulder (link 2) -> wrist (link 6)
+  auto point = [&](const Eigen::VectorXd& q, const char* body) {
+    fk_->SetState(q, Eigen::VectorXd::Zero(7));
+    const int id = mj_name2id(model_, mjOBJ_BODY, body);
+    const double* x = fk_->data().xpos + 3 * id;
+    return Eigen::Vector3d(x[0], x[1], x[2]);
+  };
+  auto elbow_dir = [&](const Eigen::VectorXd& q) {
+    const Eigen::Vector3d s = point(q, "pa10_link2"), w = point(q, "pa10_link6"), e = point(q, "pa10_link4");
+    const Eigen::Vector3d axis = (w - s).normalized();
+    const Eigen::Vector3d v = e - s;
+    return std::pair<Eigen::Vector3d, Eigen::Vector3d>((v - v.dot(axis) * axis).normalized(), axis);
+  };
+  const auto [u0, a0] = elbow_dir(q0_);
+  const auto [u1, a1] = elbow_dir(plan.q.back());
+  EXPECT_LT((a0 - a1).norm(), 1e-6);  // the shoulder-wrist line stays put with the tool
+  const double swing = std::acos(std::clamp(u0.dot(u1), -1.0, 1.0));
+  EXPECT_GE(swing, 20 * kDeg);
+}
+
+TEST_F(MotionTest, TargetsBeyondLimitsOrReachAreRefusedBeforeMoving) {
+  Eigen::VectorXd q1 = q0_;
+  q1[1] = 100 * kDeg;  // S2's range is +-94 deg (mjcf/pa10/pa10.xml)
+  try {
+    planner_->Joint(q0_, q1, MotionLimits());
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("joint S2 = 100 deg is beyond its upper limit 94 deg"), std::string::npos)
+        << e.what();
+  }
+  try {
+    planner_->Linear(q0_, Pose(2.0, 0, 0.5, Down()), MotionLimits());  // the arm reaches about 1.3 m
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("out of reach"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace vlab::task
