@@ -27,17 +27,21 @@
 //    wrist accelerations. Then b = -(M - c x F + I_c Omega') / |.|, phi = atan2(-b_y, b_z)
 //    seen in the groove plane (y, z), after a first-order low-pass (kSmooth) of the two
 //    components, delayed by that low-pass, the JR3 filter's group delay and a period.
-// 3. Phase lock: a phase-locked loop phi_hat' = nu_ff + kPll wrap(phi_meas - phi_hat), run
+// 3. Phase lock: a phase-locked loop phi_hat' = nu_ff + kPll wrap(phi_meas - phi_hat) (the
+//    correction clipped to +-kPllMax: a stale or disturbed reading must not jerk the wrist), run
 //    only once the couple stands out (|M| > kMinCouple); before, phi_hat free-runs at nu_ff
 //    from the start estimate. The cone phase psi = phi_hat + s (delta - 90 deg) (s = sign of
 //    nu; delta = 0 puts the axle on the groove's line of nodes, the law's optimum; the
 //    spin-up law omega' = (r/R) omega nu sin(alpha) cos(delta), mjcf/powerball/README.md).
+// 5. Command: joint velocities, the cone's rate plus kPull times the position error (the
+//    others held at the start pose), clipped to kMaxJointSpeed.
 // 4. Cone angle: alpha = min(alpha_max, v_wrist / |nu|) (the wrist's joint speed alpha nu
-//    stays under --wrist-speed), times a speed regulator (1 at and below target - 1,000
+//    stays under --wrist-speed), times a speed regulator (1 at and below target - kRegulatorBand
 //    rpm, 0 at the target) so the rotor holds near the target instead of running away (the
 //    law blows up in finite time), ramped in over the first kRamp_s and rate-limited
 //    (kAlphaRate) so the tips are never slammed.
-// Logs FILE (CSV): time, counter rpm, nu_ff, alpha (deg), phi_hat, psi, |M| (N m).
+// Logs FILE (CSV): time, counter rpm, nu_ff, alpha commanded and measured (deg, from W1 and
+// W2), phi_hat, psi, |M| (N m).
 // Ends when the arm is silent for --timeout s or on SIGTERM/SIGINT; exit 0; 2 on bridge errors.
 #include <algorithm>
 #include <cmath>
@@ -74,12 +78,15 @@ constexpr double kRollRatio = 0.0012 / 0.027;  // r / R
 constexpr double kComOffset_m = 0.0392, kToolInertia = 5.2e-4;
 constexpr int kW1 = 5, kW2 = 6;                // joint indices of W1 and W2 in the arm
 constexpr double kPll = 4.0;                   // rad/s: phase-locked loop gain
+constexpr double kPllMax = 2.0;                // rad/s: its largest correction of the phase rate
 constexpr double kSmooth = 2.0 * kPi * 20.0;   // rad/s: first-order low-pass of the couple
 constexpr double kMinCouple = 0.02;            // N m: the axle angle is read above this
 constexpr double kFilterDelay_s = 0.3 / 125.0; // JR3 filter 2's group delay (sensors/sensor_wrench.h)
 constexpr double kAlphaRate = 3.0 * kDeg;      // rad/s: how fast the cone angle may change
 constexpr double kRamp_s = 3.0;                // s: the cone angle's ramp at the start
-constexpr double kRegulatorBand = 1000.0;      // rpm below the target where alpha tapers to 0
+constexpr double kRegulatorBand = 2500.0;      // rpm below the target where alpha tapers to 0
+constexpr double kPull = 20.0;                 // 1/s: velocity per position error
+constexpr double kMaxJointSpeed = 6.0;         // rad/s: under the arm's 2 pi wrist limit
 
 struct Address { std::string host; int port = 0; };
 struct Options {
@@ -136,6 +143,20 @@ bool ReadUntil(Client& c, std::int64_t seq, double timeout_s, State* s) {
 
 double Wrap(double angle) { return std::remainder(angle, 2.0 * kPi); }
 
+// the arm's next state: period seq + 1 in lockstep, else the newest one after `a`
+bool NextArmState(Arm& arm, bool per_period, double timeout_s, Arm::State* a) {
+  if (per_period) return ReadUntil(arm, a->seq + 1, timeout_s, a);
+  for (double waited = 0; !g_stop && waited < timeout_s; waited += kPoll_s) {
+    try {
+      const std::int64_t last = a->seq;
+      arm.ReadLatest(kPoll_s, a);
+      if (a->seq > last) return true;
+    } catch (const vlab::bridge::TimeoutError&) {
+    }
+  }
+  return false;
+}
+
 int Run(const Options& o) {
   Arm arm = Arm::Connect(o.arm.host, o.arm.port, kConnect_s);
   Wrench jr3 = Wrench::Connect(o.jr3.host, o.jr3.port, kConnect_s);
@@ -144,6 +165,9 @@ int Run(const Options& o) {
     std::fprintf(stderr, "powerball_spin: arm '%s' has %d joints, not the PA10's 7\n", arm.name().c_str(), arm.joints());
     return 2;
   }
+  // lockstep: every period in turn; otherwise (realtime) the newest state, skipping any the
+  // loop fell behind on, so that a command never answers an old state
+  const bool per_period = arm.describe().value("clock", "") == "lockstep";
   Arm::State a;
   Wrench::State w;
   Device::State c;
@@ -151,13 +175,14 @@ int Run(const Options& o) {
   const Eigen::VectorXd q0 = a.q;
   const double t0 = a.time;
   std::FILE* log = o.log.empty() ? nullptr : std::fopen(o.log.c_str(), "w");
-  if (log) std::fprintf(log, "time,counter_rpm,nu_ff,alpha_deg,phi_hat,psi,couple\n");
+  if (log) std::fprintf(log, "time,counter_rpm,nu_ff,alpha_deg,alpha_measured_deg,phi_hat,psi,couple\n");
 
   const double delta = o.delta_deg * kDeg, alpha_max = o.alpha_max_deg * kDeg;
   double phi_hat = 0, alpha = 0, t_prev = 0, next_keepalive = 1.0, t = 0;
   double accel[2] = {0, 0}, m_y = 0, m_z = 0;
   bool locked = false, first = true;
-  Eigen::VectorXd q_cmd = q0;
+  Eigen::VectorXd v_cmd = Eigen::VectorXd::Zero(7);
+  double alpha_prev = 0;
   do {
     t = a.time - t0;
     if (!ReadUntil(jr3, a.seq, o.timeout_s, &w)) break;
@@ -182,7 +207,8 @@ int Run(const Options& o) {
     // 3. phase lock
     if (first) phi_hat = phi_meas;
     if (couple > kMinCouple) locked = true;
-    phi_hat += dt * (nu_ff + (couple > kMinCouple ? kPll * Wrap(phi_meas - phi_hat) : 0.0));
+    const double pull = couple > kMinCouple ? std::clamp(kPll * Wrap(phi_meas - phi_hat), -kPllMax, kPllMax) : 0.0;
+    phi_hat += dt * (nu_ff + pull);
     phi_hat = Wrap(phi_hat);
     // 4. cone angle: wrist speed cap, speed regulator, ramp, rate limit
     const double rpm = std::abs(c.values[kCounterRpm]);
@@ -190,15 +216,26 @@ int Run(const Options& o) {
     const double regulate = std::clamp((o.target_rpm - rpm) / kRegulatorBand, 0.0, 1.0);
     const double wanted = cap * regulate * std::min(1.0, t / kRamp_s);
     alpha += std::clamp(wanted - alpha, -kAlphaRate * dt, kAlphaRate * dt);
-    // the command acts from the next period on: lead it by one period
-    const double psi = phi_hat + s * (delta - 0.5 * kPi) + nu_ff * dt;
+    // 5. velocity command: the cone's rate plus a slow pull (kPull) onto the cone and, for
+    // the other joints, onto the start pose. A velocity command survives a late or missed
+    // period in realtime (the drive keeps integrating it); a position command would not.
+    const double phase_rate = nu_ff + pull;
+    const double alpha_rate = dt > 0 ? (alpha - alpha_prev) / dt : 0.0;
+    alpha_prev = alpha;
+    const double psi = phi_hat + s * (delta - 0.5 * kPi);
     const double theta[2] = {alpha * std::sin(psi), alpha * std::cos(psi)};
+    const double theta_rate[2] = {alpha_rate * std::sin(psi) + alpha * phase_rate * std::cos(psi),
+                                  alpha_rate * std::cos(psi) - alpha * phase_rate * std::sin(psi)};
     // the cone's joint accelerations, analytic (psi turning at nu_ff): -nu^2 theta
     accel[0] = -nu_ff * nu_ff * theta[0];
     accel[1] = -nu_ff * nu_ff * theta[1];
-    q_cmd(kW1) = q0(kW1) + theta[0];
-    q_cmd(kW2) = q0(kW2) + theta[1];
-    arm.Write(vlab::bridge::ArmMode::kPosition, q_cmd, a.seq);
+    for (int i = 0; i < 7; ++i) {
+      double target = q0(i), rate = 0.0;
+      if (i == kW1) target += theta[0], rate = theta_rate[0];
+      if (i == kW2) target += theta[1], rate = theta_rate[1];
+      v_cmd(i) = std::clamp(rate + kPull * (target - a.q(i)), -kMaxJointSpeed, kMaxJointSpeed);
+    }
+    arm.Write(vlab::bridge::ArmMode::kVelocity, v_cmd, a.seq);
     first = false;
     if (t >= next_keepalive) {
       jr3.KeepAlive();
@@ -211,10 +248,12 @@ int Run(const Options& o) {
       }
     }
     if (log) {
-      std::fprintf(log, "%.4f,%.1f,%.4f,%.4f,%.4f,%.4f,%.5f\n", t, c.values[kCounterRpm], nu_ff, alpha / kDeg, phi_hat,
-                   Wrap(psi), couple);
+      // the cone the wrist made: the tilt of e3 from the measured W1, W2
+      const double alpha_measured = std::hypot(a.q(kW1) - q0(kW1), a.q(kW2) - q0(kW2));
+      std::fprintf(log, "%.4f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f\n", t, c.values[kCounterRpm], nu_ff, alpha / kDeg,
+                   alpha_measured / kDeg, phi_hat, Wrap(psi), couple);
     }
-  } while (ReadUntil(arm, a.seq + 1, o.timeout_s, &a));
+  } while (NextArmState(arm, per_period, o.timeout_s, &a));
   if (log) std::fclose(log);
   return 0;
 }
