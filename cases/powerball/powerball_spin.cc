@@ -5,11 +5,12 @@
 //   powerball_spin --arm ADDR --jr3 ADDR --counter ADDR [--target-rpm RPM] [--alpha-max DEG]
 //                  [--delta DEG] [--wrist-speed RAD_S] [--log FILE] [--timeout S] [--quiet]
 //
-// Devices: --arm, the PA10 (arm; its states pace the loop, one position command per state);
+// Devices: --arm, the PA10 (arm; its states pace the loop, one velocity command per state);
 // --jr3, the wrench device at the ball's mount (filter 1 or 2: filter 4's 7.8 Hz cut-off
 // would eat the rotating couple); --counter, the ball's own speed counter (counter kind:
 // rpm, sample-and-hold at its gate rate, quantised). Lockstep: state k of the arm, then
-// period k's states of the others.
+// period k's states of the others; realtime: the arm's newest state, then the others' of
+// that period or later.
 //
 // Geometry (cases/powerball/README.md, mjcf/pa10/pa10_powerball.xml): the groove normal e3
 // is the flange's +x; the JR3's frame is the flange's. The wrist joints tilt e3: W1 by +t
@@ -23,9 +24,11 @@
 //    reaches the sensor as -dH/dt of the tool side (the JR3 reads the load the tool side
 //    applies). Gravity and the tool side's linear inertia go out exactly by subtracting
 //    c x F (c: the tool side's centre of mass from the sensor, F the measured force, so
-//    M - c x F = -dH_c/dt); its rotational inertia by adding I_c Omega' from the commanded
-//    wrist accelerations. Then b = -(M - c x F + I_c Omega') / |.|, phi = atan2(-b_y, b_z)
-//    seen in the groove plane (y, z), after a first-order low-pass (kSmooth) of the two
+//    M - c x F = -dH_c/dt); its rotational inertia by adding I_c Omega', Omega' the cone's
+//    own joint accelerations, -nu^2 times the tilts (analytic: a second difference of the
+//    commands would feed the estimate's noise back amplified by 1 / dt^2). Then
+//    b = -(M - c x F + I_c Omega') / |.|, phi = atan2(-b_y, b_z) in the groove plane (y, z),
+//    after a first-order low-pass (kSmooth) of the two
 //    components, delayed by that low-pass, the JR3 filter's group delay and a period.
 // 3. Phase lock: a phase-locked loop phi_hat' = nu_ff + kPll wrap(phi_meas - phi_hat) (the
 //    correction clipped to +-kPllMax: a stale or disturbed reading must not jerk the wrist), run
@@ -33,13 +36,13 @@
 //    from the start estimate. The cone phase psi = phi_hat + s (delta - 90 deg) (s = sign of
 //    nu; delta = 0 puts the axle on the groove's line of nodes, the law's optimum; the
 //    spin-up law omega' = (r/R) omega nu sin(alpha) cos(delta), mjcf/powerball/README.md).
-// 5. Command: joint velocities, the cone's rate plus kPull times the position error (the
-//    others held at the start pose), clipped to kMaxJointSpeed.
 // 4. Cone angle: alpha = min(alpha_max, v_wrist / |nu|) (the wrist's joint speed alpha nu
 //    stays under --wrist-speed), times a speed regulator (1 at and below target - kRegulatorBand
 //    rpm, 0 at the target) so the rotor holds near the target instead of running away (the
 //    law blows up in finite time), ramped in over the first kRamp_s and rate-limited
 //    (kAlphaRate) so the tips are never slammed.
+// 5. Command: joint velocities, the cone's rate plus kPull times the position error (the
+//    others held at the start pose), clipped to kMaxJointSpeed.
 // Logs FILE (CSV): time, counter rpm, nu_ff, alpha commanded and measured (deg, from W1 and
 // W2), phi_hat, psi, |M| (N m).
 // Ends when the arm is silent for --timeout s or on SIGTERM/SIGINT; exit 0; 2 on bridge errors.
