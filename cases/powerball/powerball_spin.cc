@@ -42,7 +42,8 @@
 //    law blows up in finite time), ramped in over the first kRamp_s and rate-limited
 //    (kAlphaRate) so the tips are never slammed.
 // 5. Command: joint velocities, the cone's rate plus kPull times the position error (the
-//    others held at the start pose), clipped to kMaxJointSpeed.
+//    others held at the start pose), clipped to kMaxJointSpeed, changing by at most
+//    kMaxVelocityStep from one command to the next.
 // Logs FILE (CSV): time, counter rpm, nu_ff, alpha commanded and measured (deg, from W1 and
 // W2), phi_hat, psi, |M| (N m).
 // Ends when the arm is silent for --timeout s or on SIGTERM/SIGINT; exit 0; 2 on bridge errors.
@@ -90,6 +91,11 @@ constexpr double kRamp_s = 3.0;                // s: the cone angle's ramp at th
 constexpr double kRegulatorBand = 2500.0;      // rpm below the target where alpha tapers to 0
 constexpr double kPull = 20.0;                 // 1/s: velocity per position error
 constexpr double kMaxJointSpeed = 6.0;         // rad/s: under the arm's 2 pi wrist limit
+// rad/s: the largest change from one command to the next. The cone needs alpha nu^2 dt, at
+// most 0.22 rad/s per 1 ms period (12,000 rpm, 4.1 deg); a command after a stall of the
+// loop (realtime, a loaded machine: 21 ms seen) would step by that times the stall, and a
+// velocity step of dv costs the servo kd dv of torque (a 15 N m spike on W1)
+constexpr double kMaxVelocityStep = 0.5;
 
 struct Address { std::string host; int port = 0; };
 struct Options {
@@ -236,7 +242,8 @@ int Run(const Options& o) {
       double target = q0(i), rate = 0.0;
       if (i == kW1) target += theta[0], rate = theta_rate[0];
       if (i == kW2) target += theta[1], rate = theta_rate[1];
-      v_cmd(i) = std::clamp(rate + kPull * (target - a.q(i)), -kMaxJointSpeed, kMaxJointSpeed);
+      const double wanted_v = std::clamp(rate + kPull * (target - a.q(i)), -kMaxJointSpeed, kMaxJointSpeed);
+      v_cmd(i) += std::clamp(wanted_v - v_cmd(i), -kMaxVelocityStep, kMaxVelocityStep);
     }
     arm.Write(vlab::bridge::ArmMode::kVelocity, v_cmd, a.seq);
     first = false;
