@@ -284,6 +284,30 @@ TEST_F(PowerballRig, OutOfPhaseWobbleBrakesTheRotorByTheRateLaw) {
   RecordProperty("end_rpm", std::to_string(end.Rpm()));
 }
 
+// Out of sync, the other way: an open-loop cone at twice the rolling rate of 2,000 rpm
+// (free-running phase, as a beginner's wrist): the wobble and the axle drift through every
+// phase, so the friction pushes as often as it brakes ("no resistance, the rotor may slap
+// around", DS 5.2 / rpmpower). Over 4 s the tips slip (measured: slip ratio up to 0.9999,
+// rolling reads 0.0015; bound 0.1) and the spin stays below 2,200 rpm (+10 %; measured top
+// 2,054 rpm), where the locked cone of the spin-up test is past 2,600 rpm by 4 s.
+TEST_F(PowerballRig, AnUnsynchronisedWobbleSlipsAndGainsNothing) {
+  StartRolling(2000.0 * kRpm);
+  const double rate = 2.0 * data_->qvel[ball_.precess_dof];
+  double worst_slip = 0.0, top = 0.0;
+  while (data_->time < 4.0) {
+    const double ramp = std::min(1.0, data_->time);
+    Drive(10.0 * kDeg * ramp, data_->time < 1.0 ? 10.0 * kDeg : 0.0, rate * data_->time, rate);
+    ASSERT_TRUE(Step()) << "t " << data_->time;
+    const PowerballTruth t = MeasurePowerball(*model_, *data_, ball_);
+    if (data_->time > 1.0) worst_slip = std::max(worst_slip, t.slip);
+    top = std::max(top, t.Rpm());
+  }
+  EXPECT_GT(worst_slip, 0.1);
+  EXPECT_LT(top, 2200.0);
+  RecordProperty("worst_slip", std::to_string(worst_slip));
+  RecordProperty("top_rpm", std::to_string(top));
+}
+
 // 6: shell held still, the axle in the groove plane clear of both walls, 2,000 rpm, no
 // damping: an axisymmetric rotor about its symmetry axis has no gyroscopic torque, so omega
 // stays to 1e-6 over 5 s (issue) and nothing touches.
