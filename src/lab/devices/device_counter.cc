@@ -12,7 +12,10 @@
 //           at every control period; a reading is due at the first period end
 //           at or after its time (gates are whole control periods)
 //   log     NAME.revolutions, NAME.rpm (the output), NAME.true_rpm (the joint's
-//           speed at the period end, lab ground truth)
+//           speed at the period end, lab ground truth); with `powerball: true` also
+//           the ball's truth (lab_powerball.h): NAME.spin_rpm (rotor spin relative to
+//           the shell), NAME.precess_rate (rad/s, relative to the shell), NAME.slip
+//           (tip slip ratio) and NAME.moment (N m, |wall couple|)
 // A gate-time counter reads the mean speed over its gate, not the speed at its
 // end: it lags a spin-up by half a gate.
 #include <cmath>
@@ -23,6 +26,7 @@
 #include "core/core_errors.h"
 #include "lab/devices/device_counter.h"
 #include "lab/lab_log.h"
+#include "lab/lab_powerball.h"
 #include "lab/lab_yaml.h"
 
 namespace vlab::lab {
@@ -37,6 +41,8 @@ class SimCounter final : public Device {
   SimCounter(const DeviceContext& context, const DeviceConfig& c)
       : Device(c), config_(c.ParamsAs<CounterParams>()) {
     const mjModel* m = context.model;
+    model_ = m;
+    if (config_.powerball) ball_ = PowerballBinding::Bind(*m, who());
     const double period_s = context.control_period_s;
     const int joint = mj_name2id(m, mjOBJ_JOINT, config_.joint.c_str());
     if (joint < 0) throw InputError(who() + ": the scene has no joint '" + config_.joint + "'");
@@ -74,13 +80,23 @@ class SimCounter final : public Device {
 
   void State(std::vector<double>* p) const override { p->assign({revolutions_, rpm_}); }
   std::vector<std::string> Columns() const override {
-    return {name() + ".revolutions", name() + ".rpm", name() + ".true_rpm"};
+    std::vector<std::string> columns = {name() + ".revolutions", name() + ".rpm", name() + ".true_rpm"};
+    if (config_.powerball) {
+      for (const char* truth : {".spin_rpm", ".precess_rate", ".slip", ".moment"}) columns.push_back(name() + truth);
+    }
+    return columns;
   }
-  int ColumnCount() const override { return 3; }
-  void Row(const mjData&, double* out) const override {
+  int ColumnCount() const override { return config_.powerball ? 7 : 3; }
+  void Row(const mjData& d, double* out) const override {
     out[0] = revolutions_;
     out[1] = rpm_;
     out[2] = true_rpm_;
+    if (!config_.powerball) return;
+    const PowerballTruth truth = MeasurePowerball(*model_, d, ball_);
+    out[3] = truth.Rpm();
+    out[4] = truth.nu;
+    out[5] = truth.slip;
+    out[6] = truth.CoupleNorm();
   }
 
   std::string DescribeFacts() const override {
@@ -95,6 +111,8 @@ class SimCounter final : public Device {
 
  private:
   CounterParams config_;
+  const mjModel* model_ = nullptr;
+  PowerballBinding ball_;
   int qpos_adr_ = -1, dof_adr_ = -1;
   double gate_s_ = 0;
   double angle_start_ = 0, gate_angle_ = 0, gate_start_ = 0, next_reading_ = 0;
@@ -110,6 +128,7 @@ std::shared_ptr<const DeviceParams> ReadCounterParams(MapReader& r) {
   if (!(p->rate_hz >= 0 && std::isfinite(p->rate_hz))) r.Fail("rate", "must be >= 0 Hz (0: every control period)");
   p->resolution = r.Number("resolution", p->resolution);
   if (!(p->resolution >= 0 && std::isfinite(p->resolution))) r.Fail("resolution", "must be >= 0 rpm (0: none)");
+  p->powerball = r.Bool("powerball", p->powerball);
   return p;
 }
 
