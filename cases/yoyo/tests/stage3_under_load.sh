@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Yo-yo stage 3 on a busy machine: runs cases/yoyo/stage3 N times (default 10) while
+# two CPU-bound processes, started and stopped here at normal priority, keep both cores
+# busy. Each run is the full stage (46 s of wall-clock time) at the scenario's realtime
+# priority (granted to root, CAP_SYS_NICE or an rtprio limit; summary.json says what it
+# got). Prints per run the verdict, the priority granted, missed deadlines, the worst
+# period-start lateness and the swing check; then "passed K of N". Exit 0 when all passed.
+#   cases/yoyo/tests/stage3_under_load.sh [N] [VLAB] [OUT]
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+top="$(cd "$here/../../.." && pwd)"
+runs="${1:-10}"
+vlab="${2:-$top/build/vlab}"
+out="${3:-$(mktemp -d)}"
+[ -x "$vlab" ] || { echo "stage3_under_load: no vlab at $vlab (build first)" >&2; exit 2; }
+
+hogs=()
+stop_hogs() { for p in "${hogs[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
+trap stop_hogs EXIT
+for _ in 1 2; do
+  ( while :; do :; done ) &
+  hogs+=("$!")
+done
+
+passed=0
+for i in $(seq 1 "$runs"); do
+  dir="$out/run$i"
+  rc=0
+  "$vlab" run "$top/cases/yoyo/stage3.yaml" --quiet --out "$dir" >/dev/null 2>"$dir.err" || rc=$?
+  [ "$rc" -eq 0 ] && passed=$((passed + 1))
+  python3 - "$dir/summary.json" "$i" "$rc" <<'EOF'
+import json, sys
+path, i, rc = sys.argv[1], sys.argv[2], int(sys.argv[3])
+try:
+    s = json.load(open(path))
+except OSError:
+    print(f"run {i}: exit {rc}, no summary.json")
+    sys.exit(0)
+c = s["clock_stats"]
+rt = s.get("realtime_priority", {})
+lab = rt.get("lab", {})
+ctl = rt.get("controller", {})
+swing = next((k for k in s["checks"] if k["name"] == "every_swing_reaches_the_level"), None)
+print(f"run {i}: {s['result']}; priority lab {lab.get('requested')} {'granted' if lab.get('granted') else 'not granted'}, "
+      f"controller {ctl.get('requested')} {'granted' if ctl.get('granted') else 'not granted'}; "
+      f"missed {c.get('missed_deadlines')} of {c.get('periods')}, lateness max {c['lateness_s']['max'] * 1e3:.2f} ms; "
+      f"lowest swing top {swing['value']:.4f} m (>= {swing['bound']['min']})" if swing else "")
+EOF
+done
+echo "passed $passed of $runs (two CPU-bound processes beside every run; output in $out)"
+[ "$passed" -eq "$runs" ]
