@@ -23,6 +23,7 @@ struct RunArgs {
   bool list_signals = false;
   double duration_s = 0;  ///< > 0 overrides the scenario's duration
   long long seed = -1;    ///< >= 0 overrides the scenario's seed
+  std::vector<std::string> sets;  ///< --set KEY=VALUE scenario overrides, in order
 };
 int RunCommand(const RunArgs& args);
 

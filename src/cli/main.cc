@@ -31,6 +31,11 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   run_cmd->add_option("--seed", run.seed, "Override the scenario's seed (>= 0)");
   run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
+  run_cmd->add_option("--set", run.sets,
+                      "KEY=VALUE: override a scenario key by its dotted path, list items by name or index "
+                      "(devices.jr3.filter=2, controller.gains.position=15); VALUE is YAML, typed and checked "
+                      "like the file; repeatable; recorded in summary.json")
+      ->allow_extra_args(false);
 
   vlab::cli::ServeArgs serve;
   CLI::App* serve_cmd =

@@ -8,6 +8,7 @@
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/devices/device_kinds.h"
+#include "lab/lab_overrides.h"
 #include "lab/lab_yaml.h"
 
 namespace vlab::lab {
@@ -232,7 +233,27 @@ ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode) {
   return c;
 }
 
-Scenario LoadScenario(const std::string& path) {
+Scenario LoadScenario(const std::string& path) { return LoadScenario(path, {}); }
+
+namespace {
+
+// True when `message` speaks of `key_path` or something under it.
+bool MentionsPath(const std::string& message, const std::string& key_path) {
+  for (std::size_t at = message.find(key_path); at != std::string::npos; at = message.find(key_path, at + 1)) {
+    const bool starts = at == 0 || message[at - 1] == ' ';
+    const std::size_t end = at + key_path.size();
+    const bool ends = end == message.size() || message[end] == ':' || message[end] == '.' || message[end] == '[' ||
+                      message[end] == ' ';
+    if (starts && ends) return true;
+  }
+  return false;
+}
+
+Scenario ParseScenario(const std::string& path, const YAML::Node& root);
+
+}  // namespace
+
+Scenario LoadScenario(const std::string& path, const std::vector<std::string>& sets) {
   // an MJCF scene where a scenario is expected: say so, not what YAML makes of XML
   {
     std::ifstream in(path);
@@ -246,6 +267,28 @@ Scenario LoadScenario(const std::string& path) {
   }
   const YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) throw InputError(path + ": a scenario must be a YAML mapping");
+  std::vector<Override> overrides;
+  for (const std::string& set : sets) overrides.push_back(ParseOverride(set));
+  const std::vector<std::string> paths = ApplyOverrides(path, root, overrides);
+  try {
+    Scenario s = ParseScenario(path, root);
+    for (const Override& o : overrides) s.overrides.emplace_back(o.key, o.value);
+    return s;
+  } catch (const InputError& e) {
+    // name the --set behind a bad value (the last one that touched its key)
+    const std::string message = e.what();
+    for (std::size_t i = overrides.size(); i-- > 0;) {
+      if (MentionsPath(message, paths[i])) {
+        throw InputError(message + " (from --set " + overrides[i].key + "=" + overrides[i].value + ")");
+      }
+    }
+    throw;
+  }
+}
+
+namespace {
+
+Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
   MapReader r(path, root, "");
   Scenario s;
   s.file = path;
@@ -343,5 +386,7 @@ Scenario LoadScenario(const std::string& path) {
   r.Finish();
   return s;
 }
+
+}  // namespace
 
 }  // namespace vlab::lab

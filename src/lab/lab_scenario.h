@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -133,6 +134,8 @@ struct Scenario {
   ControllerConfig controller;
   OutputsConfig outputs;
   std::vector<CheckConfig> checks;
+  /// `--set KEY=VALUE` overrides applied to the file, in order (as given)
+  std::vector<std::pair<std::string, std::string>> overrides;
 };
 
 /// Resolves a scenario argument: PATH, or PATH.yaml when PATH does not exist.
@@ -151,5 +154,10 @@ ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode);
 /// Loads and validates a scenario file. Throws InputError naming the file, the
 /// line and the key.
 Scenario LoadScenario(const std::string& path);
+
+/// Loads a scenario with `--set KEY=VALUE` overrides applied to the file first
+/// (lab_overrides.h): the same typing and errors as the file's own keys; an
+/// error on an overridden key names the --set too.
+Scenario LoadScenario(const std::string& path, const std::vector<std::string>& sets);
 
 }  // namespace vlab::lab

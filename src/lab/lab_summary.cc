@@ -74,6 +74,8 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                         {"refused_full", c.sessions.refused_full},
                         {"describes_limited", c.sessions.describes_limited}}}});
   }
+  json overrides = json::object();
+  for (const auto& [key, value] : sc.overrides) overrides[key] = value;
   json summary = {
       {"scenario", sc.name},
       {"file", sc.file},
@@ -83,6 +85,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"exit_code", r.exit_code},
       {"failure", r.failure},
       {"seed", sc.seed},
+      {"overrides", overrides},
       {"clock", ClockModeName(r.clock)},
       {"duration_s", sc.duration_s},
       {"control_period_s", sc.control_period_s},
