@@ -64,6 +64,8 @@ Subcommand AddVisionCommand(CLI::App& app);  // cli_vision.cc
 Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
 Subcommand AddCompareCommand(CLI::App& app);  // cli_compare.cc
 Subcommand AddGoldenCommand(CLI::App& app);   // cli_compare.cc
+Subcommand AddSweepCommand(CLI::App& app);    // cli_sweep.cc
+Subcommand AddCollectCommand(CLI::App& app);  // cli_collect.cc
 
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.
