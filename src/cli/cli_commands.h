@@ -12,6 +12,7 @@
 namespace vlab::lab {
 struct Scenario;
 struct RunResult;
+struct Sweep;
 }  // namespace vlab::lab
 
 namespace vlab::cli {
@@ -50,6 +51,7 @@ struct BenchArgs {
 int BenchCommand(const BenchArgs& args);
 int BenchBridge(const BenchArgs& args);
 int BenchRender(const BenchArgs& args);
+int BenchSweep(const BenchArgs& args);  // cli_bench_sweep.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.
@@ -66,6 +68,10 @@ Subcommand AddCompareCommand(CLI::App& app);  // cli_compare.cc
 Subcommand AddGoldenCommand(CLI::App& app);   // cli_compare.cc
 Subcommand AddSweepCommand(CLI::App& app);    // cli_sweep.cc
 Subcommand AddCollectCommand(CLI::App& app);  // cli_collect.cc
+
+/// Runs a sweep's runs here, `jobs` at a time, into out/ID, skipping complete runs
+/// (cli_sweep.cc); quiet: no lines printed. Returns 0 when every run passed.
+int RunSweepHere(const lab::Sweep& sweep, const std::string& out, int jobs, bool quiet);
 
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.

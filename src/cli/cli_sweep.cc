@@ -82,7 +82,9 @@ std::string Duration(double s) {
   return buf;
 }
 
-int RunLocal(const lab::Sweep& sweep, const std::string& out, int jobs) {
+}  // namespace
+
+int RunSweepHere(const lab::Sweep& sweep, const std::string& out, int jobs, bool quiet) {
   fs::create_directories(out + "/logs");
   const std::string self = SelfPath();
   InstallStopSignals();
@@ -97,10 +99,12 @@ int RunLocal(const lab::Sweep& sweep, const std::string& out, int jobs) {
       todo.push_back(i);
     }
   }
-  std::printf("sweep %s: %zu runs, %d complete already (skipped), %zu to run, %d at a time; output in %s/\n",
-              sweep.name.c_str(), sweep.runs.size(), skipped, todo.size(), jobs, out.c_str());
-  std::fflush(stdout);
-  const bool tty = ::isatty(2);
+  if (!quiet) {
+    std::printf("sweep %s: %zu runs, %d complete already (skipped), %zu to run, %d at a time; output in %s/\n",
+                sweep.name.c_str(), sweep.runs.size(), skipped, todo.size(), jobs, out.c_str());
+    std::fflush(stdout);
+  }
+  const bool tty = !quiet && ::isatty(2);
   std::map<pid_t, std::pair<std::size_t, double>> running;  // pid -> run, start time
   std::size_t next = 0;
   int done = 0;
@@ -133,8 +137,10 @@ int RunLocal(const lab::Sweep& sweep, const std::string& out, int jobs) {
     (code == 0 ? pass : failed) += 1;
     if (tty) std::fprintf(stderr, "\r%*s\r", 78, "");
     const std::string see = code == 0 ? "" : "; its output: " + out + "/logs/" + run.id + ".txt";
-    std::printf("  %-16s %s (exit %d, %.1f s)%s\n", run.id.c_str(), result.c_str(), code, wall, see.c_str());
-    std::fflush(stdout);
+    if (!quiet) {
+      std::printf("  %-16s %s (exit %d, %.1f s)%s\n", run.id.c_str(), result.c_str(), code, wall, see.c_str());
+      std::fflush(stdout);
+    }
     if (tty) {
       const std::size_t left = todo.size() - static_cast<std::size_t>(done);
       const double eta = left * (busy_s / done) / jobs;
@@ -146,10 +152,14 @@ int RunLocal(const lab::Sweep& sweep, const std::string& out, int jobs) {
   if (tty) std::fprintf(stderr, "\r%*s\r", 78, "");
   const std::size_t not_run = todo.size() - static_cast<std::size_t>(done);
   const std::string interrupted = not_run ? ", " + std::to_string(not_run) + " not run (interrupted)" : "";
-  std::printf("sweep %s: %d pass, %d failed, %d skipped (complete already)%s; output in %s/\n", sweep.name.c_str(), pass,
-              failed, skipped, interrupted.c_str(), out.c_str());
+  if (!quiet) {
+    std::printf("sweep %s: %d pass, %d failed, %d skipped (complete already)%s; output in %s/\n", sweep.name.c_str(),
+                pass, failed, skipped, interrupted.c_str(), out.c_str());
+  }
   return failed == 0 && not_run == 0 && !g_stop_requested ? 0 : 1;
 }
+
+namespace {
 
 int SweepMain(const SweepArgs& a) {
   if (a.jobs < 1 || a.jobs > 1024) throw InputError("-j must be 1 to 1024");
@@ -166,7 +176,7 @@ int SweepMain(const SweepArgs& a) {
     }
     return 0;
   }
-  return RunLocal(sweep, out, a.jobs);
+  return RunSweepHere(sweep, out, a.jobs, false);
 }
 
 }  // namespace

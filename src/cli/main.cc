@@ -63,11 +63,12 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("what", bench.what,
                         "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
                         "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
-                        "| render")
+                        "| render | sweep (runs per minute of vlab sweep -j 2 vs -j 1)")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge", "render"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render", "sweep"}));
   bench_cmd->add_option("--scenario", bench.scenario,
-                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge)");
+                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge); "
+                        "sweep: a sweep file (default scenes/sweeps/pa10_gains.yaml)");
   bench_cmd->add_option("--duration", bench.duration_s,
                         "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5)");
   bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
@@ -125,6 +126,7 @@ int main(int argc, char** argv) {
   if (bench_cmd->parsed()) {
     if (bench.what == "bridge") return vlab::cli::BenchBridge(bench);
     if (bench.what == "render") return vlab::cli::BenchRender(bench);
+    if (bench.what == "sweep") return vlab::cli::BenchSweep(bench);
     return vlab::cli::BenchCommand(bench);
   }
   for (const auto& sub : more) {
