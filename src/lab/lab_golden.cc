@@ -35,9 +35,16 @@ GoldenSpec LoadGolden(const std::string& dir) {
   g.compare.from_s = r.Number("from", g.compare.from_s);
   g.compare.to_s = r.Number("to", g.compare.to_s);
   if (g.compare.to_s < g.compare.from_s) r.Fail("to", "must be >= from");
-  const YAML::Node tolerances = r.Sequence("tolerances");
+  g.compare.tolerances = ReadTolerances(file, r.Sequence("tolerances"), "tolerances");
+  r.Finish();
+  return g;
+}
+
+std::vector<ColumnTolerance> ReadTolerances(const std::string& file, const YAML::Node& tolerances,
+                                            const std::string& path) {
+  std::vector<ColumnTolerance> out;
   for (std::size_t i = 0; i < tolerances.size(); ++i) {
-    MapReader t(file, tolerances[i], "tolerances[" + std::to_string(i) + "]");
+    MapReader t(file, tolerances[i], path + "[" + std::to_string(i) + "]");
     ColumnTolerance tol;
     tol.pattern = t.String("columns");
     tol.ignore = t.Bool("ignore", false);
@@ -47,10 +54,9 @@ GoldenSpec LoadGolden(const std::string& dir) {
     if (tol.rel < 0) t.Fail("rel", "must be >= 0");
     if (tol.ignore && (t.Has("abs") || t.Has("rel"))) t.Fail("ignore", "an ignored column has no tolerance");
     t.Finish();
-    g.compare.tolerances.push_back(tol);
+    out.push_back(tol);
   }
-  r.Finish();
-  return g;
+  return out;
 }
 
 void WriteDecimatedLog(const std::string& from, const std::string& to, int every) {

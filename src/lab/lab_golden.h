@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
+
 #include "lab/lab_compare.h"
 
 namespace vlab::lab {
@@ -31,6 +33,10 @@ struct GoldenSpec {
 
 /// Reads DIR/golden.yaml strictly (InputError naming file, line and key).
 GoldenSpec LoadGolden(const std::string& dir);
+
+/// Reads a `tolerances` list ({columns: GLOB, abs: X, rel: Y} or {columns: GLOB,
+/// ignore: true}) of `file` at key path `path`; InputError naming file, line and key.
+std::vector<ColumnTolerance> ReadTolerances(const std::string& file, const YAML::Node& list, const std::string& path);
 
 /// Writes every `every`-th data row of the CSV `from` (the header and row 0
 /// always) to `to`, byte for byte, through a temporary file renamed into place.

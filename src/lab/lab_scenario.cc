@@ -8,6 +8,7 @@
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/devices/device_kinds.h"
+#include "lab/lab_golden.h"
 #include "lab/lab_overrides.h"
 #include "lab/lab_yaml.h"
 
@@ -146,6 +147,19 @@ CheckConfig ReadCheck(const std::string& file, const YAML::Node& node, const std
   CheckConfig c;
   c.where = YamlWhere(file, node);
   c.name = r.String("name");
+  if (r.Has("golden")) {
+    const std::string golden = r.String("golden");
+    c.golden = (fs::path(file).parent_path() / golden).lexically_normal().string();
+    if (!fs::exists(c.golden)) r.Fail("golden", "no such golden folder or log: " + c.golden);
+    c.signal = "golden:" + golden;
+    c.max = 1.0;  // the worst divergence, in multiples of its tolerance
+    c.tolerances = ReadTolerances(file, r.Sequence("tolerances"), r.Child("tolerances"));
+    c.from_s = r.Number("from", c.from_s);
+    c.to_s = r.Number("to", c.to_s);
+    if (c.to_s < c.from_s) r.Fail("to", "must be >= from");
+    r.Finish();
+    return c;
+  }
   c.signal = r.String("signal");
   const std::string reduce = r.String("reduce", "max");
   if (!ReduceFromName(reduce, &c.reduce)) r.Fail("reduce", "unknown reduction '" + reduce + "' (known: max, min, mean, rms, final, max_abs, min_of_window_max, max_of_window_min)");
@@ -382,6 +396,10 @@ Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
   const YAML::Node checks = r.Sequence("checks");
   for (std::size_t i = 0; i < checks.size(); ++i) {
     s.checks.push_back(ReadCheck(path, checks[i], "checks[" + std::to_string(i) + "]"));
+    if (!s.checks.back().golden.empty() && !s.outputs.log) {
+      throw InputError(s.checks.back().where + ": checks[" + std::to_string(i) +
+                       "].golden: a golden check compares log.csv: it needs outputs.log: true");
+    }
   }
   r.Finish();
   return s;

@@ -17,6 +17,7 @@
 
 #include "control/time_scaling.h"
 #include "core/core_clock.h"
+#include "lab/lab_compare.h"
 #include "lab/devices/device_config.h"
 #include "render/renderer.h"
 
@@ -82,6 +83,12 @@ struct CheckConfig {
   double to_s = std::numeric_limits<double>::infinity();
   double window_s = 0.0;       ///< sub-window length, s (> 0 only for the *_of_window_* reductions)
   std::string where;
+  /// A golden check (`golden:` key): the run's log.csv compared with this golden folder
+  /// or log CSV (resolved) within `tolerances` (then a golden folder's own), over
+  /// [from, to] (lab_compare.h). Its value is the worst divergence as a multiple of its
+  /// tolerance (0: all within; inf: a missing column), bound max 1. "" for a signal check.
+  std::string golden;
+  std::vector<ColumnTolerance> tolerances;
 };
 
 /// Images of one MJCF camera written into the output folder during a run.

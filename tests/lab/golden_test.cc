@@ -139,5 +139,43 @@ TEST(GoldenTest, UpdateWritesOnlyWhenAskedAndSaysWhatChanged) {
   EXPECT_EQ(ReadFile(golden + "/log.csv"), log);
 }
 
+// a scenario's golden check: the run's log against a golden, the report beside it
+TEST(GoldenTest, ScenarioGoldenCheckPassesFailsAndSkipsLikeAnyCheck) {
+  TempDir dir;
+  std::string scenario = ReadFile(kSource + "/scenes/pa10_reach.yaml");
+  scenario.replace(scenario.find("scene: pa10.xml"), 15, "scene: " + kSource + "/scenes/pa10.xml");
+  scenario.replace(scenario.find("\nchecks:\n"), 9,
+                   "\nchecks:\n  - {name: matches, golden: " + kSource + "/tests/goldens/pa10_reach, from: 0.5}\n");
+  WriteFile(dir / "s.yaml", scenario);
+  const auto same = RunVlab("run " + (dir / "s.yaml") + " --out " + (dir / "same"));
+  EXPECT_EQ(same.exit_code, 0) << same.out << same.err;
+  EXPECT_NE(same.out.find("pass  matches"), std::string::npos) << same.out;
+  EXPECT_NE(ReadFile(dir / "same/golden_matches.txt").find("result: pass (37 columns"), std::string::npos);
+  // other gains: the scenario's own checks still pass, the golden check does not
+  const auto other = RunVlab("run " + (dir / "s.yaml") + " --out " + (dir / "other") +
+                             " --set controller.gains.position=19");
+  EXPECT_EQ(other.exit_code, 1) << other.out << other.err;
+  EXPECT_NE(other.out.find("FAIL  matches"), std::string::npos) << other.out;
+  EXPECT_NE(other.out.find("pass  position_tracking"), std::string::npos) << other.out;
+  EXPECT_NE(other.err.find("check 'matches' failed: log.csv diverges from the golden"), std::string::npos) << other.err;
+  EXPECT_NE(ReadFile(dir / "other/golden_matches.txt").find("FAIL pa10.q.S1"), std::string::npos);
+  // a shortened run is compared over what it reached; one that ends before `from` skips it
+  EXPECT_EQ(RunVlab("run " + (dir / "s.yaml") + " -q --duration 3 --out " + (dir / "short")).exit_code, 0);
+  const auto early = RunVlab("run " + (dir / "s.yaml") + " --duration 0.2 --out " + (dir / "early"));
+  EXPECT_NE(early.out.find("skip  matches"), std::string::npos) << early.out;
+  // bad input: a golden that is not there, a golden check without a log
+  const std::string missing = dir / "missing.yaml";
+  std::string bad = scenario;
+  bad.replace(bad.find("tests/goldens/pa10_reach"), 24, "tests/goldens/nope");
+  WriteFile(missing, bad);
+  const auto no_golden = RunVlab("run " + missing + " --out " + (dir / "x"));
+  EXPECT_EQ(no_golden.exit_code, 2);
+  EXPECT_NE(no_golden.err.find("checks[0].golden: no such golden folder or log"), std::string::npos) << no_golden.err;
+  const auto no_log = RunVlab("run " + (dir / "s.yaml") + " --set outputs.log=false --out " + (dir / "y"));
+  EXPECT_EQ(no_log.exit_code, 2);
+  EXPECT_NE(no_log.err.find("a golden check compares log.csv: it needs outputs.log: true"), std::string::npos)
+      << no_log.err;
+}
+
 }  // namespace
 }  // namespace vlab
