@@ -130,8 +130,8 @@ void PlotCollected(const CollectedTable& table, const std::string& key, const st
   const std::string x_column = key == "seed" ? "seed" : "set:" + key;
   const int xi = table.Column(x_column), yi = table.Column(check);
   if (xi < 0) throw InputError("--x " + key + ": no run overrides it (collected columns: set:KEY for each --set KEY)");
-  if (yi < 0 || check.find('.') != std::string::npos && check.size() > 8 &&
-                    check.compare(check.size() - 8, 8, ".verdict") == 0) {
+  const bool verdict = check.size() > 8 && check.compare(check.size() - 8, 8, ".verdict") == 0;
+  if (yi < 0 || verdict) {
     throw InputError("--y " + check + ": no check of that name in the runs");
   }
   // one line per group: the seed, or (x = seed) the other overrides
