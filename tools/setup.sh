@@ -16,6 +16,9 @@ VLAB_APT_PACKAGES+=(liblua5.4-dev)
 
 # for the tests only: Octave runs the MATLAB/Octave example (tests/serve/octave_client_test.sh)
 VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)
+# for the tests only: the sweep engines (tests/lab/sweep_parallel_test.sh, sweep_slurm_test.sh):
+# GNU parallel, and a single-node Slurm with its munge authentication, started by the test
+VLAB_TEST_APT_PACKAGES+=(parallel slurm-wlm munge)
 
 vlab_missing_packages() {
   local pkg missing=()

@@ -12,6 +12,7 @@
 namespace vlab::lab {
 struct Scenario;
 struct RunResult;
+struct Sweep;
 }  // namespace vlab::lab
 
 namespace vlab::cli {
@@ -24,6 +25,7 @@ struct RunArgs {
   double duration_s = 0;  ///< > 0 overrides the scenario's duration
   long long seed = -1;    ///< >= 0 overrides the scenario's seed
   int rt_priority = -1;   ///< >= 0 overrides the scenario's realtime.priority
+  std::vector<std::string> sets;  ///< --set KEY=VALUE scenario overrides, in order
 };
 int RunCommand(const RunArgs& args);
 
@@ -53,6 +55,7 @@ int BenchBridge(const BenchArgs& args);
 int BenchRender(const BenchArgs& args);
 int BenchRealtime(const BenchArgs& args);  // cli_bench_realtime.cc
 int BenchTask(const BenchArgs& args);  // cli_bench_task.cc
+int BenchSweep(const BenchArgs& args);  // cli_bench_sweep.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.
@@ -66,6 +69,14 @@ Subcommand AddCameraCommand(CLI::App& app);  // cli_camera.cc
 Subcommand AddVisionCommand(CLI::App& app);  // cli_vision.cc
 Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
 Subcommand AddTaskCommand(CLI::App& app);    // cli_task.cc
+Subcommand AddCompareCommand(CLI::App& app);  // cli_compare.cc
+Subcommand AddGoldenCommand(CLI::App& app);   // cli_compare.cc
+Subcommand AddSweepCommand(CLI::App& app);    // cli_sweep.cc
+Subcommand AddCollectCommand(CLI::App& app);  // cli_collect.cc
+
+/// Runs a sweep's runs here, `jobs` at a time, into out/ID, skipping complete runs
+/// (cli_sweep.cc); quiet: no lines printed. Returns 0 when every run passed.
+int RunSweepHere(const lab::Sweep& sweep, const std::string& out, int jobs, bool quiet);
 
 /// Prints one line about realtime priority (RunOptions::on_realtime) on stderr.
 void PrintRealtime(const std::string& line);

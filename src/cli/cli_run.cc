@@ -79,7 +79,7 @@ int WithErrorReport(const std::function<int()>& body) {
 
 int RunCommand(const RunArgs& args) {
   return WithErrorReport([&args] {
-    lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario));
+    lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario), args.sets);
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
     if (args.seed >= 0) scenario.seed = static_cast<std::uint64_t>(args.seed);
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);

@@ -36,6 +36,11 @@ int main(int argc, char** argv) {
       "when permitted (root, CAP_SYS_NICE or ulimit -r); 0: normal priority (default: the scenario's "
       "realtime.priority); what was granted is printed and recorded in summary.json";
   run_cmd->add_option("--rt-priority", run.rt_priority, rt_help)->check(CLI::Range(0, 99));
+  run_cmd->add_option("--set", run.sets,
+                      "KEY=VALUE: override a scenario key by its dotted path, list items by name or index "
+                      "(devices.jr3.filter=2, controller.gains.position=15); VALUE is YAML, typed and checked "
+                      "like the file; repeatable; recorded in summary.json")
+      ->allow_extra_args(false);
 
   vlab::cli::ServeArgs serve;
   CLI::App* serve_cmd =
@@ -66,12 +71,14 @@ int main(int argc, char** argv) {
                         "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
                         "| render | realtime (1 kHz beside 2 and 4 served 640x480 cameras: quiet, under 2 CPU hogs, "
                         "and under them at realtime priority when permitted) "
-                        "| task (a task script vs the built-in task_space controller, period time)")
+                        "| task (a task script vs the built-in task_space controller, period time) "
+                        "| sweep (runs per minute of vlab sweep -j 2 vs -j 1)")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task", "sweep"}));
   bench_cmd->add_option("--scenario", bench.scenario,
-                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge, "
-                        "scenes/pa10_reach_task for task)");
+                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge "
+                        "and realtime, scenes/pa10_reach_task for task); sweep: a sweep file (default "
+                        "scenes/sweeps/pa10_gains.yaml)");
   bench_cmd->add_option("--duration", bench.duration_s,
                         "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5); "
                         "realtime: of each run (default 10)");
@@ -81,7 +88,9 @@ int main(int argc, char** argv) {
   // subcommands that define themselves in their own files
   const std::vector<vlab::cli::Subcommand> more = {vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app),
                                                    vlab::cli::AddVisionCommand(app), vlab::cli::AddCubesCommand(app),
-                                                   vlab::cli::AddTaskCommand(app)};
+                                                   vlab::cli::AddTaskCommand(app), vlab::cli::AddCompareCommand(app),
+                                                   vlab::cli::AddGoldenCommand(app), vlab::cli::AddSweepCommand(app),
+                                                   vlab::cli::AddCollectCommand(app)};
 
   try {
     app.parse(argc, argv);
@@ -131,6 +140,7 @@ int main(int argc, char** argv) {
     if (bench.what == "render") return vlab::cli::BenchRender(bench);
     if (bench.what == "realtime") return vlab::cli::BenchRealtime(bench);
     if (bench.what == "task") return vlab::cli::BenchTask(bench);
+    if (bench.what == "sweep") return vlab::cli::BenchSweep(bench);
     return vlab::cli::BenchCommand(bench);
   }
   for (const auto& sub : more) {

@@ -70,7 +70,12 @@ void RunSession::Prepare() {
   result_.clock = clock_->mode();
 
   // checks first: a bad signal name is bad input, and must leave nothing behind
-  checks_ = std::make_unique<CheckSet>(sc.checks, s_.columns);
+  // (golden checks compare the written log after the run: lab_run_golden.cc)
+  std::vector<CheckConfig> signal_checks;
+  for (const CheckConfig& c : sc.checks) {
+    if (c.golden.empty()) signal_checks.push_back(c);
+  }
+  checks_ = std::make_unique<CheckSet>(signal_checks, s_.columns);
   for (const PlotConfig& plot : sc.outputs.plots) CheckPlotColumns(plot, s_.columns);
   // image outputs: cameras and sizes checked against the scene before anything is written
   if (!options_.out_dir.empty() && !sc.outputs.images.empty()) {
@@ -292,6 +297,7 @@ RunResult RunSession::Finish() {
 
 void RunSession::WriteOutputs() {
   if (log_) log_->Close();
+  EvaluateGoldenChecks();
   if (images_) images_->Finish();
   // a plot that cannot be drawn fails the run, and the rest is written; a plot of a CSV
   // that an external controller writes into {out} is skipped where the lab did not start

@@ -64,6 +64,8 @@ class RunSession {
   // vlab serve in lockstep: why the run had no controller ("" when a command arrived)
   std::string NoController() const;
   void WriteOutputs();
+  /// Compares the written log.csv with each golden check's golden (lab_run_golden.cc).
+  void EvaluateGoldenChecks();
 
   Lab::Impl& s_;
   const RunOptions& options_;

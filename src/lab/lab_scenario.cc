@@ -9,6 +9,8 @@
 #include "core/core_mujoco.h"
 #include "core/core_realtime.h"
 #include "lab/devices/device_kinds.h"
+#include "lab/lab_golden.h"
+#include "lab/lab_overrides.h"
 #include "lab/lab_yaml.h"
 
 namespace vlab::lab {
@@ -177,6 +179,19 @@ CheckConfig ReadCheck(const std::string& file, const YAML::Node& node, const std
   CheckConfig c;
   c.where = YamlWhere(file, node);
   c.name = r.String("name");
+  if (r.Has("golden")) {
+    const std::string golden = r.String("golden");
+    c.golden = (fs::path(file).parent_path() / golden).lexically_normal().string();
+    if (!fs::exists(c.golden)) r.Fail("golden", "no such golden folder or log: " + c.golden);
+    c.signal = "golden:" + golden;
+    c.max = 1.0;  // the worst divergence, in multiples of its tolerance
+    c.tolerances = ReadTolerances(file, r.Sequence("tolerances"), r.Child("tolerances"));
+    c.from_s = r.Number("from", c.from_s);
+    c.to_s = r.Number("to", c.to_s);
+    if (c.to_s < c.from_s) r.Fail("to", "must be >= from");
+    r.Finish();
+    return c;
+  }
   c.signal = r.String("signal");
   const std::string reduce = r.String("reduce", "max");
   if (!ReduceFromName(reduce, &c.reduce)) r.Fail("reduce", "unknown reduction '" + reduce + "' (known: max, min, mean, rms, final, max_abs, min_of_window_max, max_of_window_min)");
@@ -266,7 +281,27 @@ ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode) {
   return c;
 }
 
-Scenario LoadScenario(const std::string& path) {
+Scenario LoadScenario(const std::string& path) { return LoadScenario(path, {}); }
+
+namespace {
+
+// True when `message` speaks of `key_path` or something under it.
+bool MentionsPath(const std::string& message, const std::string& key_path) {
+  for (std::size_t at = message.find(key_path); at != std::string::npos; at = message.find(key_path, at + 1)) {
+    const bool starts = at == 0 || message[at - 1] == ' ';
+    const std::size_t end = at + key_path.size();
+    const bool ends = end == message.size() || message[end] == ':' || message[end] == '.' || message[end] == '[' ||
+                      message[end] == ' ';
+    if (starts && ends) return true;
+  }
+  return false;
+}
+
+Scenario ParseScenario(const std::string& path, const YAML::Node& root);
+
+}  // namespace
+
+Scenario LoadScenario(const std::string& path, const std::vector<std::string>& sets) {
   // an MJCF scene where a scenario is expected: say so, not what YAML makes of XML
   {
     std::ifstream in(path);
@@ -280,6 +315,28 @@ Scenario LoadScenario(const std::string& path) {
   }
   const YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) throw InputError(path + ": a scenario must be a YAML mapping");
+  std::vector<Override> overrides;
+  for (const std::string& set : sets) overrides.push_back(ParseOverride(set));
+  const std::vector<std::string> paths = ApplyOverrides(path, root, overrides);
+  try {
+    Scenario s = ParseScenario(path, root);
+    for (const Override& o : overrides) s.overrides.emplace_back(o.key, o.value);
+    return s;
+  } catch (const InputError& e) {
+    // name the --set behind a bad value (the last one that touched its key)
+    const std::string message = e.what();
+    for (std::size_t i = overrides.size(); i-- > 0;) {
+      if (MentionsPath(message, paths[i])) {
+        throw InputError(message + " (from --set " + overrides[i].key + "=" + overrides[i].value + ")");
+      }
+    }
+    throw;
+  }
+}
+
+namespace {
+
+Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
   MapReader r(path, root, "");
   Scenario s;
   s.file = path;
@@ -377,9 +434,15 @@ Scenario LoadScenario(const std::string& path) {
   const YAML::Node checks = r.Sequence("checks");
   for (std::size_t i = 0; i < checks.size(); ++i) {
     s.checks.push_back(ReadCheck(path, checks[i], "checks[" + std::to_string(i) + "]"));
+    if (!s.checks.back().golden.empty() && !s.outputs.log) {
+      throw InputError(s.checks.back().where + ": checks[" + std::to_string(i) +
+                       "].golden: a golden check compares log.csv: it needs outputs.log: true");
+    }
   }
   r.Finish();
   return s;
 }
+
+}  // namespace
 
 }  // namespace vlab::lab

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -16,6 +17,7 @@
 
 #include "control/time_scaling.h"
 #include "core/core_clock.h"
+#include "lab/lab_compare.h"
 #include "lab/devices/device_config.h"
 #include "render/renderer.h"
 
@@ -97,6 +99,12 @@ struct CheckConfig {
   double to_s = std::numeric_limits<double>::infinity();
   double window_s = 0.0;       ///< sub-window length, s (> 0 only for the *_of_window_* reductions)
   std::string where;
+  /// A golden check (`golden:` key): the run's log.csv compared with this golden folder
+  /// or log CSV (resolved) within `tolerances` (then a golden folder's own), over
+  /// [from, to] (lab_compare.h). Its value is the worst divergence as a multiple of its
+  /// tolerance (0: all within; inf: a missing column), bound max 1. "" for a signal check.
+  std::string golden;
+  std::vector<ColumnTolerance> tolerances;
 };
 
 /// Images of one MJCF camera written into the output folder during a run.
@@ -149,6 +157,8 @@ struct Scenario {
   ControllerConfig controller;
   OutputsConfig outputs;
   std::vector<CheckConfig> checks;
+  /// `--set KEY=VALUE` overrides applied to the file, in order (as given)
+  std::vector<std::pair<std::string, std::string>> overrides;
 };
 
 /// Resolves a scenario argument: PATH, or PATH.yaml when PATH does not exist.
@@ -167,5 +177,10 @@ ClockConfig ScenarioClock(const Scenario& scenario, ClockMode mode);
 /// Loads and validates a scenario file. Throws InputError naming the file, the
 /// line and the key.
 Scenario LoadScenario(const std::string& path);
+
+/// Loads a scenario with `--set KEY=VALUE` overrides applied to the file first
+/// (lab_overrides.h): the same typing and errors as the file's own keys; an
+/// error on an overridden key names the --set too.
+Scenario LoadScenario(const std::string& path, const std::vector<std::string>& sets);
 
 }  // namespace vlab::lab

@@ -78,6 +78,8 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
     return json{{"requested", g.requested}, {"granted", g.granted}, {"memory_locked", g.memory_locked},
                 {"reason", g.reason}};
   };
+  json overrides = json::object();
+  for (const auto& [key, value] : sc.overrides) overrides[key] = value;
   json summary = {
       {"scenario", sc.name},
       {"file", sc.file},
@@ -87,6 +89,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"exit_code", r.exit_code},
       {"failure", r.failure},
       {"seed", sc.seed},
+      {"overrides", overrides},
       {"clock", ClockModeName(r.clock)},
       {"duration_s", sc.duration_s},
       {"control_period_s", sc.control_period_s},
