@@ -34,7 +34,9 @@ TEST(TaskCli, HelloRunsAsAnExternalControllerWithTheSameMotion) {
   for (std::size_t row = 1; row < a.size(); ++row) {
     const std::vector<std::string> x = SplitCsv(a[row]), y = SplitCsv(b[row]);
     for (std::size_t c = 0; c < header.size(); ++c) {
-      if (header[c].rfind("pa10.q.", 0) == 0) ASSERT_EQ(x[c], y[c]) << header[c] << " row " << row;
+      if (header[c].rfind("pa10.q.", 0) == 0) {
+        ASSERT_EQ(x[c], y[c]) << header[c] << " row " << row;
+      }
     }
   }
 }
