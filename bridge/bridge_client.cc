@@ -1,5 +1,7 @@
 #include "bridge/bridge_client.h"
 
+#include <sched.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -114,10 +116,21 @@ void DeviceClient::CheckSeq(std::int64_t seq) {
 }
 
 bool DeviceClient::ReceiveFromDevice(Clock::time_point deadline, long* size) {
+  // poll briefly first (a lockstep answer comes within tens of microseconds, and a
+  // sleeping thread's wake-up costs as much again), yielding so a peer on this core runs
+  const Clock::time_point spin_until =
+      std::min(deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kClientSpin_s)));
   for (;;) {
-    const double left_s = std::chrono::duration<double>(deadline - Clock::now()).count();
     Endpoint from;
-    const long n = socket_->Receive(buffer_.data(), buffer_.size(), &from, left_s > 0 ? left_s : 0);
+    long n = socket_->Receive(buffer_.data(), buffer_.size(), &from, 0.0);
+    if (n < 0 && Clock::now() < spin_until) {
+      ::sched_yield();
+      continue;
+    }
+    if (n < 0) {
+      const double left_s = std::chrono::duration<double>(deadline - Clock::now()).count();
+      n = socket_->Receive(buffer_.data(), buffer_.size(), &from, left_s > 0 ? left_s : 0);
+    }
     if (n < 0) return false;
     // a multi-homed device may answer from another address, never from another port
     if (from.port() != device_.port()) {

@@ -10,7 +10,10 @@
 // sends it one state per control period. Destroying a handle unsubscribes it. A controller's
 // loop is Read (or ReadLatest) -> compute -> Write(..., seq = state.seq); the
 // seq of a command must be the seq of the state it answers. Read and Connect
-// block up to their timeout; Write never blocks.
+// block up to their timeout; Write never blocks. A Read waits as the lab
+// does: it polls for up to kClientSpin_s (yielding the CPU between polls),
+// then sleeps; a lockstep state, which comes tens of microseconds after the
+// command, is then taken without a thread wake-up (docs/protocol.md).
 //
 // Threading: a handle is not thread-safe; use one from one thread at a time.
 // Errors (bridge_errors.h): NetworkError, ProtocolError, VersionMismatch,
@@ -28,6 +31,11 @@
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+
+namespace vlab::bridge {
+/// How long a client's Read polls before it sleeps, s (the lab spins as long).
+inline constexpr double kClientSpin_s = 200e-6;
+}  // namespace vlab::bridge
 
 #include "bridge/bridge_errors.h"
 #include "bridge/bridge_messages.h"
