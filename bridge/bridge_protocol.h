@@ -70,8 +70,9 @@ enum class DeviceKind : int {
   kGaze = 12,    ///< ground-truth gaze of a camera on a target (lab only)
   kPose = 13,    ///< pose of a tracked frame, like a motion-capture system
   kCounter = 14,  ///< speed counter on a spinning joint (the PowerBall's rpm counter)
+  kScene = 15,    ///< poses of every visual body, for viewers (vlab view)
 };
-inline constexpr int kMaxDeviceKind = 14;
+inline constexpr int kMaxDeviceKind = 15;
 enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3, kSubscribe = 4, kSession = 5 };
 
 /// Arm status bits (state payload value 0, as a whole number).
