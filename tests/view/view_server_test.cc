@@ -216,8 +216,8 @@ TEST(ViewServerTest, WebSocketGetsTheNewestFrameAndSurvivesBadFrames) {
   EXPECT_GE(server->counters().ws_closed_bad, 3);
   // the server still serves pages and frames
   EXPECT_EQ(Status(Get(port, "/")), 200);
-  WsClient after(port);
   server->Publish("frame 54");
+  WsClient after(port);
   EXPECT_EQ(after.Read(), "frame 54");
 }
 
