@@ -3,7 +3,7 @@
 // recording.bin (replay). A frame: float64 time, float64 seq, then float32
 // x, y, z, qw, qx, qy, qz per body (little-endian). Read-only: it sends nothing.
 // URL options: camera=NAME (an MJCF world camera's pose and field of view),
-// silhouette (bodies white on black, no world geoms, no lights: for tests),
+// silhouette (bodies white, world geoms black, no lights: for tests),
 // bare (no overlay).
 (function () {
   'use strict';
@@ -61,7 +61,6 @@
     });
     var textures = {};
     info.geoms.forEach(function (geom) {
-      if (silhouette && geom.body < 0) return;
       var object = makeGeom(geom, makeMaterial(geom, textures));
       if (!object) return;
       object.name = geom.name;
@@ -87,7 +86,8 @@
   }
 
   function makeMaterial(geom, textures) {
-    if (silhouette) return new THREE.MeshBasicMaterial({ color: 0xffffff });
+    // silhouette: the bodies white, the world black (it still hides what is behind it)
+    if (silhouette) return new THREE.MeshBasicMaterial({ color: geom.body >= 0 ? 0xffffff : 0x000000 });
     var rgba = geom.rgba;
     var options = { color: new THREE.Color(rgba[0], rgba[1], rgba[2]), shininess: 20 };
     if (rgba[3] < 1) { options.transparent = true; options.opacity = rgba[3]; }
