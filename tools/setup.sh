@@ -10,10 +10,13 @@ VLAB_APT_PACKAGES=(
   python3 clang libclang-rt-14-dev
   libgtest-dev
   libopencv-dev libopencv-contrib-dev
+  libjs-three
 )
 
 # for the tests only: Octave runs the MATLAB/Octave example (tests/serve/octave_client_test.sh)
 VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)
+# for the tests only: headless Chromium renders vlab view's page (tests/view/browser_test.cc)
+VLAB_TEST_APT_PACKAGES+=(chromium)
 
 vlab_missing_packages() {
   local pkg missing=()

@@ -7,6 +7,7 @@
 
 #include "core/core_errors.h"
 #include "lab/devices/device_scene.h"
+#include "lab/lab_poses.h"
 
 namespace vlab::view {
 
@@ -15,27 +16,12 @@ namespace {
 void PutBytes(std::string* out, const void* data, std::size_t n) {
   out->append(static_cast<const char*>(data), n);
 }
-// little-endian on the hosts vlab runs on (x86-64, aarch64): checked here once
-static_assert(sizeof(float) == 4 && sizeof(double) == 8, "IEEE-754 sizes");
-bool LittleEndian() {
-  const std::uint16_t one = 1;
-  unsigned char first = 0;
-  std::memcpy(&first, &one, 1);
-  return first == 1;
-}
 
 }  // namespace
 
 std::string EncodeFrame(double time, double seq, const double* poses, int values) {
-  if (!LittleEndian()) throw std::runtime_error("vlab view: big-endian hosts are not supported");
   std::string out;
-  out.reserve(kFrameHeaderBytes + 4 * values);
-  PutBytes(&out, &time, 8);
-  PutBytes(&out, &seq, 8);
-  for (int i = 0; i < values; ++i) {
-    const float v = static_cast<float>(poses[i]);
-    PutBytes(&out, &v, 4);
-  }
+  lab::EncodePoseFrame(time, seq, poses, values, &out);
   return out;
 }
 
