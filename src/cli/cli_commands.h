@@ -62,6 +62,7 @@ Subcommand AddCameraCommand(CLI::App& app);  // cli_camera.cc
 Subcommand AddVisionCommand(CLI::App& app);  // cli_vision.cc
 Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
 Subcommand AddViewCommand(CLI::App& app);    // cli_view.cc
+Subcommand AddExportCommand(CLI::App& app);  // cli_view.cc
 
 /// Runs a command body; an InputError prints one line and gives exit code 2,
 /// any other exception one line and exit code 1.

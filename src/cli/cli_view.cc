@@ -1,9 +1,11 @@
 // vlab view: a live 3-D view of the lab in the browser (src/view/), from a
 // scene device, from an arm device's joint states, or from a recorded run.
 #include <csignal>
+#include <cstdio>
 #include <memory>
 
 #include "cli/cli_commands.h"
+#include "view/view_gltf.h"
 #include "view/view_program.h"
 
 namespace vlab::cli {
@@ -44,6 +46,31 @@ Subcommand AddViewCommand(CLI::App& app) {
               std::signal(SIGINT, OnSignal);
               std::signal(SIGTERM, OnSignal);
               return view::RunView(*o, &g_stop);
+            });
+          }};
+}
+
+}  // namespace vlab::cli
+
+namespace vlab::cli {
+
+Subcommand AddExportCommand(CLI::App& app) {
+  struct Args {
+    std::string run, glb, model;
+  };
+  auto a = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand(
+      "export", "Write a run's recorded poses (outputs: {poses: ...}) as glTF 2.0 (.glb) with animation, for "
+                "Blender and three.js");
+  cmd->add_option("run", a->run, "The run's output folder (with scene.json and poses.bin)")->required();
+  cmd->add_option("file", a->glb, "The .glb file to write (never overwritten)")->required();
+  cmd->add_option("--model", a->model, "MJCF for meshes (default: the one scene.json names)");
+  return {cmd, [a] {
+            return WithErrorReport([&] {
+              const view::GltfSummary s = view::ExportGltf(a->run, a->glb, a->model);
+              std::printf("vlab export: %s: %d bodies, %d geoms, %ld frames over %.3f s, %ld bytes\n", a->glb.c_str(),
+                          s.bodies, s.geoms, s.frames, s.duration_s, s.bytes);
+              return 0;
             });
           }};
 }

@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
   // subcommands that define themselves in their own files
   const std::vector<vlab::cli::Subcommand> more = {vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app),
                                                    vlab::cli::AddVisionCommand(app), vlab::cli::AddCubesCommand(app),
-                                                   vlab::cli::AddViewCommand(app)};
+                                                   vlab::cli::AddViewCommand(app), vlab::cli::AddExportCommand(app)};
 
   try {
     app.parse(argc, argv);
