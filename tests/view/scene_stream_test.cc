@@ -9,15 +9,25 @@
 //     same model stepped here to the frame's time, to float32 precision
 //     (2^-23 relative; the browser draws float32), which an independent
 //     mj_step of a deterministic passive model must give;
-//   - the log of that served run, with the client attached, is byte-identical
+//   - the same through `vlab view` attached to the device: the frames of its
+//     WebSocket (what the page reads: float32 poses) carry the same poses, at
+//     times that are whole multiples of 1 / 50 s (a client may skip frames:
+//     newest wins; this one reads at once and is expected to get most);
+//   - the log of that served run, with both attached, is byte-identical
 //     to the log of the same scenario under `vlab run` (fast, no viewer) and
 //     to the log of the scenario without the scene device at all.
 #include <cmath>
+#include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
 
 #include "bridge/bridge_client_device.h"
 #include "test_process.h"
@@ -66,6 +76,11 @@ int PortOf(const std::string& line, const std::string& label) {
 
 class SceneStreamTest : public ::testing::Test {
  protected:
+  struct WsFrame {
+    double time = 0;
+    float pose[7] = {};
+  };
+  std::vector<WsFrame> ws_frames_;
   void SetUp() override {
     WriteFile(dir_ / "pendulum.xml", kXml);
     WriteFile(dir_ / "with.yaml", Scenario(true));
@@ -92,10 +107,39 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
   EXPECT_DOUBLE_EQ(describe["rate_hz"].get<double>(), kRateHz);
   EXPECT_EQ(scene.state_length(), 7);
 
+  // vlab view on the same device, and a WebSocket client of its page's stream
+  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--scene", "127.0.0.1:" + std::to_string(port), "--http", "0",
+                    "-q"});
+  const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
+  ASSERT_GT(http_port, 0) << view.start_line();
+  namespace asio = boost::asio;
+  asio::io_context io;
+  boost::beast::websocket::stream<asio::ip::tcp::socket> ws(io);
+  ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(http_port)});
+  ws.handshake("127.0.0.1", "/ws");
+  std::thread reader([&ws, this] {
+    // the page's frames: float64 time, float64 seq, 7 float32 (lab_poses.h)
+    boost::beast::error_code ec;
+    for (;;) {
+      boost::beast::flat_buffer b;
+      ws.read(b, ec);
+      if (ec) return;
+      const std::string m = boost::beast::buffers_to_string(b.data());
+      if (m.size() != 16 + 28) continue;
+      WsFrame f;
+      std::memcpy(&f.time, m.data(), 8);
+      std::memcpy(f.pose, m.data() + 16, 28);
+      ws_frames_.push_back(f);
+      if (f.time >= 1.0) return;
+    }
+  });
+
   // frames for 1 s of simulated time
   std::vector<bridge::Device::State> frames;
   while (frames.empty() || frames.back().time < 1.0) frames.push_back(scene.Read(5.0));
+  reader.join();
   ASSERT_EQ(serve.Wait(20), 0) << serve.output();
+  view.Stop();
   ASSERT_GE(frames.size(), 40u);
   for (std::size_t i = 1; i < frames.size(); ++i) {
     EXPECT_NEAR(frames[i].time - frames[i - 1].time, 1.0 / kRateHz, 1e-9) << "frame " << i;
@@ -118,6 +162,19 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
     moved = std::max(moved, std::abs(f.values[3] - 1.0));
   }
   EXPECT_GT(moved, 0.01) << "the pendulum must swing, or the comparison shows nothing";
+
+  // the WebSocket's frames: the poses of the UDP frames of the same time, as float32
+  ASSERT_GE(ws_frames_.size(), 25u) << "of 50 frames in 1 s, a reader on loopback should get at least half";
+  for (const WsFrame& w : ws_frames_) {
+    const double k = w.time * kRateHz;
+    EXPECT_NEAR(k, std::round(k), 1e-6) << "t " << w.time << " is not a frame time";
+    const bridge::Device::State* same = nullptr;
+    for (const auto& f : frames) {
+      if (std::abs(f.time - w.time) < 1e-9) same = &f;
+    }
+    ASSERT_NE(same, nullptr) << "t " << w.time;
+    for (int i = 0; i < 7; ++i) EXPECT_EQ(w.pose[i], static_cast<float>(same->values[i])) << "t " << w.time;
+  }
   mj_deleteData(d);
   mj_deleteModel(m);
 
