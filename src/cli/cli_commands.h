@@ -49,6 +49,7 @@ struct BenchArgs {
 int BenchCommand(const BenchArgs& args);
 int BenchBridge(const BenchArgs& args);
 int BenchRender(const BenchArgs& args);
+int BenchView(const BenchArgs& args);  // cli_bench_view.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.

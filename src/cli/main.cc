@@ -58,11 +58,11 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("what", bench.what,
                         "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
                         "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
-                        "| render")
+                        "| render | view (lab period with and without the scene stream + one viewer)")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge", "render"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render", "view"}));
   bench_cmd->add_option("--scenario", bench.scenario,
-                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge)");
+                        "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge, scenes/pa10_view for view)");
   bench_cmd->add_option("--duration", bench.duration_s,
                         "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5)");
   bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
   if (bench_cmd->parsed()) {
     if (bench.what == "bridge") return vlab::cli::BenchBridge(bench);
     if (bench.what == "render") return vlab::cli::BenchRender(bench);
+    if (bench.what == "view") return vlab::cli::BenchView(bench);
     return vlab::cli::BenchCommand(bench);
   }
   for (const auto& sub : more) {
