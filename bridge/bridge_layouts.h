@@ -192,6 +192,10 @@ inline constexpr LayoutField kCounterState[] = {
     {"revolutions", "turns", "whole turns since the start of the run, signed"},
     {"rpm", "1/min", "the speed over the last gate time, rounded to the describe reply's resolution_rpm"},
 };
+inline constexpr LayoutField kSceneState[] = {
+    {"pose", "m, unit quaternion", "x, y, z, qw, qx, qy, qz of each body of the describe reply's bodies, world frame",
+     kSensor},
+};
 
 }  // namespace layout_detail
 
@@ -221,6 +225,8 @@ inline constexpr KindLayout kKindLayouts[kMaxDeviceKind] = {
      "output only; ground truth of a tracked frame"},
     {DeviceKind::kCounter, "counter", true, layout_detail::Fields(layout_detail::kCounterState), {},
      "output only; a gate-time speed counter"},
+    {DeviceKind::kScene, "scene", true, layout_detail::Fields(layout_detail::kSceneState), {},
+     "output only; 7 values per visual body, published at the describe reply's rate_hz"},
 };
 
 namespace layout_detail {

@@ -6,7 +6,7 @@
 //   index  field         value
 //   0      magic         1447838018 (the ASCII bytes "VLAB" read as a big-endian uint32)
 //   1      version       2
-//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-14: see DeviceKind)
+//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-15: see DeviceKind)
 //   3      type          1 state (device -> client), 2 command (client -> device),
 //                        3 describe request, 4 subscribe request (client -> device),
 //                        5 session reply (device -> client): bridge_session.h
@@ -70,8 +70,9 @@ enum class DeviceKind : int {
   kGaze = 12,    ///< ground-truth gaze of a camera on a target (lab only)
   kPose = 13,    ///< pose of a tracked frame, like a motion-capture system
   kCounter = 14,  ///< speed counter on a spinning joint (the PowerBall's rpm counter)
+  kScene = 15,    ///< poses of every visual body, for viewers (vlab view)
 };
-inline constexpr int kMaxDeviceKind = 14;
+inline constexpr int kMaxDeviceKind = 15;
 enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3, kSubscribe = 4, kSession = 5 };
 
 /// Arm status bits (state payload value 0, as a whole number).

@@ -10,6 +10,7 @@ VLAB_APT_PACKAGES=(
   python3 clang libclang-rt-14-dev
   libgtest-dev
   libopencv-dev libopencv-contrib-dev
+  libjs-three
 )
 # the robot task language embeds Lua 5.4 (src/task/)
 VLAB_APT_PACKAGES+=(liblua5.4-dev)
@@ -19,6 +20,8 @@ VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)
 # for the tests only: the sweep engines (tests/lab/sweep_parallel_test.sh, sweep_slurm_test.sh):
 # GNU parallel, and a single-node Slurm with its munge authentication, started by the test
 VLAB_TEST_APT_PACKAGES+=(parallel slurm-wlm munge)
+# for the tests only: headless Chromium renders vlab view's page (tests/view/browser_test.cc)
+VLAB_TEST_APT_PACKAGES+=(chromium)
 
 vlab_missing_packages() {
   local pkg missing=()

@@ -56,6 +56,7 @@ int BenchRender(const BenchArgs& args);
 int BenchRealtime(const BenchArgs& args);  // cli_bench_realtime.cc
 int BenchTask(const BenchArgs& args);  // cli_bench_task.cc
 int BenchSweep(const BenchArgs& args);  // cli_bench_sweep.cc
+int BenchView(const BenchArgs& args);  // cli_bench_view.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.
@@ -73,6 +74,8 @@ Subcommand AddCompareCommand(CLI::App& app);  // cli_compare.cc
 Subcommand AddGoldenCommand(CLI::App& app);   // cli_compare.cc
 Subcommand AddSweepCommand(CLI::App& app);    // cli_sweep.cc
 Subcommand AddCollectCommand(CLI::App& app);  // cli_collect.cc
+Subcommand AddViewCommand(CLI::App& app);    // cli_view.cc
+Subcommand AddExportCommand(CLI::App& app);  // cli_view.cc
 
 /// Runs a sweep's runs here, `jobs` at a time, into out/ID, skipping complete runs
 /// (cli_sweep.cc); quiet: no lines printed. Returns 0 when every run passed.

@@ -72,13 +72,14 @@ int main(int argc, char** argv) {
                         "| render | realtime (1 kHz beside 2 and 4 served 640x480 cameras: quiet, under 2 CPU hogs, "
                         "and under them at realtime priority when permitted) "
                         "| task (a task script vs the built-in task_space controller, period time) "
-                        "| sweep (runs per minute of vlab sweep -j 2 vs -j 1)")
+                        "| sweep (runs per minute of vlab sweep -j 2 vs -j 1) "
+                        "| view (lab period with and without the scene stream + one viewer)")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task", "sweep"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task", "sweep", "view"}));
   bench_cmd->add_option("--scenario", bench.scenario,
                         "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge "
-                        "and realtime, scenes/pa10_reach_task for task); sweep: a sweep file (default "
-                        "scenes/sweeps/pa10_gains.yaml)");
+                        "and realtime, scenes/pa10_reach_task for task, scenes/pa10_view for view); sweep: a sweep "
+                        "file (default scenes/sweeps/pa10_gains.yaml)");
   bench_cmd->add_option("--duration", bench.duration_s,
                         "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5); "
                         "realtime: of each run (default 10)");
@@ -90,7 +91,8 @@ int main(int argc, char** argv) {
                                                    vlab::cli::AddVisionCommand(app), vlab::cli::AddCubesCommand(app),
                                                    vlab::cli::AddTaskCommand(app), vlab::cli::AddCompareCommand(app),
                                                    vlab::cli::AddGoldenCommand(app), vlab::cli::AddSweepCommand(app),
-                                                   vlab::cli::AddCollectCommand(app)};
+                                                   vlab::cli::AddCollectCommand(app), vlab::cli::AddViewCommand(app),
+                                                   vlab::cli::AddExportCommand(app)};
 
   try {
     app.parse(argc, argv);
@@ -141,6 +143,7 @@ int main(int argc, char** argv) {
     if (bench.what == "realtime") return vlab::cli::BenchRealtime(bench);
     if (bench.what == "task") return vlab::cli::BenchTask(bench);
     if (bench.what == "sweep") return vlab::cli::BenchSweep(bench);
+    if (bench.what == "view") return vlab::cli::BenchView(bench);
     return vlab::cli::BenchCommand(bench);
   }
   for (const auto& sub : more) {

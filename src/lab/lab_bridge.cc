@@ -203,7 +203,7 @@ void LabBridge::NoteTimeout(int release_after) {
 void LabBridge::Publish(std::int64_t k, double t) {
   const double seq = static_cast<double>(k);
   for (Served& d : devices_) {
-    if (!d.endpoint) continue;
+    if (!d.endpoint || !d.device->PublishDue()) continue;
     d.device->EncodeState(seq, t, d.endpoint->status_bits(), &payload_, &d.last_state);
     d.endpoint->Publish(d.last_state, *d.socket);
   }

@@ -81,6 +81,9 @@ void RunSession::Prepare() {
   if (!options_.out_dir.empty() && !sc.outputs.images.empty()) {
     images_ = ImageOutputs::Create(m_, sc.outputs.images, sc.scene, period_);
   }
+  if (!options_.out_dir.empty() && sc.outputs.poses) {
+    poses_ = PoseRecorder::Create(m_, sc.outputs.poses_rate_hz, period_, sc.scene, sc.outputs.poses_where);
+  }
   // the wire: bind every served device before anything is written
   if (serve) {
     bridge_ = s_.MakeBridge(*serve, clock_->name());
@@ -95,6 +98,7 @@ void RunSession::Prepare() {
     });
     if (sc.outputs.log) log_ = CsvLog::Open(out_->File("log.csv"), s_.columns);
     if (images_) images_->Open(*out_);
+    if (poses_) poses_->Open(*out_);
   }
   if (external_) {
     const std::string log_path = out_ ? out_->File("controller.log") : "";
@@ -127,6 +131,7 @@ void RunSession::Publish(long k) {
 void RunSession::RenderAfterPublish(double t) {
   for (auto& device : s_.devices) device->AfterPublish(d_);
   if (images_) images_->Observe(t, d_);
+  if (poses_) poses_->Observe(t, std::round(t / period_), *d_);
 }
 
 void RunSession::Start() {
@@ -299,6 +304,7 @@ void RunSession::WriteOutputs() {
   if (log_) log_->Close();
   EvaluateGoldenChecks();
   if (images_) images_->Finish();
+  if (poses_) poses_->Finish();
   // a plot that cannot be drawn fails the run, and the rest is written; a plot of a CSV
   // that an external controller writes into {out} is skipped where the lab did not start
   // the controller (vlab serve: one started by hand has no {out}) and the file is not there

@@ -19,6 +19,7 @@
 #include "lab/lab_external.h"
 #include "lab/lab_images.h"
 #include "lab/lab_log.h"
+#include "lab/lab_poses.h"
 #include "lab/lab_output.h"
 #include "lab/lab_run_watch.h"
 #include "lab/lab_runner.h"
@@ -80,6 +81,7 @@ class RunSession {
   std::unique_ptr<Clock> clock_;
   std::unique_ptr<CheckSet> checks_;
   std::unique_ptr<ImageOutputs> images_;
+  std::unique_ptr<PoseRecorder> poses_;  // outputs.poses
   std::unique_ptr<LabBridge> bridge_;
   std::unique_ptr<OutputDir> out_;
   std::unique_ptr<CsvLog> log_;

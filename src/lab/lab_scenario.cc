@@ -430,6 +430,16 @@ Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
     pr.Finish();
     s.outputs.plots.push_back(plot);
   }
+  if (outputs.Has("poses")) {
+    MapReader poses = outputs.Map("poses");
+    s.outputs.poses = true;
+    s.outputs.poses_where = path;
+    s.outputs.poses_rate_hz = poses.Number("rate", s.outputs.poses_rate_hz);
+    if (!(s.outputs.poses_rate_hz >= 0 && std::isfinite(s.outputs.poses_rate_hz))) {
+      poses.Fail("rate", "must be >= 0 Hz (0: every control period)");
+    }
+    poses.Finish();
+  }
   outputs.Finish();
   const YAML::Node checks = r.Sequence("checks");
   for (std::size_t i = 0; i < checks.size(); ++i) {

@@ -136,6 +136,9 @@ struct OutputsConfig {
   bool log = true;  ///< write log.csv
   std::vector<ImageOutputConfig> images;
   std::vector<PlotConfig> plots;
+  bool poses = false;          ///< record poses.bin + scene.json (lab_poses.h)
+  double poses_rate_hz = 30;   ///< their frames per second (0: every control period)
+  std::string poses_where;     ///< "FILE:LINE" of outputs.poses, for messages
 };
 
 struct Scenario {

@@ -36,7 +36,7 @@ std::vector<json> Describes(const std::string& scenario) {
 // the layout the table gives the device of this describe reply
 json Expected(const KindLayout& k, const json& describe) {
   if (k.kind == DeviceKind::kArm) return LayoutJson(k.kind, static_cast<int>(describe.at("joints").size()));
-  if (k.kind == DeviceKind::kFeet || k.kind == DeviceKind::kImu) {
+  if (k.kind == DeviceKind::kFeet || k.kind == DeviceKind::kImu || k.kind == DeviceKind::kScene) {
     return LayoutJson(k.kind, describe.at("layout").at("state").get<std::vector<std::string>>());
   }
   return LayoutJson(k.kind);
@@ -74,7 +74,7 @@ TEST(DescribeLayoutsTest, EveryShippedScenariosDevicesDescribeTheTablesLayouts) 
   CheckScenario(dir / "served.yaml", &kinds);
   // every float64 kind the lab serves was seen
   const std::set<std::string> lab = {"arm",  "wrench", "sim",  "base",  "gripper", "feet",
-                                     "imu",  "point",  "yoyo", "gaze",  "pose"};
+                                     "imu",  "point",  "yoyo", "gaze",  "pose", "scene"};
   EXPECT_EQ(kinds, lab);
 }
 

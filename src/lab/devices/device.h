@@ -144,6 +144,9 @@ class Device {
   virtual int log_rank() const { return 2; }
 
   // ---- the wire
+  /// False when the last Sample() made no state to publish (a decimated
+  /// stream between its frames): the bridge then sends nothing this period.
+  virtual bool PublishDue() const { return true; }
   /// The state payload of the last Sample() (status word first for commanded kinds).
   virtual void State(std::vector<double>* payload) const { payload->clear(); }
   /// The state datagram of period `seq` at time t. `endpoint_bits`: the status

@@ -9,6 +9,7 @@
 #include "lab/devices/device_gripper.h"
 #include "lab/devices/device_point.h"
 #include "lab/devices/device_pose.h"
+#include "lab/devices/device_scene.h"
 #include "lab/devices/device_sensors.h"
 #include "lab/devices/device_sim.h"
 #include "lab/devices/device_wrench.h"
@@ -36,6 +37,7 @@ const DeviceKindSpec kDeviceKinds[] = {
     {DeviceKind::kPoint, &ReadPointParams, &MakePoint},
     {DeviceKind::kYoyo, &ReadYoyoParams, &MakeYoyo},
     {DeviceKind::kCounter, &ReadCounterParams, &MakeCounter},
+    {DeviceKind::kScene, &ReadSceneParams, &MakeScene},
 };
 
 const char* Name(DeviceKind kind) { return bridge::KindName(static_cast<int>(kind)); }

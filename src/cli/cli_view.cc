@@ -1,0 +1,78 @@
+// vlab view: a live 3-D view of the lab in the browser (src/view/), from a
+// scene device, from an arm device's joint states, or from a recorded run.
+#include <csignal>
+#include <cstdio>
+#include <memory>
+
+#include "cli/cli_commands.h"
+#include "view/view_gltf.h"
+#include "view/view_program.h"
+
+namespace vlab::cli {
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+
+}  // namespace
+
+Subcommand AddViewCommand(CLI::App& app) {
+  auto o = std::make_shared<view::ViewOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "view", "Serve a live 3-D view of the lab to a browser (HTTP + WebSocket, three.js): from a scene device, "
+              "an arm device, or a recorded run; read-only");
+  cmd->add_option("--scene", o->scene, "Scene device to draw, HOST:PORT (a scenario's kind: scene device)");
+  cmd->add_option("--arm", o->arm,
+                  "Arm device to draw instead, HOST:PORT (vlab serve, vlab-kinsim or a real arm's driver): poses "
+                  "from its joint states by MuJoCo kinematics of --model");
+  cmd->add_option("--replay", o->replay, "A run's output folder with scene.json and poses.bin, to replay");
+  cmd->add_option("--model", o->model,
+                  "MJCF scene for meshes, textures and cameras (--arm: required; --scene, --replay: default the "
+                  "one the device or recording names)");
+  cmd->add_option("--rate", o->rate_hz, "--arm: frames per second (default 30)");
+  cmd->add_option("--http", o->server.port, "TCP port of the page (default 8080; 0: any free port)");
+  cmd->add_option("--bind", o->server.bind,
+                  "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see README)");
+  cmd->add_option("--max-connections", o->server.max_connections,
+                  "Connections served at once, HTTP and WebSocket (default 16; more are answered 503)");
+  cmd->add_option("--web", o->web, "Folder of the page's files (default: view_web beside the vlab binary)");
+  cmd->add_option("--connect-timeout", o->connect_timeout_s, "Wait this long for the device, s (default 10)");
+  cmd->add_option("--duration", o->duration_s, "Stop after this many seconds (default: run until interrupted)");
+  cmd->add_flag("-q,--quiet", o->quiet, "Only the start line and the final counter line");
+  return {cmd, [o] {
+            return WithErrorReport([&] {
+              g_stop = 0;
+              std::signal(SIGINT, OnSignal);
+              std::signal(SIGTERM, OnSignal);
+              return view::RunView(*o, &g_stop);
+            });
+          }};
+}
+
+}  // namespace vlab::cli
+
+namespace vlab::cli {
+
+Subcommand AddExportCommand(CLI::App& app) {
+  struct Args {
+    std::string run, glb, model;
+  };
+  auto a = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand(
+      "export", "Write a run's recorded poses (outputs: {poses: ...}) as glTF 2.0 (.glb) with animation, for "
+                "Blender and three.js");
+  cmd->add_option("run", a->run, "The run's output folder (with scene.json and poses.bin)")->required();
+  cmd->add_option("file", a->glb, "The .glb file to write (never overwritten)")->required();
+  cmd->add_option("--model", a->model, "MJCF for meshes (default: the one scene.json names)");
+  return {cmd, [a] {
+            return WithErrorReport([&] {
+              const view::GltfSummary s = view::ExportGltf(a->run, a->glb, a->model);
+              std::printf("vlab export: %s: %d bodies, %d geoms, %ld frames over %.3f s, %ld bytes\n", a->glb.c_str(),
+                          s.bodies, s.geoms, s.frames, s.duration_s, s.bytes);
+              return 0;
+            });
+          }};
+}
+
+}  // namespace vlab::cli

@@ -1,0 +1,201 @@
+// A scene stream (kind scene): what a viewer needs to draw the lab, the role
+// RoboWorks and Blender had in the original lab. The describe reply carries
+// the visual geometry (SceneGeometry); the state carries the pose of every
+// visual body at a decimated rate.
+//
+// Ports
+//   input   none
+//   output  [x, y, z, qw, qx, qy, qz] of every body of SceneBodies(), world
+//           frame (m, unit quaternion), in the describe reply's "bodies" order
+//   rate    a frame is due every 1 / rate s (rate 0: every control period) and
+//           sampled at the first period end at or after that time; only due
+//           frames are published, so subscribers get `rate` frames per second
+//   log     none: the stream only copies xpos and xquat into a buffer sized at
+//           creation, so the run, its log and its timing do not depend on it
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "bridge/bridge_layouts.h"
+#include "core/core_errors.h"
+#include "lab/devices/device_scene.h"
+#include "lab/lab_log.h"
+#include "lab/lab_yaml.h"
+
+namespace vlab::lab {
+
+namespace {
+
+constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
+constexpr int kPoseValues = 7;        // x, y, z, qw, qx, qy, qz
+
+// a geom a viewer draws: MuJoCo's default visible groups, not fully transparent
+bool Visible(const mjModel* m, int geom) {
+  const int mat = m->geom_matid[geom];
+  const float alpha = mat >= 0 ? m->mat_rgba[4 * mat + 3] : m->geom_rgba[4 * geom + 3];
+  return m->geom_group[geom] >= 0 && m->geom_group[geom] <= 2 && alpha > 0;
+}
+
+const char* GeomTypeName(int type) {
+  switch (type) {
+    case mjGEOM_PLANE: return "plane";
+    case mjGEOM_SPHERE: return "sphere";
+    case mjGEOM_CAPSULE: return "capsule";
+    case mjGEOM_ELLIPSOID: return "ellipsoid";
+    case mjGEOM_CYLINDER: return "cylinder";
+    case mjGEOM_BOX: return "box";
+    case mjGEOM_MESH: return "mesh";
+    default: return "other";
+  }
+}
+
+std::string NameOf(const mjModel* m, mjtObj type, int id) {
+  const char* name = mj_id2name(m, type, id);
+  return name ? name : "";
+}
+
+template <class T>
+nlohmann::json Array(const T* values, int n) {
+  nlohmann::json a = nlohmann::json::array();
+  for (int i = 0; i < n; ++i) a.push_back(values[i]);
+  return a;
+}
+
+class SimScene final : public Device {
+ public:
+  SimScene(const DeviceContext& context, const DeviceConfig& c)
+      : Device(c), config_(c.ParamsAs<SceneParams>()), model_(context.model), scene_(context.scene) {
+    const double period_s = context.control_period_s;
+    interval_s_ = config_.rate_hz > 0 ? 1.0 / config_.rate_hz : period_s;
+    if (interval_s_ < period_s - kSameTime_s) {
+      throw InputError(who() + ": rate " + FormatDouble(config_.rate_hz) + " Hz is faster than the control rate (" +
+                       FormatDouble(1.0 / period_s) + " Hz)");
+    }
+    bodies_ = SceneBodies(model_);
+    if (bodies_.empty()) throw InputError(who() + ": the scene has no body with a visible geom to stream");
+    const int values = kPoseValues * static_cast<int>(bodies_.size());
+    if (values + bridge::kHeaderValues > bridge::kMaxPacketValues) {
+      throw InputError(who() + ": " + std::to_string(bodies_.size()) + " visual bodies need " +
+                       std::to_string(values) + " values, more than a datagram holds (" +
+                       std::to_string(bridge::kMaxPacketValues - bridge::kHeaderValues) + ")");
+    }
+    poses_.assign(values, 0.0);
+  }
+
+  void Reset(const mjData& d) override {
+    next_frame_ = d.time;
+    Sample(d, d.time);
+  }
+
+  void Sample(const mjData& d, double t) override {
+    due_ = t + kSameTime_s >= next_frame_;
+    if (!due_) return;
+    ScenePoses(d, bodies_, poses_.data());
+    next_frame_ += interval_s_;
+    if (next_frame_ < t + kSameTime_s) next_frame_ = t + interval_s_;  // an interval shorter than a period
+  }
+
+  bool PublishDue() const override { return due_; }
+  void State(std::vector<double>* p) const override { p->assign(poses_.begin(), poses_.end()); }
+
+  std::string DescribeFacts() const override {
+    std::vector<std::string> values;
+    for (int b : bodies_) {
+      const std::string body = NameOf(model_, mjOBJ_BODY, b);
+      for (const char* v : {".x", ".y", ".z", ".qw", ".qx", ".qy", ".qz"}) values.push_back(body + v);
+    }
+    nlohmann::json j = SceneGeometry(model_, bodies_);
+    j["layout"] = bridge::LayoutJson(kind(), values);
+    j["units"] = {{"x", "m"}, {"y", "m"}, {"z", "m"}, {"qw", ""}, {"qx", ""}, {"qy", ""}, {"qz", ""}};
+    j["frame"] = "world";
+    j["rate_hz"] = 1.0 / interval_s_;
+    j["model"] = scene_;
+    return j.dump();
+  }
+
+ private:
+  SceneParams config_;
+  const mjModel* model_;
+  std::string scene_;
+  double interval_s_ = 0;
+  std::vector<int> bodies_;
+  std::vector<double> poses_;
+  double next_frame_ = 0;
+  bool due_ = false;
+};
+
+}  // namespace
+
+std::vector<int> SceneBodies(const mjModel* m) {
+  std::vector<char> has(m->nbody, 0);
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (Visible(m, g)) has[m->geom_bodyid[g]] = 1;
+  }
+  std::vector<int> bodies;
+  for (int b = 1; b < m->nbody; ++b) {
+    if (has[b]) bodies.push_back(b);
+  }
+  return bodies;
+}
+
+nlohmann::json SceneGeometry(const mjModel* m, const std::vector<int>& bodies) {
+  std::vector<int> index(m->nbody, -1);
+  nlohmann::json names = nlohmann::json::array();
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    index[bodies[i]] = static_cast<int>(i);
+    names.push_back(NameOf(m, mjOBJ_BODY, bodies[i]));
+  }
+  nlohmann::json geoms = nlohmann::json::array();
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (!Visible(m, g)) continue;
+    const int mat = m->geom_matid[g];
+    nlohmann::json j;
+    j["name"] = NameOf(m, mjOBJ_GEOM, g);
+    j["body"] = index[m->geom_bodyid[g]];  // -1: the world (static)
+    j["type"] = GeomTypeName(m->geom_type[g]);
+    j["size"] = Array(m->geom_size + 3 * g, 3);
+    j["pos"] = Array(m->geom_pos + 3 * g, 3);
+    j["quat"] = Array(m->geom_quat + 4 * g, 4);
+    j["rgba"] = mat >= 0 ? Array(m->mat_rgba + 4 * mat, 4) : Array(m->geom_rgba + 4 * g, 4);
+    j["mesh"] = m->geom_type[g] == mjGEOM_MESH ? m->geom_dataid[g] : -1;
+    const int tex = mat >= 0 ? m->mat_texid[mat] : -1;
+    j["texture"] = tex;
+    if (tex >= 0) {
+      j["texrepeat"] = Array(m->mat_texrepeat + 2 * mat, 2);
+      j["texuniform"] = m->mat_texuniform[mat] != 0;
+    }
+    geoms.push_back(j);
+  }
+  nlohmann::json meshes = nlohmann::json::array();
+  for (int i = 0; i < m->nmesh; ++i) {
+    meshes.push_back({{"name", NameOf(m, mjOBJ_MESH, i)}, {"vertices", m->mesh_vertnum[i]},
+                      {"faces", m->mesh_facenum[i]}});
+  }
+  nlohmann::json textures = nlohmann::json::array();
+  for (int i = 0; i < m->ntex; ++i) {
+    const char* type = m->tex_type[i] == mjTEXTURE_2D ? "2d" : m->tex_type[i] == mjTEXTURE_CUBE ? "cube" : "skybox";
+    textures.push_back({{"name", NameOf(m, mjOBJ_TEXTURE, i)}, {"type", type}, {"width", m->tex_width[i]},
+                        {"height", m->tex_height[i]}});
+  }
+  return {{"bodies", names}, {"geoms", geoms}, {"meshes", meshes}, {"textures", textures}};
+}
+
+void ScenePoses(const mjData& d, const std::vector<int>& bodies, double* out) {
+  for (int b : bodies) {
+    for (int i = 0; i < 3; ++i) *out++ = d.xpos[3 * b + i];
+    for (int i = 0; i < 4; ++i) *out++ = d.xquat[4 * b + i];
+  }
+}
+
+std::shared_ptr<const DeviceParams> ReadSceneParams(MapReader& r) {
+  auto p = std::make_shared<SceneParams>();
+  p->rate_hz = r.Number("rate", p->rate_hz);
+  if (!(p->rate_hz >= 0 && std::isfinite(p->rate_hz))) r.Fail("rate", "must be >= 0 Hz (0: every control period)");
+  return p;
+}
+
+std::unique_ptr<Device> MakeScene(const DeviceContext& context, const DeviceConfig& config) {
+  return std::make_unique<SimScene>(context, config);
+}
+
+}  // namespace vlab::lab

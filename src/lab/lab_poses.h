@@ -1,0 +1,56 @@
+// The pose recording of a run (outputs: {poses: {rate: HZ}}): the pose of
+// every visual body at a decimated rate, for `vlab view --replay` and
+// `vlab export` (glTF). Written into the run's output folder:
+//   scene.json  the visual geometry (SceneGeometry: bodies, geoms, meshes,
+//               textures), the MJCF path ("model") and "rate_hz"
+//   poses.bin   frames back to back, each 16 + 28 n bytes, little-endian:
+//               float64 time (s), float64 period k, then float32 x, y, z, qw,
+//               qx, qy, qz of each of the n bodies, world frame: the bytes of
+//               a scene stream's frame as `vlab view` sends it to the page
+// Observing only reads mjData: a run's log is the same with or without it.
+#pragma once
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+namespace vlab::lab {
+
+class OutputDir;
+
+/// The bytes of one pose frame (see above) into `out` (resized; no
+/// allocation once it has the capacity). Little-endian hosts only.
+void EncodePoseFrame(double time, double seq, const double* poses, int values, std::string* out);
+
+class PoseRecorder {
+ public:
+  /// Frames every 1 / rate_hz s at the first period end at or after each
+  /// (rate 0: every period). Throws InputError (naming `where`) when the rate
+  /// is faster than the control rate.
+  static std::unique_ptr<PoseRecorder> Create(const mjModel* m, double rate_hz, double period_s,
+                                              const std::string& scene, const std::string& where);
+  ~PoseRecorder();
+  /// Writes scene.json and opens poses.bin in the staging folder; throws
+  /// std::runtime_error naming the file when it cannot.
+  void Open(const OutputDir& out);
+  /// At every period end t (k = period): a frame when one is due.
+  void Observe(double t, double k, const mjData& d);
+  /// Closes poses.bin; throws std::runtime_error when the write failed.
+  void Finish();
+  long frames() const { return frames_; }
+
+ private:
+  PoseRecorder() = default;
+  const mjModel* m_ = nullptr;
+  std::vector<int> bodies_;
+  std::vector<double> poses_;
+  std::string frame_, scene_, path_;
+  double interval_s_ = 0, next_ = 0, rate_hz_ = 0;
+  std::FILE* file_ = nullptr;
+  long frames_ = 0;
+};
+
+}  // namespace vlab::lab

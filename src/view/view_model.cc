@@ -1,0 +1,103 @@
+#include "view/view_model.h"
+
+#include <cstring>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/core_errors.h"
+#include "lab/devices/device_scene.h"
+#include "lab/lab_poses.h"
+
+namespace vlab::view {
+
+namespace {
+
+void PutBytes(std::string* out, const void* data, std::size_t n) {
+  out->append(static_cast<const char*>(data), n);
+}
+
+}  // namespace
+
+std::string EncodeFrame(double time, double seq, const double* poses, int values) {
+  std::string out;
+  lab::EncodePoseFrame(time, seq, poses, values, &out);
+  return out;
+}
+
+std::unique_ptr<ViewModel> ViewModel::Load(const std::string& path) {
+  char error[1000] = "";
+  mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  if (!m) throw InputError("vlab view: model '" + path + "': " + error);
+  std::unique_ptr<ViewModel> v(new ViewModel());
+  v->m_ = m;
+  v->d_ = mj_makeData(m);
+  mj_kinematics(m, v->d_);
+  return v;
+}
+
+ViewModel::~ViewModel() {
+  if (d_) mj_deleteData(d_);
+  if (m_) mj_deleteModel(m_);
+}
+
+bool ViewModel::MeshBytes(int id, std::string* out) const {
+  if (id < 0 || id >= m_->nmesh) return false;
+  const std::uint32_t nv = static_cast<std::uint32_t>(m_->mesh_vertnum[id]);
+  const std::uint32_t nf = static_cast<std::uint32_t>(m_->mesh_facenum[id]);
+  out->clear();
+  PutBytes(out, &nv, 4);
+  PutBytes(out, &nf, 4);
+  PutBytes(out, m_->mesh_vert + 3 * m_->mesh_vertadr[id], 12 * nv);
+  for (std::uint32_t i = 0; i < 3 * nf; ++i) {
+    const std::uint32_t index = static_cast<std::uint32_t>(m_->mesh_face[3 * m_->mesh_faceadr[id] + i]);
+    PutBytes(out, &index, 4);
+  }
+  return true;
+}
+
+bool ViewModel::TexturePng(int id, std::string* out) const {
+  if (id < 0 || id >= m_->ntex) return false;
+  const int w = m_->tex_width[id], h = m_->tex_height[id];
+  // MuJoCo keeps RGB rows top-down; OpenCV writes BGR
+  cv::Mat rgb(h, w, CV_8UC3, m_->tex_rgb + m_->tex_adr[id]);
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", bgr, png)) return false;
+  out->assign(png.begin(), png.end());
+  return true;
+}
+
+nlohmann::json ViewModel::Cameras() const {
+  nlohmann::json cameras = nlohmann::json::array();
+  for (int c = 0; c < m_->ncam; ++c) {
+    if (m_->cam_bodyid[c] != 0) continue;
+    const char* name = mj_id2name(m_, mjOBJ_CAMERA, c);
+    cameras.push_back({{"name", name ? name : ""},
+                       {"pos", {m_->cam_pos[3 * c], m_->cam_pos[3 * c + 1], m_->cam_pos[3 * c + 2]}},
+                       {"quat", {m_->cam_quat[4 * c], m_->cam_quat[4 * c + 1], m_->cam_quat[4 * c + 2], m_->cam_quat[4 * c + 3]}},
+                       {"fovy", m_->cam_fovy[c]}});
+  }
+  return cameras;
+}
+
+void ViewModel::BindJoints(const std::vector<std::string>& names) {
+  qpos_adr_.clear();
+  for (const std::string& name : names) {
+    const int j = mj_name2id(m_, mjOBJ_JOINT, name.c_str());
+    if (j < 0) throw InputError("vlab view: the model has no joint '" + name + "' (named by the arm's describe reply)");
+    if (m_->jnt_type[j] != mjJNT_HINGE && m_->jnt_type[j] != mjJNT_SLIDE) {
+      throw InputError("vlab view: joint '" + name + "' is not a hinge or slide joint");
+    }
+    qpos_adr_.push_back(m_->jnt_qposadr[j]);
+  }
+}
+
+void ViewModel::ArmPoses(const std::vector<double>& q, const std::vector<int>& bodies, double* out) {
+  for (std::size_t i = 0; i < qpos_adr_.size() && i < q.size(); ++i) d_->qpos[qpos_adr_[i]] = q[i];
+  mj_kinematics(m_, d_);
+  lab::ScenePoses(*d_, bodies, out);
+}
+
+}  // namespace vlab::view

@@ -1,0 +1,234 @@
+// vlab view: draws the lab's visual bodies (scene.json) with three.js r111 and
+// moves them with the pose frames of the WebSocket /ws (live) or of
+// recording.bin (replay). A frame: float64 time, float64 seq, then float32
+// x, y, z, qw, qx, qy, qz per body (little-endian). Read-only: it sends nothing.
+// URL options: camera=NAME (an MJCF world camera's pose and field of view),
+// silhouette (bodies white, world geoms black, no lights: for tests),
+// bare (no overlay).
+(function () {
+  'use strict';
+  var params = new URLSearchParams(window.location.search);
+  var silhouette = params.has('silhouette');
+  if (silhouette || params.has('bare')) document.body.className = 'bare';
+  // for tests and for the curious: what has been drawn
+  var state = window.vlabView = { ready: false, frames: 0, time: 0, seq: -1, paused: false, error: '' };
+  var renderer, scene, camera, controls, groups = [], latest = null, info = null;
+  var recording = null, replayTime = 0, lastWall = 0;
+
+  function setStatus(text) { document.getElementById('status').textContent = text; }
+  function fail(text) { state.error = text; setStatus(text); }
+
+  fetch('scene.json').then(function (r) {
+    if (!r.ok) throw new Error('scene.json: HTTP ' + r.status);
+    return r.json();
+  }).then(build).catch(function (e) { fail('error: ' + e.message); });
+
+  function build(sceneInfo) {
+    info = sceneInfo;
+    renderer = new THREE.WebGLRenderer({ antialias: !silhouette, preserveDrawingBuffer: true });
+    renderer.setPixelRatio(silhouette ? 1 : (window.devicePixelRatio || 1));
+    renderer.setSize(window.innerWidth, window.innerHeight);
+    document.body.appendChild(renderer.domElement);
+    scene = new THREE.Scene();
+    scene.background = new THREE.Color(silhouette ? 0x000000 : 0x39424e);
+    if (!silhouette) {
+      scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 0.6));
+      var key = new THREE.DirectionalLight(0xffffff, 0.7);
+      key.position.set(1.0, -1.5, 3.0);
+      scene.add(key);
+    }
+    camera = new THREE.PerspectiveCamera(45, window.innerWidth / window.innerHeight, 0.01, 100);
+    camera.up.set(0, 0, 1);  // z up, as MuJoCo's world
+    var fixed = (info.cameras || []).filter(function (c) { return c.name === params.get('camera'); })[0];
+    if (params.get('camera') && !fixed) return fail('no world camera "' + params.get('camera') + '"');
+    if (fixed) {
+      // a MuJoCo camera looks along its -z with +y up, as a three.js camera does
+      camera.fov = fixed.fovy;
+      camera.position.set(fixed.pos[0], fixed.pos[1], fixed.pos[2]);
+      camera.quaternion.set(fixed.quat[1], fixed.quat[2], fixed.quat[3], fixed.quat[0]);
+      camera.updateProjectionMatrix();
+    } else {
+      camera.position.set(2.2, -1.6, 1.5);
+      controls = new THREE.OrbitControls(camera, renderer.domElement);
+      controls.target.set(0.3, 0, 0.6);
+      controls.update();
+    }
+    groups = info.bodies.map(function (name) {
+      var g = new THREE.Group();
+      g.name = name;
+      scene.add(g);
+      return g;
+    });
+    var textures = {};
+    info.geoms.forEach(function (geom) {
+      var object = makeGeom(geom, makeMaterial(geom, textures));
+      if (!object) return;
+      object.name = geom.name;
+      object.position.set(geom.pos[0], geom.pos[1], geom.pos[2]);
+      object.quaternion.set(geom.quat[1], geom.quat[2], geom.quat[3], geom.quat[0]);
+      (geom.body >= 0 ? groups[geom.body] : scene).add(object);
+    });
+    window.addEventListener('resize', function () {
+      camera.aspect = window.innerWidth / window.innerHeight;
+      camera.updateProjectionMatrix();
+      renderer.setSize(window.innerWidth, window.innerHeight);
+    });
+    document.getElementById('pause').onclick = togglePause;
+    window.addEventListener('keydown', function (e) { if (e.code === 'Space') togglePause(); });
+    if (info.mode === 'replay') startReplay(); else connect();
+    state.ready = true;
+    requestAnimationFrame(animate);
+  }
+
+  function togglePause() {
+    state.paused = !state.paused;
+    document.getElementById('pause').textContent = state.paused ? 'resume' : 'pause';
+  }
+
+  function makeMaterial(geom, textures) {
+    // silhouette: the bodies white, the world black (it still hides what is behind it)
+    if (silhouette) return new THREE.MeshBasicMaterial({ color: geom.body >= 0 ? 0xffffff : 0x000000 });
+    var rgba = geom.rgba;
+    var options = { color: new THREE.Color(rgba[0], rgba[1], rgba[2]), shininess: 20 };
+    if (rgba[3] < 1) { options.transparent = true; options.opacity = rgba[3]; }
+    var tex = geom.texture >= 0 ? info.textures[geom.texture] : null;
+    if (tex && tex.type === '2d') {
+      var t = new THREE.TextureLoader().load('tex/' + geom.texture);
+      t.wrapS = t.wrapT = THREE.RepeatWrapping;
+      var scale = geom.texuniform ? [2 * geom.size[0], 2 * geom.size[1]] : [1, 1];
+      t.repeat.set(geom.texrepeat[0] * scale[0], geom.texrepeat[1] * scale[1]);
+      options.map = t;
+      options.color = new THREE.Color(1, 1, 1);
+      return new THREE.MeshPhongMaterial(options);
+    }
+    if (tex && tex.type === 'cube' && geom.type === 'box') return cubeMaterials(geom.texture, options, textures);
+    return new THREE.MeshPhongMaterial(options);
+  }
+
+  // a cube texture: six square faces stacked (+x, -x, +y, -y, +z, -z), the
+  // order of a BoxBufferGeometry's groups; each face's image axes are those
+  // MuJoCo uses (docs: mjcf/cubes), which are three.js's box UVs
+  function cubeMaterials(id, options, textures) {
+    var materials = [];
+    for (var f = 0; f < 6; ++f) {
+      var o = Object.assign({}, options, { color: new THREE.Color(1, 1, 1) });
+      materials.push(new THREE.MeshPhongMaterial(o));
+    }
+    var image = new Image();
+    image.onload = function () {
+      var w = image.width;
+      for (var f = 0; f < 6; ++f) {
+        var canvas = document.createElement('canvas');
+        canvas.width = canvas.height = w;
+        canvas.getContext('2d').drawImage(image, 0, f * w, w, w, 0, 0, w, w);
+        materials[f].map = new THREE.CanvasTexture(canvas);
+        materials[f].needsUpdate = true;
+      }
+    };
+    image.src = 'tex/' + id;
+    return materials;
+  }
+
+  // MuJoCo's capsule: a cylinder of half-length h with hemispheres of radius r, along z
+  function capsuleGeometry(r, h) {
+    var points = [], n = 12, i, a;
+    for (i = 0; i <= n; ++i) { a = -Math.PI / 2 + (i / n) * Math.PI / 2; points.push(new THREE.Vector2(r * Math.cos(a), -h + r * Math.sin(a))); }
+    for (i = 0; i <= n; ++i) { a = (i / n) * Math.PI / 2; points.push(new THREE.Vector2(r * Math.cos(a), h + r * Math.sin(a))); }
+    return new THREE.LatheBufferGeometry(points, 32).rotateX(Math.PI / 2);
+  }
+
+  function makeGeom(geom, material) {
+    var s = geom.size, g;
+    switch (geom.type) {
+      case 'box': g = new THREE.BoxBufferGeometry(2 * s[0], 2 * s[1], 2 * s[2]); break;
+      case 'sphere': g = new THREE.SphereBufferGeometry(s[0], 32, 16); break;
+      case 'ellipsoid': g = new THREE.SphereBufferGeometry(1, 32, 16).scale(s[0], s[1], s[2]); break;
+      case 'cylinder': g = new THREE.CylinderBufferGeometry(s[0], s[0], 2 * s[1], 32).rotateX(Math.PI / 2); break;
+      case 'capsule': g = capsuleGeometry(s[0], s[1]); break;
+      case 'plane': g = new THREE.PlaneBufferGeometry(2 * (s[0] || 10), 2 * (s[1] || 10)); break;
+      case 'mesh': g = new THREE.BufferGeometry(); loadMesh(geom.mesh, g); break;
+      default: return null;
+    }
+    return new THREE.Mesh(g, material);
+  }
+
+  function loadMesh(id, geometry) {
+    fetch('mesh/' + id).then(function (r) {
+      if (!r.ok) throw new Error('mesh ' + id + ': HTTP ' + r.status);
+      return r.arrayBuffer();
+    }).then(function (buffer) {
+      var counts = new Uint32Array(buffer, 0, 2);
+      var vertices = new Float32Array(buffer, 8, 3 * counts[0]);
+      var faces = new Uint32Array(buffer, 8 + 12 * counts[0], 3 * counts[1]);
+      geometry.setAttribute('position', new THREE.BufferAttribute(vertices, 3));
+      geometry.setIndex(new THREE.BufferAttribute(faces, 1));
+      geometry.computeVertexNormals();
+    }).catch(function (e) { fail('error: ' + e.message); });
+  }
+
+  function connect() {
+    var ws = new WebSocket((window.location.protocol === 'https:' ? 'wss://' : 'ws://') + window.location.host + '/ws');
+    ws.binaryType = 'arraybuffer';
+    ws.onopen = function () { setStatus(''); };
+    ws.onmessage = function (event) { latest = event.data; };  // the newest wins
+    ws.onclose = function () { setStatus('disconnected, retrying'); setTimeout(connect, 1000); };
+  }
+
+  function apply(buffer, offset) {
+    var view = new DataView(buffer, offset, 16);
+    state.time = view.getFloat64(0, true);
+    state.seq = view.getFloat64(8, true);
+    var p = new Float32Array(buffer, offset + 16, 7 * groups.length);
+    for (var i = 0; i < groups.length; ++i) {
+      groups[i].position.set(p[7 * i], p[7 * i + 1], p[7 * i + 2]);
+      groups[i].quaternion.set(p[7 * i + 4], p[7 * i + 5], p[7 * i + 6], p[7 * i + 3]);
+    }
+    ++state.frames;
+    document.getElementById('clock').textContent = 't = ' + state.time.toFixed(3) + ' s';
+  }
+
+  // replay: every frame of the run at once; the slider and the speed pick the time
+  function startReplay() {
+    document.getElementById('replay').style.display = 'inline';
+    fetch('recording.bin').then(function (r) {
+      if (!r.ok) throw new Error('recording.bin: HTTP ' + r.status);
+      return r.arrayBuffer();
+    }).then(function (buffer) {
+      var size = 16 + 28 * groups.length, count = Math.floor(buffer.byteLength / size);
+      if (count < 1) throw new Error('an empty recording');
+      var times = [];
+      for (var k = 0; k < count; ++k) times.push(new DataView(buffer, k * size, 8).getFloat64(0, true));
+      recording = { buffer: buffer, size: size, times: times };
+      var slider = document.getElementById('slider');
+      slider.min = times[0];
+      slider.max = times[count - 1];
+      replayTime = times[0];
+      slider.oninput = function () { replayTime = parseFloat(slider.value); showReplay(); };
+      showReplay();
+    }).catch(function (e) { fail('error: ' + e.message); });
+  }
+
+  function showReplay() {
+    var t = recording.times, lo = 0, hi = t.length - 1;
+    while (lo < hi) { var mid = (lo + hi + 1) >> 1; if (t[mid] <= replayTime) lo = mid; else hi = mid - 1; }
+    apply(recording.buffer, lo * recording.size);
+    document.getElementById('slider').value = replayTime;
+  }
+
+  function animate(wall) {
+    requestAnimationFrame(animate);
+    if (recording && !state.paused) {
+      var speed = parseFloat(document.getElementById('speed').value);
+      if (lastWall) replayTime += speed * (wall - lastWall) / 1000;
+      var end = recording.times[recording.times.length - 1];
+      if (replayTime > end) replayTime = recording.times[0];  // loop
+      showReplay();
+    }
+    lastWall = wall;
+    if (latest && !state.paused) {
+      apply(latest, 0);
+      latest = null;
+    }
+    renderer.render(scene, camera);
+  }
+})();
