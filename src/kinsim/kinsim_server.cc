@@ -17,7 +17,6 @@ namespace {
 // the most datagrams handled in one period, so that a flood cannot stall the loop
 constexpr int kMaxDatagramsPerPeriod = 1000;
 
-long Periods(double seconds, double rate_hz) { return std::max(1L, std::lround(seconds * rate_hz)); }
 
 long long NowNs() {
   timespec t;

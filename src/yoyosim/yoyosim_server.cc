@@ -28,7 +28,6 @@ static_assert(bridge::CommandIndex(kPoint, "x") == 0 && bridge::CommandIndex(kPo
                   bridge::CommandIndex(kPoint, "z") == 2 && kPointCommandValues == 3,
               "a point command is the set-point [x, y, z] YoyoSim takes");
 
-long Periods(double seconds, double period_s) { return std::max(1L, std::lround(seconds / period_s)); }
 
 void Require(bool ok, const std::string& what) {
   if (!ok) throw vlab::InputError(what);
