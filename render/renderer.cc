@@ -2,6 +2,7 @@
 
 #include <dirent.h>
 #include <sched.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <cmath>
@@ -126,7 +127,12 @@ struct Renderer::Impl {
 };
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-int SetRasterizerPriority(int priority) {
+namespace {
+
+// calls `change` with the thread id of every llvmpipe rasterizer thread of this process;
+// returns how many calls returned true
+template <typename Change>
+int ForEachRasterizer(Change change) {
   DIR* tasks = ::opendir("/proc/self/task");
   if (!tasks) return 0;
   int changed = 0;
@@ -135,13 +141,21 @@ int SetRasterizerPriority(int priority) {
     std::ifstream comm(std::string("/proc/self/task/") + e->d_name + "/comm");
     std::string name;
     std::getline(comm, name);
-    if (name.rfind("llvmpipe-", 0) != 0) continue;
-    sched_param param{};
-    param.sched_priority = priority;
-    if (::sched_setscheduler(std::atoi(e->d_name), priority > 0 ? SCHED_FIFO : SCHED_OTHER, &param) == 0) ++changed;
+    if (name.rfind("llvmpipe-", 0) == 0 && change(std::atoi(e->d_name))) ++changed;
   }
   ::closedir(tasks);
   return changed;
+}
+
+}  // namespace
+
+int SetRasterizerScheduling(int policy, int value) {
+  return ForEachRasterizer([policy, value](int tid) {
+    sched_param param{};
+    param.sched_priority = policy == SCHED_FIFO ? value : 0;
+    if (::sched_setscheduler(tid, policy, &param) != 0) return false;
+    return policy != SCHED_OTHER || ::setpriority(PRIO_PROCESS, static_cast<id_t>(tid), value) == 0;
+  });
 }
 
 Renderer::~Renderer() = default;

@@ -74,12 +74,12 @@ int CameraId(const mjModel* m, const std::string& name);
 
 /// Mesa's llvmpipe draws with a pool of rasterizer threads ("llvmpipe-N"), one
 /// pool per process, made with the first GL context and shared by every
-/// renderer. A renderer on a realtime thread waits for them, so they must run
-/// at its priority or a busy machine stalls it: puts every such thread of this
-/// process on SCHED_FIFO at `priority` (1..99), or back to normal priority (0).
+/// renderer. A renderer waits for them, so they must be scheduled as the thread
+/// that renders: sets every such thread of this process to `policy` (SCHED_OTHER
+/// with nice value `value`, SCHED_IDLE, or SCHED_FIFO at priority `value`).
 /// Returns how many threads it changed (0 when there are none yet, or when not
 /// permitted).
-int SetRasterizerPriority(int priority);
+int SetRasterizerScheduling(int policy, int value);
 
 class Renderer {
  public:

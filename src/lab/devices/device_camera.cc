@@ -2,6 +2,8 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +22,8 @@ namespace vlab::lab {
 
 namespace {
 constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
+// the nice value of a worker (and the rasterizer threads) under a control thread that is not realtime
+constexpr int kWorkerNice = 10;
 }  // namespace
 
 std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r) {
@@ -187,12 +191,18 @@ void SimCamera::StopWorker() {
 
 void SimCamera::WorkerMain() {
   Worker& w = *worker_;
-  // serving a realtime loop: one priority below the control thread it was started from
-  int policy = 0, priority = 0;
+  // below the control thread, always: under a realtime one (SCHED_FIFO P) at SCHED_FIFO
+  // P - 1; under a normal one at nice 10 (not SCHED_IDLE: that starves under any load,
+  // and a worker must always progress). The rasterizer threads it waits for follow it.
+  int policy = 0;
   sched_param param{};
-  if (::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO) {
-    priority = std::max(kMinRealtimePriority, param.sched_priority - 1);
-    SetThreadRealtime(priority);
+  const bool realtime_loop = ::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO;
+  const int worker_policy = realtime_loop ? SCHED_FIFO : SCHED_OTHER;
+  const int worker_value = realtime_loop ? std::max(kMinRealtimePriority, param.sched_priority - 1) : kWorkerNice;
+  if (realtime_loop) {
+    SetThreadRealtime(worker_value);
+  } else {
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), worker_value);
   }
   // everything GL lives and dies on this thread
   std::unique_ptr<render::Renderer> renderer;
@@ -208,8 +218,8 @@ void SimCamera::WorkerMain() {
     o.profile = config_.profile;
     o.scene = scene_;
     renderer = render::Renderer::Create(m_, o);
-    // the rasterizer threads it waits for: at its priority, wherever they were made
-    if (priority > 0) render::SetRasterizerPriority(priority);
+    // the rasterizer threads it waits for: as it is, wherever they were made
+    render::SetRasterizerScheduling(worker_policy, worker_value);
     renderer->Render(w.warm, camera_, &ideal);
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(w.mutex);
@@ -226,7 +236,7 @@ void SimCamera::WorkerMain() {
   std::unique_lock<std::mutex> lock(w.mutex);
   for (;;) {
     w.wake.wait(lock, [&w] { return w.stop || w.finished < w.queued; });
-    if (w.finished == w.queued) break;  // stop, and nothing left to do
+    if (w.stop) break;  // what is still queued would not be sent: the camera is no longer served
     Pending& p = queue_[w.at];
     lock.unlock();
     bool ok = false;
@@ -248,7 +258,7 @@ void SimCamera::WorkerMain() {
   }
   lock.unlock();
   renderer.reset();
-  if (priority > 0) render::SetRasterizerPriority(0);  // (the pool outlives this camera)
+  render::SetRasterizerScheduling(SCHED_OTHER, 0);  // (the pool outlives this camera)
 }
 
 void SimCamera::Drain() {
@@ -270,7 +280,7 @@ void SimCamera::BeforeRun(mjData* d) {
 }
 
 void SimCamera::Unserve() {
-  StopWorker();  // (it finishes what was queued first)
+  StopWorker();  // (what is still queued is dropped: nothing is sent once unserved)
   server_.reset();
   t_prev_ = -1;
   due_ = {0, 0};
