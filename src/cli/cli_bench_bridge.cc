@@ -101,6 +101,7 @@ long ReceiveAsLab(bridge::UdpSocket& socket, unsigned char* buf, std::size_t siz
   bool ready = false;
   do {
     ready = bridge::WaitReadable(&fd, 1, 0.0);
+    if (!ready) sched_yield();
   } while (!ready && vlab::WallNow() < spin_until);
   if (!ready && !bridge::WaitReadable(&fd, 1, timeout_s - kLabSpinSeconds)) return -1;
   return socket.Receive(buf, size, nullptr, 0.0);

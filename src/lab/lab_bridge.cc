@@ -1,5 +1,7 @@
 #include "lab/lab_bridge.h"
 
+#include <sched.h>
+
 #include <sys/socket.h>
 
 #include <algorithm>
@@ -142,6 +144,7 @@ void LabBridge::Poll(double timeout_s) {
       CheckPeerExit();
       return;
     }
+    ::sched_yield();  // a controller on this core runs at once (it polls too)
   } while (WallNow() < spin_until);
   const double left = timeout_s - kSpinSeconds;
   if (left <= 0 || !bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), left)) return;
