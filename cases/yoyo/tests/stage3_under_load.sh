@@ -13,6 +13,7 @@ runs="${1:-10}"
 vlab="${2:-$top/build/vlab}"
 out="${3:-$(mktemp -d)}"
 [ -x "$vlab" ] || { echo "stage3_under_load: no vlab at $vlab (build first)" >&2; exit 2; }
+mkdir -p "$out"
 
 hogs=()
 stop_hogs() { for p in "${hogs[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
