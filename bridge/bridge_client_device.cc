@@ -13,31 +13,6 @@ namespace vlab::bridge {
 
 namespace {
 
-// "q[7]" -> q[0] .. q[6]; "x" -> x
-std::vector<std::string> Expand(const nlohmann::json& fields, const std::string& label) {
-  std::vector<std::string> out;
-  if (!fields.is_array()) throw ProtocolError(label + ": describe reply has no layout");
-  for (const auto& f : fields) {
-    if (!f.is_string()) throw ProtocolError(label + ": describe layout holds a non-string field");
-    const std::string s = f.get<std::string>();
-    const auto open = s.find('[');
-    if (open == std::string::npos || s.back() != ']') {
-      out.push_back(s);
-      continue;
-    }
-    const std::string base = s.substr(0, open);
-    int n = 0;
-    try {
-      n = std::stoi(s.substr(open + 1, s.size() - open - 2));
-    } catch (const std::exception&) {
-      throw ProtocolError(label + ": describe layout field '" + s + "' has a bad count");
-    }
-    if (n < 0 || n > kMaxPacketValues) throw ProtocolError(label + ": describe layout field '" + s + "' is too long");
-    for (int i = 0; i < n; ++i) out.push_back(base + "[" + std::to_string(i) + "]");
-  }
-  return out;
-}
-
 // the index of `name` in `names`, or -1
 int IndexOf(const std::vector<std::string>& names, std::string_view name) {
   for (std::size_t i = 0; i < names.size(); ++i) {
@@ -61,13 +36,37 @@ DeviceKind Float64Kind(DeviceKind kind) {
 
 }  // namespace
 
+std::vector<std::string> ExpandLayoutFields(const nlohmann::json& fields, const std::string& label) {
+  std::vector<std::string> out;
+  if (!fields.is_array()) throw ProtocolError(label + ": describe reply has no layout");
+  for (const auto& f : fields) {
+    if (!f.is_string()) throw ProtocolError(label + ": describe layout holds a non-string field");
+    const std::string s = f.get<std::string>();
+    const auto open = s.find('[');
+    if (open == std::string::npos || s.back() != ']') {
+      out.push_back(s);
+      continue;
+    }
+    const std::string base = s.substr(0, open);
+    int n = 0;
+    try {
+      n = std::stoi(s.substr(open + 1, s.size() - open - 2));
+    } catch (const std::exception&) {
+      throw ProtocolError(label + ": describe layout field '" + s + "' has a bad count");
+    }
+    if (n < 0 || n > kMaxPacketValues) throw ProtocolError(label + ": describe layout field '" + s + "' is too long");
+    for (int i = 0; i < n; ++i) out.push_back(base + "[" + std::to_string(i) + "]");
+  }
+  return out;
+}
+
 Device::Device(DeviceKind kind, const std::string& address, int port, double timeout_s,
                const std::string& bind_address)
     : DeviceClient(Float64Kind(kind), address, port, timeout_s, bind_address) {
   const nlohmann::json& layout = describe().contains("layout") ? describe()["layout"] : nlohmann::json();
   if (!layout.is_object()) throw ProtocolError(Label() + ": describe reply has no layout");
-  state_names_ = Expand(layout.value("state", nlohmann::json()), Label());
-  command_names_ = Expand(layout.value("command", nlohmann::json::array()), Label());
+  state_names_ = ExpandLayoutFields(layout.value("state", nlohmann::json()), Label());
+  command_names_ = ExpandLayoutFields(layout.value("command", nlohmann::json::array()), Label());
   // a fixed layout must be the table's: its compile-time indices are then right
   const KindLayout& table = LayoutOf(kind);
   if (IsFixed(table.state) && IsFixed(table.command)) {

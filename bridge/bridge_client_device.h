@@ -24,6 +24,11 @@
 namespace vlab::bridge {
 
 /// A device of any float64 kind, its layout from its describe reply.
+/// A describe reply's layout (its "state" or "command" list) as one name per
+/// value: "q[7]" -> "q[0]" .. "q[6]", "x" -> "x". Throws ProtocolError naming
+/// `label` for a layout that is not a list of names or a bad count.
+std::vector<std::string> ExpandLayoutFields(const nlohmann::json& fields, const std::string& label);
+
 class Device : public DeviceClient {
  public:
   /// One state, sampled by the device at the end of control period `seq`.

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
@@ -13,23 +14,6 @@
 namespace vlab::lab {
 
 namespace {
-
-// "q[7]" -> q[0] .. q[6]; "x" -> x
-std::vector<std::string> Expand(const nlohmann::json& fields) {
-  std::vector<std::string> out;
-  if (!fields.is_array()) return out;
-  for (const auto& f : fields) {
-    const std::string s = f.get<std::string>();
-    const auto open = s.find('[');
-    if (open == std::string::npos || s.back() != ']') {
-      out.push_back(s);
-      continue;
-    }
-    const int n = std::stoi(s.substr(open + 1, s.size() - open - 2));
-    for (int i = 0; i < n; ++i) out.push_back(s.substr(0, open) + "[" + std::to_string(i) + "]");
-  }
-  return out;
-}
 
 // a lab device as the task runtime sees it: its wire payloads, in process
 class LabChannel final : public task::Channel {
@@ -49,8 +33,8 @@ class LabChannel final : public task::Channel {
       }
     }
     if (layout.is_object()) {
-      state_names_ = Expand(layout.value("state", nlohmann::json::array()));
-      command_names_ = Expand(layout.value("command", nlohmann::json::array()));
+      state_names_ = bridge::ExpandLayoutFields(layout.value("state", nlohmann::json::array()), device_->name());
+      command_names_ = bridge::ExpandLayoutFields(layout.value("command", nlohmann::json::array()), device_->name());
     }
     if (!dynamic_cast<SimArm*>(d) && static_cast<int>(command_names_.size()) != d->command_length()) {
       command_names_.clear();

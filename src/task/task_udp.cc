@@ -8,30 +8,12 @@ namespace vlab::task {
 
 namespace {
 
-// "q[7]" -> q[0] .. q[6]
-std::vector<std::string> Expand(const nlohmann::json& fields) {
-  std::vector<std::string> out;
-  if (!fields.is_array()) return out;
-  for (const auto& f : fields) {
-    if (!f.is_string()) continue;
-    const std::string s = f.get<std::string>();
-    const auto open = s.find('[');
-    if (open == std::string::npos || s.back() != ']') {
-      out.push_back(s);
-      continue;
-    }
-    const int n = std::stoi(s.substr(open + 1, s.size() - open - 2));
-    for (int i = 0; i < n; ++i) out.push_back(s.substr(0, open) + "[" + std::to_string(i) + "]");
-  }
-  return out;
-}
-
 class UdpArm final : public Channel {
  public:
   explicit UdpArm(bridge::Arm arm) : arm_(std::move(arm)) {
     const nlohmann::json& layout = arm_.describe().value("layout", nlohmann::json::object());
-    state_names_ = Expand(layout.value("state", nlohmann::json::array()));
-    command_names_ = Expand(layout.value("command", nlohmann::json::array()));
+    state_names_ = bridge::ExpandLayoutFields(layout.value("state", nlohmann::json::array()), arm_.Label());
+    command_names_ = bridge::ExpandLayoutFields(layout.value("command", nlohmann::json::array()), arm_.Label());
   }
   const std::string& name() const override { return arm_.name(); }
   bridge::DeviceKind kind() const override { return bridge::DeviceKind::kArm; }
