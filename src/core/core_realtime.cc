@@ -4,17 +4,69 @@
 #include <sched.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
 namespace vlab {
 
+namespace {
+
+// The kernel's struct sched_attr (include/uapi/linux/sched/types.h); glibc 2.36
+// has no wrapper for sched_setattr / sched_getattr.
+struct SchedAttr {
+  std::uint32_t size;
+  std::uint32_t sched_policy;
+  std::uint64_t sched_flags;
+  std::int32_t sched_nice;
+  std::uint32_t sched_priority;
+  std::uint64_t sched_runtime;
+  std::uint64_t sched_deadline;
+  std::uint64_t sched_period;
+  std::uint32_t sched_util_min;
+  std::uint32_t sched_util_max;
+};
+
+bool GetAttr(SchedAttr* a) {
+  *a = SchedAttr{};
+  return ::syscall(SYS_sched_getattr, 0, a, sizeof(SchedAttr), 0) == 0;
+}
+
+std::string SliceText(std::uint64_t ns) {
+  if (ns == 0) return "the kernel keeps no per-thread slice (Linux < 6.12)";
+  char text[64];
+  std::snprintf(text, sizeof text, "a %.1f ms scheduler slice", static_cast<double>(ns) * 1e-6);
+  return text;
+}
+
+}  // namespace
+
+std::uint64_t ThreadSlice() {
+  SchedAttr a{};
+  if (!GetAttr(&a) || (a.sched_policy != SCHED_OTHER && a.sched_policy != SCHED_BATCH)) return 0;
+  return a.sched_runtime;
+}
+
+std::uint64_t SetThreadSlice(std::uint64_t ns) {
+  SchedAttr a{};
+  if (!GetAttr(&a) || (a.sched_policy != SCHED_OTHER && a.sched_policy != SCHED_BATCH)) return 0;
+  // the nice value read back goes in again; util clamps and the policy stay
+  a.size = sizeof(SchedAttr);
+  a.sched_flags = 0;
+  a.sched_runtime = ns;
+  ::syscall(SYS_sched_setattr, 0, &a, 0);
+  return ThreadSlice();
+}
+
 std::string RealtimeGrant::Line() const {
-  if (requested == 0) return "realtime priority not requested";
+  const std::string slice = SliceText(slice_ns);
+  if (requested == 0) return "realtime priority not requested; " + slice;
   const std::string p = "realtime priority " + std::to_string(requested);
-  if (!granted) return p + " not granted: " + reason + "; running at normal priority";
+  if (!granted) return p + " not granted: " + reason + "; running at normal priority with " + slice;
   if (memory_locked) return p + " granted (SCHED_FIFO, memory locked)";
   if (reason.empty()) return p + " granted (SCHED_FIFO)";
   return p + " granted (SCHED_FIFO, memory not locked: " + reason + ")";
@@ -52,9 +104,13 @@ RealtimeGrant RequestRealtime(int priority) {
   }
   RealtimeGrant g;
   g.requested = priority;
-  if (priority == 0) return g;
+  if (priority == 0) {
+    g.slice_ns = SetThreadSlice(kLoopSlice_ns);
+    return g;
+  }
   if (!SetThreadRealtime(priority)) {
     g.reason = RealtimeRefusal(priority, errno);
+    g.slice_ns = SetThreadSlice(kLoopSlice_ns);
     return g;
   }
   g.granted = true;
@@ -67,6 +123,7 @@ RealtimeGrant RequestRealtime(int priority) {
 }
 
 void DropRealtime(const RealtimeGrant& grant) {
+  if (grant.slice_ns != 0) SetThreadSlice(0);
   if (!grant.granted) return;
   sched_param param{};
   param.sched_priority = 0;

@@ -9,11 +9,23 @@
 // loop; it is tried once the priority is granted, and its refusal is reported
 // but does not withdraw the priority.
 //
-// Priorities are SCHED_FIFO's 1 (lowest) to 99; 0 asks for nothing. The kernel's
-// realtime throttling (/proc/sys/kernel/sched_rt_runtime_us, 95 % by default)
-// still leaves the rest of the machine a share of every second.
+// Priorities are SCHED_FIFO's 1 (lowest) to 99; 0 asks for no SCHED_FIFO. The
+// kernel's realtime throttling (/proc/sys/kernel/sched_rt_runtime_us, 95 % by
+// default) still leaves the rest of the machine a share of every second.
+//
+// Without SCHED_FIFO (not asked, or refused) the thread asks for a short slice of
+// the fair scheduler instead, which needs no privilege. Since Linux 6.6 the fair
+// scheduler is EEVDF; a running thread keeps the core until its slice (3 ms by
+// default) is used ("run to parity"), so a loop thread that wakes for its deadline
+// waited up to that long behind a camera worker, whatever the worker's nice
+// value. Since 6.12 a thread may ask for its own slice (sched_setattr's
+// sched_runtime, 0.1 to 100 ms), and a waking thread with a shorter slice than
+// the running one preempts it at once. The slice does not change a thread's share
+// of the CPU, only when it gets it. Older kernels ignore the request; the grant
+// then says so.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace vlab {
@@ -28,14 +40,23 @@ struct RealtimeGrant {
   bool granted = false;        ///< SCHED_FIFO at `requested`
   bool memory_locked = false;  ///< mlockall(MCL_CURRENT | MCL_FUTURE) succeeded
   std::string reason;          ///< why not granted, or why memory is not locked ("" when all went through)
+  /// Without SCHED_FIFO: the fair scheduler's slice now in force for the thread, ns
+  /// (kLoopSlice_ns when the kernel took the request), 0 where the kernel keeps no
+  /// per-thread slice (before Linux 6.12) or a SCHED_FIFO thread needs none.
+  std::uint64_t slice_ns = 0;
   /// One line: "realtime priority 50 granted (SCHED_FIFO, memory locked)",
   /// "realtime priority 50 not granted: ...; running at normal priority", or
   /// "realtime priority not requested".
   std::string Line() const;
 };
 
+/// The fair-scheduler slice a loop thread asks for without SCHED_FIFO: the
+/// kernel's smallest (0.1 ms).
+inline constexpr std::uint64_t kLoopSlice_ns = 100'000;
+
 /// Puts the calling thread on SCHED_FIFO at `priority` (1..99) and locks the
-/// process's memory. priority 0 asks for nothing (granted false, no reason).
+/// process's memory. priority 0 asks for no SCHED_FIFO (granted false, no
+/// reason). Without SCHED_FIFO, the thread asks for a kLoopSlice_ns slice (above).
 /// Throws std::invalid_argument for a priority outside 0..99.
 RealtimeGrant RequestRealtime(int priority);
 
@@ -43,9 +64,17 @@ RealtimeGrant RequestRealtime(int priority);
 /// false (errno kept) when refused. For the threads that serve a realtime loop.
 bool SetThreadRealtime(int priority);
 
-/// Back to SCHED_OTHER for the calling thread, and unlocks memory if `grant`
-/// locked it. Nothing when nothing was granted.
+/// Back to SCHED_OTHER with the default slice for the calling thread, and
+/// unlocks memory if `grant` locked it. Nothing when nothing was granted.
 void DropRealtime(const RealtimeGrant& grant);
+
+/// Asks the fair scheduler for a slice of `ns` (0: the default) for the calling
+/// thread, keeping its nice value; returns the slice now in force (ns), read
+/// back from the kernel: 0 where it keeps no per-thread slice (before 6.12).
+std::uint64_t SetThreadSlice(std::uint64_t ns);
+
+/// The calling thread's fair-scheduler slice (ns), 0 where the kernel has none.
+std::uint64_t ThreadSlice();
 
 /// The scheduling of a process that vlab started (after its exec): its
 /// SCHED_FIFO priority, 0 when it runs at normal priority, -1 when it cannot

@@ -73,10 +73,13 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                         {"unsubscribed", c.sessions.unsubscribed}, {"expired", c.sessions.expired},
                         {"refused_full", c.sessions.refused_full},
                         {"describes_limited", c.sessions.describes_limited}}}});
+    if (d.kind == "camera") {
+      served.back()["frames"] = {{"sent", d.frames.sent}, {"late", d.frames.late}, {"dropped", d.frames.dropped}};
+    }
   }
   const auto grant = [](const RealtimeGrant& g) {
     return json{{"requested", g.requested}, {"granted", g.granted}, {"memory_locked", g.memory_locked},
-                {"reason", g.reason}};
+                {"reason", g.reason}, {"slice_ns", g.slice_ns}};
   };
   json overrides = json::object();
   for (const auto& [key, value] : sc.overrides) overrides[key] = value;

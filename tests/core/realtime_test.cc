@@ -6,8 +6,13 @@
 // and without any of them.
 #include <pthread.h>
 #include <sched.h>
+#include <sys/utsname.h>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <stdexcept>
 #include <thread>
 
@@ -28,6 +33,16 @@ bool FifoPermitted(int priority) {
   });
   probe.join();
   return permitted;
+}
+
+// Linux 6.12 and later keep a fair-scheduler slice per thread (sched_setattr's
+// sched_runtime); read from the kernel's release, not from the code under test
+bool KernelHasPerThreadSlice() {
+  utsname u{};
+  if (::uname(&u) != 0) return false;
+  int major = 0, minor = 0;
+  if (std::sscanf(u.release, "%d.%d", &major, &minor) != 2) return false;
+  return major > 6 || (major == 6 && minor >= 12);
 }
 
 int ThreadPolicy(int* priority) {
@@ -55,6 +70,9 @@ TEST(Realtime, GrantedExactlyWhenTheKernelPermitsAndDroppedAfter) {
       EXPECT_FALSE(g.memory_locked);
       EXPECT_NE(g.reason.find("rtprio"), std::string::npos) << g.reason;  // says what would grant it
       EXPECT_NE(g.Line().find("running at normal priority"), std::string::npos) << g.Line();
+      // refused, the loop thread asks for the shortest fair slice instead
+      EXPECT_EQ(g.slice_ns, KernelHasPerThreadSlice() ? kLoopSlice_ns : 0u) << g.Line();
+      EXPECT_EQ(ThreadSlice(), g.slice_ns);
     }
     DropRealtime(g);
     EXPECT_EQ(ThreadPolicy(&priority), SCHED_OTHER);
@@ -68,13 +86,46 @@ TEST(Realtime, ZeroAsksForNothingAndOutOfRangeIsRefused) {
     const RealtimeGrant g = RequestRealtime(0);
     EXPECT_FALSE(g.granted);
     EXPECT_TRUE(g.reason.empty());
-    EXPECT_EQ(g.Line(), "realtime priority not requested");
     int priority = -1;
     EXPECT_EQ(ThreadPolicy(&priority), SCHED_OTHER);
+    // no SCHED_FIFO asked: the thread still asks for the shortest fair slice
+    if (KernelHasPerThreadSlice()) {
+      EXPECT_EQ(g.slice_ns, kLoopSlice_ns);
+      EXPECT_EQ(g.Line(), "realtime priority not requested; a 0.1 ms scheduler slice");
+    } else {
+      EXPECT_EQ(g.slice_ns, 0u);
+      EXPECT_EQ(g.Line(), "realtime priority not requested; the kernel keeps no per-thread slice (Linux < 6.12)");
+    }
+    DropRealtime(g);
+    EXPECT_NE(ThreadSlice(), kLoopSlice_ns);  // the default again
     EXPECT_THROW(RequestRealtime(100), std::invalid_argument);
     EXPECT_THROW(RequestRealtime(-1), std::invalid_argument);
     EXPECT_FALSE(SetThreadRealtime(0));
     EXPECT_FALSE(SetThreadRealtime(100));
+  });
+  worker.join();
+}
+
+// the slice is asked and read back per thread, with the thread's nice value kept
+TEST(Realtime, AThreadsSliceIsSetReadBackAndKeepsItsNiceValue) {
+  std::thread worker([] {
+    const id_t tid = static_cast<id_t>(::gettid());
+    ASSERT_EQ(::setpriority(PRIO_PROCESS, tid, 5), 0);
+    const std::uint64_t before = ThreadSlice();
+    const std::uint64_t got = SetThreadSlice(2'000'000);
+    if (KernelHasPerThreadSlice()) {
+      EXPECT_GT(before, 0u);
+      EXPECT_EQ(got, 2'000'000u);
+      EXPECT_EQ(SetThreadSlice(kLoopSlice_ns), kLoopSlice_ns);
+    } else {
+      EXPECT_EQ(got, 0u);
+    }
+    errno = 0;
+    EXPECT_EQ(::getpriority(PRIO_PROCESS, tid), 5);
+    SetThreadSlice(0);
+    if (KernelHasPerThreadSlice()) {
+      EXPECT_EQ(ThreadSlice(), before);
+    }
   });
   worker.join();
 }

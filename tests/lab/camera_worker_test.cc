@@ -4,11 +4,14 @@
 // - lockstep: the frame of stamp s goes out in the period whose end is the first
 //   at or after s + latency, with exactly the pixels a renderer on the test's
 //   thread draws of that state, whether or not two threads compete for the CPU;
+// - injected faults: a dropped frame is never sent, a late one is held its
+//   late_by and the frames due behind it go out with it, in order;
 // - realtime: every frame goes out, in order, with the same pixels; the control
 //   thread never waits for the worker, and a frame sent after its period is
 //   counted late (checked against what the test saw after each period).
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <future>
 #include <thread>
 #include <vector>
@@ -39,7 +42,7 @@ constexpr double kPeriod = 0.002;
 constexpr int kWidth = 160, kHeight = 120;
 
 struct Harness {
-  explicit Harness(const std::string& clock, double latency) {
+  explicit Harness(const std::string& clock, double latency, const std::function<void(CameraParams&)>& edit = {}) {
     m = LoadModelFromString("camera_worker_test", kSceneXml);
     d = mj_makeData(m.get());
     mj_forward(m.get(), d);
@@ -53,6 +56,7 @@ struct Harness {
     p.fps = 25;
     p.latency_s = latency;
     p.encoding = bridge::CameraEncoding::kRaw;  // no noise, no distortion: the pixels are the render's
+    if (edit) edit(p);
     DeviceContext context;
     context.model = m.get();
     context.control_period_s = kPeriod;
@@ -191,6 +195,45 @@ TEST(CameraWorkerTest, RealtimeNeverWaitsSendsEveryFrameInOrderAndCountsTheLateO
   }
   EXPECT_EQ(h.camera->frames_late(), late);
   EXPECT_EQ(h.camera->frames_dropped(), 0);
+}
+
+}  // namespace
+}  // namespace vlab::lab
+
+namespace vlab::lab {
+namespace {
+
+// the camera's fault injection (drop_frames, late_frames, late_by), which tests of
+// clients (the yo-yo controller, vlab vision) use: a dropped frame never goes out;
+// a late frame goes out late_by after it was due, the frames due before that wait
+// behind it (a stalled pipeline keeps its order) and are counted late with it
+TEST(CameraWorkerTest, InjectedDropAndLateFramesGoOutAsConfigured) {
+  constexpr int kPeriods = 300;  // 0.6 s: frames 0..15
+  constexpr double kLatency = 0.01, kLateBy = 0.1;
+  Harness h("lockstep", kLatency, [](CameraParams& p) {
+    p.drop_frames = {3};
+    p.late_frames = {6};
+    p.late_by_s = kLateBy;
+  });
+  const Sent s = Drive(h, kPeriods);
+  std::vector<std::int64_t> ids;
+  for (const auto& f : s.received) ids.push_back(f.id);
+  ASSERT_EQ(ids.size(), s.reference.size() - 2) << "all but the dropped frame, as in the fault-free test";
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    EXPECT_EQ(ids[i], static_cast<std::int64_t>(i < 3 ? i : i + 1)) << "in order, frame 3 missing";
+    EXPECT_TRUE(s.received[i].rgb == s.reference[ids[i]]) << "frame " << ids[i] << ": not the render of its state";
+  }
+  // frame 6 (stamp 0.24 s) is due at 0.24 + 0.01 + 0.1 = 0.35 s: period 175
+  const long held = DuePeriod(s.received[5].time_s, kLatency + kLateBy);
+  ASSERT_EQ(s.received[5].id, 6);
+  EXPECT_EQ(held, 175);
+  EXPECT_LE(s.frames_after_period[held - 1], 5) << "frame 6 went out before its late_by had passed";
+  // frames 7 and 8 (due at 0.29 and 0.33 s) went out with it, frame 9 (due 0.37 s) on time
+  EXPECT_EQ(s.frames_after_period[held], 5 + 3);
+  EXPECT_EQ(s.frames_after_period[DuePeriod(9 / 25.0, kLatency) - 1], 5 + 3);
+  EXPECT_EQ(s.frames_after_period[DuePeriod(9 / 25.0, kLatency)], 5 + 4);
+  EXPECT_EQ(h.camera->frames_late(), 3);     // 6, and 7 and 8 behind it
+  EXPECT_EQ(h.camera->frames_dropped(), 1);  // 3
 }
 
 }  // namespace

@@ -57,3 +57,39 @@ if(NOT n EQUAL 1)
   message(FATAL_ERROR "the stages ran different controller binaries: ${hashes}")
 endif()
 message(STATUS "the three stages passed with the same controller (fnv1a64 ${hashes})")
+
+# Stage 3 again, with a lost and a late frame injected by the webcam (docs/scenarios.md,
+# camera `drop_frames`, `late_frames`): frame 375 (t = 15 s) never sent, frame 450 (18 s)
+# held 0.12 s (three frames' time, the frames behind it with it), both within the checked
+# swings [10, 24] s. The controller and vlab vision must ride through them: the same checks
+# and amplitude bound as the plain run.
+execute_process(COMMAND ${VLAB} run ${OUT}/stage3_short.yaml --quiet --duration 25 --out ${OUT}/stage3_faults
+                        --set "devices.webcam.drop_frames=[375]" --set "devices.webcam.late_frames=[450]"
+                        --set "devices.webcam.late_by=0.12"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out TIMEOUT 120)
+file(READ ${OUT}/stage3_faults/controller.log log)
+string(REGEX MATCH "amplitude error ([0-9.]+)" _ "${log}")
+set(error "${CMAKE_MATCH_1}")
+if(NOT rc EQUAL 0 OR error STREQUAL "")
+  message(FATAL_ERROR "stage3 with a lost and a late frame failed:\n${out}\ncontroller.log:\n${log}")
+endif()
+# the faults happened: the webcam counted them, and vlab vision saw a gap in the frame ids
+file(READ ${OUT}/stage3_faults/summary.json summary)
+string(JSON ndev LENGTH "${summary}" bridge devices)
+set(dropped "")
+math(EXPR last "${ndev} - 1")
+foreach(i RANGE ${last})
+  string(JSON name GET "${summary}" bridge devices ${i} name)
+  if(name STREQUAL "webcam")
+    string(JSON dropped GET "${summary}" bridge devices ${i} frames dropped)
+    string(JSON late GET "${summary}" bridge devices ${i} frames late)
+  endif()
+endforeach()
+string(REGEX MATCH "vlab vision: ([0-9]+) frames[^\n]*, ([0-9]+) skipped" _ "${log}")
+set(skipped "${CMAKE_MATCH_2}")
+if(NOT dropped EQUAL 1 OR late LESS 1 OR skipped STREQUAL "" OR skipped LESS 1)
+  message(FATAL_ERROR "stage3 faults not injected as asked: webcam dropped '${dropped}' (1), late '${late}' (>= 1), "
+                      "vlab vision skipped '${skipped}' (>= 1)\n${log}")
+endif()
+message(STATUS "stage3 with frame 375 lost and frame 450 0.12 s late: pass, amplitude error ${error}; "
+               "webcam dropped ${dropped}, late ${late}; vlab vision skipped ${skipped}")

@@ -24,6 +24,10 @@ namespace {
 constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 // the nice value of a worker (and the rasterizer threads) under a control thread that is not realtime
 constexpr int kWorkerNice = 10;
+
+bool Listed(const std::vector<std::int64_t>& sorted_ids, std::int64_t id) {
+  return !sorted_ids.empty() && std::binary_search(sorted_ids.begin(), sorted_ids.end(), id);
+}
 }  // namespace
 
 std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r) {
@@ -52,6 +56,19 @@ std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r) {
   const std::string profile = r.String("profile", "fast");
   if (profile != "fast" && profile != "quality") r.Fail("profile", "must be fast or quality");
   c->profile = render::ProfileFromName(profile);
+  const auto ids = [&r](const char* key) {
+    std::vector<std::int64_t> out;
+    for (double v : r.Numbers(key, {})) {
+      if (!(v >= 0 && v <= 1e15 && v == std::floor(v))) r.Fail(key, "frame ids are whole numbers >= 0");
+      out.push_back(static_cast<std::int64_t>(v));
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  c->drop_frames = ids("drop_frames");
+  c->late_frames = ids("late_frames");
+  c->late_by_s = r.Number("late_by", c->late_by_s);
+  if (!(c->late_by_s > 0 && c->late_by_s <= 10)) r.Fail("late_by", "must be > 0 and <= 10 s");
   return c;
 }
 
@@ -315,10 +332,15 @@ void SimCamera::Deliver(double t, mjData* d) {
   // frames delivered: their latency has passed, and (realtime) the worker has done them
   while (count_ > 0) {
     Pending& p = queue_[head_];
-    const bool due = p.frame.time_s + config_.latency_s <= t + kSameTime_s;
-    if (!due || !WaitDone(p, !realtime_)) break;
-    if (p.frame.time_s + config_.latency_s <= t_before + kSameTime_s) ++late_;
-    if (p.ok) server_->Send(p.frame);
+    const bool held = Listed(config_.late_frames, p.frame.id);  // an injected stall
+    const double due_at = p.frame.time_s + config_.latency_s + (held ? config_.late_by_s : 0.0);
+    if (due_at > t + kSameTime_s || !WaitDone(p, !realtime_)) break;
+    if (held || p.frame.time_s + config_.latency_s <= t_before + kSameTime_s) ++late_;
+    if (Listed(config_.drop_frames, p.frame.id)) {  // an injected loss
+      ++dropped_;
+    } else if (p.ok) {
+      server_->Send(p.frame);
+    }
     head_ = (head_ + 1) % queue_.size();
     --count_;
   }

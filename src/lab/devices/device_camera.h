@@ -58,10 +58,19 @@ struct CameraParams : DeviceParams {
   bridge::CameraEncoding encoding = bridge::CameraEncoding::kJpeg;  ///< frames on the wire (jpeg | raw)
   int jpeg_quality = 90;         ///< 1-100
   render::Profile profile = render::Profile::kFast;  ///< fast | quality
+  // Faults injected on purpose, to test that a client survives them (frame ids as
+  // sent, 0 the first): a dropped frame is rendered and never sent (counted
+  // dropped), as a frame lost on the way; a late frame is held `late_by_s` past
+  // its due time and the frames behind it wait with it (counted late), as after a
+  // stall of the camera's pipeline.
+  std::vector<std::int64_t> drop_frames;  ///< ids never sent
+  std::vector<std::int64_t> late_frames;  ///< ids delivered late_by_s late
+  double late_by_s = 0.1;
 };
 
 /// Reads a camera entry's keys (camera, width, height, fps, exposure, latency,
-/// distortion, noise, encoding, jpeg_quality, profile).
+/// distortion, noise, encoding, jpeg_quality, profile, drop_frames, late_frames,
+/// late_by).
 std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r);
 /// Makes a SimCamera.
 std::unique_ptr<Device> MakeCamera(const DeviceContext& context, const DeviceConfig& config);
