@@ -9,7 +9,13 @@
 // - realtime: every frame goes out, in order, with the same pixels; the control
 //   thread never waits for the worker, and a frame sent after its period is
 //   counted late (checked against what the test saw after each period).
+#include <sys/resource.h>
+#include <sched.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <functional>
 #include <future>
@@ -20,6 +26,7 @@
 
 #include "bridge/bridge_camera_client.h"
 #include "core/core_mujoco.h"
+#include "core/core_realtime.h"
 #include "lab/devices/device_camera.h"
 #include "render/renderer.h"
 
@@ -234,6 +241,58 @@ TEST(CameraWorkerTest, InjectedDropAndLateFramesGoOutAsConfigured) {
   EXPECT_EQ(s.frames_after_period[DuePeriod(9 / 25.0, kLatency)], 5 + 4);
   EXPECT_EQ(h.camera->frames_late(), 3);     // 6, and 7 and 8 behind it
   EXPECT_EQ(h.camera->frames_dropped(), 1);  // 3
+}
+
+}  // namespace
+}  // namespace vlab::lab
+
+namespace vlab::lab {
+namespace {
+
+// the worker's scheduling once it has set it (it does so first thing): waits at most 5 s
+bool WorkerScheduling(const SimCamera& camera, int* policy, int* nice) {
+  for (int i = 0; i < 500 && camera.worker_thread_id() == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const long tid = camera.worker_thread_id();
+  if (tid == 0) return false;
+  *policy = ::sched_getscheduler(static_cast<pid_t>(tid));
+  errno = 0;
+  *nice = ::getpriority(PRIO_PROCESS, static_cast<id_t>(tid));
+  return true;
+}
+
+// the render worker runs below the control thread: nice 10 under a normal one; under a
+// SCHED_FIFO one, normal policy at nice -20 (not realtime: it would spend the realtime
+// budget the control thread needs) where the kernel permits it (root, CAP_SYS_NICE)
+TEST(CameraWorkerTest, TheWorkerRunsBelowTheControlThreadButNotAtRealtimePriority) {
+  std::thread normal([] {
+    Harness h("realtime", 0.01);
+    int policy = -1, nice = 99;
+    Drive(h, 5);
+    ASSERT_TRUE(WorkerScheduling(*h.camera, &policy, &nice));
+    EXPECT_EQ(policy, SCHED_OTHER);
+    EXPECT_EQ(nice, 10);
+  });
+  normal.join();
+  std::thread fifo([] {
+    if (!SetThreadRealtime(30)) {
+      GTEST_SKIP() << "SCHED_FIFO is not permitted here: " << RealtimeRefusal(30, errno);
+    }
+    Harness h("realtime", 0.01);
+    Drive(h, 5);
+    int policy = -1, nice = 99;
+    errno = 0;
+    const bool nice_permitted = ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), -20) == 0;
+    ASSERT_TRUE(WorkerScheduling(*h.camera, &policy, &nice));
+    if (nice_permitted) {
+      EXPECT_EQ(policy, SCHED_OTHER);
+      EXPECT_EQ(nice, -20);
+    } else {  // an rtprio limit without a nice limit: SCHED_FIFO one below
+      EXPECT_EQ(policy, SCHED_FIFO);
+    }
+  });
+  fifo.join();
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <condition_variable>
 #include <mutex>
@@ -24,6 +25,8 @@ namespace {
 constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 // the nice value of a worker (and the rasterizer threads) under a control thread that is not realtime
 constexpr int kWorkerNice = 10;
+// the nice value of a worker (and the rasterizer threads) under a realtime control thread
+constexpr int kRealtimeWorkerNice = -20;
 
 bool Listed(const std::vector<std::int64_t>& sorted_ids, std::int64_t id) {
   return !sorted_ids.empty() && std::binary_search(sorted_ids.begin(), sorted_ids.end(), id);
@@ -165,10 +168,13 @@ struct SimCamera::Worker {
   bool stop = false;             // (mutex)
   std::string error;             // (mutex) why the renderer could not be made
   long rendered = 0;             // (mutex)
+  std::atomic<long> tid{0};      // the worker's thread id, once it runs
   mjData* warm = nullptr;        // the state of the warm-up draw (control thread's, read before ready)
 };
 
 SimCamera::SimCamera(const DeviceConfig& config) : Device(config) {}
+
+long SimCamera::worker_thread_id() const { return worker_ ? worker_->tid.load() : 0; }
 
 long SimCamera::frames_rendered() const {
   if (!worker_) return 0;
@@ -208,19 +214,35 @@ void SimCamera::StopWorker() {
 
 void SimCamera::WorkerMain() {
   Worker& w = *worker_;
-  // below the control thread, always: under a realtime one (SCHED_FIFO P) at SCHED_FIFO
-  // P - 1; under a normal one at nice 10 (not SCHED_IDLE: that starves under any load,
-  // and a worker must always progress). The rasterizer threads it waits for follow it.
+  // below the control thread, always. Under a realtime one (SCHED_FIFO P): SCHED_OTHER at
+  // nice -20, which takes the cores from normal work nearly as SCHED_FIFO would (weight
+  // 88761 against 1024) but is not realtime: four cameras' rendering fills both cores,
+  // and as SCHED_FIFO threads they ran the CPUs into the kernel's realtime throttling
+  // (95 % of each second), which then stalled the control thread too, for up to 50 ms.
+  // Where nice -20 is not permitted (an rtprio limit without a nice limit), SCHED_FIFO
+  // P - 1. Under a normal control thread: nice 10 (not SCHED_IDLE: that starves under any
+  // load, and a worker must always progress). The rasterizer threads it waits for follow it.
   int policy = 0;
   sched_param param{};
   const bool realtime_loop = ::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO;
-  const int worker_policy = realtime_loop ? SCHED_FIFO : SCHED_OTHER;
-  const int worker_value = realtime_loop ? std::max(kMinRealtimePriority, param.sched_priority - 1) : kWorkerNice;
+  const id_t tid = static_cast<id_t>(::gettid());
+  ::pthread_setname_np(::pthread_self(), kWorkerThreadName);  // (for ps -L and top -H)
+  int worker_policy = SCHED_OTHER;
+  int worker_value = kWorkerNice;
   if (realtime_loop) {
-    SetThreadRealtime(worker_value);
+    sched_param normal{};
+    ::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &normal);  // (made by the control thread: inherited FIFO)
+    if (::setpriority(PRIO_PROCESS, tid, kRealtimeWorkerNice) == 0) {
+      worker_value = kRealtimeWorkerNice;
+    } else {
+      worker_policy = SCHED_FIFO;
+      worker_value = std::max(kMinRealtimePriority, param.sched_priority - 1);
+      SetThreadRealtime(worker_value);
+    }
   } else {
-    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), worker_value);
+    ::setpriority(PRIO_PROCESS, tid, worker_value);
   }
+  w.tid = static_cast<long>(tid);  // (set: for the tests)
   // everything GL lives and dies on this thread
   std::unique_ptr<render::Renderer> renderer;
   render::RgbImage ideal;

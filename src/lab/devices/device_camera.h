@@ -18,11 +18,13 @@
 // waited for, so the frame of stamp t has the same bytes and goes out in the
 // same period whatever the load; in realtime runs the control thread never
 // waits: a frame not ready in time goes out at the first period end after it
-// is (counted late). A worker runs below the control thread: one priority
-// below a SCHED_FIFO one (core_realtime.h), at nice 10 under a normal one;
-// llvmpipe's rasterizer threads follow the worker. Rendering several cameras
-// at realtime priority can spend the kernel's realtime budget (95 % of each
-// second by default) and get the control thread throttled with it.
+// is (counted late). A worker runs below the control thread: under a
+// SCHED_FIFO one (core_realtime.h) at normal policy and nice -20 (SCHED_FIFO
+// one priority below where that nice value is not permitted), at nice 10 under
+// a normal one; llvmpipe's rasterizer threads follow the worker. Not at
+// realtime priority by choice: rendering several cameras fills the cores, and
+// realtime workers spent the kernel's realtime budget (95 % of each second by
+// default) and got the control thread throttled with them.
 // Rendering reads the state and never changes it; nothing is rendered while
 // nobody subscribes. Under `vlab run` (nothing served) the device is idle.
 // It serves itself (OwnTransport): its frames travel in chunks on its own
@@ -43,6 +45,9 @@
 #include "sensors/sensor_camera.h"
 
 namespace vlab::lab {
+
+/// The name of a camera's render worker thread (/proc/PID/task/TID/comm).
+inline constexpr const char* kWorkerThreadName = "vlab-camera";
 
 /// A simulated webcam: an MJCF camera rendered offscreen at the camera's own
 /// frame rate, through a lens and sensor model (sensors/sensor_camera.h).
@@ -86,6 +91,8 @@ class SimCamera final : public Device, public OwnTransport {
   const sensors::CameraModel& model() const { return *model_; }
   const bridge::CameraServer* server() const { return server_.get(); }
   long frames_rendered() const;
+  /// The render worker's thread id (gettid), 0 before it has started.
+  long worker_thread_id() const;
   /// Frames delivered after their stamp + latency (realtime: the worker was late).
   long frames_late() const { return late_; }
   /// Frames not rendered because the ring of frames in flight was full (realtime only).
