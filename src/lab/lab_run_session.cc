@@ -17,6 +17,8 @@ namespace {
 
 // how long an external controller gets to exit after SIGTERM at the end of a run
 constexpr double kControllerGrace_s = 2.0;
+// the longest wait for a controller's answer to the final state (lockstep), s
+constexpr double kFinalAnswerWait_s = 2.0;
 
 double Seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
@@ -272,8 +274,24 @@ bool RunSession::Period() {
   return true;
 }
 
+void RunSession::AwaitFinalAnswer() {
+  // The last period publishes the state that closes the run, and nothing applies a command
+  // to it. Stopped at once, the controller had or had not handled it (and written a row of
+  // its own log for it) by the time SIGTERM came: its log's last row varied from run to run.
+  if (!controller_ || !bridge_ || clock_->mode() != ClockMode::kLockstep || diverged_ || !result_.failure.empty()) {
+    return;
+  }
+  const auto until = WallClock::now() + std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(
+                                            std::min(s_.scenario.lockstep.timeout_s, kFinalAnswerWait_s)));
+  while (!bridge_->Answered(k_) && !controller_->Exited() && WallClock::now() < until) {
+    if (options_.interrupt && *options_.interrupt != 0) return;
+    bridge_->Poll(0.001);
+  }
+}
+
 RunResult RunSession::Finish() {
   result_.loop_wall_s = Seconds(t_loop_, WallClock::now());
+  AwaitFinalAnswer();
   DropRealtime(result_.realtime);  // the outputs are written at normal priority
   if (controller_) {
     controller_->Stop(kControllerGrace_s);

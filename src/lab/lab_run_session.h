@@ -60,6 +60,9 @@ class RunSession {
   bool Interrupted();
   // vlab serve: says once which devices period 0 waits for
   void NoteWaiting();
+  // lockstep with a controller that vlab run started: waits (bounded) for its answer to the
+  // final state before it is stopped, so what it makes of that state is the same every run
+  void AwaitFinalAnswer();
   // lockstep and realtime: the control thread on SCHED_FIFO when asked and permitted
   void RequestPriority();
   // vlab serve in lockstep: why the run had no controller ("" when a command arrived)

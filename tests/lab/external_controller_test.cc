@@ -81,6 +81,34 @@ TEST(ExternalController, RunStartsItAndTheLogIsTheSameTwice) {
   EXPECT_NE(ReadFile(dir / "a/controller.log").find("max tracking error"), std::string::npos);
 }
 
+// lockstep: the lab waits for the answer to the state that closes the run before it stops
+// the controller, so a controller that logs each state before it answers logs the final one
+// on every run. This one takes 20 ms per state (Python dies on SIGTERM at once): stopped
+// without that wait, its last row was the period before, or missing, whichever SIGTERM hit.
+TEST(ExternalController, TheFinalStateIsAnsweredBeforeTheControllerIsStopped) {
+  TempDir dir;
+  WriteFile(dir / "slow.py", R"(import sys, time
+sys.path.insert(0, ")" VLAB_SOURCE_DIR R"(/bridge/python")
+import vlab_client
+host, port = sys.argv[1].rsplit(":", 1)
+with vlab_client.Arm(host, int(port), timeout=5.0) as arm, open(sys.argv[2], "w") as rows:
+    while True:
+        state = arm.read(5.0)
+        time.sleep(0.02)
+        rows.write("%.3f\n" % state.time)
+        rows.flush()
+        arm.write(vlab_client.HOLD, [], state.seq)
+)");
+  WriteFile(dir / "s.yaml", Scenario(R"(["python3", ")" + (dir / "slow.py") + R"(", "{pa10}", "{out}/rows.txt"])", 0.1));
+  for (const char* run : {"a", "b"}) {
+    const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / run));
+    ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+    const std::vector<std::string> rows = Lines(ReadFile(dir / (std::string(run) + "/rows.txt")));
+    ASSERT_EQ(rows.size(), 51u) << "t = 0 .. 0.1 s at 500 Hz: 51 states, each logged";
+    EXPECT_EQ(rows.back(), "0.100");
+  }
+}
+
 TEST(ExternalController, AFailingControllerEndsTheRunWithItsStatus) {
   TempDir dir;
   WriteFile(dir / "s.yaml", Scenario(R"(["sh", "-c", "echo cannot reach {pa10} >&2; exit 3"])"));
