@@ -25,7 +25,6 @@
 // largest distance of the ball from the image centre after 1 s (px).
 #include <algorithm>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <deque>
@@ -35,6 +34,7 @@
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"
+#include "bridge/bridge_program.h"
 #include "head_track_eyes.h"
 
 namespace {
@@ -43,8 +43,9 @@ using vlab::bridge::Arm;
 using vlab::bridge::ArmMode;
 using vlab::bridge::CameraClient;
 
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
+using vlab::bridge::program::Address;
+using vlab::bridge::program::ParseAddress;
+using vlab::bridge::program::Stopped;
 
 constexpr double kReadTimeout_s = 2.0;    // no state for this long: the run is over
 constexpr double kFrameTimeout_s = 1.0;   // wait for a frame the lab has sent
@@ -57,23 +58,10 @@ constexpr const char* kJoints[7] = {"neck_pitch", "neck_roll", "neck_yaw", "head
                                     "eye_tilt", "left_eye_pan", "right_eye_pan"};
 enum Joint { kNeckPitch, kNeckRoll, kNeckYaw, kHeadTilt, kEyeTilt, kLeftPan, kRightPan };
 
-struct Address {
-  std::string host;
-  int port = 0;
-};
 struct Options {
   Address arm, left, right;
   bool quiet = false;
 };
-
-bool ParseAddress(const std::string& text, Address* a) {
-  const std::size_t colon = text.rfind(':');
-  if (colon == std::string::npos) return false;
-  a->host = text.substr(0, colon);
-  if (a->host.size() > 2 && a->host.front() == '[' && a->host.back() == ']') a->host = a->host.substr(1, a->host.size() - 2);
-  a->port = std::atoi(text.c_str() + colon + 1);
-  return !a->host.empty() && a->port > 0 && a->port < 65536;
-}
 
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
@@ -125,7 +113,7 @@ const CameraClient::Frame* NextFrame(Eye& e, double t) {
   const std::int64_t newest = head_track::NewestSentFrame(t, e.schedule);
   if (newest < 1) return nullptr;  // frame 0 may predate the subscription
   double waited = 0;
-  while ((e.queue.empty() || e.queue.back().id < newest) && !g_stop) {
+  while ((e.queue.empty() || e.queue.back().id < newest) && !Stopped()) {
     if (waited >= kFrameTimeout_s) {
       ++e.late;
       break;
@@ -208,7 +196,7 @@ Eigen::VectorXd Command(const Eye& l, const Eye& r, const Arm::State& s, const A
 // The next state (lockstep: the next one; realtime: the newest); false when
 // none comes within kReadTimeout_s (the run is over) or a signal asks to stop.
 bool NextState(Arm& arm, Arm::State* state) {
-  for (double waited = 0; waited < kReadTimeout_s && !g_stop; waited += kSlice_s) {
+  for (double waited = 0; waited < kReadTimeout_s && !Stopped(); waited += kSlice_s) {
     try {
       arm.ReadLatest(kSlice_s, state);
       return true;
@@ -287,13 +275,5 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: %s --arm HOST:PORT --left HOST:PORT --right HOST:PORT [--quiet]\n", argv[0]);
     return 2;
   }
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
-  try {
-    return Run(options);
-  } catch (const vlab::bridge::BridgeError& e) {
-    if (g_stop) return 0;
-    std::fprintf(stderr, "head_track: %s\n", e.what());
-    return 2;
-  }
+  return vlab::bridge::program::Main("head_track", [&] { return Run(options); });
 }

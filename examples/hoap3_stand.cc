@@ -24,7 +24,6 @@
 // --max-error is given and exceeded; 2 on a bridge error (printed) or bad arguments.
 #include <algorithm>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -35,6 +34,7 @@
 
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
+#include "bridge/bridge_program.h"
 
 namespace {
 
@@ -43,13 +43,10 @@ using vlab::bridge::ArmMode;
 using vlab::bridge::Device;
 using Eigen::VectorXd;
 
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
-
-struct Address {
-  std::string host;
-  int port = 0;
-};
+using vlab::bridge::program::Address;
+using vlab::bridge::program::ParseAddress;
+using vlab::bridge::program::ReadNext;
+using vlab::bridge::program::Stopped;
 
 struct Options {
   Address arm{"127.0.0.1", 50020};
@@ -62,17 +59,6 @@ struct Options {
 
 constexpr double kSettle_s = 0.5;      // the pads sink into the floor at first
 constexpr double kConnect_s = 5.0;     // describe reply wait
-constexpr double kPoll_s = 0.05;       // read slices, so that a signal is seen soon
-
-// HOST:PORT or [IPv6]:PORT
-bool ParseAddress(const std::string& value, Address* a) {
-  const std::size_t colon = value.rfind(':');
-  if (colon == std::string::npos) return false;
-  a->host = value.substr(0, colon);
-  if (a->host.size() > 2 && a->host.front() == '[' && a->host.back() == ']') a->host = a->host.substr(1, a->host.size() - 2);
-  a->port = std::atoi(value.c_str() + colon + 1);
-  return !a->host.empty() && a->port > 0 && a->port < 65536;
-}
 
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
@@ -135,19 +121,6 @@ int Index(const Arm& arm, const std::string& joint) {
   return it == names.end() ? -1 : static_cast<int>(it - names.begin());
 }
 
-// The next (newest) state; false when the device fell silent for timeout_s or a
-// signal asked to stop.
-bool NextState(Arm& arm, double timeout_s, Arm::State* state) {
-  for (double waited = 0; !g_stop && waited < timeout_s; waited += kPoll_s) {
-    try {
-      arm.ReadLatest(kPoll_s, state);  // lockstep: the next one; realtime: the newest
-      return true;
-    } catch (const vlab::bridge::TimeoutError&) {
-    }
-  }
-  return false;
-}
-
 int Run(const Options& o) {
   Arm arm = Arm::Connect(o.arm.host, o.arm.port, kConnect_s);
   std::unique_ptr<Device> feet;
@@ -177,9 +150,9 @@ int Run(const Options& o) {
   }
 
   Arm::State state;
-  if (!NextState(arm, o.timeout_s + kConnect_s, &state)) {
+  if (!ReadNext(arm, o.timeout_s + kConnect_s, &state)) {
     std::fprintf(stderr, "hoap3_stand: no state from %s\n", arm.Label().c_str());
-    return g_stop ? 0 : 2;
+    return Stopped() ? 0 : 2;
   }
   const double t0 = state.time;
   script.q0 = state.q;
@@ -213,7 +186,7 @@ int Run(const Options& o) {
       std::printf("t = %.3f s: %s; max tracking error so far %.6f rad\n", t, phases[phase++], max_error);
       std::fflush(stdout);
     }
-  } while (NextState(arm, o.timeout_s, &state));
+  } while (ReadNext(arm, o.timeout_s, &state));
 
   std::printf("max tracking error: %.6f rad\n", max_error);
   if (feet && sum_max > 0) std::printf("FSR sum: min %.3f N, max %.3f N\n", sum_min, sum_max);
@@ -235,12 +208,5 @@ int main(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
-  try {
-    return Run(options);
-  } catch (const vlab::bridge::BridgeError& e) {
-    std::fprintf(stderr, "hoap3_stand: %s\n", e.what());
-    return 2;
-  }
+  return vlab::bridge::program::Main("hoap3_stand", [&] { return Run(options); });
 }

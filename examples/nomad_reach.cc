@@ -25,7 +25,6 @@
 // bad arguments.
 #include <algorithm>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -37,6 +36,7 @@
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_errors.h"
 #include "bridge/bridge_layouts.h"
+#include "bridge/bridge_program.h"
 #include "control/robot_model.h"
 #include "control/task_space.h"
 #include "control/time_scaling.h"
@@ -50,12 +50,11 @@ using vlab::bridge::DeviceKind;
 using Eigen::Vector3d;
 using Eigen::VectorXd;
 
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
+using vlab::bridge::program::kPoll_s;
+using vlab::bridge::program::Stopped;
 
 constexpr double kDrive_s = 6.0, kStand_s = 1.0, kReach_s = 4.0;
 constexpr double kOdometryGain = 5.0;  // 1/s on the base's position error
-constexpr double kPoll_s = 0.05;       // read slices, so that a signal is seen soon
 // the base's odometry in its state (bridge/bridge_layouts.h)
 constexpr int kBaseX = vlab::bridge::StateIndex(DeviceKind::kBase, "x");
 constexpr int kBaseY = vlab::bridge::StateIndex(DeviceKind::kBase, "y");
@@ -73,11 +72,11 @@ struct Options {
 };
 
 bool ParseAddress(const std::string& text, std::string* host, int* port) {
-  const auto colon = text.rfind(':');
-  if (colon == std::string::npos) return false;
-  *host = text.substr(0, colon);
-  *port = std::atoi(text.c_str() + colon + 1);
-  return *port > 0 && *port < 65536;
+  vlab::bridge::program::Address a;
+  if (!vlab::bridge::program::ParseAddress(text, &a)) return false;
+  *host = a.host;
+  *port = a.port;
+  return true;
 }
 
 bool Parse(int argc, char** argv, Options* o) {
@@ -111,7 +110,7 @@ bool Parse(int argc, char** argv, Options* o) {
 // the next state after `seq` (blocks in slices; false: silence for timeout_s or a signal)
 template <typename Client, typename State>
 bool ReadAfter(Client& client, std::int64_t seq, double timeout_s, State* state) {
-  for (double waited = 0; !g_stop && waited < timeout_s; waited += kPoll_s) {
+  for (double waited = 0; !Stopped() && waited < timeout_s; waited += kPoll_s) {
     try {
       *state = client.Read(kPoll_s);
       if (state->seq > seq) return true;
@@ -215,12 +214,5 @@ int main(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
-  try {
-    return Run(options);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "nomad_reach: %s\n", e.what());
-    return g_stop ? 0 : 2;
-  }
+  return vlab::bridge::program::Main("nomad_reach", [&] { return Run(options); });
 }

@@ -49,7 +49,6 @@
 // Ends when the arm is silent for --timeout s or on SIGTERM/SIGINT; exit 0; 2 on bridge errors.
 #include <algorithm>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -59,6 +58,7 @@
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
+#include "bridge/bridge_program.h"
 
 namespace {
 
@@ -67,12 +67,15 @@ using vlab::bridge::Device;
 using vlab::bridge::DeviceKind;
 using vlab::bridge::Wrench;
 
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
+using vlab::bridge::program::Address;
+using vlab::bridge::program::kPoll_s;
+using vlab::bridge::program::ParseAddress;
+using vlab::bridge::program::ReadUntil;
+using vlab::bridge::program::Stopped;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
-constexpr double kPoll_s = 0.05, kConnect_s = 5.0;
+constexpr double kConnect_s = 5.0;
 constexpr int kCounterRpm = vlab::bridge::StateIndex(DeviceKind::kCounter, "rpm");
 // the ball and its mount (mjcf/powerball/README.md, mjcf/pa10/pa10_powerball.xml)
 constexpr double kRollRatio = 0.0012 / 0.027;  // r / R
@@ -97,21 +100,12 @@ constexpr double kMaxJointSpeed = 6.0;         // rad/s: under the arm's 2 pi wr
 // velocity step of dv costs the servo kd dv of torque (a 15 N m spike on W1)
 constexpr double kMaxVelocityStep = 0.5;
 
-struct Address { std::string host; int port = 0; };
 struct Options {
   Address arm, jr3, counter;
   double target_rpm = 12000, alpha_max_deg = 10, delta_deg = 0, wrist_speed = 4.0, timeout_s = 2.0;
   std::string log;
   bool quiet = false;
 };
-
-bool ParseAddress(const std::string& v, Address* a) {
-  const std::size_t colon = v.rfind(':');
-  if (colon == std::string::npos) return false;
-  a->host = v.substr(0, colon);
-  a->port = std::atoi(v.c_str() + colon + 1);
-  return !a->host.empty() && a->port > 0 && a->port < 65536;
-}
 
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
@@ -136,26 +130,12 @@ bool ParseOptions(int argc, char** argv, Options* o) {
          o->alpha_max_deg > 0 && o->alpha_max_deg <= 15 && o->wrist_speed > 0 && o->timeout_s > 0;
 }
 
-// the state of period `seq` (or a later one) of a device; false: silence or a signal
-template <typename Client, typename State>
-bool ReadUntil(Client& c, std::int64_t seq, double timeout_s, State* s) {
-  for (double waited = 0; !g_stop && waited < timeout_s; waited += kPoll_s) {
-    try {
-      *s = c.Read(kPoll_s);
-      if (s->seq >= seq) return true;
-      waited = 0;
-    } catch (const vlab::bridge::TimeoutError&) {
-    }
-  }
-  return false;
-}
-
 double Wrap(double angle) { return std::remainder(angle, 2.0 * kPi); }
 
 // the arm's next state: period seq + 1 in lockstep, else the newest one after `a`
 bool NextArmState(Arm& arm, bool per_period, double timeout_s, Arm::State* a) {
   if (per_period) return ReadUntil(arm, a->seq + 1, timeout_s, a);
-  for (double waited = 0; !g_stop && waited < timeout_s; waited += kPoll_s) {
+  for (double waited = 0; !Stopped() && waited < timeout_s; waited += kPoll_s) {
     try {
       const std::int64_t last = a->seq;
       arm.ReadLatest(kPoll_s, a);
@@ -180,7 +160,7 @@ int Run(const Options& o) {
   Arm::State a;
   Wrench::State w;
   Device::State c;
-  if (!ReadUntil(arm, 0, o.timeout_s + kConnect_s, &a)) return g_stop ? 0 : 2;
+  if (!ReadUntil(arm, 0, o.timeout_s + kConnect_s, &a)) return Stopped() ? 0 : 2;
   const Eigen::VectorXd q0 = a.q;
   const double t0 = a.time;
   std::FILE* log = o.log.empty() ? nullptr : std::fopen(o.log.c_str(), "w");
@@ -280,12 +260,5 @@ int main(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
-  try {
-    return Run(options);
-  } catch (const vlab::bridge::BridgeError& e) {
-    std::fprintf(stderr, "powerball_spin: %s\n", e.what());
-    return 2;
-  }
+  return vlab::bridge::program::Main("powerball_spin", [&] { return Run(options); });
 }

@@ -48,7 +48,6 @@
 // S + F. Exit 0; 1 when the check fails (a line says which swing); 2 on bridge errors.
 #include <algorithm>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <fstream>
@@ -61,6 +60,7 @@
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
+#include "bridge/bridge_program.h"
 #include "bridge/bridge_yoyo.h"
 
 namespace {
@@ -69,10 +69,12 @@ using vlab::bridge::Device;
 using vlab::bridge::DeviceKind;
 using vlab::bridge::Wrench;
 
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
+using vlab::bridge::program::Address;
+using vlab::bridge::program::ParseAddress;
+using vlab::bridge::program::ReadUntil;
+using vlab::bridge::program::Stopped;
 
-constexpr double kPoll_s = 0.05, kConnect_s = 5.0;
+constexpr double kConnect_s = 5.0;
 // positions in the point's and the yo-yo's states (bridge/bridge_layouts.h)
 constexpr int Hand(const char* field) { return vlab::bridge::StateIndex(DeviceKind::kPoint, field); }
 constexpr int Yoyo(const char* field) { return vlab::bridge::StateIndex(DeviceKind::kYoyo, field); }
@@ -86,21 +88,12 @@ constexpr double kGain0 = 0.75, kGainMin = 0.2, kGainMax = 5.0, kP0 = 100.0, kFo
 constexpr double kTolerance = 0.10;  // of the level
 constexpr std::size_t kPast = 50;    // periods of the hand kept (0.5 s): a camera sample is a few periods old
 
-struct Address { std::string host; int port = 0; };
 struct Options {
   Address hand, yoyo, force, mirror;
   double level = 0.36, string = 1.0, check_from = -1, check_for = 0, timeout_s = 2.0;
   std::string log;
   bool quiet = false;
 };
-
-bool ParseAddress(const std::string& v, Address* a) {
-  const std::size_t colon = v.rfind(':');
-  if (colon == std::string::npos) return false;
-  a->host = v.substr(0, colon);
-  a->port = std::atoi(v.c_str() + colon + 1);
-  return !a->host.empty() && a->port > 0 && a->port < 65536;
-}
 
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
@@ -123,20 +116,6 @@ bool ParseOptions(int argc, char** argv, Options* o) {
     if (!ok) return false;
   }
   return o->hand.port > 0 && o->yoyo.port > 0 && o->level > 0 && o->string > 0 && o->timeout_s > 0;
-}
-
-// the state of period `seq` (or a later one) of a device; false: silence or a signal
-template <typename Client, typename State>
-bool ReadUntil(Client& c, std::int64_t seq, double timeout_s, State* s) {
-  for (double waited = 0; !g_stop && waited < timeout_s; waited += kPoll_s) {
-    try {
-      *s = c.Read(kPoll_s);
-      if (s->seq >= seq) return true;
-      waited = 0;
-    } catch (const vlab::bridge::TimeoutError&) {
-    }
-  }
-  return false;
 }
 
 // FNV-1a 64 of this program's file: the same binary in every stage
@@ -199,7 +178,7 @@ int Run(const Options& o) {
 
   Device::State h, y, mr;
   Wrench::State w;
-  if (!ReadUntil(hand, 0, o.timeout_s + kConnect_s, &h)) return g_stop ? 0 : 2;
+  if (!ReadUntil(hand, 0, o.timeout_s + kConnect_s, &h)) return Stopped() ? 0 : 2;
   const double t0 = h.time, x0 = h.values[kHandX], y0 = h.values[kHandY], z0 = h.values[kHandZ];
   const double z_ref = z0 - o.string;
   double offset[3] = {0, 0, 0}, fz0 = 0;  // mirror start - hand start; static load
@@ -332,12 +311,5 @@ int main(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
-  try {
-    return Run(options);
-  } catch (const vlab::bridge::BridgeError& e) {
-    std::fprintf(stderr, "yoyo_control: %s\n", e.what());
-    return 2;
-  }
+  return vlab::bridge::program::Main("yoyo_control", [&] { return Run(options); });
 }

@@ -192,16 +192,28 @@ TEST(CameraWorkerTest, RealtimeNeverWaitsSendsEveryFrameInOrderAndCountsTheLateO
                                     // the worker finished it before Deliver looked
   Harness h("realtime", kLatency);
   const Sent s = Drive(h, kPeriods);
-  ExpectFramesAreTheRendersOfTheirStates(s);
-  // each frame sent once, in order; the ones sent after their due period are the late ones
+  // each frame sent once, in order, with its state's pixels; the ones sent after their due
+  // period are the late ones. A frame is dropped (never rendered, counted) only when the
+  // worker is a whole ring of frames behind: on a quiet machine none is, on a loaded one
+  // (the test drives the periods as fast as it can) some may be. Every frame due is
+  // received, counted dropped, or still with the worker when the periods end.
+  ASSERT_GE(s.received.size(), 10u);
   long late = 0;
-  for (const auto& f : s.received) {
+  for (std::size_t i = 0; i < s.received.size(); ++i) {
+    const auto& f = s.received[i];
+    if (i > 0) {
+      EXPECT_GT(f.id, s.received[i - 1].id) << "out of order or twice";
+    }
+    ASSERT_LT(static_cast<std::size_t>(f.id), s.reference.size());
+    EXPECT_TRUE(f.rgb == s.reference[f.id]) << "frame " << f.id << ": not the render of its state";
     const long due = DuePeriod(f.time_s, kLatency);
-    const bool on_time = s.frames_after_period[due] >= f.id + 1;
+    const bool on_time = s.frames_after_period[due] >= static_cast<long>(i) + 1;
     if (!on_time) ++late;
   }
   EXPECT_EQ(h.camera->frames_late(), late);
-  EXPECT_EQ(h.camera->frames_dropped(), 0);
+  EXPECT_LE(static_cast<long>(s.received.size()) + h.camera->frames_dropped(),
+            static_cast<long>(s.reference.size()) - 1)
+      << "more frames received and dropped than were due";
 }
 
 }  // namespace
@@ -262,10 +274,9 @@ bool WorkerScheduling(const SimCamera& camera, int* policy, int* nice) {
   return true;
 }
 
-// the render worker runs below the control thread: nice 10 under a normal one; under a
-// SCHED_FIFO one, normal policy at nice -20 (not realtime: it would spend the realtime
-// budget the control thread needs) where the kernel permits it (root, CAP_SYS_NICE)
-TEST(CameraWorkerTest, TheWorkerRunsBelowTheControlThreadButNotAtRealtimePriority) {
+// the render worker runs below the control thread: nice 10 under a normal one, SCHED_FIFO
+// one priority below a realtime one (so that no normal work, from any session, delays it)
+TEST(CameraWorkerTest, TheWorkerRunsBelowTheControlThread) {
   std::thread normal([] {
     Harness h("realtime", 0.01);
     int policy = -1, nice = 99;
@@ -282,15 +293,11 @@ TEST(CameraWorkerTest, TheWorkerRunsBelowTheControlThreadButNotAtRealtimePriorit
     Harness h("realtime", 0.01);
     Drive(h, 5);
     int policy = -1, nice = 99;
-    errno = 0;
-    const bool nice_permitted = ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), -20) == 0;
     ASSERT_TRUE(WorkerScheduling(*h.camera, &policy, &nice));
-    if (nice_permitted) {
-      EXPECT_EQ(policy, SCHED_OTHER);
-      EXPECT_EQ(nice, -20);
-    } else {  // an rtprio limit without a nice limit: SCHED_FIFO one below
-      EXPECT_EQ(policy, SCHED_FIFO);
-    }
+    EXPECT_EQ(policy, SCHED_FIFO);
+    sched_param p{};
+    ASSERT_EQ(::sched_getparam(static_cast<pid_t>(h.camera->worker_thread_id()), &p), 0);
+    EXPECT_EQ(p.sched_priority, 29);
   });
   fifo.join();
 }

@@ -73,7 +73,9 @@ set(error "${CMAKE_MATCH_1}")
 if(NOT rc EQUAL 0 OR error STREQUAL "")
   message(FATAL_ERROR "stage3 with a lost and a late frame failed:\n${out}\ncontroller.log:\n${log}")
 endif()
-# the faults happened: the webcam counted them, and vlab vision saw a gap in the frame ids
+# the faults happened: the webcam counted them (at least them: on a loaded machine a worker
+# that falls a ring of frames behind drops more, and frames rendered after their due
+# period are late too)
 file(READ ${OUT}/stage3_faults/summary.json summary)
 string(JSON ndev LENGTH "${summary}" bridge devices)
 set(dropped "")
@@ -87,9 +89,9 @@ foreach(i RANGE ${last})
 endforeach()
 string(REGEX MATCH "vlab vision: ([0-9]+) frames[^\n]*, ([0-9]+) skipped" _ "${log}")
 set(skipped "${CMAKE_MATCH_2}")
-if(NOT dropped EQUAL 1 OR late LESS 1 OR skipped STREQUAL "" OR skipped LESS 1)
-  message(FATAL_ERROR "stage3 faults not injected as asked: webcam dropped '${dropped}' (1), late '${late}' (>= 1), "
-                      "vlab vision skipped '${skipped}' (>= 1)\n${log}")
+if(dropped STREQUAL "" OR dropped LESS 1 OR late LESS 3)
+  message(FATAL_ERROR "stage3 faults not injected as asked: webcam dropped '${dropped}' (>= 1), late '${late}' "
+                      "(>= 3: frame 450 and the two due behind it)\n${log}")
 endif()
 message(STATUS "stage3 with frame 375 lost and frame 450 0.12 s late: pass, amplitude error ${error}; "
                "webcam dropped ${dropped}, late ${late}; vlab vision skipped ${skipped}")

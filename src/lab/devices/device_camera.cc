@@ -25,8 +25,6 @@ namespace {
 constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 // the nice value of a worker (and the rasterizer threads) under a control thread that is not realtime
 constexpr int kWorkerNice = 10;
-// the nice value of a worker (and the rasterizer threads) under a realtime control thread
-constexpr int kRealtimeWorkerNice = -20;
 
 bool Listed(const std::vector<std::int64_t>& sorted_ids, std::int64_t id) {
   return !sorted_ids.empty() && std::binary_search(sorted_ids.begin(), sorted_ids.end(), id);
@@ -214,31 +212,23 @@ void SimCamera::StopWorker() {
 
 void SimCamera::WorkerMain() {
   Worker& w = *worker_;
-  // below the control thread, always. Under a realtime one (SCHED_FIFO P): SCHED_OTHER at
-  // nice -20, which takes the cores from normal work nearly as SCHED_FIFO would (weight
-  // 88761 against 1024) but is not realtime: four cameras' rendering fills both cores,
-  // and as SCHED_FIFO threads they ran the CPUs into the kernel's realtime throttling
-  // (95 % of each second), which then stalled the control thread too, for up to 50 ms.
-  // Where nice -20 is not permitted (an rtprio limit without a nice limit), SCHED_FIFO
-  // P - 1. Under a normal control thread: nice 10 (not SCHED_IDLE: that starves under any
-  // load, and a worker must always progress). The rasterizer threads it waits for follow it.
+  // below the control thread, always: under a realtime one (SCHED_FIFO P) at SCHED_FIFO
+  // P - 1; under a normal one at nice 10 (not SCHED_IDLE: that starves under any load,
+  // and a worker must always progress). The rasterizer threads it waits for follow it.
+  // Not SCHED_OTHER at nice -20 under a realtime loop: that keeps the workers out of
+  // the kernel's realtime throttling, but the kernel shares the CPU between sessions
+  // first (autogroup), so work started from another terminal took the workers' share
+  // whatever their nice value (yo-yo stage 3 beside a build: 36 frames dropped, 1022
+  // late, a bad swing).
   int policy = 0;
   sched_param param{};
   const bool realtime_loop = ::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO;
   const id_t tid = static_cast<id_t>(::gettid());
   ::pthread_setname_np(::pthread_self(), kWorkerThreadName);  // (for ps -L and top -H)
-  int worker_policy = SCHED_OTHER;
-  int worker_value = kWorkerNice;
+  const int worker_policy = realtime_loop ? SCHED_FIFO : SCHED_OTHER;
+  const int worker_value = realtime_loop ? std::max(kMinRealtimePriority, param.sched_priority - 1) : kWorkerNice;
   if (realtime_loop) {
-    sched_param normal{};
-    ::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &normal);  // (made by the control thread: inherited FIFO)
-    if (::setpriority(PRIO_PROCESS, tid, kRealtimeWorkerNice) == 0) {
-      worker_value = kRealtimeWorkerNice;
-    } else {
-      worker_policy = SCHED_FIFO;
-      worker_value = std::max(kMinRealtimePriority, param.sched_priority - 1);
-      SetThreadRealtime(worker_value);
-    }
+    SetThreadRealtime(worker_value);
   } else {
     ::setpriority(PRIO_PROCESS, tid, worker_value);
   }

@@ -18,13 +18,11 @@
 // waited for, so the frame of stamp t has the same bytes and goes out in the
 // same period whatever the load; in realtime runs the control thread never
 // waits: a frame not ready in time goes out at the first period end after it
-// is (counted late). A worker runs below the control thread: under a
-// SCHED_FIFO one (core_realtime.h) at normal policy and nice -20 (SCHED_FIFO
-// one priority below where that nice value is not permitted), at nice 10 under
-// a normal one; llvmpipe's rasterizer threads follow the worker. Not at
-// realtime priority by choice: rendering several cameras fills the cores, and
-// realtime workers spent the kernel's realtime budget (95 % of each second by
-// default) and got the control thread throttled with them.
+// is (counted late). A worker runs below the control thread: one priority
+// below a SCHED_FIFO one (core_realtime.h), at nice 10 under a normal one;
+// llvmpipe's rasterizer threads follow the worker. Rendering several cameras
+// at realtime priority can spend the kernel's realtime budget (95 % of each
+// second by default) and get the control thread throttled with it.
 // Rendering reads the state and never changes it; nothing is rendered while
 // nobody subscribes. Under `vlab run` (nothing served) the device is idle.
 // It serves itself (OwnTransport): its frames travel in chunks on its own
