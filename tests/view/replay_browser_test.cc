@@ -8,8 +8,9 @@
 //     time, the last one not after it: the clock and every body's pose equal
 //     poses.bin's frame exactly (float32 in both);
 //   - speed control: at speed s, n ticks of d ms move the replay's own frame
-//     timestamps by s * n * d / 1000 s, within one recording interval (1/30 s);
-//     measured at 0.5x, 1x and 5x;
+//     timestamps by s * n * d / 1000 s, within one recording interval (1/30 s),
+//     and the frame shown then is that recorded frame; measured at 0.5x, 1x
+//     and 5x;
 //   - the plot panel: plots.bin holds log.csv's time and pa10.q.S1 exactly,
 //     and its canvas shows the signal's colour.
 // Live panels (a served scenario with a webcam: `vlab view --scene --camera
@@ -186,6 +187,14 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
     const double expected = 0.5 + speed * ticks * 0.040;
     EXPECT_LE(t, expected + 1e-9) << "speed " << speed;
     EXPECT_GT(t, expected - 1 / kPoseRateHz - 1e-9) << "speed " << speed;
+    // and what is shown then is that recorded frame, pose for pose
+    std::size_t k = 0;
+    while (k + 1 < n && rec.times[k] < t) ++k;
+    ASSERT_EQ(rec.times[k], t) << "speed " << speed << ": t " << t << " is not a recorded frame's time";
+    const nlohmann::json pose = chromium.Evaluate("vlabView.pose(" + std::to_string(bodies - 1) + ")");
+    for (int v = 0; v < 7; ++v) {
+      EXPECT_EQ(pose[v].get<double>(), static_cast<double>(rec.poses[k][7 * (bodies - 1) + v])) << "speed " << speed;
+    }
     const double rate = (t - t0) / (ticks * 0.040);
     std::printf("speed %.1fx: %d ticks of 40 ms moved the replay from %.4f to %.4f s: %.3fx\n", speed, ticks, t0, t,
                 rate);
