@@ -17,8 +17,11 @@
 // --plot`, the scene device sending the signals): the camera panel's image decodes to the camera's size
 // and is not blank, and the plot canvas shows its signals' colours.
 // Both fail, never skip, without Chromium (tools/setup.sh installs it for tests).
+// With $VLAB_VIEW_PANELS_SCREENSHOT set, the live test also writes its page's
+// screenshot there (docs/view_panels.png is one).
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -252,6 +255,9 @@ TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
   EXPECT_GT(image["shown"].get<double>(), 1000.0) << "the panel is not on the page: " << image.dump();
   EXPECT_GT(ColourPixels(chromium, "plot", 0xff, 0x6b, 0x6b), 50) << "pa10.q.S1's line (#ff6b6b)";
   EXPECT_GT(ColourPixels(chromium, "plot", 0x4d, 0xab, 0xf7), 50) << "pa10.q.E1's line (#4dabf7)";
+  if (const char* out = std::getenv("VLAB_VIEW_PANELS_SCREENSHOT"); out && *out) {
+    std::ofstream(out, std::ios::binary) << chromium.Screenshot();  // docs/view_panels.png is one
+  }
   std::printf("live panels: %d camera pictures (frame %.0f), %d plot samples\n", s["cameraFrames"].get<int>(),
               s["cameraId"].get<double>(), s["plotSamples"].get<int>());
   view.Stop();
