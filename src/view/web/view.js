@@ -267,7 +267,9 @@
   function drawPlot() {
     var canvas = document.getElementById('plot'), g = canvas.getContext('2d'), w = canvas.width, h = canvas.height;
     var end = info.mode === 'replay' ? replayTime : (plot.times.length ? plot.times[plot.times.length - 1] : 0);
-    var start = end - kPlotWindow, lo = Infinity, hi = -Infinity, first = -1, last = -1, k, i;
+    // the last kPlotWindow seconds, or all there is when that is less
+    var start = Math.max(end - kPlotWindow, plot.times.length ? plot.times[0] : end);
+    var span = end - start > 1e-9 ? end - start : 1, lo = Infinity, hi = -Infinity, first = -1, last = -1, k, i;
     for (k = 0; k < plot.times.length; ++k) {
       if (plot.times[k] < start || plot.times[k] > end) continue;
       if (first < 0) first = k;
@@ -291,7 +293,7 @@
       g.lineWidth = 2;
       g.beginPath();
       for (k = first; k <= last; ++k) {
-        var x = left + (plot.times[k] - start) / kPlotWindow * (right - left);
+        var x = left + (plot.times[k] - start) / span * (right - left);
         var y = bottom - (plot.values[i][k] - lo) / (hi - lo) * (bottom - top);
         if (k === first) g.moveTo(x, y); else g.lineTo(x, y);
       }
