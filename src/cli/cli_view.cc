@@ -30,12 +30,19 @@ Subcommand AddViewCommand(CLI::App& app) {
   cmd->add_option("--model", o->model,
                   "MJCF scene for meshes, textures and cameras (--arm: required; --scene, --replay: default the "
                   "one the device or recording names)");
-  cmd->add_option("--rate", o->rate_hz, "--arm: frames per second (default 30)");
+  cmd->add_option("--rate", o->rate_hz, "--arm: pose frames and plot samples per second (default 30; --scene: the device's rate)");
+  cmd->add_option("--camera", o->camera,
+                  "Camera device, HOST:PORT: its pictures in a panel, newest first (JPEG relayed as sent, raw as PNG)");
+  cmd->add_option("--plot", o->plot,
+                  "Signals to plot, comma-separated log.csv column names (at most 8), e.g. pa10.q.S1,pa10.qd.S1: "
+                  "--scene: among the scene device's signals (its scenario entry's signals: [...]); --arm: the arm's "
+                  "ARM.q.JOINT, ARM.qd.JOINT, ARM.tau.JOINT; --replay: any column of the run's log.csv");
   cmd->add_option("--http", o->server.port, "TCP port of the page (default 8080; 0: any free port)");
   cmd->add_option("--bind", o->server.bind,
                   "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see README)");
   cmd->add_option("--max-connections", o->server.max_connections,
-                  "Connections served at once, HTTP and WebSocket (default 16; more are answered 503)");
+                  "Connections served at once, HTTP and WebSocket (poses, camera and plot panels) together (default 16; more "
+                  "are answered 503)");
   cmd->add_option("--web", o->web, "Folder of the page's files (default: view_web beside the vlab binary)");
   cmd->add_option("--connect-timeout", o->connect_timeout_s, "Wait this long for the device, s (default 10)");
   cmd->add_option("--duration", o->duration_s, "Stop after this many seconds (default: run until interrupted)");

@@ -120,6 +120,7 @@ void RunSession::Prepare() {
 
 void RunSession::EmitRow(double t) {
   s_.WriteRow(t, row_);
+  for (auto& dev : s_.devices) dev->LogRow(row_.data());
   if (log_) log_->Append(row_.data());
   checks_->Add(t, row_.data());
 }

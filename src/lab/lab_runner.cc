@@ -121,6 +121,7 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
     impl->controller_columns = impl->controller->Columns().size();
     for (auto& c : impl->controller->Columns()) impl->columns.push_back(c);
   }
+  for (Device* device : impl->device_ptrs) device->BindLog(impl->columns);
   return std::unique_ptr<Lab>(new Lab(std::move(impl)));
 }
 

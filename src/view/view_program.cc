@@ -5,17 +5,22 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
+#include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_scene.h"
 #include "view/view_model.h"
+#include "view/view_panels.h"
 
 namespace vlab::view {
 
@@ -68,6 +73,59 @@ double Now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// the WebSocket channels (ViewServerConfig::channels)
+constexpr int kPoseChannel = 0, kCameraChannel = 1, kPlotChannel = 2;
+
+// --arm's plots: the arm's states, decimated to `rate_hz`, on the plot channel
+class PlotFeed {
+ public:
+  PlotFeed(const bridge::Arm& arm, const std::vector<std::string>& signals, double rate_hz)
+      : signals_(arm.name(), arm.joint_names(), signals), interval_s_(1.0 / rate_hz) {}
+  // publishes the state if a sample is due; true if it did
+  bool Offer(const bridge::Arm::State& s, ViewServer* server) {
+    if (s.time + 1e-9 < next_) return false;
+    next_ = std::max(next_ + interval_s_, s.time);
+    server->Publish(EncodePlotMessage(s.time, static_cast<double>(s.seq), signals_.Values(s.q, s.qd, s.tau)),
+                    kPlotChannel);
+    return true;
+  }
+
+ private:
+  ArmSignals signals_;
+  double interval_s_;
+  double next_ = -1;
+};
+
+// a receiving loop on its own thread (the camera): it never blocks the pose
+// feed, and what it gets goes out newest first
+class Feeder {
+ public:
+  template <typename Step>
+  Feeder(volatile std::sig_atomic_t* stop, Step step)
+      : thread_([this, stop, step]() mutable {
+          while (!*stop && !quit_) {
+            try {
+              if (step()) ++count_;
+            } catch (const bridge::TimeoutError&) {
+            } catch (const std::exception&) {
+              ++errors_;  // a stray or malformed datagram: counted, the panel goes on
+              std::this_thread::sleep_for(std::chrono::milliseconds(10));
+            }
+          }
+        }) {}
+  ~Feeder() {
+    quit_ = true;
+    thread_.join();
+  }
+  long count() const { return count_; }
+  long errors() const { return errors_; }
+
+ private:
+  std::atomic<bool> quit_{false};
+  std::atomic<long> count_{0}, errors_{0};
+  std::thread thread_;
+};
+
 }  // namespace
 
 void SplitHostPort(const std::string& option, const std::string& text, std::string* host, int* port) {
@@ -91,6 +149,8 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   if (!(o.rate_hz > 0 && o.rate_hz <= 1000)) throw InputError("vlab view: --rate must be > 0 and <= 1000 Hz");
   if (o.server.port < 0 || o.server.port > 65535) throw InputError("vlab view: --http must be 0 to 65535");
   if (o.server.max_connections < 1) throw InputError("vlab view: --max-connections must be >= 1");
+  if (!o.replay.empty() && !o.camera.empty()) throw InputError("vlab view: --camera is for live views, not --replay");
+  const std::vector<std::string> plots = o.plot.empty() ? std::vector<std::string>() : ParsePlotSignals(o.plot);
   std::map<std::string, StaticFile> page = PageFiles(o.web.empty() ? DefaultWebDir() : o.web);
 
   // the source and what the page is told about the scene
@@ -99,7 +159,11 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   std::unique_ptr<ViewModel> model;
   nlohmann::json info;
   std::vector<int> bodies;
-  std::string recording, source;
+  std::string recording, source, plot_rows;
+  std::vector<int> scene_signals;  // --scene: where each plotted signal is in the scene device's state
+  std::size_t scene_pose_values = 0;
+  std::unique_ptr<bridge::CameraClient> camera;
+  std::unique_ptr<PlotFeed> plot_feed;
   if (!o.scene.empty()) {
     std::string host;
     int port = 0;
@@ -113,6 +177,23 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     else if (!o.quiet) std::printf("vlab view: no model '%s' here: drawing primitives only (give --model)\n", path.c_str());
     info["mode"] = "live";
     source = "scene device '" + scene_device->name() + "' at " + o.scene;
+    scene_pose_values = 7 * info["bodies"].size();
+    const std::vector<std::string> sent = d.value("signals", std::vector<std::string>());
+    if (static_cast<std::size_t>(scene_device->state_length()) != scene_pose_values + sent.size()) {
+      throw bridge::ProtocolError("vlab view: scene device '" + scene_device->name() + "': its layout has " +
+                                  std::to_string(scene_device->state_length()) + " values, not 7 per body and one per signal");
+    }
+    for (const std::string& p : plots) {
+      const auto at = std::find(sent.begin(), sent.end(), p);
+      if (at == sent.end()) {
+        std::string list;
+        for (const std::string& s : sent) list += (list.empty() ? "" : ", ") + s;
+        throw InputError("vlab view: --plot: scene device '" + scene_device->name() + "' does not send signal '" + p +
+                         "' (it sends: " + (list.empty() ? std::string("none") : list) +
+                         "; add it to the scenario's scene device: signals: [...])");
+      }
+      scene_signals.push_back(static_cast<int>(scene_pose_values + (at - sent.begin())));
+    }
   } else if (!o.arm.empty()) {
     std::string host;
     int port = 0;
@@ -120,6 +201,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     model = ViewModel::Load(o.model);
     arm = std::make_unique<bridge::Arm>(bridge::Arm::Connect(host, port, o.connect_timeout_s));
     model->BindJoints(arm->joint_names());
+    if (!plots.empty()) plot_feed = std::make_unique<PlotFeed>(*arm, plots, o.rate_hz);
     bodies = lab::SceneBodies(model->model());
     info = lab::SceneGeometry(model->model(), bodies);
     info["rate_hz"] = o.rate_hz;
@@ -138,13 +220,34 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     }
     const std::string path = o.model.empty() ? info.value("model", std::string()) : o.model;
     if (!o.model.empty() || (!path.empty() && fs::is_regular_file(path))) model = ViewModel::Load(path);
+    if (!plots.empty()) plot_rows = ReplayPlotRows((fs::path(o.replay) / "log.csv").string(), plots);
     info["mode"] = "replay";
     source = "replay of " + o.replay + " (" + std::to_string(recording.size() / frame) + " frames)";
+  }
+  if (!o.camera.empty()) {
+    std::string host;
+    int port = 0;
+    SplitHostPort("--camera", o.camera, &host, &port);
+    bridge::CameraClientOptions options;
+    options.timeout_s = o.connect_timeout_s;
+    options.decode = false;  // relayed as sent (raw frames: as PNG)
+    camera = std::make_unique<bridge::CameraClient>(bridge::CameraClient::Connect(host, port, options));
+    info["camera"] = {{"name", camera->name()}, {"width", camera->width()}, {"height", camera->height()},
+                      {"fps", camera->fps()}, {"address", o.camera}};
+    source += "; camera '" + camera->name() + "' at " + o.camera;
+  }
+  if (!plots.empty()) {
+    info["plots"] = plots;
+    info["plot_source"] = !o.replay.empty() ? std::string("log.csv")
+                          : arm                ? "arm '" + arm->name() + "'"
+                                               : "scene device '" + scene_device->name() + "'";
+    source += "; plotting " + o.plot;
   }
   info["cameras"] = model ? model->Cameras() : nlohmann::json::array();
   const std::string info_text = info.dump();
   const ViewModel* m = model.get();
-  auto resources = [m, info_text, &recording](const std::string& path, std::string* type, std::string* body) {
+  auto resources = [m, info_text, &recording, &plot_rows](const std::string& path, std::string* type,
+                                                         std::string* body) {
     if (path == "/scene.json") {
       *type = "application/json";
       *body = info_text;
@@ -155,30 +258,58 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
       *body = recording;
       return true;
     }
+    if (path == "/plots.bin" && !plot_rows.empty()) {
+      *type = "application/octet-stream";
+      *body = plot_rows;
+      return true;
+    }
     *type = path.compare(0, 5, "/tex/") == 0 ? "image/png" : "application/octet-stream";
     if (const int id = IdAfter(path, "/mesh/"); m && id >= 0) return m->MeshBytes(id, body);
     if (const int id = IdAfter(path, "/tex/"); m && id >= 0) return m->TexturePng(id, body);
     return false;
   };
-  std::unique_ptr<ViewServer> server = ViewServer::Create(o.server, std::move(page), resources);
+  ViewServerConfig server_config = o.server;
+  server_config.channels = {"/ws", "/camera", "/plot"};  // kPoseChannel, kCameraChannel, kPlotChannel
+  std::unique_ptr<ViewServer> server = ViewServer::Create(server_config, std::move(page), resources);
   std::printf("vlab view: http://%s:%d/ (%s; %zu bodies)\n", server->address().c_str(), server->port(),
               source.c_str(), info["bodies"].size());
   std::fflush(stdout);
 
+  // the panels' feeds, each on its own thread
+  std::unique_ptr<Feeder> camera_feed;
+  if (camera) {
+    bridge::CameraClient* c = camera.get();
+    ViewServer* v = server.get();
+    auto frame = std::make_shared<bridge::CameraClient::Frame>();
+    camera_feed = std::make_unique<Feeder>(stop, [c, v, frame] {
+      c->ReceiveLatest(0.2, frame.get());
+      v->Publish(EncodeCameraMessage(*frame), kCameraChannel);
+      return true;
+    });
+  }
+
   // feed the newest frame until stopped
   const double start = Now();
   double last_keepalive = start, next_arm_frame = -1;
-  long frames = 0, timeouts = 0;
+  long frames = 0, timeouts = 0, plot_samples = 0;
   std::vector<double> poses(7 * bodies.size());
   while (!*stop && (o.duration_s <= 0 || Now() - start < o.duration_s)) {
     try {
       if (scene_device) {
         const bridge::Device::State s = scene_device->ReadLatest(0.1);
-        server->Publish(EncodeFrame(s.time, static_cast<double>(s.seq), s.values.data(), static_cast<int>(s.values.size())));
+        server->Publish(
+            EncodeFrame(s.time, static_cast<double>(s.seq), s.values.data(), static_cast<int>(scene_pose_values)));
+        if (!scene_signals.empty()) {
+          std::vector<double> values;
+          for (int i : scene_signals) values.push_back(s.values[i]);
+          server->Publish(EncodePlotMessage(s.time, static_cast<double>(s.seq), values), kPlotChannel);
+          ++plot_samples;
+        }
         ++frames;
       } else if (arm) {
         const bridge::Arm::State s = arm->ReadLatest(0.1);
         if (s.time + 1e-9 < next_arm_frame) continue;
+        if (plot_feed && plot_feed->Offer(s, server.get())) ++plot_samples;
         next_arm_frame = std::max(next_arm_frame + 1.0 / o.rate_hz, s.time);
         model->ArmPoses(std::vector<double>(s.q.data(), s.q.data() + s.q.size()), bodies, poses.data());
         server->Publish(EncodeFrame(s.time, static_cast<double>(s.seq), poses.data(), static_cast<int>(poses.size())));
@@ -195,6 +326,14 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
       last_keepalive = Now();
     }
   }
+  const long camera_frames = camera_feed ? camera_feed->count() : 0, camera_errors = camera_feed ? camera_feed->errors() : 0;
+  camera_feed.reset();  // joins: nothing publishes from here on
+  if (camera && !o.quiet) {
+    std::printf("vlab view: camera: %ld frames relayed, %ld receive errors, %ld incomplete frames dropped, %ld chunks "
+                "refused\n",
+                camera_frames, camera_errors, camera->counters().frames_dropped, camera->counters().refused);
+  }
+  if (!plots.empty() && o.replay.empty() && !o.quiet) std::printf("vlab view: plots: %ld samples sent\n", plot_samples);
   const ViewServerCounters c = server->counters();
   std::printf(
       "vlab view: %ld frames in, %ld sent, %ld skipped by slow clients; %ld requests (%ld errors), %ld connections "

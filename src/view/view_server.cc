@@ -2,9 +2,11 @@
 // answer from the in-memory table, and WebSocket sessions fed by a poll timer.
 #include "view/view_server.h"
 
+#include <algorithm>
 #include <chrono>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 
 #include <boost/asio.hpp>
@@ -33,19 +35,22 @@ struct ViewServer::Impl {
   std::string address;
   int port = 0;
 
-  // the newest frame, swapped under the lock; version counts frames published
+  // per channel, the newest message, swapped under the lock; version counts messages published
+  struct Slot {
+    std::shared_ptr<const std::string> frame;
+    std::uint64_t version = 0;
+  };
   mutable std::mutex frame_mutex;
-  std::shared_ptr<const std::string> frame;
-  std::uint64_t version = 0;
+  std::vector<Slot> slots;
 
   std::atomic<int> connections{0}, ws_clients{0};
   std::atomic<long> requests{0}, errors{0}, refused{0}, ws_sessions{0}, frames_sent{0}, frames_skipped{0},
       ws_closed_bad{0};
 
-  std::shared_ptr<const std::string> Newest(std::uint64_t* v) const {
+  std::shared_ptr<const std::string> Newest(int channel, std::uint64_t* v) const {
     std::lock_guard<std::mutex> lock(frame_mutex);
-    *v = version;
-    return frame;
+    *v = slots[channel].version;
+    return slots[channel].frame;
   }
   void Accept();
 };
@@ -64,8 +69,8 @@ struct ConnectionSlot {
 // ---- WebSocket: the newest frame to one client, what it sends dropped
 class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(Impl& server, tcp::socket socket)
-      : server_(server), slot_(server), ws_(std::move(socket)), timer_(ws_.get_executor()) {}
+  WsSession(Impl& server, tcp::socket socket, int channel)
+      : server_(server), slot_(server), ws_(std::move(socket)), timer_(ws_.get_executor()), channel_(channel) {}
 
   void Start(http::request<http::string_body> request) {
     ws_.read_message_max(server_.config.max_ws_message_bytes);
@@ -103,7 +108,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (done_) return;
     if (!writing_) {
       std::uint64_t version = 0;
-      std::shared_ptr<const std::string> frame = server_.Newest(&version);
+      std::shared_ptr<const std::string> frame = server_.Newest(channel_, &version);
       if (frame && version != sent_) {
         if (sent_ != 0 && version > sent_ + 1) server_.frames_skipped += static_cast<long>(version - sent_ - 1);
         sent_ = version;
@@ -131,6 +136,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   websocket::stream<beast::tcp_stream> ws_;
   asio::steady_timer timer_;
   beast::flat_buffer in_;
+  int channel_;
   std::uint64_t sent_ = 0;
   bool writing_ = false, done_ = false, counted_ = false;
 };
@@ -177,10 +183,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     const std::string target(request.target());
     const std::string path = target.substr(0, target.find('?'));
     if (websocket::is_upgrade(request)) {
-      if (path != "/ws") return Reply(http::status::not_found, "", "", false, version);
+      const auto& channels = server_.config.channels;
+      const auto channel = std::find(channels.begin(), channels.end(), path);
+      if (channel == channels.end()) return Reply(http::status::not_found, "", "", false, version);
       ++server_.requests;
       stream_.expires_never();
-      std::make_shared<WsSession>(server_, stream_.release_socket())->Start(std::move(request));
+      std::make_shared<WsSession>(server_, stream_.release_socket(), static_cast<int>(channel - channels.begin()))
+          ->Start(std::move(request));
       return;
     }
     const bool keep = request.keep_alive();
@@ -254,6 +263,8 @@ std::unique_ptr<ViewServer> ViewServer::Create(const ViewServerConfig& config, s
   impl->config = config;
   impl->files = std::move(files);
   impl->resources = std::move(resources);
+  if (config.channels.empty()) throw InputError("vlab view: a server needs at least one WebSocket channel");
+  impl->slots.resize(config.channels.size());
   const std::string where = config.bind + ":" + std::to_string(config.port);
   try {
     const tcp::endpoint endpoint(asio::ip::make_address(config.bind), static_cast<unsigned short>(config.port));
@@ -281,11 +292,14 @@ ViewServer::~ViewServer() {
   impl_->io.reset();
 }
 
-void ViewServer::Publish(std::string frame) {
+void ViewServer::Publish(std::string frame, int channel) {
+  if (channel < 0 || channel >= static_cast<int>(impl_->slots.size())) {
+    throw std::invalid_argument("vlab view: no WebSocket channel " + std::to_string(channel));
+  }
   auto shared = std::make_shared<const std::string>(std::move(frame));
   std::lock_guard<std::mutex> lock(impl_->frame_mutex);
-  impl_->frame = std::move(shared);
-  ++impl_->version;
+  impl_->slots[channel].frame = std::move(shared);
+  ++impl_->slots[channel].version;
 }
 
 int ViewServer::port() const { return impl_->port; }

@@ -4,10 +4,12 @@
 //
 // Ports
 //   input   HTTP/1.1 GET and HEAD requests on one TCP port (bind address:
-//           loopback unless told otherwise); a WebSocket upgrade on /ws
+//           loopback unless told otherwise); a WebSocket upgrade on one of
+//           the channels' paths (/ws: poses; the view adds /camera, /plot)
 //   output  the page's files (a fixed table: no request names a file on
 //           disk), generated resources (Resources callback), and binary
-//           WebSocket messages: the newest frame Publish() was given
+//           WebSocket messages: on each channel, the newest message
+//           Publish() was given for it
 //   rate    a client gets a frame when one newer than its last is there and
 //           its previous write has completed: a slow client skips frames, and
 //           nothing ever waits on a client (Publish only swaps a pointer)
@@ -26,6 +28,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace vlab::view {
 
@@ -47,6 +50,9 @@ struct ViewServerConfig {
   std::size_t max_ws_message_bytes = 1024;  ///< a client's WebSocket message
   double idle_timeout_s = 30;               ///< an HTTP connection silent this long is closed
   double frame_poll_s = 0.005;              ///< how often a WebSocket session looks for a newer frame
+  /// WebSocket paths, one channel each (index = Publish's channel); an
+  /// upgrade on any other path is answered 404
+  std::vector<std::string> channels = {"/ws"};
 };
 
 struct ViewServerCounters {
@@ -54,7 +60,7 @@ struct ViewServerCounters {
   long errors = 0;          ///< answered with a 4xx or 5xx status
   long refused = 0;         ///< connections refused: too many
   long ws_sessions = 0;     ///< WebSocket sessions opened
-  long frames_sent = 0;     ///< WebSocket messages sent
+  long frames_sent = 0;     ///< WebSocket messages sent (all channels)
   long frames_skipped = 0;  ///< frames a client did not get because a newer one came first
   long ws_closed_bad = 0;   ///< WebSocket sessions closed for a bad or oversized message
 };
@@ -70,8 +76,10 @@ class ViewServer {
   ViewServer(const ViewServer&) = delete;
   ViewServer& operator=(const ViewServer&) = delete;
 
-  /// Makes `frame` the newest frame (a binary WebSocket message).
-  void Publish(std::string frame);
+  /// Makes `frame` the newest message of channel `channel` (an index into
+  /// config.channels; 0: the poses): a binary WebSocket message to every
+  /// client of that channel's path.
+  void Publish(std::string frame, int channel = 0);
   int port() const;
   const std::string& address() const;
   ViewServerCounters counters() const;

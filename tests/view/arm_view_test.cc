@@ -7,7 +7,10 @@
 //     mj_kinematics gives here for the arm's joint angles (read from the arm
 //     device itself);
 //   - frames are 1 / 20 s apart in the arm's time, up to one of its periods
-//     (100 Hz: a frame is the first state at or after its time).
+//     (100 Hz: a frame is the first state at or after its time);
+//   - with --plot ARM.q.S1,ARM.q.E1, the /plot channel's samples carry the
+//     arm's joint angles as the device sends them (float64, exactly), at the
+//     same rate.
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -40,14 +43,14 @@ TEST(ArmViewTest, PosesFromAnArmDevicesJointStatesByKinematics) {
   const int arm_port = PortOf(kinsim.start_line(), " on 127.0.0.1");
   ASSERT_GT(arm_port, 0) << kinsim.start_line();
   const std::string arm = "127.0.0.1:" + std::to_string(arm_port);
-  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--arm", arm, "--model", "scenes/pa10.xml", "--rate", "20",
-                    "--http", "0", "-q"});
-  const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
-  ASSERT_GT(http_port, 0) << view.start_line() << view.output();
-
   // the arm's joint angles, from the device
   bridge::Arm client = bridge::Arm::Connect("127.0.0.1", arm_port, 5.0);
   const bridge::Arm::State state = client.Read(5.0);
+  const std::string plots = client.name() + ".q.S1," + client.name() + ".q.E1";
+  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--arm", arm, "--model", "scenes/pa10.xml", "--rate", "20",
+                    "--plot", plots, "--http", "0", "-q"});
+  const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
+  ASSERT_GT(http_port, 0) << view.start_line() << view.output();
   // the bodies' poses by kinematics, here
   char error[1000] = "";
   mjModel* m = mj_loadXML(VLAB_SOURCE_DIR "/scenes/pa10.xml", nullptr, error, sizeof(error));
@@ -86,6 +89,27 @@ TEST(ArmViewTest, PosesFromAnArmDevicesJointStatesByKinematics) {
   for (std::size_t k = 2; k < times.size(); ++k) {  // the first may be a newest-wins leftover
     EXPECT_GE(times[k] - times[k - 1], 0.05 - 1e-9);
     EXPECT_LE(times[k] - times[k - 1], 0.05 + 0.01 + 1e-9);
+  }
+
+  // the plot channel: S1 and E1 as the arm sends them
+  boost::beast::websocket::stream<asio::ip::tcp::socket> plot(io);
+  plot.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(http_port)});
+  plot.handshake("127.0.0.1", "/plot");
+  std::vector<double> plot_times;
+  for (int k = 0; k < 5; ++k) {
+    boost::beast::flat_buffer b;
+    plot.read(b);
+    const std::string p = boost::beast::buffers_to_string(b.data());
+    ASSERT_EQ(p.size(), 32u);
+    double v[4];
+    std::memcpy(v, p.data(), 32);
+    plot_times.push_back(v[0]);
+    EXPECT_EQ(v[2], state.q[0]) << "S1";
+    EXPECT_EQ(v[3], state.q[3]) << "E1";
+  }
+  for (std::size_t k = 2; k < plot_times.size(); ++k) {
+    EXPECT_GE(plot_times[k] - plot_times[k - 1], 0.05 - 1e-9);
+    EXPECT_LE(plot_times[k] - plot_times[k - 1], 0.05 + 0.01 + 1e-9);
   }
   view.Stop();
   kinsim.Stop();

@@ -4,7 +4,9 @@
 // connections and WebSocket messages, answers malformed requests with an
 // HTTP error and malformed WebSocket frames by closing that session, and
 // keeps serving afterwards; a WebSocket client gets the newest frame, not a
-// queue of old ones.
+// queue of old ones. The panels' channels (/camera, /plot) are each their own
+// newest-wins slot, and their clients count toward the same connection and
+// message bounds.
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -31,10 +33,11 @@ using tcp = asio::ip::tcp;
 
 constexpr const char* kPage = "<html>vlab view test page</html>";
 
-std::unique_ptr<ViewServer> Start(int max_connections = 16) {
+std::unique_ptr<ViewServer> Start(int max_connections = 16, std::vector<std::string> channels = {"/ws"}) {
   ViewServerConfig config;
   config.port = 0;
   config.max_connections = max_connections;
+  config.channels = std::move(channels);
   config.idle_timeout_s = 5;
   std::map<std::string, StaticFile> files{{"/index.html", {"text/html", kPage}}, {"/view.js", {"text/javascript", "//"}}};
   auto resources = [](const std::string& path, std::string* type, std::string* body) {
@@ -160,11 +163,11 @@ TEST(ViewServerTest, ConnectionsAreBounded) {
   EXPECT_EQ(Status(r), 200);
 }
 
-// a WebSocket client of /ws
+// a WebSocket client of /ws (or another channel)
 struct WsClient {
-  explicit WsClient(int port) : ws(io) {
+  explicit WsClient(int port, const std::string& path = "/ws") : ws(io) {
     ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-    ws.handshake("127.0.0.1", "/ws");
+    ws.handshake("127.0.0.1", path);
     ws.binary(true);
   }
   std::string Read() {
@@ -219,6 +222,41 @@ TEST(ViewServerTest, WebSocketGetsTheNewestFrameAndSurvivesBadFrames) {
   server->Publish("frame 54");
   WsClient after(port);
   EXPECT_EQ(after.Read(), "frame 54");
+}
+
+TEST(ViewServerTest, PanelChannelsAreSeparateAndShareTheBounds) {
+  auto server = Start(3, {"/ws", "/camera", "/plot"});
+  const int port = server->port();
+  server->Publish("pose 1");
+  server->Publish("picture 1", 1);
+  server->Publish("picture 2", 1);  // newest wins on each channel alone
+  server->Publish("sample 1", 2);
+  EXPECT_THROW(server->Publish("nowhere", 3), std::invalid_argument);
+  WsClient poses(port), camera(port, "/camera"), plot(port, "/plot");
+  EXPECT_EQ(poses.Read(), "pose 1");
+  EXPECT_EQ(camera.Read(), "picture 2");
+  EXPECT_EQ(plot.Read(), "sample 1");
+  server->Publish("sample 2", 2);
+  EXPECT_EQ(plot.Read(), "sample 2");
+  // three WebSocket clients fill the three connections: a fourth is refused
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(Status(Get(port, "/")), 503);
+  EXPECT_THROW(WsClient(port, "/plot"), boost::system::system_error);
+  // an oversized message on a panel's channel closes that session, as on /ws
+  beast::flat_buffer b;
+  beast::error_code ec;
+  camera.ws.write(asio::buffer(std::string(5000, 'x')), ec);
+  ec = {};
+  server->Publish("picture 3", 1);
+  for (int i = 0; i < 3 && !ec; ++i) camera.ws.read(b, ec);
+  EXPECT_TRUE(ec) << "the camera session should have been closed";
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_GE(server->counters().ws_closed_bad, 1);
+  // its slot is free again; a path that is no channel is 404
+  std::string r = Raw(port).Send("GET /other HTTP/1.1\r\nHost: x\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n"
+                                 "Sec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n")
+                      .ReadAll(1);
+  EXPECT_EQ(Status(r), 404) << r;
 }
 
 }  // namespace

@@ -132,6 +132,13 @@ class Device {
 
   // ---- the log
   /// Log columns, prefixed "NAME.".
+  /// The log's columns ("time" first), once the lab has them all (a scene
+  /// stream's `signals` resolve here); throws InputError naming a column it
+  /// lacks.
+  virtual void BindLog(const std::vector<std::string>& columns) { (void)columns; }
+  /// Each log row as the lab writes it (columns as BindLog's), after Sample
+  /// and before the period's states are published.
+  virtual void LogRow(const double* row) { (void)row; }
   virtual std::vector<std::string> Columns() const { return {}; }
   virtual int ColumnCount() const { return 0; }
   /// ColumnCount() values of the last Sample().

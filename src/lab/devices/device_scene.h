@@ -17,7 +17,10 @@ namespace vlab::lab {
 /// A scene stream's keys.
 struct SceneParams : DeviceParams {
   double rate_hz = 30.0;  ///< pose frames per second (at most the control rate)
+  std::vector<std::string> signals;  ///< log columns sent after the poses (live plots), at most kMaxSceneSignals
 };
+
+inline constexpr int kMaxSceneSignals = 16;
 
 /// The bodies a scene stream carries, in stream order: every body except the
 /// world that has a visible geom (group 0-2, alpha > 0), in body-id order.
@@ -36,7 +39,7 @@ nlohmann::json SceneGeometry(const mjModel* m, const std::vector<int>& bodies);
 /// from mjData's xpos and xquat into out[0 .. 7 * bodies.size()).
 void ScenePoses(const mjData& d, const std::vector<int>& bodies, double* out);
 
-/// Reads a scene entry's keys (rate).
+/// Reads a scene entry's keys (rate, signals).
 std::shared_ptr<const DeviceParams> ReadSceneParams(MapReader& r);
 /// Makes the scene stream; throws InputError naming the device when the rate
 /// is faster than the control rate or the scene has too many bodies for a datagram.

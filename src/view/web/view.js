@@ -2,18 +2,29 @@
 // moves them with the pose frames of the WebSocket /ws (live) or of
 // recording.bin (replay). A frame: float64 time, float64 seq, then float32
 // x, y, z, qw, qx, qy, qz per body (little-endian). Read-only: it sends nothing.
+// Panels, when scene.json names them: a camera device's pictures (WebSocket
+// /camera: float64 time, float64 frame id, uint32 width, uint32 height, then
+// a JPEG or PNG file) and plots of a few signals (live: WebSocket /plot,
+// float64 time, float64 seq, float64 per signal; replay: plots.bin, rows of
+// float64 time and one float64 per signal). Newest wins everywhere.
 // URL options: camera=NAME (an MJCF world camera's pose and field of view),
 // silhouette (bodies white, world geoms black, no lights: for tests),
-// bare (no overlay).
+// bare (no overlay), clock=manual (a replay advances only by vlabView.tick(ms):
+// for tests).
 (function () {
   'use strict';
   var params = new URLSearchParams(window.location.search);
   var silhouette = params.has('silhouette');
   if (silhouette || params.has('bare')) document.body.className = 'bare';
   // for tests and for the curious: what has been drawn
-  var state = window.vlabView = { ready: false, frames: 0, time: 0, seq: -1, paused: false, error: '' };
+  var state = window.vlabView = { ready: false, frames: 0, time: 0, seq: -1, paused: false, error: '',
+                                  replayTime: 0, cameraFrames: 0, cameraId: -1, cameraTime: 0, plotSamples: 0,
+                                  plotLast: null, plotDrawn: 0 };
   var renderer, scene, camera, controls, groups = [], latest = null, info = null;
-  var recording = null, replayTime = 0, lastWall = 0;
+  var recording = null, replayTime = 0, lastWall = 0, manualClock = params.get('clock') === 'manual';
+  var plot = null;  // { names, times: [], values: [[]...], dirty }
+  var kPlotWindow = 10;  // s of signal shown
+  var kPlotColours = ['#ff6b6b', '#4dabf7', '#69db7c', '#ffd43b', '#da77f2', '#ffa94d', '#3bc9db', '#f8f9fa'];
 
   function setStatus(text) { document.getElementById('status').textContent = text; }
   function fail(text) { state.error = text; setStatus(text); }
@@ -75,7 +86,14 @@
     });
     document.getElementById('pause').onclick = togglePause;
     window.addEventListener('keydown', function (e) { if (e.code === 'Space') togglePause(); });
-    if (info.mode === 'replay') startReplay(); else connect();
+    if (info.camera) startCamera();
+    if (info.plots && info.plots.length) startPlots();
+    if (info.mode === 'replay') startReplay(); else connect('/ws', function (data) { latest = data; });  // the newest wins
+    state.tick = tick;
+    state.pose = function (i) {
+      var g = groups[i];
+      return [g.position.x, g.position.y, g.position.z, g.quaternion.w, g.quaternion.x, g.quaternion.y, g.quaternion.z];
+    };
     state.ready = true;
     requestAnimationFrame(animate);
   }
@@ -166,12 +184,123 @@
     }).catch(function (e) { fail('error: ' + e.message); });
   }
 
-  function connect() {
-    var ws = new WebSocket((window.location.protocol === 'https:' ? 'wss://' : 'ws://') + window.location.host + '/ws');
+  function connect(path, onData) {
+    var ws = new WebSocket((window.location.protocol === 'https:' ? 'wss://' : 'ws://') + window.location.host + path);
     ws.binaryType = 'arraybuffer';
     ws.onopen = function () { setStatus(''); };
-    ws.onmessage = function (event) { latest = event.data; };  // the newest wins
-    ws.onclose = function () { setStatus('disconnected, retrying'); setTimeout(connect, 1000); };
+    ws.onmessage = function (event) { onData(event.data); };
+    ws.onclose = function () {
+      setStatus('disconnected, retrying');
+      setTimeout(function () { connect(path, onData); }, 1000);
+    };
+  }
+
+  // ---- the camera panel: one picture decoding at a time, the newest waiting
+  function startCamera() {
+    var img = document.getElementById('camera'), pending = null, busy = false, url = null;
+    document.getElementById('camera-panel').style.display = 'block';
+    document.getElementById('camera-caption').textContent = 'camera ' + info.camera.name;
+    function show(data) {
+      var head = new DataView(data, 0, 24), bytes = new Uint8Array(data, 24);
+      var jpeg = bytes.length > 1 && bytes[0] === 0xff && bytes[1] === 0xd8;
+      busy = true;
+      var next = URL.createObjectURL(new Blob([bytes], { type: jpeg ? 'image/jpeg' : 'image/png' }));
+      img.onload = function () {
+        if (url) URL.revokeObjectURL(url);
+        url = next;
+        state.cameraId = head.getFloat64(8, true);
+        state.cameraTime = head.getFloat64(0, true);
+        ++state.cameraFrames;
+        document.getElementById('camera-caption').textContent = 'camera ' + info.camera.name + ', frame ' +
+            state.cameraId + ', t = ' + state.cameraTime.toFixed(3) + ' s';
+        busy = false;
+        if (pending) { var p = pending; pending = null; show(p); }
+      };
+      img.onerror = function () { URL.revokeObjectURL(next); busy = false; fail('camera: a picture did not decode'); };
+      img.src = next;
+    }
+    connect('/camera', function (data) {
+      if (state.paused || data.byteLength <= 24) return;
+      if (busy) pending = data; else show(data);
+    });
+  }
+
+  // ---- the plot panel: the last kPlotWindow seconds of each signal
+  function startPlots() {
+    document.getElementById('plot-panel').style.display = 'block';
+    var n = info.plots.length;
+    plot = { names: info.plots, times: [], values: info.plots.map(function () { return []; }), dirty: true };
+    if (info.mode === 'replay') {
+      fetch('plots.bin').then(function (r) {
+        if (!r.ok) throw new Error('plots.bin: HTTP ' + r.status);
+        return r.arrayBuffer();
+      }).then(function (buffer) {
+        var v = new Float64Array(buffer), rows = v.length / (n + 1);
+        for (var k = 0; k < rows; ++k) {
+          plot.times.push(v[k * (n + 1)]);
+          for (var i = 0; i < n; ++i) plot.values[i].push(v[k * (n + 1) + 1 + i]);
+        }
+        state.plotSamples = rows;
+        plot.dirty = true;
+      }).catch(function (e) { fail('error: ' + e.message); });
+      return;
+    }
+    connect('/plot', function (data) {
+      if (state.paused || data.byteLength !== 8 * (n + 2)) return;
+      var v = new Float64Array(data);
+      if (plot.times.length && v[0] <= plot.times[plot.times.length - 1]) {  // the lab restarted: start afresh
+        if (v[0] < plot.times[plot.times.length - 1]) { plot.times = []; plot.values = plot.values.map(function () { return []; }); }
+        else return;
+      }
+      plot.times.push(v[0]);
+      for (var i = 0; i < n; ++i) plot.values[i].push(v[2 + i]);
+      while (plot.times.length > 1 && plot.times[0] < v[0] - kPlotWindow) {
+        plot.times.shift();
+        plot.values.forEach(function (a) { a.shift(); });
+      }
+      state.plotLast = Array.prototype.slice.call(v);
+      ++state.plotSamples;
+      plot.dirty = true;
+    });
+  }
+
+  function drawPlot() {
+    var canvas = document.getElementById('plot'), g = canvas.getContext('2d'), w = canvas.width, h = canvas.height;
+    var end = info.mode === 'replay' ? replayTime : (plot.times.length ? plot.times[plot.times.length - 1] : 0);
+    // the last kPlotWindow seconds, or all there is when that is less
+    var start = Math.max(end - kPlotWindow, plot.times.length ? plot.times[0] : end);
+    var span = end - start > 1e-9 ? end - start : 1, lo = Infinity, hi = -Infinity, first = -1, last = -1, k, i;
+    for (k = 0; k < plot.times.length; ++k) {
+      if (plot.times[k] < start || plot.times[k] > end) continue;
+      if (first < 0) first = k;
+      last = k;
+      for (i = 0; i < plot.names.length; ++i) { lo = Math.min(lo, plot.values[i][k]); hi = Math.max(hi, plot.values[i][k]); }
+    }
+    g.fillStyle = '#1b1f24';
+    g.fillRect(0, 0, w, h);
+    var left = 56, top = 18, bottom = h - 18, right = w - 8;
+    g.strokeStyle = '#555';
+    g.strokeRect(left, top, right - left, bottom - top);
+    g.font = '11px sans-serif';
+    g.fillStyle = '#ccc';
+    g.fillText('t = ' + start.toFixed(1) + ' .. ' + end.toFixed(1) + ' s', left, h - 4);
+    if (first < 0) return;
+    if (hi - lo < 1e-9) { hi += 0.5; lo -= 0.5; }
+    g.fillText(hi.toPrecision(3), 2, top + 8);
+    g.fillText(lo.toPrecision(3), 2, bottom);
+    for (i = 0; i < plot.names.length; ++i) {
+      g.strokeStyle = g.fillStyle = kPlotColours[i % kPlotColours.length];
+      g.lineWidth = 2;
+      g.beginPath();
+      for (k = first; k <= last; ++k) {
+        var x = left + (plot.times[k] - start) / span * (right - left);
+        var y = bottom - (plot.values[i][k] - lo) / (hi - lo) * (bottom - top);
+        if (k === first) g.moveTo(x, y); else g.lineTo(x, y);
+      }
+      g.stroke();
+      g.fillText(plot.names[i], left + 4 + i * (right - left) / plot.names.length, 12);
+    }
+    ++state.plotDrawn;
   }
 
   function apply(buffer, offset) {
@@ -205,6 +334,7 @@
       replayTime = times[0];
       slider.oninput = function () { replayTime = parseFloat(slider.value); showReplay(); };
       showReplay();
+      state.replayFrames = count;
     }).catch(function (e) { fail('error: ' + e.message); });
   }
 
@@ -213,18 +343,30 @@
     while (lo < hi) { var mid = (lo + hi + 1) >> 1; if (t[mid] <= replayTime) lo = mid; else hi = mid - 1; }
     apply(recording.buffer, lo * recording.size);
     document.getElementById('slider').value = replayTime;
+    state.replayTime = replayTime;
+    if (plot) plot.dirty = true;
+  }
+
+  // the replay goes on by `ms` of the page's clock times the speed chosen
+  function advance(ms) {
+    var speed = parseFloat(document.getElementById('speed').value);
+    replayTime += speed * ms / 1000;
+    var end = recording.times[recording.times.length - 1];
+    if (replayTime > end) replayTime = recording.times[0];  // loop
+    showReplay();
+  }
+
+  // clock=manual: the test's clock
+  function tick(ms) {
+    if (recording && !state.paused) advance(ms);
+    return state.time;
   }
 
   function animate(wall) {
     requestAnimationFrame(animate);
-    if (recording && !state.paused) {
-      var speed = parseFloat(document.getElementById('speed').value);
-      if (lastWall) replayTime += speed * (wall - lastWall) / 1000;
-      var end = recording.times[recording.times.length - 1];
-      if (replayTime > end) replayTime = recording.times[0];  // loop
-      showReplay();
-    }
+    if (recording && !state.paused && !manualClock && lastWall) advance(wall - lastWall);
     lastWall = wall;
+    if (plot && plot.dirty && !state.paused) { plot.dirty = false; drawPlot(); }
     if (latest && !state.paused) {
       apply(latest, 0);
       latest = null;
