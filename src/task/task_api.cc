@@ -40,12 +40,13 @@ function wait(a, timeout)
   error("wait: expected seconds or a condition function, got " .. type(a), 2)
 end
 local function await() while moving() do yield() end return outcome() end
+local function settle() while moving(true) do yield() end end  -- a blended move's end: at rest
 local mj, ml, mc, sm = _movej, _movel, _movec, _selfmove
 _movej, _movel, _movec, _selfmove = nil, nil, nil, nil
-function movej(target, options) mj(target, options) return await() end
+function movej(target, options) settle() mj(target, options) return await() end
 function movel(target, options) ml(target, options) return await() end
-function movec(via, target, options) mc(via, target, options) return await() end
-function selfmove(options) sm(options) return await() end
+function movec(via, target, options) settle() mc(via, target, options) return await() end
+function selfmove(options) settle() sm(options) return await() end
 local raise = _signal
 _signal = nil
 function signal(name) raise(name) end
@@ -167,6 +168,12 @@ void Start(Robot& r, Plan&& plan) {
   r.moving = !r.plan.q.empty();
   r.outcome = "done";
   r.guard = nullptr;
+  r.blend_at = -1;
+}
+
+// whether the running move was left for a blend: its entry sample has been handed out
+bool BlendReady(const Robot& r) {
+  return r.moving && r.blend_at >= 0 && static_cast<long>(r.next) - 1 >= r.blend_at;
 }
 
 // the guard option of a move: force = N (and wrench = NAME)
@@ -234,12 +241,54 @@ int MoveJ(lua_State* L) {
 
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
   CheckOptions(L, 2, "movel", known);
   const Frame goal = ToWorld(r, CheckFrame(L, 1, "movel"));
   const MotionLimits limits = MoveLimits(L, r, 2, "movel");
   const double t = Option(L, 2, "t", 0, "movel");
-  PlanOrFail(L, r, "movel", [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
+  const double radius = Option(L, 2, "r", r.blend_setting_m, "movel");
+  if (radius < 0) ScriptError(L, "movel: the blend radius r must be >= 0 m, got %g", radius);
+  if (radius > 0 && Option(L, 2, "force", 0, "movel") > 0) {
+    ScriptError(L, "movel: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
+  }
+  if (BlendReady(r)) {
+    // entered from the previous move's blend: its radius must fit in this segment too
+    const double seg = (goal.p - r.blend_corner_W).norm();
+    if (r.blend_radius_m > seg / 2 + 1e-12) {
+      ScriptError(L, "movel: the blend radius r = %g m of the move before is larger than half of this move "
+                     "(%g m from the corner): at most %g m",
+                  r.blend_radius_m, seg, seg / 2);
+    }
+    if (t > 0) ScriptError(L, "movel: a move entered from a blend takes its speed (v), not a duration (t)");
+    BlendStart b;
+    b.q = r.q_ref;
+    b.entry = r.plan.tool_W[r.next - 1];
+    b.corner = r.blend_corner_W;
+    b.speed_mps = r.plan.speed_mps[r.next - 1];
+    PlanOrFail(L, r, "movel", [&] { return r.planner->FromBlend(b, goal, limits); });
+    r.segment_m = seg;
+  } else {
+    const double seg = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
+    PlanOrFail(L, r, "movel", [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
+    r.segment_m = seg;
+  }
+  if (radius > 0) {
+    if (radius > r.segment_m / 2 + 1e-12) {
+      r.moving = false;  // (not one sample of it was sent)
+      r.plan = Plan();
+      ScriptError(L, "movel: the blend radius r = %g m is larger than half of this move (%g m): at most %g m", radius,
+                  r.segment_m, r.segment_m / 2);
+    }
+    // left at the first sample within the radius of the target (not the last: that one is at rest)
+    for (std::size_t i = 0; i + 1 < r.plan.tool_W.size(); ++i) {
+      if ((r.plan.tool_W[i].p - goal.p).norm() <= radius) {
+        r.blend_at = static_cast<long>(i);
+        break;
+      }
+    }
+    r.blend_radius_m = radius;
+    r.blend_corner_W = goal.p;
+  }
   SetGuard(L, r, 2, "movel");
   return 0;
 }
@@ -277,8 +326,10 @@ int SelfMove(lua_State* L) {
   return 0;
 }
 
-int Moving(lua_State* L) {
-  lua_pushboolean(L, P(L)->robot && P(L)->robot->moving);
+int Moving(lua_State* L) {  // moving(): until done or left for a blend; moving(true): until at rest
+  const Robot* r = P(L)->robot.get();
+  const bool raw = lua_toboolean(L, 1);
+  lua_pushboolean(L, r && r->moving && (raw || !BlendReady(*r)));
   return 1;
 }
 int Outcome(lua_State* L) {
@@ -351,6 +402,13 @@ int SetJointSpeed(lua_State* L) {
 int SetTool(lua_State* L) {
   Robot& r = NeedRobot(L, "tool");
   r.planner->set_tool(CheckFrame(L, 1, "tool"));
+  return 0;
+}
+int SetBlend(lua_State* L) {
+  Robot& r = NeedRobot(L, "blend");
+  const double v = Number(L, 1, "blend");
+  if (v < 0) ScriptError(L, "blend: the radius must be >= 0 m (0: every move stops at its target)");
+  r.blend_setting_m = v;
   return 0;
 }
 int SetBase(lua_State* L) {
@@ -682,7 +740,7 @@ void OpenApi(Program* p) {
       {"_signal", Signal},       {"_take_signal", TakeSignal}, {"now", Now},           {"joints", Joints},
       {"pose", Pose},            {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
       {"speed", SetSpeed},       {"accel", SetAccel},        {"jspeed", SetJointSpeed}, {"tool", SetTool},
-      {"base", SetBase},         {"device", Device},         {"_markers_open", MarkersOpen},
+      {"base", SetBase},         {"blend", SetBlend},         {"device", Device},         {"_markers_open", MarkersOpen},
       {"_markers_due", MarkersDue}, {"_markers_take", MarkersTake}, {"_markers_poll", MarkersPoll},
       {"_markers_latest", MarkersLatest}, {nullptr, nullptr}};
   lua_pushglobaltable(L);
