@@ -239,6 +239,26 @@ int MoveJ(lua_State* L) {
   return 0;
 }
 
+// a move with a blend radius: it may be left at the first sample within the radius of its
+// target (not the last: that one is at rest); `segment` is the move's length (movec: its chord)
+void SetBlend(lua_State* L, Robot& r, const Eigen::Vector3d& target, double radius, double segment, const char* what) {
+  if (radius > segment / 2 + 1e-12) {
+    r.moving = false;  // (not one sample of it was sent)
+    r.plan = Plan();
+    ScriptError(L, "%s: the blend radius r = %g m is larger than half of this move (%g m): at most %g m", what, radius,
+                segment, segment / 2);
+  }
+  for (std::size_t i = 0; i + 1 < r.plan.tool_W.size(); ++i) {
+    if ((r.plan.tool_W[i].p - target).norm() <= radius) {
+      r.blend_at = static_cast<long>(i);
+      break;
+    }
+  }
+  r.blend_radius_m = radius;
+  r.blend_corner_W = target;
+  r.segment_m = segment;
+}
+
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
   static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
@@ -265,6 +285,11 @@ int MoveL(lua_State* L) {
     b.entry = r.plan.tool_W[r.next - 1];
     b.corner = r.blend_corner_W;
     b.speed_mps = r.plan.speed_mps[r.next - 1];
+    // direction of motion at the entry: the central difference of the samples around it
+    const std::size_t i = r.next - 1;
+    const Eigen::Vector3d after = r.plan.tool_W[std::min(i + 1, r.plan.tool_W.size() - 1)].p;
+    const Eigen::Vector3d before = i > 0 ? r.plan.tool_W[i - 1].p : r.planner->ToolPose(r.q_ref).p;
+    if ((after - before).norm() > 1e-12) b.tangent = (after - before).normalized();
     PlanOrFail(L, r, "movel", [&] { return r.planner->FromBlend(b, goal, limits); });
     r.segment_m = seg;
   } else {
@@ -272,31 +297,20 @@ int MoveL(lua_State* L) {
     PlanOrFail(L, r, "movel", [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
     r.segment_m = seg;
   }
-  if (radius > 0) {
-    if (radius > r.segment_m / 2 + 1e-12) {
-      r.moving = false;  // (not one sample of it was sent)
-      r.plan = Plan();
-      ScriptError(L, "movel: the blend radius r = %g m is larger than half of this move (%g m): at most %g m", radius,
-                  r.segment_m, r.segment_m / 2);
-    }
-    // left at the first sample within the radius of the target (not the last: that one is at rest)
-    for (std::size_t i = 0; i + 1 < r.plan.tool_W.size(); ++i) {
-      if ((r.plan.tool_W[i].p - goal.p).norm() <= radius) {
-        r.blend_at = static_cast<long>(i);
-        break;
-      }
-    }
-    r.blend_radius_m = radius;
-    r.blend_corner_W = goal.p;
-  }
+  if (radius > 0) SetBlend(L, r, goal.p, radius, r.segment_m, "movel");
   SetGuard(L, r, 2, "movel");
   return 0;
 }
 
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
   CheckOptions(L, 3, "movec", known);
+  const double radius = Option(L, 3, "r", r.blend_setting_m, "movec");
+  if (radius < 0) ScriptError(L, "movec: the blend radius r must be >= 0 m, got %g", radius);
+  if (radius > 0 && Option(L, 3, "force", 0, "movec") > 0) {
+    ScriptError(L, "movec: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
+  }
   Eigen::Vector3d via;
   if (const Frame* f = ToFrame(L, 1)) {
     via = ToWorld(r, *f).p;
@@ -308,7 +322,9 @@ int MoveC(lua_State* L) {
   const Frame goal = ToWorld(r, CheckFrame(L, 2, "movec"));
   const MotionLimits limits = MoveLimits(L, r, 3, "movec");
   const double t = Option(L, 3, "t", 0, "movec");
+  const double chord = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
   PlanOrFail(L, r, "movec", [&] { return r.planner->Arc(r.q_ref, via, goal, limits, t); });
+  if (radius > 0) SetBlend(L, r, goal.p, radius, chord, "movec");
   SetGuard(L, r, 3, "movec");
   return 0;
 }

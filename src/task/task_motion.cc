@@ -294,10 +294,16 @@ Plan MotionPlanner::FromBlend(const BlendStart& b, const Frame& goal_W, const Mo
   if (seg < 1e-9) throw std::invalid_argument("the target is the corner of the blend: nothing to blend into");
   const Eigen::Vector3d u2 = (C - B) / seg;
   const Eigen::Vector3d P2 = B + d1 * u2;
-  // the quadratic Bézier P1, B, P2: tangent to both lines at its ends; its arc length by a table
+  // the cubic Bézier from P1 along the motion to P2 along the new line (after a line: the
+  // quadratic P1, B, P2, degree-elevated); its arc length by a table
+  const Eigen::Vector3d t1 = b.tangent.norm() > 0.5 ? b.tangent.normalized() : Eigen::Vector3d((B - P1).normalized());
+  const Eigen::Vector3d C1 = P1 + (2.0 / 3.0) * d1 * t1, C2 = P2 - (2.0 / 3.0) * d1 * u2;
   constexpr int kTable = 512;
   std::vector<double> arc(kTable + 1, 0.0);
-  auto bezier = [&](double t) { return (1 - t) * (1 - t) * P1 + 2 * (1 - t) * t * B + t * t * P2; };
+  auto bezier = [&](double t) {
+    const double s = 1 - t;
+    return Eigen::Vector3d(s * s * s * P1 + 3 * s * s * t * C1 + 3 * s * t * t * C2 + t * t * t * P2);
+  };
   for (int k = 1; k <= kTable; ++k) arc[k] = arc[k - 1] + (bezier(double(k) / kTable) - bezier(double(k - 1) / kTable)).norm();
   const double Lb = arc[kTable];
   const double L = Lb + (C - P2).norm();

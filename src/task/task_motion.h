@@ -65,6 +65,7 @@ struct BlendStart {
   Eigen::VectorXd q;           ///< chain joints of that sample
   Frame entry;                 ///< its tool pose (world): P1, within the radius of the corner
   Eigen::Vector3d corner = Eigen::Vector3d::Zero();  ///< the running move's target point B (world)
+  Eigen::Vector3d tangent = Eigen::Vector3d::Zero();  ///< unit direction of motion at P1 (a line: towards B)
   double speed_mps = 0;        ///< the tool's path speed there
 };
 
@@ -92,9 +93,11 @@ class MotionPlanner {
   Plan Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via_W, const Frame& goal_W,
            const MotionLimits& limits, double duration_s = 0) const;
   /// The next straight move, entered from a blend: from P1 (b.entry, |B − P1|
-  /// = d ≤ r) along the quadratic Bézier P1, B, P2 (P2 = B + d·(C − B)/|C − B|:
-  /// tangent to both lines, it passes B at 0.25·|2B − P1 − P2|, 0.354·d for a
-  /// right angle) and on along the line P2 → C to rest at the goal C.
+  /// = d ≤ r) along the cubic Bézier P1, P1 + ⅔·d·t, P2 − ⅔·d·u, P2 (t the
+  /// direction of motion at P1, P2 = B + d·u, u = (C − B)/|C − B|: tangent to
+  /// the path at both ends; after a line, t points at B and the curve is the
+  /// quadratic Bézier P1, B, P2, which passes B at 0.25·|2B − P1 − P2|, 0.354·d
+  /// for a right angle) and on along the line P2 → C to rest at the goal C.
   /// The path speed starts at b.speed_mps (no stop) and follows a trapezoid
   /// to rest; orientation by SLERP from P1's to the goal's over the path.
   Plan FromBlend(const BlendStart& b, const Frame& goal_W, const MotionLimits& limits) const;

@@ -409,6 +409,41 @@ TEST_F(BlendTest, MovelWithRadiusPassesTheCornerWithinItWithoutStoppingAndEndsOn
   EXPECT_LT(arrive_blended, arrive_stopped);
 }
 
+// movec's r: a quarter circle (radius 0.1 m, centre 0.1 m along -x of the ready pose) to B,
+// blended into a line at a right angle to the arc's end tangent
+TEST_F(BlendTest, MovecWithRadiusBlendsIntoTheNextLineAlongItsTangent) {
+  auto r = Make({{"pa10", "local a = pose()\n"
+                          "local o = a.pos + vec3(-0.1, 0, 0)\n"
+                          "B = frame(o + vec3(0, 0.1, 0), a.rot)\n"
+                          "C = frame(o + vec3(0, 0.2, 0), a.rot)\n"
+                          "movec(o + vec3(0.1 / math.sqrt(2), 0.1 / math.sqrt(2), 0), B, {r = 0.02})\n"
+                          "movel(C)\n"
+                          "print(B.x, B.y, B.z, C.x, C.y, C.z)\n"}});
+  ASSERT_TRUE(RunFor(*r, 5000)) << r->error();
+  for (int k = 0; k < 1500; ++k) ASSERT_TRUE(r->Step((5000 + k) * kPeriod, nullptr));
+  Eigen::Vector3d B, C;
+  std::istringstream in(printed_.back().substr(printed_.back().find(": ") + 2));
+  in >> B[0] >> B[1] >> B[2] >> C[0] >> C[1] >> C[2];
+  const std::vector<Eigen::Vector3d> p = ToolPath();
+  double d_min = 1e9, v_near = 1e9, turn_max = 0;
+  for (std::size_t k = 0; k < p.size(); ++k) d_min = std::min(d_min, (p[k] - B).norm());
+  for (std::size_t k = 2; k < p.size(); ++k) {
+    const Eigen::Vector3d v1 = (p[k - 1] - p[k - 2]) / kPeriod, v2 = (p[k] - p[k - 1]) / kPeriod;
+    if ((p[k] - B).norm() < 2 * r_) v_near = std::min(v_near, v2.norm());
+    if (v1.norm() > 0.5 * v_ && v2.norm() > 0.5 * v_) turn_max = std::max(turn_max, std::acos(std::clamp(v1.normalized().dot(v2.normalized()), -1.0, 1.0)));
+  }
+  EXPECT_LE(d_min, r_);
+  EXPECT_GT(d_min, 0.25 * r_);
+  EXPECT_GT(v_near, 0.95 * v_);  // no stop at B
+  // the direction of motion turns smoothly: on the arc by v T / R = 2 mrad per period; a blend
+  // that left the arc along the chord to B instead of its tangent would turn by about
+  // r / (2 R) = 0.1 rad at once; the curve's own sharpest bend is about v T / (0.35 r) = 0.03 rad
+  EXPECT_LT(turn_max, 0.05);
+  EXPECT_LT((p.back() - C).norm(), 1e-8);
+  std::printf("movec blend: closest %.3f mm, slowest near B %.4f m/s, sharpest turn %.4f rad per period\n",
+              d_min * 1e3, v_near, turn_max);
+}
+
 TEST_F(BlendTest, RadiusOverHalfASegmentIsAnErrorAtItsLine) {
   // the first segment is 0.10 m long: r = 0.06 m is more than half of it
   auto first = Make({{"pa10", std::string(kCorner) + "movel(B, {r = 0.06})\nmovel(C)\n"}});
