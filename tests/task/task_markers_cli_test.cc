@@ -32,10 +32,10 @@ int FreeUdpPort() { return bridge::UdpSocket::Bind("127.0.0.1", 0)->local_port()
 std::string CommandOverride(int port) {
   const std::string p = std::to_string(port);
   return "--set 'controller.command=[\"{scenario_dir}/../../../examples/with_helper.sh\", \"{bin}/vlab\", \"vision\", "
-         "\"--camera\", \"{webcam}\", \"--port\", \"" + p + "\", \"--marker\", \"4X4_50:0-35:0.025\", \"--quiet\", "
+         "\"--camera\", \"{webcam}\", \"--port\", \"" + p + "\", \"--marker\", \"4X4_50:0-35:0.025\", \"--connect-timeout\", \"30\", \"--quiet\", "
          "\"--\", \"{bin}/vlab\", \"task\", \"{scenario_dir}/markers.lua\", \"--arm\", \"{pa10}\", \"--device\", "
          "\"markers=127.0.0.1:" + p + "\", \"--scene\", \"{scenario_dir}/../../../scenes/pa10_cubes.xml\", "
-         "\"--tip\", \"tool\", \"--timeout\", \"15\", \"--hold\"]'";
+         "\"--tip\", \"tool\", \"--timeout\", \"40\", \"--hold\"]'";
 }
 
 struct Pose {
