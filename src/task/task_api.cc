@@ -578,6 +578,13 @@ void PushMarkersState(lua_State* L, const bridge::MarkersClient::State& s) {
 int MarkersDue(lua_State* L) {
   MarkerChannel* m = MarkersArg(L);
   const double t0 = Number(L, 2, "markers:next");
+  char why[512] = "";
+  try {
+    m->Renew();  // the frame wanted is exposed from now on: subscribed by then, however long the script was away
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
   const CameraTiming timing = m->timing();
   if (!P(L)->markers_hold || !(timing.fps > 0)) return 0;
   double frame_time = 0;

@@ -60,6 +60,9 @@ class MarkerChannel {
   /// Takes the states already arrived; the first with time >= t_min - 1 us
   /// in *out (true), without waiting.
   virtual bool Poll(double t_min, bridge::MarkersClient::State* out) = 0;
+  /// Renews the subscription now (a script that read nothing for a while:
+  /// the device drops a subscriber silent for 10 s).
+  virtual void Renew() = 0;
 };
 
 /// The devices a runtime may use, by name; a robot program's arm among them.

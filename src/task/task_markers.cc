@@ -85,6 +85,12 @@ void UdpMarkers::Open() {
   renewed_ = std::chrono::steady_clock::now();
 }
 
+void UdpMarkers::Renew() {
+  Open();
+  client_->KeepAlive();
+  renewed_ = std::chrono::steady_clock::now();
+}
+
 void UdpMarkers::KeepAliveNowAndThen() {
   const auto now = std::chrono::steady_clock::now();
   if (std::chrono::duration<double>(now - renewed_).count() < kRenew_s) return;

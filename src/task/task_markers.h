@@ -38,6 +38,7 @@ class UdpMarkers final : public MarkerChannel {
   bool Latest(bridge::MarkersClient::State* out) override;
   bool WaitFor(double t_min, double timeout_s, bridge::MarkersClient::State* out) override;
   bool Poll(double t_min, bridge::MarkersClient::State* out) override;
+  void Renew() override;
 
   /// Device time that is time 0 of the runtime (vlab task: the arm's first state).
   void set_time_origin(double t_s) { origin_s_ = t_s; }
