@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 
 #include <lua.hpp>
 
@@ -39,17 +40,51 @@ function wait(a, timeout)
   error("wait: expected seconds or a condition function, got " .. type(a), 2)
 end
 local function await() while moving() do yield() end return outcome() end
+local function settle() while moving(true) do yield() end end  -- a blended move's end: at rest
 local mj, ml, mc, sm = _movej, _movel, _movec, _selfmove
 _movej, _movel, _movec, _selfmove = nil, nil, nil, nil
-function movej(target, options) mj(target, options) return await() end
+function movej(target, options) settle() mj(target, options) return await() end
 function movel(target, options) ml(target, options) return await() end
-function movec(via, target, options) mc(via, target, options) return await() end
-function selfmove(options) sm(options) return await() end
+function movec(via, target, options) settle() mc(via, target, options) return await() end
+function selfmove(options) settle() sm(options) return await() end
 local raise = _signal
 _signal = nil
 function signal(name) raise(name) end
 function wait_signal(name, timeout)
   return wait(function() return take(name) end, timeout)
+end
+local m_open, m_due, m_take, m_poll, m_latest = _markers_open, _markers_due, _markers_take, _markers_poll, _markers_latest
+_markers_open, _markers_due, _markers_take, _markers_poll, _markers_latest = nil, nil, nil, nil, nil
+function markers(name)
+  m_open(name)
+  -- one period on: the camera renders only while someone listens, so frames queued before
+  -- the vision program was there are not rendered; from here on every frame is
+  yield()
+  local vis = {name = name}
+  function vis:next(timeout)
+    if timeout ~= nil and (type(timeout) ~= "number" or timeout < 0) then
+      error("markers:next: the timeout must be a number of seconds >= 0", 2)
+    end
+    local t0 = clock()
+    local t_end = timeout and (t0 + periods(timeout) * PERIOD - PERIOD / 2)
+    local due, frame_time = m_due(name, t0)
+    if due then  -- lockstep: to the period that delivers the frame, then hold for its markers
+      if t_end and due > t_end then
+        while clock() < t_end do yield() end
+        return nil
+      end
+      while clock() < due - PERIOD / 2 do yield() end
+      return m_take(name, frame_time)
+    end
+    while true do  -- realtime: the first state of a frame exposed at or after t0
+      local s = m_poll(name, t0)
+      if s then return s end
+      if t_end and clock() >= t_end then return nil end
+      yield()
+    end
+  end
+  function vis:latest() return m_latest(name) end
+  return vis
 end
 function gripper(name)
   local d = device(name)
@@ -133,6 +168,12 @@ void Start(Robot& r, Plan&& plan) {
   r.moving = !r.plan.q.empty();
   r.outcome = "done";
   r.guard = nullptr;
+  r.blend_at = -1;
+}
+
+// whether the running move was left for a blend: its entry sample has been handed out
+bool BlendReady(const Robot& r) {
+  return r.moving && r.blend_at >= 0 && static_cast<long>(r.next) - 1 >= r.blend_at;
 }
 
 // the guard option of a move: force = N (and wrench = NAME)
@@ -198,22 +239,78 @@ int MoveJ(lua_State* L) {
   return 0;
 }
 
+// a move with a blend radius: it may be left at the first sample within the radius of its
+// target (not the last: that one is at rest); `segment` is the move's length (movec: its chord)
+void SetBlend(lua_State* L, Robot& r, const Eigen::Vector3d& target, double radius, double segment, const char* what) {
+  if (radius > segment / 2 + 1e-12) {
+    r.moving = false;  // (not one sample of it was sent)
+    r.plan = Plan();
+    ScriptError(L, "%s: the blend radius r = %g m is larger than half of this move (%g m): at most %g m", what, radius,
+                segment, segment / 2);
+  }
+  for (std::size_t i = 0; i + 1 < r.plan.tool_W.size(); ++i) {
+    if ((r.plan.tool_W[i].p - target).norm() <= radius) {
+      r.blend_at = static_cast<long>(i);
+      break;
+    }
+  }
+  r.blend_radius_m = radius;
+  r.blend_corner_W = target;
+  r.segment_m = segment;
+}
+
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
   CheckOptions(L, 2, "movel", known);
   const Frame goal = ToWorld(r, CheckFrame(L, 1, "movel"));
   const MotionLimits limits = MoveLimits(L, r, 2, "movel");
   const double t = Option(L, 2, "t", 0, "movel");
-  PlanOrFail(L, r, "movel", [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
+  const double radius = Option(L, 2, "r", r.blend_setting_m, "movel");
+  if (radius < 0) ScriptError(L, "movel: the blend radius r must be >= 0 m, got %g", radius);
+  if (radius > 0 && Option(L, 2, "force", 0, "movel") > 0) {
+    ScriptError(L, "movel: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
+  }
+  if (BlendReady(r)) {
+    // entered from the previous move's blend: its radius must fit in this segment too
+    const double seg = (goal.p - r.blend_corner_W).norm();
+    if (r.blend_radius_m > seg / 2 + 1e-12) {
+      ScriptError(L, "movel: the blend radius r = %g m of the move before is larger than half of this move "
+                     "(%g m from the corner): at most %g m",
+                  r.blend_radius_m, seg, seg / 2);
+    }
+    if (t > 0) ScriptError(L, "movel: a move entered from a blend takes its speed (v), not a duration (t)");
+    BlendStart b;
+    b.q = r.q_ref;
+    b.entry = r.plan.tool_W[r.next - 1];
+    b.corner = r.blend_corner_W;
+    b.speed_mps = r.plan.speed_mps[r.next - 1];
+    // direction of motion at the entry: the central difference of the samples around it
+    const std::size_t i = r.next - 1;
+    const Eigen::Vector3d after = r.plan.tool_W[std::min(i + 1, r.plan.tool_W.size() - 1)].p;
+    const Eigen::Vector3d before = i > 0 ? r.plan.tool_W[i - 1].p : r.planner->ToolPose(r.q_ref).p;
+    if ((after - before).norm() > 1e-12) b.tangent = (after - before).normalized();
+    PlanOrFail(L, r, "movel", [&] { return r.planner->FromBlend(b, goal, limits); });
+    r.segment_m = seg;
+  } else {
+    const double seg = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
+    PlanOrFail(L, r, "movel", [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
+    r.segment_m = seg;
+  }
+  if (radius > 0) SetBlend(L, r, goal.p, radius, r.segment_m, "movel");
   SetGuard(L, r, 2, "movel");
   return 0;
 }
 
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
   CheckOptions(L, 3, "movec", known);
+  const double radius = Option(L, 3, "r", r.blend_setting_m, "movec");
+  if (radius < 0) ScriptError(L, "movec: the blend radius r must be >= 0 m, got %g", radius);
+  if (radius > 0 && Option(L, 3, "force", 0, "movec") > 0) {
+    ScriptError(L, "movec: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
+  }
   Eigen::Vector3d via;
   if (const Frame* f = ToFrame(L, 1)) {
     via = ToWorld(r, *f).p;
@@ -225,7 +322,9 @@ int MoveC(lua_State* L) {
   const Frame goal = ToWorld(r, CheckFrame(L, 2, "movec"));
   const MotionLimits limits = MoveLimits(L, r, 3, "movec");
   const double t = Option(L, 3, "t", 0, "movec");
+  const double chord = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
   PlanOrFail(L, r, "movec", [&] { return r.planner->Arc(r.q_ref, via, goal, limits, t); });
+  if (radius > 0) SetBlend(L, r, goal.p, radius, chord, "movec");
   SetGuard(L, r, 3, "movec");
   return 0;
 }
@@ -243,8 +342,10 @@ int SelfMove(lua_State* L) {
   return 0;
 }
 
-int Moving(lua_State* L) {
-  lua_pushboolean(L, P(L)->robot && P(L)->robot->moving);
+int Moving(lua_State* L) {  // moving(): until done or left for a blend; moving(true): until at rest
+  const Robot* r = P(L)->robot.get();
+  const bool raw = lua_toboolean(L, 1);
+  lua_pushboolean(L, r && r->moving && (raw || !BlendReady(*r)));
   return 1;
 }
 int Outcome(lua_State* L) {
@@ -317,6 +418,13 @@ int SetJointSpeed(lua_State* L) {
 int SetTool(lua_State* L) {
   Robot& r = NeedRobot(L, "tool");
   r.planner->set_tool(CheckFrame(L, 1, "tool"));
+  return 0;
+}
+int SetBlend(lua_State* L) {
+  Robot& r = NeedRobot(L, "blend");
+  const double v = Number(L, 1, "blend");
+  if (v < 0) ScriptError(L, "blend: the radius must be >= 0 m (0: every move stops at its target)");
+  r.blend_setting_m = v;
   return 0;
 }
 int SetBase(lua_State* L) {
@@ -405,6 +513,150 @@ int Device(lua_State* L) {
   lua_setfield(L, -2, "name");
   static const luaL_Reg methods[] = {{"get", DeviceGet}, {"read", DeviceRead}, {"send", DeviceSend}, {nullptr, nullptr}};
   luaL_setfuncs(L, methods, 0);
+  return 1;
+}
+
+// ---- markers(NAME): a markers device (kind 5), through task_markers.h
+MarkerChannel* MarkersArg(lua_State* L) {
+  const char* name = luaL_checkstring(L, 1);
+  MarkerChannel* m = P(L)->devices->FindMarkers(name);
+  if (!m) ScriptError(L, "markers: no markers device named '%s'", name);
+  return m;
+}
+int MarkersOpen(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  char why[512] = "";
+  try {
+    m->Open();
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  return 0;
+}
+void PushMarkerFrame(lua_State* L, const Eigen::Matrix4d& T) {
+  Frame f;
+  f.p = T.block<3, 1>(0, 3);
+  f.q = Eigen::Quaterniond(Eigen::Matrix3d(T.block<3, 3>(0, 0))).normalized();
+  PushFrame(L, f);
+}
+// {seq, time, described, unknown, markers = {{dictionary, id, valid, error, camera, world}, ...}}
+void PushMarkersState(lua_State* L, const bridge::MarkersClient::State& s) {
+  lua_createtable(L, 0, 5);
+  lua_pushinteger(L, static_cast<lua_Integer>(s.seq));
+  lua_setfield(L, -2, "seq");
+  lua_pushnumber(L, s.time);
+  lua_setfield(L, -2, "time");
+  lua_pushinteger(L, s.described);
+  lua_setfield(L, -2, "described");
+  lua_pushinteger(L, s.unknown);
+  lua_setfield(L, -2, "unknown");
+  lua_createtable(L, static_cast<int>(s.markers.size()), 0);
+  for (std::size_t i = 0; i < s.markers.size(); ++i) {
+    const bridge::MarkersClient::Marker& m = s.markers[i];
+    lua_createtable(L, 0, 6);
+    const bridge::MarkerDictionary* d = bridge::FindMarkerDictionary(m.dictionary);
+    lua_pushstring(L, d ? d->name : "?");
+    lua_setfield(L, -2, "dictionary");
+    lua_pushinteger(L, m.id);
+    lua_setfield(L, -2, "id");
+    lua_pushboolean(L, m.valid);
+    lua_setfield(L, -2, "valid");
+    lua_pushnumber(L, m.reprojection_error_px);
+    lua_setfield(L, -2, "error");
+    PushMarkerFrame(L, m.T_camera_marker);
+    lua_setfield(L, -2, "camera");
+    if (m.world_valid) {
+      PushMarkerFrame(L, m.T_world_marker);
+      lua_setfield(L, -2, "world");
+    }
+    lua_rawseti(L, -2, static_cast<lua_Integer>(i + 1));
+  }
+  lua_setfield(L, -2, "markers");
+}
+// (due, frame_time): the period that delivers the wanted frame; nothing when not holding
+int MarkersDue(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  const double t0 = Number(L, 2, "markers:next");
+  char why[512] = "";
+  try {
+    m->Renew();  // the frame wanted is exposed from now on: subscribed by then, however long the script was away
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  const CameraTiming timing = m->timing();
+  if (!P(L)->markers_hold || !(timing.fps > 0)) return 0;
+  double frame_time = 0;
+  const double due = MarkersFrameDue(timing, P(L)->period_s, t0, &frame_time);
+  lua_pushnumber(L, due);
+  lua_pushnumber(L, frame_time);
+  return 2;
+}
+// the markers state of the frame stamped frame_time: waits (wall time) while the period is held
+int MarkersTake(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  const double frame_time = Number(L, 2, "markers:next");
+  const double wait_s = P(L)->markers_wait_s;
+  auto s = std::make_unique<bridge::MarkersClient::State>();
+  char why[512] = "";
+  try {
+    if (!m->WaitFor(frame_time, wait_s, s.get())) {
+      std::snprintf(why, sizeof why,
+                    "no markers state of the camera frame stamped %.6g s within %g s of waiting (is the vision "
+                    "program running, and its camera served?)",
+                    frame_time, wait_s);
+    } else if (std::fabs(s->time - frame_time) > 1e-6) {
+      std::snprintf(why, sizeof why,
+                    "waited for the camera frame stamped %.6g s and got the one stamped %.6g s: the camera's schedule "
+                    "is not the one its describe reply gives (fps, exposure_s, latency_s)",
+                    frame_time, s->time);
+    }
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) {
+    s.reset();
+    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  }
+  PushMarkersState(L, *s);
+  return 1;
+}
+int MarkersPoll(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  const double t0 = Number(L, 2, "markers:next");
+  auto s = std::make_unique<bridge::MarkersClient::State>();
+  char why[512] = "";
+  bool got = false;
+  try {
+    got = m->Poll(t0, s.get());
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) {
+    s.reset();
+    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  }
+  if (!got) return 0;
+  PushMarkersState(L, *s);
+  return 1;
+}
+int MarkersLatest(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  auto s = std::make_unique<bridge::MarkersClient::State>();
+  char why[512] = "";
+  bool got = false;
+  try {
+    got = m->Latest(s.get());
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) {
+    s.reset();
+    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  }
+  if (!got) return 0;
+  PushMarkersState(L, *s);
   return 1;
 }
 
@@ -511,7 +763,9 @@ void OpenApi(Program* p) {
       {"_signal", Signal},       {"_take_signal", TakeSignal}, {"now", Now},           {"joints", Joints},
       {"pose", Pose},            {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
       {"speed", SetSpeed},       {"accel", SetAccel},        {"jspeed", SetJointSpeed}, {"tool", SetTool},
-      {"base", SetBase},         {"device", Device},         {nullptr, nullptr}};
+      {"base", SetBase},         {"blend", SetBlend},         {"device", Device},         {"_markers_open", MarkersOpen},
+      {"_markers_due", MarkersDue}, {"_markers_take", MarkersTake}, {"_markers_poll", MarkersPoll},
+      {"_markers_latest", MarkersLatest}, {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, functions, 0);
   lua_pop(L, 1);

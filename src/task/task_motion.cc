@@ -33,6 +33,62 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& r) {
 
 std::string Percent(int i, int n) { return "at " + Fmt(100.0 * (i + 1) / n, "%.0f") + "% of the path"; }
 
+
+// a speed profile over a path of length L that starts at speed v0 (m/s),
+// ramps to the peak vp at a, cruises, and stops at a (or, when it cannot stop
+// within L at a, decelerates at the rate that stops it at L)
+struct StartSpeedProfile {
+  double L = 0, v0 = 0, vp = 0, a = 0, a_stop = 0;
+  double t1 = 0, t2 = 0, T = 0;   // end of the ramp, of the cruise, of the move
+  double d1 = 0, d2 = 0;          // distance at t1, t2
+  StartSpeedProfile(double length, double start_speed, double v, double accel) : L(length), v0(start_speed), a(accel) {
+    if (v0 * v0 / (2 * a) >= L) {  // no room to speed up or cruise: one deceleration to rest at L
+      vp = v0;
+      a_stop = v0 > 0 ? v0 * v0 / (2 * L) : a;
+      T = v0 > 0 ? v0 / a_stop : 0;
+      return;
+    }
+    a_stop = a;
+    if (v0 <= v) {
+      vp = (v * v - v0 * v0) / (2 * a) + v * v / (2 * a) <= L ? v : std::sqrt((2 * a * L + v0 * v0) / 2);
+    } else {
+      vp = v;  // v0 * v0 / (2 a) < L: down to v, cruise, stop
+    }
+    t1 = std::abs(vp - v0) / a;
+    d1 = (v0 + vp) / 2 * t1;
+    const double d_stop = vp * vp / (2 * a);
+    d2 = L - d_stop;
+    t2 = t1 + (vp > 0 ? (d2 - d1) / vp : 0);
+    T = t2 + vp / a;
+  }
+  // distance and speed at time t
+  void At(double t, double* s, double* v) const {
+    if (t >= T) {
+      *s = L;
+      *v = 0;
+      return;
+    }
+    if (t2 == 0 && t1 == 0) {  // the deceleration alone
+      *s = v0 * t - a_stop * t * t / 2;
+      *v = v0 - a_stop * t;
+      return;
+    }
+    if (t < t1) {
+      const double acc = vp >= v0 ? a : -a;
+      *s = v0 * t + acc * t * t / 2;
+      *v = v0 + acc * t;
+    } else if (t < t2) {
+      *s = d1 + vp * (t - t1);
+      *v = vp;
+    } else {
+      const double u = t - t2;
+      *s = d2 + vp * u - a * u * u / 2;
+      *v = vp - a * u;
+    }
+    *s = std::min(*s, L);
+  }
+};
+
 }  // namespace
 
 void TrapezoidTiming(double d, double v, double a, double* duration_s, double* accel_fraction) {
@@ -133,18 +189,32 @@ Plan MotionPlanner::Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, 
 }
 
 template <class PoseAt>
-Plan MotionPlanner::Cartesian(const Eigen::VectorXd& q0, double T, double frac, PoseAt pose_at) const {
+Plan MotionPlanner::Cartesian(const Eigen::VectorXd& q0, double T, double frac, double length_m, PoseAt pose_at) const {
   const int N = std::max(1, static_cast<int>(std::ceil(T / period_s_ - 1e-9)));
   T = N * period_s_;
   control::TimeScaling scaling{control::TimeScalingType::kTrapezoidal, std::clamp(frac, 1e-3, 0.5)};
-  Plan plan;
+  std::vector<Frame> goals(N);
+  std::vector<double> speeds(N);
+  for (int i = 0; i < N; ++i) {
+    const control::ScalingSample s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_);
+    goals[i] = pose_at(s.s);
+    speeds[i] = s.sd * length_m;
+  }
+  Plan plan = SolvePath(q0, goals, speeds);
   plan.duration_s = T;
+  return plan;
+}
+
+Plan MotionPlanner::SolvePath(const Eigen::VectorXd& q0, const std::vector<Frame>& goals,
+                              const std::vector<double>& speeds) const {
+  const int N = static_cast<int>(goals.size());
+  Plan plan;
   Eigen::VectorXd q = q0, guess;
   plan.q.reserve(N);
   plan.tool_W.reserve(N);
+  plan.speed_mps = speeds;
   for (int i = 0; i < N; ++i) {
-    const double s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_).s;
-    const Frame goal = pose_at(s);
+    const Frame& goal = goals[i];
     int it;
     double pe, re;
     // Newton from the linear extrapolation of the last two samples: one step usually does
@@ -173,7 +243,7 @@ Plan MotionPlanner::Linear(const Eigen::VectorXd& q0, const Frame& goal_W, const
     T = std::max(T_lin, T_rot);
     frac = T_lin >= T_rot ? f_lin : f_rot;
   }
-  return Cartesian(q0, T, frac, [&](double s) {
+  return Cartesian(q0, T, frac, (goal_W.p - start.p).norm(), [&](double s) {
     Frame f;
     f.p = start.p + s * (goal_W.p - start.p);
     f.q = start.q.slerp(s, q1);
@@ -207,13 +277,65 @@ Plan MotionPlanner::Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via, c
     T = std::max(T_lin, T_rot);
     frac = T_lin >= T_rot ? f_lin : f_rot;
   }
-  Plan plan = Cartesian(q0, T, frac, [&](double s) {
+  Plan plan = Cartesian(q0, T, frac, r * theta, [&](double s) {
     Frame f;
     f.p = c + r * (u * std::cos(theta * s) + w * std::sin(theta * s));
     f.q = start.q.slerp(s, q1);
     return f;
   });
   plan.tool_W.back().p = goal_W.p;  // equal up to rounding
+  return plan;
+}
+
+Plan MotionPlanner::FromBlend(const BlendStart& b, const Frame& goal_W, const MotionLimits& limits) const {
+  const Eigen::Vector3d P1 = b.entry.p, B = b.corner, C = goal_W.p;
+  const double d1 = (B - P1).norm();
+  const double seg = (C - B).norm();
+  if (seg < 1e-9) throw std::invalid_argument("the target is the corner of the blend: nothing to blend into");
+  const Eigen::Vector3d u2 = (C - B) / seg;
+  const Eigen::Vector3d P2 = B + d1 * u2;
+  // the cubic Bézier from P1 along the motion to P2 along the new line (after a line: the
+  // quadratic P1, B, P2, degree-elevated); its arc length by a table
+  const Eigen::Vector3d t1 = b.tangent.norm() > 0.5 ? b.tangent.normalized() : Eigen::Vector3d((B - P1).normalized());
+  const Eigen::Vector3d C1 = P1 + (2.0 / 3.0) * d1 * t1, C2 = P2 - (2.0 / 3.0) * d1 * u2;
+  constexpr int kTable = 512;
+  std::vector<double> arc(kTable + 1, 0.0);
+  auto bezier = [&](double t) {
+    const double s = 1 - t;
+    return Eigen::Vector3d(s * s * s * P1 + 3 * s * s * t * C1 + 3 * s * t * t * C2 + t * t * t * P2);
+  };
+  for (int k = 1; k <= kTable; ++k) arc[k] = arc[k - 1] + (bezier(double(k) / kTable) - bezier(double(k - 1) / kTable)).norm();
+  const double Lb = arc[kTable];
+  const double L = Lb + (C - P2).norm();
+  const Eigen::Quaterniond q1 = b.entry.q.dot(goal_W.q) < 0 ? Eigen::Quaterniond(-goal_W.q.coeffs()) : goal_W.q;
+  const double angle = b.entry.q.angularDistance(q1);
+  // the path speed: limited so that the SLERP over the path keeps the angular speed limit
+  double v = limits.speed_mps;
+  if (angle > 1e-12) v = std::min(v, limits.rot_speed_rps * L / angle);
+  const StartSpeedProfile profile(L, b.speed_mps, v, limits.accel_mps2);
+  const int N = std::max(1, static_cast<int>(std::ceil(profile.T / period_s_ - 1e-9)));
+  std::vector<Frame> goals(N);
+  std::vector<double> speeds(N);
+  for (int i = 0; i < N; ++i) {
+    double s, sv;
+    profile.At(std::min((i + 1) * period_s_, profile.T), &s, &sv);
+    if (i == N - 1) s = L, sv = 0;
+    Frame f;
+    if (s < Lb) {
+      const int k = static_cast<int>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin());
+      const int k0 = std::clamp(k - 1, 0, kTable - 1);
+      const double t = (k0 + (s - arc[k0]) / std::max(1e-15, arc[k0 + 1] - arc[k0])) / kTable;
+      f.p = bezier(std::clamp(t, 0.0, 1.0));
+    } else {
+      f.p = P2 + (s - Lb) * u2;
+    }
+    if (i == N - 1) f.p = C;
+    f.q = b.entry.q.slerp(L > 0 ? s / L : 1.0, q1);
+    goals[i] = f;
+    speeds[i] = sv;
+  }
+  Plan plan = SolvePath(b.q, goals, speeds);
+  plan.duration_s = N * period_s_;
   return plan;
 }
 

@@ -20,6 +20,9 @@
 //   self       null-space motion: one joint driven by a quintic while the tool
 //              pose is held (7-DOF arm: the elbow swings about the
 //              shoulder-wrist line)
+//   blend      the next straight move entered from a blended one (movel's r):
+//              a quadratic Bézier round the corner, then the line; the path
+//              speed carries over (FromBlend)
 // Inverse kinematics: each Cartesian sample is solved by Newton steps
 // q += J⁺·e (damped least squares, λ = 1e-6) from the previous sample, to
 // 1e-9 m and 1e-9 rad; a sample that does not converge, or a joint beyond its
@@ -51,7 +54,19 @@ struct MotionLimits {
 struct Plan {
   std::vector<Eigen::VectorXd> q;  ///< chain joints, rad, sample i at (i + 1)·period after the start
   std::vector<Frame> tool_W;       ///< planned tool pose of each sample (world); empty for joint moves
+  std::vector<double> speed_mps;   ///< planned tool path speed of each sample (Cartesian moves)
   double duration_s = 0;
+};
+
+/// Where a move with a blend radius is left for the next one (blending): the
+/// sample of the running plan at which the tool came within the radius of
+/// the corner (the running move's target).
+struct BlendStart {
+  Eigen::VectorXd q;           ///< chain joints of that sample
+  Frame entry;                 ///< its tool pose (world): P1, within the radius of the corner
+  Eigen::Vector3d corner = Eigen::Vector3d::Zero();  ///< the running move's target point B (world)
+  Eigen::Vector3d tangent = Eigen::Vector3d::Zero();  ///< unit direction of motion at P1 (a line: towards B)
+  double speed_mps = 0;        ///< the tool's path speed there
 };
 
 class MotionPlanner {
@@ -77,6 +92,15 @@ class MotionPlanner {
               double duration_s = 0) const;
   Plan Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via_W, const Frame& goal_W,
            const MotionLimits& limits, double duration_s = 0) const;
+  /// The next straight move, entered from a blend: from P1 (b.entry, |B − P1|
+  /// = d ≤ r) along the cubic Bézier P1, P1 + ⅔·d·t, P2 − ⅔·d·u, P2 (t the
+  /// direction of motion at P1, P2 = B + d·u, u = (C − B)/|C − B|: tangent to
+  /// the path at both ends; after a line, t points at B and the curve is the
+  /// quadratic Bézier P1, B, P2, which passes B at 0.25·|2B − P1 − P2|, 0.354·d
+  /// for a right angle) and on along the line P2 → C to rest at the goal C.
+  /// The path speed starts at b.speed_mps (no stop) and follows a trapezoid
+  /// to rest; orientation by SLERP from P1's to the goal's over the path.
+  Plan FromBlend(const BlendStart& b, const Frame& goal_W, const MotionLimits& limits) const;
   /// Moves chain joint `joint` by `delta` rad over `duration_s` with the tool held.
   Plan Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const;
 
@@ -87,7 +111,10 @@ class MotionPlanner {
  private:
   // samples of a Cartesian path: pose(s) for s of a trapezoid in time
   template <class PoseAt>
-  Plan Cartesian(const Eigen::VectorXd& q0, double duration_s, double accel_fraction, PoseAt pose_at) const;
+  Plan Cartesian(const Eigen::VectorXd& q0, double duration_s, double accel_fraction, double length_m,
+                 PoseAt pose_at) const;
+  // joints of each tool pose by Newton steps from the previous; throws where one fails
+  Plan SolvePath(const Eigen::VectorXd& q0, const std::vector<Frame>& goals, const std::vector<double>& speeds) const;
   Eigen::VectorXd Solve(const Eigen::VectorXd& q_start, const Frame& goal_W, int* iterations, double* pos_err,
                         double* rot_err) const;
 

@@ -53,6 +53,13 @@ struct Robot {
   std::size_t next = 0;
   bool moving = false;
   std::string outcome = "done";    ///< of the last move: "done" or "contact"
+  // blending (movel's r, blend()): the running move may be left for the next at sample
+  // blend_at (-1: it runs to its end), where the tool is within blend_radius of its target
+  double blend_setting_m = 0;      ///< blend(r)
+  long blend_at = -1;
+  double blend_radius_m = 0;
+  Eigen::Vector3d blend_corner_W = Eigen::Vector3d::Zero();
+  double segment_m = 0;            ///< length of the running move's straight segment
   // guard of the running move
   Channel* guard = nullptr;
   double guard_force_N = 0;
@@ -73,6 +80,8 @@ struct Program {
   bool ended = false;
   double t_s = 0;                  ///< simulated time of the current period
   double period_s = 0.002;
+  bool markers_hold = true;        ///< RuntimeConfig::markers_hold
+  double markers_wait_s = 10.0;    ///< RuntimeConfig::markers_wait_s
   std::unique_ptr<Robot> robot;    ///< null for a program without a robot
   Devices* devices = nullptr;
   Blackboard* board = nullptr;

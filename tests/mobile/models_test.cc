@@ -214,5 +214,30 @@ TEST_F(MobileModels, Pa10WithTheGripper) {
   Hold(m, d);
 }
 
+// the keyframe home (docs/tasks.md's tutorial starts there): the gripper's free joint holds the
+// welded place by its typed numbers (to their 9 decimals: 1e-8 m, 1e-8 rad), the tool points
+// straight down, the pads are 0.14 m above the table, and only the cube touches the table
+TEST_F(MobileModels, Pa10WithTheGripperHomeKeyframeHasTheGripperAtItsWeld) {
+  const mjModel* m = LoadModel("scenes/pa10_gripper.xml");
+  mjData* d = MakeData(m);
+  const int home = mj_name2id(m, mjOBJ_KEY, "home");
+  ASSERT_GE(home, 0);
+  mj_resetDataKeyframe(m, d, home);
+  mj_forward(m, d);
+  const int tool = mj_name2id(m, mjOBJ_SITE, "tool"), mount = mj_name2id(m, mjOBJ_SITE, "gripper_mount");
+  EXPECT_LT((Vec3(d->site_xpos + 3 * tool) - Vec3(d->site_xpos + 3 * mount)).norm(), 1e-8);
+  EXPECT_LT(AngleBetween(Mat3(d->site_xmat + 9 * tool), Mat3(d->site_xmat + 9 * mount)), 1e-8);
+  EXPECT_NEAR(d->site_xmat[9 * tool + 8], -1.0, 1e-12);  // the tool z is the world's -z
+  const int tcp = mj_name2id(m, mjOBJ_SITE, "gripper_tcp");
+  EXPECT_NEAR(d->site_xpos[3 * tcp + 2] - 0.40, 0.143, 0.001);  // the table top is at z = 0.40 m
+  const int cube = mj_name2id(m, mjOBJ_GEOM, "cube"), table = mj_name2id(m, mjOBJ_GEOM, "table_top");
+  for (int c = 0; c < d->ncon; ++c) {
+    const int g1 = d->contact[c].geom1, g2 = d->contact[c].geom2;
+    EXPECT_TRUE((g1 == cube && g2 == table) || (g1 == table && g2 == cube))
+        << mj_id2name(m, mjOBJ_GEOM, g1) << " touches " << mj_id2name(m, mjOBJ_GEOM, g2);
+  }
+  Hold(m, d);
+}
+
 }  // namespace
 }  // namespace vlab::testing

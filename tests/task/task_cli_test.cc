@@ -75,6 +75,18 @@ TEST(TaskCli, GuardedMoveStopsAtTheTable) {
   EXPECT_NE(r.out.find("pass  stopped_at_the_table"), std::string::npos) << r.out;
 }
 
+// docs/tasks.md's tutorial, steps 1-6, with the gripper (scenes/pa10_gripper.xml): the
+// scenario's checks say the cube ends within 2 mm of the place frame, turned by 90 degrees
+TEST(TaskCli, TutorialWithTheGripperPicksAndPlacesTheCube) {
+  TempDir out;
+  const ProcessResult r = RunVlab("run tests/data/task/tutorial_gripper.yaml --out '" + out.path() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("touched at"), std::string::npos) << r.out;  // step 4 felt the table
+  for (const char* check : {"placed_x", "placed_y", "placed_z", "turned_90_deg"}) {
+    EXPECT_NE(r.out.find(std::string("pass  ") + check), std::string::npos) << r.out;
+  }
+}
+
 // docs/tasks.md's tutorial, steps 1-4, as written there
 TEST(TaskCli, TutorialStepsRun) {
   TempDir out;

@@ -6,12 +6,15 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <sstream>
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
 #include "core/core_errors.h"
 #include "mujoco_fixture.h"
+#include "control/robot_model.h"
+#include "task/task_motion.h"
 #include "task/task_runtime.h"
 #include "test_util.h"
 
@@ -325,6 +328,138 @@ TEST_F(RuntimeTest, GripperAndDevicesByName) {
   EXPECT_EQ(gripper_.commands.front(), (std::vector<double>{1, 20}));
   EXPECT_EQ(gripper_.commands.back(), (std::vector<double>{0, 0.07}));
   EXPECT_EQ(gripper_.commands.size(), 201u);  // one per period from the close on (periods 0..200)
+}
+
+// ---- blending (movel's r, blend()): a right-angle corner B, from the ready pose 0.10 m
+// along -x to B, then 0.10 m along +y to C; speed 0.1 m/s, acceleration 0.5 m/s^2 (the defaults)
+class BlendTest : public RuntimeTest {
+ protected:
+  // the tool positions the arm was commanded to, one per period (forward kinematics)
+  std::vector<Eigen::Vector3d> ToolPath() {
+    auto fk = control::RobotModel::Create(model_, {"world", "tool"});
+    MotionPlanner planner(fk.get(), kPeriod);
+    std::vector<Eigen::Vector3d> out;
+    for (const Eigen::VectorXd& q : arm_->history()) out.push_back(planner.ToolPose(q).p);
+    return out;
+  }
+  static constexpr const char* kCorner =
+      "local a = pose()\n"
+      "B = frame(a.pos + vec3(-0.10, 0, 0), a.rot)\n"
+      "C = frame(a.pos + vec3(-0.10, 0.10, 0), a.rot)\n";
+  const double r_ = 0.02, v_ = 0.1;
+};
+
+TEST_F(BlendTest, MovelWithRadiusPassesTheCornerWithinItWithoutStoppingAndEndsOnTarget) {
+  auto run = [this](const std::string& moves, std::vector<Eigen::Vector3d>* path, Eigen::Vector3d* B,
+                    Eigen::Vector3d* C) {
+    Eigen::VectorXd ready(7);  // both runs start from the ready pose
+    ready << 0, 0.523599, 0, 1.047198, 0, 1.570796, 0;
+    arm_ = std::make_unique<FakeArm>("pa10", ready);
+    devices_.channels["pa10"] = arm_.get();
+    auto r = Make({{"pa10", std::string(kCorner) + moves + "print(B.x, B.y, B.z, C.x, C.y, C.z)\n"}});
+    printed_.clear();
+    ASSERT_TRUE(RunFor(*r, 5000)) << r->error();
+    for (int k = 0; k < 1500; ++k) ASSERT_TRUE(r->Step((5000 + k) * kPeriod, nullptr));  // the blended motion ends
+    *path = ToolPath();
+    std::istringstream in(printed_.back().substr(printed_.back().find(": ") + 2));
+    in >> (*B)[0] >> (*B)[1] >> (*B)[2] >> (*C)[0] >> (*C)[1] >> (*C)[2];
+  };
+  std::vector<Eigen::Vector3d> blended, stopped;
+  Eigen::Vector3d B, C;
+  run("movel(B, {r = 0.02})\nmovel(C)\n", &blended, &B, &C);
+  run("movel(B)\nmovel(C)\n", &stopped, &B, &C);
+
+  auto closest = [&](const std::vector<Eigen::Vector3d>& p) {
+    double d = 1e9;
+    for (const auto& x : p) d = std::min(d, (x - B).norm());
+    return d;
+  };
+  // the quadratic Bezier P1 B P2 (|P1 - B| = |P2 - B| = d, a right angle) passes B at
+  // 0.25 |2B - P1 - P2| = 0.25 sqrt(2) d = 0.354 d; the blend is entered at the first period
+  // within r of B, so d is in (r - v T, r]: the closest approach is in (0.353 r, 0.354 r]
+  const double d_min = closest(blended);
+  EXPECT_LE(d_min, r_);
+  EXPECT_GT(d_min, 0.30 * r_) << "it cuts the corner more than a blend of radius r does";
+  EXPECT_NEAR(d_min, 0.3536 * r_, 0.0005 * r_ + 0.36 * v_ * kPeriod);
+  EXPECT_LT(closest(stopped), 1e-9);  // without r the path goes through B
+
+  // speed between the moves: within 2 r of B the blended path keeps the cruise speed (no stop;
+  // the entry is at cruise: r > v^2 / (2 a) = 10 mm), the stopped one comes to rest at B
+  auto slowest_near_b = [&](const std::vector<Eigen::Vector3d>& p) {
+    double v_min = 1e9;
+    for (std::size_t k = 1; k < p.size(); ++k) {
+      if ((p[k] - B).norm() < 2 * r_) v_min = std::min(v_min, (p[k] - p[k - 1]).norm() / kPeriod);
+    }
+    return v_min;
+  };
+  EXPECT_GT(slowest_near_b(blended), 0.95 * v_);
+  EXPECT_LT(slowest_near_b(stopped), 0.05 * v_);
+  // velocity continuous: speed changes by at most the acceleration limit per period (plus rounding)
+  for (std::size_t k = 2; k < blended.size(); ++k) {
+    const double v1 = (blended[k - 1] - blended[k - 2]).norm() / kPeriod, v2 = (blended[k] - blended[k - 1]).norm() / kPeriod;
+    ASSERT_LE(std::abs(v2 - v1), 0.5 * kPeriod * 1.01 + 1e-9) << "period " << k;
+  }
+  // the final target is reached as without blend: C, to the IK tolerance (1e-9 m)
+  EXPECT_LT((blended.back() - C).norm(), 1e-8);
+  EXPECT_LT((stopped.back() - C).norm(), 1e-8);
+  // and it takes less time: no stop at B
+  std::size_t arrive_blended = 0, arrive_stopped = 0;
+  while (arrive_blended + 1 < blended.size() && (blended[arrive_blended] - C).norm() > 1e-8) ++arrive_blended;
+  while (arrive_stopped + 1 < stopped.size() && (stopped[arrive_stopped] - C).norm() > 1e-8) ++arrive_stopped;
+  EXPECT_LT(arrive_blended, arrive_stopped);
+}
+
+// movec's r: a quarter circle (radius 0.1 m, centre 0.1 m along -x of the ready pose) to B,
+// blended into a line at a right angle to the arc's end tangent
+TEST_F(BlendTest, MovecWithRadiusBlendsIntoTheNextLineAlongItsTangent) {
+  auto r = Make({{"pa10", "local a = pose()\n"
+                          "local o = a.pos + vec3(-0.1, 0, 0)\n"
+                          "B = frame(o + vec3(0, 0.1, 0), a.rot)\n"
+                          "C = frame(o + vec3(0, 0.2, 0), a.rot)\n"
+                          "movec(o + vec3(0.1 / math.sqrt(2), 0.1 / math.sqrt(2), 0), B, {r = 0.02})\n"
+                          "movel(C)\n"
+                          "print(B.x, B.y, B.z, C.x, C.y, C.z)\n"}});
+  ASSERT_TRUE(RunFor(*r, 5000)) << r->error();
+  for (int k = 0; k < 1500; ++k) ASSERT_TRUE(r->Step((5000 + k) * kPeriod, nullptr));
+  Eigen::Vector3d B, C;
+  std::istringstream in(printed_.back().substr(printed_.back().find(": ") + 2));
+  in >> B[0] >> B[1] >> B[2] >> C[0] >> C[1] >> C[2];
+  const std::vector<Eigen::Vector3d> p = ToolPath();
+  double d_min = 1e9, v_near = 1e9, turn_max = 0;
+  for (std::size_t k = 0; k < p.size(); ++k) d_min = std::min(d_min, (p[k] - B).norm());
+  for (std::size_t k = 2; k < p.size(); ++k) {
+    const Eigen::Vector3d v1 = (p[k - 1] - p[k - 2]) / kPeriod, v2 = (p[k] - p[k - 1]) / kPeriod;
+    if ((p[k] - B).norm() < 2 * r_) v_near = std::min(v_near, v2.norm());
+    if (v1.norm() > 0.5 * v_ && v2.norm() > 0.5 * v_) turn_max = std::max(turn_max, std::acos(std::clamp(v1.normalized().dot(v2.normalized()), -1.0, 1.0)));
+  }
+  EXPECT_LE(d_min, r_);
+  EXPECT_GT(d_min, 0.25 * r_);
+  EXPECT_GT(v_near, 0.95 * v_);  // no stop at B
+  // the direction of motion turns smoothly: on the arc by v T / R = 2 mrad per period; a blend
+  // that left the arc along the chord to B instead of its tangent would turn by about
+  // r / (2 R) = 0.1 rad at once; the curve's own sharpest bend is about v T / (0.35 r) = 0.03 rad
+  EXPECT_LT(turn_max, 0.05);
+  EXPECT_LT((p.back() - C).norm(), 1e-8);
+  std::printf("movec blend: closest %.3f mm, slowest near B %.4f m/s, sharpest turn %.4f rad per period\n",
+              d_min * 1e3, v_near, turn_max);
+}
+
+TEST_F(BlendTest, RadiusOverHalfASegmentIsAnErrorAtItsLine) {
+  // the first segment is 0.10 m long: r = 0.06 m is more than half of it
+  auto first = Make({{"pa10", std::string(kCorner) + "movel(B, {r = 0.06})\nmovel(C)\n"}});
+  EXPECT_FALSE(RunFor(*first, 5000));
+  EXPECT_NE(first->error().find("pa10.lua:4: movel: the blend radius r = 0.06 m is larger than half of this move "
+                                "(0.1 m): at most 0.05 m"),
+            std::string::npos)
+      << first->error();
+  // the second one, 0.05 m from B, cannot take the 0.04 m radius of the first (blend() sets it)
+  auto second = Make({{"pa10b", std::string(kCorner) + "blend(0.04)\nmovel(B)\nblend(0)\n"
+                                "movel(frame(B.pos + vec3(0, 0.05, 0), B.rot))\n"}});
+  EXPECT_FALSE(RunFor(*second, 5000));
+  EXPECT_NE(second->error().find("pa10b.lua:7: movel: the blend radius r = 0.04 m of the move before is larger "
+                                 "than half of this move (0.05 m from the corner): at most 0.025 m"),
+            std::string::npos)
+      << second->error();
 }
 
 }  // namespace
