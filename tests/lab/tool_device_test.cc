@@ -69,6 +69,7 @@ DeviceConfig ToolConfig(double reach) {
   p.max_angular_speed = 1.0;
   p.workspace_min = {0.3, -0.5, 0.2};
   p.workspace_max = {1.2, 0.5, 1.2};
+  p.reach = ToolParams::Reach::kFixed;
   p.reach_centre = {kShoulder.x(), kShoulder.y(), kShoulder.z()};
   p.reach_radius = reach;
   p.tilt_axis = {0, 0, -1};
@@ -222,6 +223,44 @@ TEST_F(ToolDeviceTest, RefusesMalformedAndOutOfLimitCommands) {
     const Eigen::Quaterniond q(Eigen::AngleAxisd(tilt * kDeg, Eigen::Vector3d::UnitY()) * down);
     EXPECT_EQ(check(p, q), tilt < 60 ? bridge::CommandCheck::kAccept : bridge::CommandCheck::kLimits) << tilt;
   }
+  // the served endpoint refuses (and counts by reason) with the same check
+  bridge::EndpointConfig endpoint;
+  rig.tool->ConfigureEndpoint(100, &endpoint);
+  EXPECT_EQ(endpoint.kind, bridge::DeviceKind::kTool);
+  EXPECT_EQ(endpoint.command_length, 7);
+  EXPECT_TRUE(endpoint.status_first);
+  ASSERT_TRUE(endpoint.check_command);
+  const Eigen::Vector3d far = kShoulder + (rig.reach + 0.001) * out;
+  EXPECT_EQ(endpoint.check_command({far.x(), far.y(), far.z(), down.w(), down.x(), down.y(), down.z()}),
+            bridge::CommandCheck::kLimits);
+}
+
+TEST_F(ToolDeviceTest, ByDefaultRefusesWhatNoPostureReaches) {
+  // reach auto: from S1's anchor (0, 0, 0.2), the chain's length; with the arm straight up
+  // (q = 0) every anchor and the tool site lie on the z axis, so that length is the tool
+  // site's height above the anchor there
+  mjModel* m = LoadModel("scenes/pa10.xml");
+  mjData* d = MakeData(m);
+  mj_forward(m, d);
+  const Eigen::Vector3d anchor(0, 0, 0.2);
+  const double length = (Eigen::Map<const Eigen::Vector3d>(d->site_xpos + 3 * mj_name2id(m, mjOBJ_SITE, "tool")) -
+                         anchor).norm();
+  DeviceConfig c = ToolConfig(1.0);
+  c.EditParams<ToolParams>().reach = ToolParams::Reach::kAuto;
+  c.EditParams<ToolParams>().workspace_min = {-2, -2, -2};
+  c.EditParams<ToolParams>().workspace_max = {2, 2, 2};
+  c.EditParams<ToolParams>().max_tilt_deg = 180;
+  auto arm = SimArm::Create({m, kPeriod, 1, "pa10.xml"}, ArmConfig());
+  auto tool = MakeDevice({m, kPeriod, 1, "pa10.xml"}, c);
+  tool->Bind({arm.get(), tool.get()});
+  const Eigen::Vector3d out = Eigen::Vector3d(0.6, -0.3, 0.2).normalized();
+  auto check = [&](double r) {
+    const Eigen::Vector3d p = anchor + r * out;
+    return tool->CheckCommand({p.x(), p.y(), p.z(), 1, 0, 0, 0});
+  };
+  EXPECT_EQ(check(length - 0.001), bridge::CommandCheck::kAccept);
+  EXPECT_EQ(check(length + 0.001), bridge::CommandCheck::kLimits);
+  EXPECT_GT(length, 1.0);  // 0.115 + 0.45 + 0.5 + 0.08 m of links, and the JR3 and tool below the site
 }
 
 TEST_F(ToolDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
@@ -263,6 +302,9 @@ TEST(ToolScenarioTest, ScenarioKeysAndRules) {
                      "workspace: {min: [0.3, -0.5, 0.4], max: [1.1, 0.5, 1.2]}, "
                      "reach: {centre: [0, 0, 0.315], radius: 1.0}, tilt: {axis: [0, 0, -1], max_deg: 90}}\n"),
             "");
+  EXPECT_EQ(error_of("  - {name: tool, kind: tool, arm: pa10, reach: off}\n"), "");
+  EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, reach: far}\n").find("reach: is auto, off or"),
+            std::string::npos);
   EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: nope}\n").find("no arm device 'nope'"), std::string::npos);
   EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, reach: {radius: 0}}\n").find("reach.radius: must be > 0"),
             std::string::npos);

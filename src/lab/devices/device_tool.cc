@@ -10,7 +10,8 @@
 //           orientation it should take (unit quaternion), world frame;
 //           refused (malformed) when not finite or |q| is not 1 +- 0.001;
 //           refused (limits) outside the workspace box, beyond the reach
-//           sphere, or with the tool's z axis outside the tilt cone
+//           sphere (by default the chain's length from its first joint: no
+//           posture gets there), or with the tool's z axis outside the tilt cone
 //   output  [status, x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz]: the
 //           site's pose, linear (m/s) and angular (rad/s) velocity, world
 //           frame (qw >= 0); status kStatusHolding while holding
@@ -69,6 +70,8 @@ class SimTool final : public Device {
       box_max_[i] = config_.workspace_max[i];
     }
     reach_centre_ = Eigen::Vector3d(config_.reach_centre[0], config_.reach_centre[1], config_.reach_centre[2]);
+    reach_radius_ = config_.reach == ToolParams::Reach::kFixed ? config_.reach_radius : INFINITY;
+    if (config_.reach == ToolParams::Reach::kAuto) ChainLength();
     tilt_axis_ = Eigen::Vector3d(config_.tilt_axis[0], config_.tilt_axis[1], config_.tilt_axis[2]).normalized();
     cos_max_tilt_ = std::cos(config_.max_tilt_deg * M_PI / 180);
     q_.setZero(chain_->dof());
@@ -136,7 +139,7 @@ class SimTool final : public Device {
     for (int i = 0; i < 3; ++i) {
       if (p[i] < box_min_[i] || p[i] > box_max_[i]) return bridge::CommandCheck::kLimits;
     }
-    if ((p - reach_centre_).norm() > config_.reach_radius) return bridge::CommandCheck::kLimits;
+    if ((p - reach_centre_).norm() > reach_radius_) return bridge::CommandCheck::kLimits;
     const Eigen::Vector3d tool_z = q.normalized() * Eigen::Vector3d::UnitZ();
     if (tool_z.dot(tilt_axis_) < cos_max_tilt_) return bridge::CommandCheck::kLimits;
     return bridge::CommandCheck::kAccept;
@@ -185,6 +188,9 @@ class SimTool final : public Device {
   }
 
   void Sample(const mjData& d, double) override {
+    if (config_.reach == ToolParams::Reach::kAuto) {
+      reach_centre_ = Eigen::Map<const Eigen::Vector3d>(d.xanchor + 3 * chain_->joint_ids().front());
+    }
     p_ = Eigen::Map<const Eigen::Vector3d>(d.site_xpos + 3 * site_);
     const Eigen::Matrix3d R_WS = Eigen::Map<const Matrix3RowMajor>(d.site_xmat + 9 * site_);
     q_WS_ = Eigen::Quaterniond(R_WS);
@@ -227,17 +233,39 @@ class SimTool final : public Device {
                         {"watchdog", bridge::kStatusWatchdog}, {"not_owner", bridge::kStatusNotOwner}};
     // an unbounded side or reach reads null
     j["limits"] = {{"workspace_min", config_.workspace_min}, {"workspace_max", config_.workspace_max},
-                   {"reach_centre", config_.reach_centre},   {"reach", config_.reach_radius},
+                   {"reach_centre", {reach_centre_.x(), reach_centre_.y(), reach_centre_.z()}},
+                   {"reach", reach_radius_},
                    {"tilt_axis", config_.tilt_axis},         {"max_tilt_deg", config_.max_tilt_deg},
                    {"speed_max", config_.max_speed},         {"angular_speed_max", config_.max_angular_speed},
                    {"quaternion_norm_tolerance", kQuaternionNormTolerance}};
     j["gains"] = {{"position", config_.k_position}, {"orientation", config_.k_orientation},
                   {"null_space", config_.k_null}, {"damping", config_.damping}};
+    j["limits"]["reach_mode"] = config_.reach == ToolParams::Reach::kAuto    ? "auto"
+                                : config_.reach == ToolParams::Reach::kFixed ? "fixed"
+                                                                              : "off";
     j["watchdog_periods"] = config_.input.watchdog_periods;
     return j.dump();
   }
 
  private:
+  // the reach sphere of kAuto: the anchors of the chain's joints and the site
+  // at the model's reference posture; the distances between them are those of
+  // every posture (each lies on one rigid link)
+  void ChainLength() {
+    std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(model_), mj_deleteData);
+    if (!d) throw InputError(who() + ": cannot allocate MuJoCo data");
+    mj_kinematics(model_, d.get());
+    const std::vector<int>& joints = chain_->joint_ids();
+    reach_radius_ = 0;
+    for (std::size_t i = 0; i < joints.size(); ++i) {
+      const Eigen::Map<const Eigen::Vector3d> a(d->xanchor + 3 * joints[i]);
+      const Eigen::Map<const Eigen::Vector3d> b(i + 1 < joints.size() ? d->xanchor + 3 * joints[i + 1]
+                                                                      : d->site_xpos + 3 * site_);
+      reach_radius_ += (b - a).norm();
+    }
+    reach_centre_ = Eigen::Map<const Eigen::Vector3d>(d->xanchor + 3 * joints.front());
+  }
+
   // the chain's joint positions and velocities out of mjData (no allocation)
   void ReadChain(const mjData& d) {
     for (int i = 0; i < chain_->dof(); ++i) {
@@ -257,6 +285,7 @@ class SimTool final : public Device {
   double box_min_[3] = {0, 0, 0}, box_max_[3] = {0, 0, 0};
   Eigen::Vector3d reach_centre_ = Eigen::Vector3d::Zero(), tilt_axis_ = -Eigen::Vector3d::UnitZ();
   double cos_max_tilt_ = -1;
+  double reach_radius_ = INFINITY;  // m
   Eigen::VectorXd q_, qd_;
   bridge::ArmCommand velocity_, hold_;
   Eigen::Vector3d p_cmd_ = Eigen::Vector3d::Zero(), p_set_ = Eigen::Vector3d::Zero();
@@ -301,11 +330,19 @@ std::shared_ptr<const DeviceParams> ReadToolParams(MapReader& r) {
     if (!(p->workspace_min[i] < p->workspace_max[i])) box.Fail("max", "must be > min in x, y and z");
   }
   box.Finish();
-  MapReader reach = r.Map("reach");
-  p->reach_centre = Vector3(reach, "centre", p->reach_centre);
-  p->reach_radius = reach.Number("radius", p->reach_radius);
-  if (!(p->reach_radius > 0)) reach.Fail("radius", "must be > 0 m");
-  reach.Finish();
+  const YAML::Node reach_node = r.Raw("reach");
+  if (reach_node.IsDefined() && reach_node.IsScalar()) {
+    const std::string mode = reach_node.Scalar();
+    if (mode != "auto" && mode != "off") r.Fail("reach", "is auto, off or {centre: [x, y, z], radius: m}");
+    p->reach = mode == "auto" ? ToolParams::Reach::kAuto : ToolParams::Reach::kOff;
+  } else if (reach_node.IsDefined()) {
+    MapReader reach = r.Map("reach");
+    p->reach = ToolParams::Reach::kFixed;
+    p->reach_centre = Vector3(reach, "centre", p->reach_centre);
+    p->reach_radius = reach.Number("radius");
+    if (!(p->reach_radius > 0)) reach.Fail("radius", "must be > 0 m");
+    reach.Finish();
+  }
   MapReader tilt = r.Map("tilt");
   p->tilt_axis = Vector3(tilt, "axis", p->tilt_axis);
   if (Eigen::Vector3d(p->tilt_axis[0], p->tilt_axis[1], p->tilt_axis[2]).norm() < 1e-9) {

@@ -30,8 +30,13 @@ struct ToolParams : DeviceParams {
   /// Workspace box, world frame, m: positions outside [min, max] are refused (limits).
   std::vector<double> workspace_min = {-kInf, -kInf, -kInf};
   std::vector<double> workspace_max = {kInf, kInf, kInf};
-  /// Reach sphere, world frame: positions farther than reach_radius from
-  /// reach_centre are refused (limits); an infinite radius: no check.
+  /// Reach sphere: positions farther than the radius from the centre are
+  /// refused (limits). kAuto (the default): centred on the chain's first
+  /// joint's anchor (where it is at each period's end), radius the sum of the
+  /// distances anchor to anchor along the chain and on to the site (rigid
+  /// links: no posture reaches farther); kFixed: reach_centre (world frame, m)
+  /// and reach_radius (m); kOff: no check.
+  enum class Reach { kAuto, kFixed, kOff } reach = Reach::kAuto;
   std::vector<double> reach_centre = {0, 0, 0};
   double reach_radius = kInf;
   /// Tool-axis cone: orientations whose tool z axis is more than max_tilt_deg
