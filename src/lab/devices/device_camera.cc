@@ -231,6 +231,7 @@ void SimCamera::WorkerMain() {
     SetThreadRealtime(worker_value);
   } else {
     ::setpriority(PRIO_PROCESS, tid, worker_value);
+    SetThreadSlice(0);  // the scheduler's default slice, not the control thread's short one it inherited
   }
   w.tid = static_cast<long>(tid);  // (set: for the tests)
   // everything GL lives and dies on this thread
