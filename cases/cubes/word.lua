@@ -66,11 +66,20 @@ local function turn_to(yaw)
   movej(q)
 end
 
+-- the arm's redundancy back to S3 = 0 with the tool held still (a null-space move): straight-line
+-- paths solve the inverse kinematics by minimum-norm steps, which let the elbow drift about the
+-- shoulder-wrist line; over a few letters S3 or S1 walked into its limit
+local function relax()
+  local s3 = joints()[3]
+  if math.abs(s3) > 5 then selfmove{joint = 3, by = -s3, t = math.max(0.5, math.abs(s3) / 45)} end
+end
+
 -- PICK: the cube `c` (from cubes.describe) with the tool at `yaw`
 local function pick(g, c, yaw)
   local above = at(c.pos + vec3(0, 0, S.lift), yaw)
   local grasp = at(vec3(c.pos.x, c.pos.y, math.max(c.pos.z, M.table_z + cubes.EDGE / 2) + S.grasp_up), yaw)
   g:open(S.open)
+  relax()
   turn_to(yaw)
   movel(above)
   wait(function() return g:opening() > S.open - 0.004 end, 2.0)
@@ -93,6 +102,7 @@ end
 local function place(g, slot, yaw)
   local over = at(slot.pos + vec3(0, 0, S.lift), yaw)
   local down = at(vec3(slot.pos.x, slot.pos.y, M.table_z + cubes.EDGE / 2 + S.place_up + S.grasp_up), yaw)
+  relax()
   turn_to(yaw)
   movel(over)
   movel(down, {v = S.v_near})
