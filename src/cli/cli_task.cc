@@ -1,4 +1,5 @@
 // vlab task SCRIPT --arm HOST:PORT [--wrench HOST:PORT] [--device KIND=HOST:PORT]
+//                  (KIND a float64 kind, or markers: a vision program)
 //                  --scene MJCF --tip SITE: runs a task-language script
 // (src/task/) against devices over UDP: vlab serve, vlab run's external
 // controller seam, vlab-kinsim or a real driver. The same script as a scenario's
@@ -58,6 +59,7 @@ int Task(const TaskArgs& a) {
   task::RuntimeConfig rc;
   rc.period_s = a.period_s > 0 ? a.period_s : (devices.control_hz() > 0 ? 1.0 / devices.control_hz() : 0.002);
   rc.seed = static_cast<std::uint64_t>(a.seed);
+  rc.markers_hold = !devices.realtime();  // lockstep: markers:next() holds the period for its frame
   const bool quiet = a.quiet;
   rc.print = [quiet](const std::string& who, double t, const std::string& text) {
     if (quiet) return;
@@ -85,7 +87,10 @@ int Task(const TaskArgs& a) {
       std::fprintf(stderr, "vlab task: %s (the script had not ended)\n", e.what());
       return 1;
     }
-    if (t0 < 0) t0 = t;
+    if (t0 < 0) {
+      t0 = t;
+      devices.set_time_origin(t0);
+    }
     if (!runtime->Step(t - t0, nullptr)) {
       std::fprintf(stderr, "vlab task: %s\n", runtime->error().c_str());
       return 1;
@@ -110,7 +115,8 @@ Subcommand AddTaskCommand(CLI::App& app) {
   cmd->add_option("script", a->script, "The .lua script")->required();
   cmd->add_option("--arm", a->arm, "The arm the script moves: HOST:PORT")->required();
   cmd->add_option("--wrench", a->wrenches, "A wrench (force/torque) device: HOST:PORT (repeatable)");
-  cmd->add_option("--device", a->devices, "Any float64 device: KIND=HOST:PORT, e.g. gripper=127.0.0.1:50020 (repeatable)");
+  cmd->add_option("--device", a->devices, "Any float64 device, or a markers device (vlab vision): KIND=HOST:PORT, e.g. "
+                  "gripper=127.0.0.1:50020, markers=127.0.0.1:50014 (repeatable)");
   cmd->add_option("--scene", a->scene, "MJCF with the arm's kinematic chain (e.g. scenes/pa10.xml)")->required();
   cmd->add_option("--tip", a->tip_site, "Site at the tool flange (e.g. tool)")->required();
   cmd->add_option("--base", a->base_body, "Body the chain starts from")->capture_default_str();

@@ -52,7 +52,10 @@ RunSession::RunSession(Lab::Impl& lab, const RunOptions& options)
       t_start_(WallClock::now()) {}
 
 // the MuJoCo error cleanup (the staging folder's removal) ends with the run, however it ends
-RunSession::~RunSession() { SetMujocoErrorCleanup(nullptr); }
+RunSession::~RunSession() {
+  SetMujocoErrorCleanup(nullptr);
+  if (s_.task) s_.task->SetIdle(nullptr);  // the bridge goes with the session
+}
 
 void RunSession::Prepare() {
   InstallMujocoHandlers();
@@ -87,6 +90,8 @@ void RunSession::Prepare() {
   // the wire: bind every served device before anything is written
   if (serve) {
     bridge_ = s_.MakeBridge(*serve, clock_->name());
+    // a task program waiting in wall time (markers) lets the lab serve meanwhile
+    if (s_.task) s_.task->SetIdle([b = bridge_.get()] { b->Poll(0.0); });
     if (options_.on_serving && !external_) options_.on_serving(bridge_->Devices());
   }
   // outputs: staging folder (removed on a MuJoCo error too), log

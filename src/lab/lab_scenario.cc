@@ -78,6 +78,26 @@ ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
   const double budget = r.Number("instruction_budget", static_cast<double>(c.instruction_budget));
   if (!(budget >= 1000 && budget <= 1e12)) r.Fail("instruction_budget", "must be between 1000 and 1e12");
   c.instruction_budget = static_cast<long>(budget);
+  // markers: {NAME: HOST:PORT}: vision programs beside the lab (docs/tasks.md)
+  const YAML::Node markers = r.Raw("markers");
+  if (markers && !markers.IsNull()) {
+    if (!markers.IsMap()) r.Fail("markers", "expected a mapping NAME: HOST:PORT (e.g. {vision: 127.0.0.1:50014})");
+    for (const auto& kv : markers) {
+      const std::string name = kv.first.as<std::string>();
+      const std::string endpoint = kv.second.IsScalar() ? kv.second.as<std::string>() : "";
+      const auto colon = endpoint.rfind(':');
+      int port = 0;
+      try {
+        port = colon == std::string::npos ? 0 : std::stoi(endpoint.substr(colon + 1));
+      } catch (const std::exception&) {
+        port = 0;
+      }
+      if (colon == std::string::npos || colon == 0 || port < 1 || port > 65535) {
+        r.Fail("markers", "'" + name + "': expected HOST:PORT (port 1..65535), got '" + endpoint + "'");
+      }
+      c.markers[name] = endpoint;
+    }
+  }
   const YAML::Node programs = r.Sequence("programs");
   if (programs.size() == 0) r.Fail("programs", "needs at least one program: {robot: ARM, script: FILE.lua, tip_site: SITE}");
   const std::filesystem::path dir = std::filesystem::path(r.file()).parent_path();

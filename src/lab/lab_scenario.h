@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -84,6 +85,9 @@ struct ControllerConfig {
   // task: robot programs in the task language, resumed in this order each period
   std::vector<TaskProgramEntry> programs;
   long instruction_budget = 10'000'000;  ///< Lua VM instructions per resume
+  /// markers devices the programs read (markers("NAME")): NAME -> "HOST:PORT"
+  /// of a vision program running beside the lab
+  std::map<std::string, std::string> markers;
   // joint_pd and task_space
   control::TimeScalingType timing = control::TimeScalingType::kQuintic;  ///< quintic | trapezoidal
   double start_s = 0.0;            ///< hold until this time, then follow the path

@@ -9,6 +9,7 @@
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
+#include "task/task_markers.h"
 #include "task/task_runtime.h"
 
 namespace vlab::lab {
@@ -98,20 +99,33 @@ class LabChannel final : public task::Channel {
 
 class LabDevices final : public task::Devices {
  public:
-  explicit LabDevices(const std::vector<Device*>& devices) {
+  LabDevices(const std::vector<Device*>& devices, const std::map<std::string, std::string>& markers) {
     for (Device* d : devices) {
       channels_.emplace(d->name(), std::make_unique<LabChannel>(d));
       names_.push_back(d->name());
+    }
+    // vision programs beside the lab: connected when a script first asks (markers(NAME)),
+    // when the lab serves the camera they read; tried for up to 10 s
+    for (const auto& [name, endpoint] : markers) {
+      markers_.emplace(name, std::make_unique<task::UdpMarkers>(name, endpoint, 10.0));
     }
   }
   task::Channel* Find(const std::string& name) override {
     const auto it = channels_.find(name);
     return it == channels_.end() ? nullptr : it->second.get();
   }
+  void SetIdle(const std::function<void()>& idle) {
+    for (auto& [name, m] : markers_) m->set_idle(idle);
+  }
+  task::MarkerChannel* FindMarkers(const std::string& name) override {
+    const auto it = markers_.find(name);
+    return it == markers_.end() ? nullptr : it->second.get();
+  }
   std::vector<std::string> Names() const override { return names_; }
 
  private:
   std::map<std::string, std::unique_ptr<LabChannel>> channels_;
+  std::map<std::string, std::unique_ptr<task::UdpMarkers>> markers_;
   std::vector<std::string> names_;
 };
 
@@ -132,11 +146,13 @@ TaskController::~TaskController() = default;
 std::unique_ptr<TaskController> TaskController::Create(const mjModel* model, const Scenario& scenario,
                                                        const std::vector<Device*>& devices) {
   auto impl = std::make_unique<Impl>();
-  impl->devices = std::make_unique<LabDevices>(devices);
+  impl->devices = std::make_unique<LabDevices>(devices, scenario.controller.markers);
   task::RuntimeConfig rc;
   rc.period_s = scenario.control_period_s;
   rc.seed = scenario.seed;
   rc.instruction_budget = scenario.controller.instruction_budget;
+  // the scenario's clock (vlab serve --clock may override it: realtime then still holds)
+  rc.markers_hold = scenario.clock != ClockMode::kRealtime;
   rc.print = [](const std::string& who, double t, const std::string& text) {
     std::printf("[%s t=%.3f] %s\n", who.c_str(), t, text.c_str());
     std::fflush(stdout);
@@ -169,6 +185,7 @@ bool TaskController::Update(double t_s, double* columns) {
   impl_->used = true;
   return impl_->runtime->Step(t_s, columns);
 }
+void TaskController::SetIdle(std::function<void()> idle) { impl_->devices->SetIdle(idle); }
 const std::string& TaskController::error() const { return impl_->runtime->error(); }
 
 }  // namespace vlab::lab

@@ -12,6 +12,7 @@
 // before; a syntax error is an InputError when the lab is created.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,6 +44,10 @@ class TaskController {
   /// the log columns. False when a program failed: error() says where.
   bool Update(double t_s, double* columns);
   const std::string& error() const;
+  /// Called while a script waits in wall time (markers:next() holding a
+  /// period, markers() connecting): the run serves its devices meanwhile
+  /// (LabBridge::Poll), so that the vision program can read the lab's camera.
+  void SetIdle(std::function<void()> idle);
 
  private:
   struct Impl;

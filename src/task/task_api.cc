@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 
 #include <lua.hpp>
 
@@ -50,6 +51,39 @@ _signal = nil
 function signal(name) raise(name) end
 function wait_signal(name, timeout)
   return wait(function() return take(name) end, timeout)
+end
+local m_open, m_due, m_take, m_poll, m_latest = _markers_open, _markers_due, _markers_take, _markers_poll, _markers_latest
+_markers_open, _markers_due, _markers_take, _markers_poll, _markers_latest = nil, nil, nil, nil, nil
+function markers(name)
+  m_open(name)
+  -- one period on: the camera renders only while someone listens, so frames queued before
+  -- the vision program was there are not rendered; from here on every frame is
+  yield()
+  local vis = {name = name}
+  function vis:next(timeout)
+    if timeout ~= nil and (type(timeout) ~= "number" or timeout < 0) then
+      error("markers:next: the timeout must be a number of seconds >= 0", 2)
+    end
+    local t0 = clock()
+    local t_end = timeout and (t0 + periods(timeout) * PERIOD - PERIOD / 2)
+    local due, frame_time = m_due(name, t0)
+    if due then  -- lockstep: to the period that delivers the frame, then hold for its markers
+      if t_end and due > t_end then
+        while clock() < t_end do yield() end
+        return nil
+      end
+      while clock() < due - PERIOD / 2 do yield() end
+      return m_take(name, frame_time)
+    end
+    while true do  -- realtime: the first state of a frame exposed at or after t0
+      local s = m_poll(name, t0)
+      if s then return s end
+      if t_end and clock() >= t_end then return nil end
+      yield()
+    end
+  end
+  function vis:latest() return m_latest(name) end
+  return vis
 end
 function gripper(name)
   local d = device(name)
@@ -408,6 +442,143 @@ int Device(lua_State* L) {
   return 1;
 }
 
+// ---- markers(NAME): a markers device (kind 5), through task_markers.h
+MarkerChannel* MarkersArg(lua_State* L) {
+  const char* name = luaL_checkstring(L, 1);
+  MarkerChannel* m = P(L)->devices->FindMarkers(name);
+  if (!m) ScriptError(L, "markers: no markers device named '%s'", name);
+  return m;
+}
+int MarkersOpen(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  char why[512] = "";
+  try {
+    m->Open();
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  return 0;
+}
+void PushMarkerFrame(lua_State* L, const Eigen::Matrix4d& T) {
+  Frame f;
+  f.p = T.block<3, 1>(0, 3);
+  f.q = Eigen::Quaterniond(Eigen::Matrix3d(T.block<3, 3>(0, 0))).normalized();
+  PushFrame(L, f);
+}
+// {seq, time, described, unknown, markers = {{dictionary, id, valid, error, camera, world}, ...}}
+void PushMarkersState(lua_State* L, const bridge::MarkersClient::State& s) {
+  lua_createtable(L, 0, 5);
+  lua_pushinteger(L, static_cast<lua_Integer>(s.seq));
+  lua_setfield(L, -2, "seq");
+  lua_pushnumber(L, s.time);
+  lua_setfield(L, -2, "time");
+  lua_pushinteger(L, s.described);
+  lua_setfield(L, -2, "described");
+  lua_pushinteger(L, s.unknown);
+  lua_setfield(L, -2, "unknown");
+  lua_createtable(L, static_cast<int>(s.markers.size()), 0);
+  for (std::size_t i = 0; i < s.markers.size(); ++i) {
+    const bridge::MarkersClient::Marker& m = s.markers[i];
+    lua_createtable(L, 0, 6);
+    const bridge::MarkerDictionary* d = bridge::FindMarkerDictionary(m.dictionary);
+    lua_pushstring(L, d ? d->name : "?");
+    lua_setfield(L, -2, "dictionary");
+    lua_pushinteger(L, m.id);
+    lua_setfield(L, -2, "id");
+    lua_pushboolean(L, m.valid);
+    lua_setfield(L, -2, "valid");
+    lua_pushnumber(L, m.reprojection_error_px);
+    lua_setfield(L, -2, "error");
+    PushMarkerFrame(L, m.T_camera_marker);
+    lua_setfield(L, -2, "camera");
+    if (m.world_valid) {
+      PushMarkerFrame(L, m.T_world_marker);
+      lua_setfield(L, -2, "world");
+    }
+    lua_rawseti(L, -2, static_cast<lua_Integer>(i + 1));
+  }
+  lua_setfield(L, -2, "markers");
+}
+// (due, frame_time): the period that delivers the wanted frame; nothing when not holding
+int MarkersDue(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  const double t0 = Number(L, 2, "markers:next");
+  const CameraTiming timing = m->timing();
+  if (!P(L)->markers_hold || !(timing.fps > 0)) return 0;
+  double frame_time = 0;
+  const double due = MarkersFrameDue(timing, P(L)->period_s, t0, &frame_time);
+  lua_pushnumber(L, due);
+  lua_pushnumber(L, frame_time);
+  return 2;
+}
+// the markers state of the frame stamped frame_time: waits (wall time) while the period is held
+int MarkersTake(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  const double frame_time = Number(L, 2, "markers:next");
+  const double wait_s = P(L)->markers_wait_s;
+  auto s = std::make_unique<bridge::MarkersClient::State>();
+  char why[512] = "";
+  try {
+    if (!m->WaitFor(frame_time, wait_s, s.get())) {
+      std::snprintf(why, sizeof why,
+                    "no markers state of the camera frame stamped %.6g s within %g s of waiting (is the vision "
+                    "program running, and its camera served?)",
+                    frame_time, wait_s);
+    } else if (std::fabs(s->time - frame_time) > 1e-6) {
+      std::snprintf(why, sizeof why,
+                    "waited for the camera frame stamped %.6g s and got the one stamped %.6g s: the camera's schedule "
+                    "is not the one its describe reply gives (fps, exposure_s, latency_s)",
+                    frame_time, s->time);
+    }
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) {
+    s.reset();
+    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  }
+  PushMarkersState(L, *s);
+  return 1;
+}
+int MarkersPoll(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  const double t0 = Number(L, 2, "markers:next");
+  auto s = std::make_unique<bridge::MarkersClient::State>();
+  char why[512] = "";
+  bool got = false;
+  try {
+    got = m->Poll(t0, s.get());
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) {
+    s.reset();
+    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  }
+  if (!got) return 0;
+  PushMarkersState(L, *s);
+  return 1;
+}
+int MarkersLatest(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  auto s = std::make_unique<bridge::MarkersClient::State>();
+  char why[512] = "";
+  bool got = false;
+  try {
+    got = m->Latest(s.get());
+  } catch (const std::exception& e) {
+    std::snprintf(why, sizeof why, "%s", e.what());
+  }
+  if (why[0]) {
+    s.reset();
+    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
+  }
+  if (!got) return 0;
+  PushMarkersState(L, *s);
+  return 1;
+}
+
 // ---- blackboard
 int SharedIndex(lua_State* L) {
   const char* key = luaL_checkstring(L, 2);
@@ -511,7 +682,9 @@ void OpenApi(Program* p) {
       {"_signal", Signal},       {"_take_signal", TakeSignal}, {"now", Now},           {"joints", Joints},
       {"pose", Pose},            {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
       {"speed", SetSpeed},       {"accel", SetAccel},        {"jspeed", SetJointSpeed}, {"tool", SetTool},
-      {"base", SetBase},         {"device", Device},         {nullptr, nullptr}};
+      {"base", SetBase},         {"device", Device},         {"_markers_open", MarkersOpen},
+      {"_markers_due", MarkersDue}, {"_markers_take", MarkersTake}, {"_markers_poll", MarkersPoll},
+      {"_markers_latest", MarkersLatest}, {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, functions, 0);
   lua_pop(L, 1);

@@ -73,6 +73,8 @@ struct Program {
   bool ended = false;
   double t_s = 0;                  ///< simulated time of the current period
   double period_s = 0.002;
+  bool markers_hold = true;        ///< RuntimeConfig::markers_hold
+  double markers_wait_s = 10.0;    ///< RuntimeConfig::markers_wait_s
   std::unique_ptr<Robot> robot;    ///< null for a program without a robot
   Devices* devices = nullptr;
   Blackboard* board = nullptr;

@@ -129,6 +129,8 @@ std::unique_ptr<Runtime> Runtime::Create(const RuntimeConfig& config, const mjMo
     p->index = static_cast<int>(i);
     p->label = c.robot.empty() ? std::filesystem::path(c.script).filename().string() : c.robot;
     p->period_s = config.period_s;
+    p->markers_hold = config.markers_hold;
+    p->markers_wait_s = config.markers_wait_s;
     p->devices = devices;
     p->board = &impl->board;
     p->sandbox.script_dir = std::filesystem::path(c.script).parent_path().string();

@@ -45,6 +45,13 @@ struct RuntimeConfig {
   double period_s = 0.002;
   std::uint64_t seed = 1;
   long instruction_budget = 10'000'000;  ///< VM instructions per resume
+  /// markers:next() under a lockstep or fast clock: advance to the period
+  /// that delivers the wanted camera frame, then hold the period (wall time)
+  /// until its markers state arrives, so that the run is reproducible. False
+  /// under a realtime clock: next() yields until a state of the frame or a
+  /// later one arrives.
+  bool markers_hold = true;
+  double markers_wait_s = 10.0;  ///< the longest hold (wall time): then a runtime error
   /// print() output of the programs: (robot or script name, simulated time, text).
   std::function<void(const std::string&, double, const std::string&)> print;
 };

@@ -3,6 +3,7 @@
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
+#include "task/task_markers.h"
 
 namespace vlab::task {
 
@@ -48,6 +49,10 @@ class UdpArm final : public Channel {
     arm_.ReadLatest(timeout_s, &state_);
     have_ = true;
     return state_.time;
+  }
+  std::string describe_clock() const {
+    const nlohmann::json& c = arm_.describe().value("clock", nlohmann::json());
+    return c.is_string() ? c.get<std::string>() : "";
   }
   double control_hz() const {
     const nlohmann::json& d = arm_.describe();
@@ -148,6 +153,7 @@ struct UdpDevices::Impl {
   std::vector<std::unique_ptr<UdpWrench>> wrenches;
   std::vector<std::unique_ptr<UdpDevice>> others;
   std::map<std::string, Channel*> by_name;
+  std::map<std::string, std::unique_ptr<UdpMarkers>> markers;
 };
 
 UdpDevices::UdpDevices() : impl_(std::make_unique<Impl>()) {}
@@ -166,6 +172,15 @@ void UdpDevices::Add(const std::string& kind, const std::string& endpoint, doubl
   std::string host;
   int port;
   SplitEndpoint(endpoint, "--" + kind, &host, &port);
+  if (kind == "markers") {
+    auto m = std::make_unique<UdpMarkers>("", endpoint, timeout_s);
+    m->Open();
+    if (impl_->by_name.count(m->name()) || impl_->markers.count(m->name())) {
+      throw InputError("two devices named '" + m->name() + "'");
+    }
+    impl_->markers[m->name()] = std::move(m);
+    return;
+  }
   const bridge::KindLayout* layout = bridge::FindKindLayout(kind);
   if (!layout || !layout->float64) throw InputError("--device: '" + kind + "' is not a float64 device kind");
   Channel* c = nullptr;
@@ -185,6 +200,19 @@ double UdpDevices::Receive(double timeout_s) {
   for (auto& w : impl_->wrenches) w->Receive(timeout_s);
   for (auto& d : impl_->others) d->Receive(timeout_s);
   return t;
+}
+
+void UdpDevices::set_time_origin(double t_s) {
+  for (auto& [name, m] : impl_->markers) m->set_time_origin(t_s);
+}
+
+bool UdpDevices::realtime() const {
+  return impl_->arm && impl_->arm->describe_clock() == "realtime";
+}
+
+MarkerChannel* UdpDevices::FindMarkers(const std::string& name) {
+  const auto it = impl_->markers.find(name);
+  return it == impl_->markers.end() ? nullptr : it->second.get();
 }
 
 double UdpDevices::control_hz() const { return impl_->arm ? impl_->arm->control_hz() : 0.0; }

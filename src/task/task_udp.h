@@ -30,8 +30,13 @@ class UdpDevices final : public Devices {
   /// pace Receive); its name comes from its describe reply.
   void AddArm(const std::string& endpoint, double timeout_s);
   /// Connects to a device of `kind` ("wrench", "gripper", ... any float64
-  /// kind) at "HOST:PORT".
+  /// kind, or "markers": a vision program, tried until timeout_s) at
+  /// "HOST:PORT".
   void Add(const std::string& kind, const std::string& endpoint, double timeout_s);
+  /// The devices' time of the runtime's time 0 (the arm's first state).
+  void set_time_origin(double t_s);
+  /// Whether the arm's describe reply says "clock": "realtime".
+  bool realtime() const;
 
   /// Waits up to timeout_s for the arm's next state and takes the newest of
   /// every other device. Returns the arm state's time (s). Throws TimeoutError.
@@ -42,6 +47,7 @@ class UdpDevices final : public Devices {
   const std::string& arm_name() const;
 
   Channel* Find(const std::string& name) override;
+  MarkerChannel* FindMarkers(const std::string& name) override;
   std::vector<std::string> Names() const override;
 
  private:

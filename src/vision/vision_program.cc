@@ -56,6 +56,10 @@ json CameraDescribe(const bridge::CameraClient& camera, const CameraModel& m, co
           {"width", m.width},
           {"height", m.height},
           {"fps", camera.fps()},
+          // the camera's schedule, as its describe reply gives it (null when it does not): a
+          // client that holds a lockstep clock for a frame's markers needs it (docs/tasks.md)
+          {"exposure_s", cd.value("exposure_s", json())},
+          {"latency_s", cd.value("latency_s", json())},
           {"intrinsics",
            {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
           {"distortion", camera.calibration().distortion},
