@@ -50,7 +50,7 @@ RandomizeConfig StageOne() {
   c.region = {0.40, 0.80, -0.40, 0.40};
   c.has_within = true;
   c.within_radius = 0.78;
-  c.exclude.push_back({0.405, 0.455, -0.13, 0.13});
+  c.exclude.push_back({0.655, 0.705, -0.13, 0.13});
   c.clearance_m = 0.04;
   c.surface_z = 0.20;
   c.where = "test";
@@ -62,7 +62,7 @@ TEST(RandomizeTest, ReadsEveryKey) {
   WriteFile(dir / "s.yaml", ScenarioText(std::string("  bodies: ") + kCubes +
                                          "\n  region: {x: [0.4, 0.8], y: [-0.4, 0.4]}\n"
                                          "  within: {center: [0, 0.1], radius: 0.78}\n"
-                                         "  exclude: [{x: [0.405, 0.455], y: [-0.13, 0.13]}]\n"
+                                         "  exclude: [{x: [0.655, 0.705], y: [-0.13, 0.13]}]\n"
                                          "  clearance: 0.03\n  surface: 0.2\n  drop: 0.0002\n"
                                          "  resting_face: 4\n  yaw: [-10, 10]\n"));
   const Scenario s = LoadScenario(dir / "s.yaml");
@@ -74,7 +74,7 @@ TEST(RandomizeTest, ReadsEveryKey) {
   EXPECT_TRUE(c.has_within);
   EXPECT_DOUBLE_EQ(c.within_center.y(), 0.1);
   ASSERT_EQ(c.exclude.size(), 1u);
-  EXPECT_DOUBLE_EQ(c.exclude[0].x_min, 0.405);
+  EXPECT_DOUBLE_EQ(c.exclude[0].x_min, 0.655);
   EXPECT_DOUBLE_EQ(c.clearance_m, 0.03);
   EXPECT_DOUBLE_EQ(c.surface_z, 0.2);
   EXPECT_DOUBLE_EQ(c.drop_m, 0.0002);
@@ -207,7 +207,7 @@ TEST(RandomizeTest, LabStartsFromTheLayout) {
   WriteFile(dir / "s.yaml", ScenarioText(std::string("  bodies: ") + kCubes +
                                          "\n  region: {x: [0.4, 0.8], y: [-0.4, 0.4]}\n"
                                          "  within: {center: [0, 0], radius: 0.78}\n"
-                                         "  exclude: [{x: [0.405, 0.455], y: [-0.13, 0.13]}]\n"
+                                         "  exclude: [{x: [0.655, 0.705], y: [-0.13, 0.13]}]\n"
                                          "  surface: 0.2\n"));
   Scenario s = LoadScenario(dir / "s.yaml");
   s.seed = 11;
