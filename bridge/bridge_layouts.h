@@ -197,6 +197,37 @@ inline constexpr LayoutField kSceneState[] = {
      kSensor},
 };
 
+inline constexpr LayoutField kWordState[] = {
+    {"spelled", "", "1 when every letter is within the describe reply's bounds, else 0"},
+    {"letter", "m, deg, deg, m/s, –",
+     "pos_error, yaw_error, tilt, speed, on_top of each letter of the describe reply's word, in order", kSensor},
+};
+inline constexpr LayoutField kToolState[] = {
+    {"status", "", "status bits (holding, refused, watchdog, not_owner)"},
+    {"x", "m", "where the tool is, world frame"},
+    {"y", "m", "where the tool is, world frame"},
+    {"z", "m", "where the tool is, world frame"},
+    {"qw", "", "the tool's orientation, world frame (unit quaternion)"},
+    {"qx", "", "the tool's orientation, world frame (unit quaternion)"},
+    {"qy", "", "the tool's orientation, world frame (unit quaternion)"},
+    {"qz", "", "the tool's orientation, world frame (unit quaternion)"},
+    {"vx", "m/s", "its linear velocity, world frame"},
+    {"vy", "m/s", "its linear velocity, world frame"},
+    {"vz", "m/s", "its linear velocity, world frame"},
+    {"wx", "rad/s", "its angular velocity, world frame"},
+    {"wy", "rad/s", "its angular velocity, world frame"},
+    {"wz", "rad/s", "its angular velocity, world frame"},
+};
+inline constexpr LayoutField kToolCommand[] = {
+    {"x", "m", "where the tool should go, world frame"},
+    {"y", "m", "where the tool should go, world frame"},
+    {"z", "m", "where the tool should go, world frame"},
+    {"qw", "", "the orientation it should take, world frame (unit quaternion)"},
+    {"qx", "", "the orientation it should take, world frame (unit quaternion)"},
+    {"qy", "", "the orientation it should take, world frame (unit quaternion)"},
+    {"qz", "", "the orientation it should take, world frame (unit quaternion)"},
+};
+
 }  // namespace layout_detail
 
 /// The table: one row per device kind, row i is kind i + 1.
@@ -227,6 +258,10 @@ inline constexpr KindLayout kKindLayouts[kMaxDeviceKind] = {
      "output only; a gate-time speed counter"},
     {DeviceKind::kScene, "scene", true, layout_detail::Fields(layout_detail::kSceneState), {},
      "output only; 7 values per visual body, published at the describe reply's rate_hz"},
+    {DeviceKind::kWord, "word", true, layout_detail::Fields(layout_detail::kWordState), {},
+     "output only; lab ground truth; 5 values per letter"},
+    {DeviceKind::kTool, "tool", true, layout_detail::Fields(layout_detail::kToolState),
+     layout_detail::Fields(layout_detail::kToolCommand), "a commanded and measured tool pose"},
 };
 
 namespace layout_detail {
@@ -257,7 +292,7 @@ static_assert(TableIsWellFormed(), "kKindLayouts: rows out of kind order, or a r
 /// Throws std::invalid_argument "<kind>: <what> field '<name>' has no fixed
 /// index (it follows a per-joint or per-sensor group)".
 [[noreturn]] void ThrowNotFixed(int kind, const char* what, std::string_view name);
-/// Throws std::invalid_argument "device kind <kind> is not one of 1..13".
+/// Throws std::invalid_argument "device kind <kind> is not one of 1..kMaxDeviceKind".
 [[noreturn]] void ThrowNoKind(int kind);
 /// Throws std::invalid_argument: FieldNames<N> of a list that is not N single values.
 [[noreturn]] void ThrowNotNames(std::size_t want, std::size_t have);

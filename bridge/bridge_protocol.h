@@ -71,8 +71,10 @@ enum class DeviceKind : int {
   kPose = 13,    ///< pose of a tracked frame, like a motion-capture system
   kCounter = 14,  ///< speed counter on a spinning joint (the PowerBall's rpm counter)
   kScene = 15,    ///< poses of every visual body, for viewers (vlab view)
+  kWord = 16,     ///< lettered cubes against their slots: is the word spelled (lab only)
+  kTool = 17,     ///< a commanded and measured tool pose (position and orientation)
 };
-inline constexpr int kMaxDeviceKind = 15;
+inline constexpr int kMaxDeviceKind = 17;
 enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3, kSubscribe = 4, kSession = 5 };
 
 /// Arm status bits (state payload value 0, as a whole number).

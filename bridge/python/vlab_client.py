@@ -63,10 +63,11 @@ MAX_SEQ = 2 ** 53
 KIND_ARM, KIND_WRENCH, KIND_SIM, KIND_CAMERA, KIND_MARKERS = 1, 2, 3, 4, 5
 KIND_BASE, KIND_GRIPPER, KIND_FEET, KIND_IMU, KIND_POINT = 6, 7, 8, 9, 10
 KIND_YOYO, KIND_GAZE, KIND_POSE, KIND_COUNTER, KIND_SCENE = 11, 12, 13, 14, 15
+KIND_WORD, KIND_TOOL = 16, 17
 KIND_NAMES = {KIND_ARM: "arm", KIND_WRENCH: "wrench", KIND_SIM: "sim", KIND_CAMERA: "camera",
               KIND_MARKERS: "markers", KIND_BASE: "base", KIND_GRIPPER: "gripper", KIND_FEET: "feet",
               KIND_IMU: "imu", KIND_POINT: "point", KIND_YOYO: "yoyo", KIND_GAZE: "gaze", KIND_POSE: "pose",
-              KIND_COUNTER: "counter", KIND_SCENE: "scene"}
+              KIND_COUNTER: "counter", KIND_SCENE: "scene", KIND_WORD: "word", KIND_TOOL: "tool"}
 KIND_CODES = {name: code for code, name in KIND_NAMES.items()}
 # kinds whose payload is not one float64 array per period: their own clients
 _NOT_FLOAT64 = {KIND_CAMERA: "docs/protocol_camera.md, class Camera", KIND_MARKERS: "docs/protocol_markers.md"}

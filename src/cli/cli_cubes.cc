@@ -1,7 +1,9 @@
 // vlab cubes --out DIR: writes the lettered cubes (face PNGs, MJCF fragments,
-// README) into DIR; with --scene FILE, also the cube scene: the PA10 scene
+// README) into DIR, one letter per cube (--letters) or alphabet blocks with a
+// letter per face (--faces); with --scene FILE, also the cube scene: the PA10 scene
 // with --count cubes at poses drawn from --seed and a webcam above the table.
 // The output is deterministic: the same options give the same bytes.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -21,6 +23,7 @@ namespace fs = std::filesystem;
 struct CubesArgs {
   std::string out_dir;
   std::string letters = "ABCDEF";
+  std::string faces;
   double size_m = 0.05;
   std::string dictionary = "4X4_50";
   int first_id = 0;
@@ -46,6 +49,15 @@ int Cubes(const CubesArgs& a, const CLI::App& cmd) {
     throw vlab::InputError("cubes: --dictionary '" + a.dictionary + "' is not one of " + known);
   }
   cubes.letters = a.letters;
+  if (cmd.count("--faces") > 0) {
+    if (cmd.count("--letters") > 0) throw vlab::InputError("cubes: --letters and --faces exclude each other");
+    std::size_t from = 0;
+    while (from <= a.faces.size()) {
+      const std::size_t comma = std::min(a.faces.find(',', from), a.faces.size());
+      cubes.faces.push_back(a.faces.substr(from, comma - from));
+      from = comma + 1;
+    }
+  }
   cubes.size_m = a.size_m;
   cubes.dictionary = dictionary->code;
   cubes.first_id = a.first_id;
@@ -73,9 +85,9 @@ int Cubes(const CubesArgs& a, const CLI::App& cmd) {
 
   vision::WriteGeneratedFiles(a.out_dir, files);
   if (!a.quiet) {
-    std::printf("vlab cubes: %zu cubes (%s), %s markers %d-%d of %s mm, %zu files in %s\n", cubes.letters.size(),
-                cubes.letters.c_str(), dictionary->name, vision::CubeMarkerId(cubes, 0, 0),
-                vision::CubeMarkerId(cubes, static_cast<int>(cubes.letters.size()) - 1, vision::kCubeFaces - 1),
+    std::printf("vlab cubes: %d cubes (%s), %s markers %d-%d of %s mm, %zu files in %s\n", vision::CubeCount(cubes),
+                vision::CubeSetOption(cubes).c_str(), dictionary->name, vision::CubeMarkerId(cubes, 0, 0),
+                vision::CubeMarkerId(cubes, vision::CubeCount(cubes) - 1, vision::kCubeFaces - 1),
                 vision::MjcfNumber(vision::CubeMarkerSide(cubes) * 1000).c_str(), files.size(), a.out_dir.c_str());
   }
   if (with_scene) {
@@ -94,12 +106,15 @@ Subcommand AddCubesCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "cubes", "Write the lettered cubes (face PNGs with ArUco markers, MJCF) and optionally their scene");
   cmd->add_option("--out", args->out_dir, "Folder for the cube files (e.g. mjcf/cubes)")->required();
-  cmd->add_option("--letters", args->letters, "One cube per letter, A-Z or 0-9 (default ABCDEF)");
+  cmd->add_option("--letters", args->letters, "One cube per letter, A-Z or 0-9, on all its faces (default ABCDEF)");
+  cmd->add_option("--faces", args->faces,
+                  "Alphabet blocks instead: one block per comma-separated entry, its six face letters in the order "
+                  "right left up down front back (e.g. AGMSY4,BHNTZ5)");
   cmd->add_option("--size", args->size_m, "Cube edge, m (default 0.05)");
   cmd->add_option("--dictionary", args->dictionary, "ArUco dictionary, e.g. 4X4_50 (default), 5X5_100, APRILTAG_36h11");
   cmd->add_option("--first-id", args->first_id, "Marker id of the first cube's first face (default 0)");
   cmd->add_option("--scene", args->scene, "Also write the cube scene (MJCF) to this file, e.g. scenes/pa10_cubes.xml");
-  cmd->add_option("--count", args->count, "Cubes in the scene: the first N letters (default 6)");
+  cmd->add_option("--count", args->count, "Cubes in the scene: the first N letters or blocks (default 6)");
   cmd->add_option("--seed", args->seed, "Seed of the cubes' poses (default 1)");
   cmd->add_option("--pa10", args->pa10_dir, "The PA10 model folder the scene includes (default mjcf/pa10)");
   cmd->add_flag("-q,--quiet", args->quiet, "No summary lines");

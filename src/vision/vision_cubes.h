@@ -1,5 +1,6 @@
 // The lettered cubes: a set of wooden-block cubes, one letter each, with an
-// ArUco marker and the cube's letter on every face, and their MJCF.
+// ArUco marker and the cube's letter on every face, and their MJCF; or a set
+// of alphabet blocks, six letters each, a different one on every face.
 //
 // Cube i of a set (letters[i]) has six faces in MuJoCo's cube-texture order
 // (CubeFace); the marker of face f has id first_id + 6 i + f. Files written
@@ -20,19 +21,20 @@
 
 #include <Eigen/Geometry>
 
+#include "vision/vision_cube_faces.h"
 #include "vision/vision_face.h"
 
 namespace vlab::vision {
 
-/// Faces in MuJoCo's cube-texture order (fileright, fileleft, fileup,
-/// filedown, filefront, fileback): the face's outward normal in the cube frame.
-enum CubeFace : int { kFacePlusX = 0, kFaceMinusX, kFacePlusY, kFaceMinusY, kFacePlusZ, kFaceMinusZ };
-inline constexpr int kCubeFaces = 6;
 /// "right", "left", "up", "down", "front", "back" (the texture attribute's suffix).
 const char* CubeFaceName(int face);
 
 struct CubeSetConfig {
-  std::string letters = "ABCDEF";  ///< one cube per letter (A-Z, 0-9), no repeats
+  std::string letters = "ABCDEF";  ///< one cube per letter (A-Z, 0-9), no repeats; unused with `faces`
+  /// Alphabet blocks: one entry per cube, its six face letters (A-Z, 0-9) in
+  /// CubeFace order; no two entries alike. Empty: one cube per letter of
+  /// `letters`, the letter on every face.
+  std::vector<std::string> faces;
   double size_m = 0.05;            ///< cube edge, m
   int dictionary = 0;              ///< MarkerDictionary::code (0: 4X4_50)
   int first_id = 0;                ///< marker id of the first cube's first face
@@ -44,8 +46,15 @@ struct CubeSetConfig {
 /// Throws InputError naming the option (letters, size, dictionary, ids).
 void CheckCubeSet(const CubeSetConfig& config);
 
-/// Body (and geom, material, texture) name of cube i: "cube_<L>".
+/// Number of cubes of the set.
+int CubeCount(const CubeSetConfig& config);
+/// The letter on face f of cube i.
+char CubeFaceLetter(const CubeSetConfig& config, int cube, int face);
+/// Body (and geom, material, texture) name of cube i: "cube_<L>", or for an
+/// alphabet block "cube_<its six letters>" (cube_AGMSY4).
 std::string CubeName(const CubeSetConfig& config, int cube);
+/// The set as `vlab cubes` options name it: "--letters ABCDEF" or "--faces AGMSY4,...".
+std::string CubeSetOption(const CubeSetConfig& config);
 /// Marker id of face f of cube i.
 int CubeMarkerId(const CubeSetConfig& config, int cube, int face);
 /// Marker side on the cube, m.

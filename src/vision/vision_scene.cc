@@ -53,10 +53,10 @@ std::string XyAxes(const Eigen::Vector3d& position, const Eigen::Vector3d& targe
 
 std::vector<CubePlacement> PlaceCubes(const CubeSetConfig& cubes, const CubeSceneConfig& s) {
   CheckCubeSet(cubes);
-  const int available = static_cast<int>(cubes.letters.size());
+  const int available = CubeCount(cubes);
   if (s.count < 1 || s.count > available) {
     throw vlab::InputError("cube scene: --count " + std::to_string(s.count) + " outside 1.." +
-                          std::to_string(available) + " (one cube per letter of --letters)");
+                          std::to_string(available) + " (one cube per letter of --letters, or per block of --faces)");
   }
   const double radius = cubes.size_m * std::sqrt(0.5);  // circumscribed circle of the footprint
   const double x_lo = s.x_min + radius, x_hi = s.x_max - radius;

@@ -39,6 +39,11 @@ json Expected(const KindLayout& k, const json& describe) {
   if (k.kind == DeviceKind::kFeet || k.kind == DeviceKind::kImu || k.kind == DeviceKind::kScene) {
     return LayoutJson(k.kind, describe.at("layout").at("state").get<std::vector<std::string>>());
   }
+  if (k.kind == DeviceKind::kWord) {  // spelled, then the letters' values
+    std::vector<std::string> values = describe.at("layout").at("state").get<std::vector<std::string>>();
+    if (!values.empty()) values.erase(values.begin());
+    return LayoutJson(k.kind, values);
+  }
   return LayoutJson(k.kind);
 }
 
@@ -70,11 +75,14 @@ TEST(DescribeLayoutsTest, EveryShippedScenariosDevicesDescribeTheTablesLayouts) 
                      "  - {name: gripper, kind: gripper, port: 50099}\n"
                      "  - {name: cube_pose, kind: pose, site: cube, port: 50098}\n"
                      "  - {name: gaze, kind: gaze, camera: overview, target: cube, width: 320, height: 240, "
-                     "port: 50097}\n");
+                     "port: 50097}\n"
+                     "  - {name: word, kind: word, word: A, slots: [cube], letters: {A: cube}, port: 50096}\n"
+                     "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n"
+                     "  - {name: tool, kind: tool, arm: pa10, port: 50095}\n");
   CheckScenario(dir / "served.yaml", &kinds);
   // every float64 kind the lab serves was seen
   const std::set<std::string> lab = {"arm",  "wrench", "sim",  "base",  "gripper", "feet",
-                                     "imu",  "point",  "yoyo", "gaze",  "pose", "scene"};
+                                     "imu",  "point",  "yoyo", "gaze",  "pose", "scene", "word", "tool"};
   EXPECT_EQ(kinds, lab);
 }
 

@@ -41,7 +41,7 @@ std::string ThrownBy(void (*f)()) {
 TEST(LayoutsTest, KindNamesAndCodesGoBothWays) {
   // the published codes: a kind's code never changes
   const char* names[] = {"arm",  "wrench", "sim",   "camera", "markers", "base", "gripper",
-                         "feet", "imu",    "point", "yoyo",   "gaze",    "pose", "counter", "scene"};
+                         "feet", "imu",    "point", "yoyo",   "gaze",    "pose", "counter", "scene", "word", "tool"};
   for (int kind = 1; kind <= static_cast<int>(std::size(names)); ++kind) {
     EXPECT_STREQ(KindName(kind), names[kind - 1]);
     EXPECT_EQ(KindFromName(names[kind - 1]), kind);

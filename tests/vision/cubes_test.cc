@@ -1,10 +1,13 @@
 // The lettered cubes (vision_cubes.h) and `vlab cubes`: marker frames on the
 // faces, the generated files, their equality with the committed mjcf/cubes and
 // scenes/pa10_cubes.xml, and bad options refused with exit code 2.
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "core/core_errors.h"
 #include "test_util.h"
@@ -90,6 +93,7 @@ TEST(CubesCommand, RegeneratesTheCommittedFilesByteForByte) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   int compared = 0;
   for (const auto& entry : fs::directory_iterator(VLAB_SOURCE_DIR "/mjcf/cubes")) {
+    if (entry.is_directory()) continue;  // blocks/: the alphabet blocks, below
     const std::string name = entry.path().filename().string();
     ASSERT_TRUE(fs::exists(tmp / ("mjcf/cubes/" + name))) << name << " is committed but not generated";
     EXPECT_TRUE(ReadFile(entry.path().string()) == ReadFile(tmp / ("mjcf/cubes/" + name))) << name << " differs";
@@ -99,6 +103,78 @@ TEST(CubesCommand, RegeneratesTheCommittedFilesByteForByte) {
   EXPECT_EQ(compared, 44);
   EXPECT_TRUE(ReadFile(VLAB_SOURCE_DIR "/scenes/pa10_cubes.xml") == ReadFile(tmp / "scenes/pa10_cubes.xml"))
       << "scenes/pa10_cubes.xml differs";
+}
+
+// the alphabet blocks of mjcf/cubes/blocks: one letter per face, A-F each on a different block
+constexpr const char* kBlocks = "AGMSY4,BHNTZ5,CIOU06,DJPV17,EKQW28,FLRX39";
+
+TEST(CubesCommand, RegeneratesTheCommittedBlocksByteForByte) {
+  TempDir tmp;
+  const auto r = RunVlab("cubes --out '" + (tmp / "blocks") + "' --faces " + kBlocks +
+                         " --size 0.05 --dictionary 4X4_50 --first-id 0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int compared = 0;
+  for (const auto& entry : fs::directory_iterator(VLAB_SOURCE_DIR "/mjcf/cubes/blocks")) {
+    const std::string name = entry.path().filename().string();
+    ASSERT_TRUE(fs::exists(tmp / ("blocks/" + name))) << name << " is committed but not generated";
+    EXPECT_TRUE(ReadFile(entry.path().string()) == ReadFile(tmp / ("blocks/" + name))) << name << " differs";
+    ++compared;
+  }
+  EXPECT_EQ(compared, static_cast<int>(testing::Entries(tmp / "blocks").size()));
+  EXPECT_EQ(compared, 44);
+}
+
+TEST(Cubes, AlphabetBlocksCarryOneLetterPerFace) {
+  CubeSetConfig c;
+  c.faces = {"AGMSY4", "BHNTZ5"};
+  EXPECT_EQ(CubeCount(c), 2);
+  EXPECT_EQ(CubeName(c, 1), "cube_BHNTZ5");
+  EXPECT_EQ(CubeFaceLetter(c, 0, kFaceMinusY), 'S');
+  EXPECT_EQ(CubeSetOption(c), "--faces AGMSY4,BHNTZ5");
+  const std::vector<GeneratedFile> files = CubeSetFiles(c);
+  ASSERT_EQ(files.size(), 2u * 7 + 2);
+  // each face image is the face drawn with its own letter and marker 6 i + f (in the block's
+  // colour, read off the image's corner, and the generator's ink), and not with another letter
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const std::string name = std::string("cube_BHNTZ5_") + CubeFaceName(f) + ".png";
+    const auto file = std::find_if(files.begin(), files.end(), [&](const GeneratedFile& g) { return g.name == name; });
+    ASSERT_NE(file, files.end()) << name;
+    const std::vector<std::uint8_t> png(file->bytes.begin(), file->bytes.end());
+    const cv::Mat image = cv::imdecode(png, cv::IMREAD_COLOR);
+    ASSERT_FALSE(image.empty()) << name;
+    FaceSpec spec;
+    spec.id = 6 + f;
+    const cv::Vec3b corner = image.at<cv::Vec3b>(1, 1);
+    spec.background = cv::Scalar(corner[0], corner[1], corner[2]);
+    spec.ink = cv::Scalar(100, 36, 24);  // vision_cubes.cc: dark blue ink
+    spec.letter = "BHNTZ5"[f];
+    EXPECT_EQ(cv::norm(image, DrawFace(spec, c.layout), cv::NORM_INF), 0) << name;
+    spec.letter = 'X';
+    EXPECT_GT(cv::norm(image, DrawFace(spec, c.layout), cv::NORM_INF), 0) << name;
+  }
+  // the assets name each block's face letters for the word device
+  const auto assets = std::find_if(files.begin(), files.end(), [](const GeneratedFile& g) {
+    return g.name == "cubes_assets.xml";
+  });
+  ASSERT_NE(assets, files.end());
+  EXPECT_NE(assets->bytes.find("<text name=\"cube_AGMSY4.faces\" data=\"AGMSY4\"/>"), std::string::npos);
+  EXPECT_NE(assets->bytes.find("<text name=\"cube_BHNTZ5.faces\" data=\"BHNTZ5\"/>"), std::string::npos);
+  // the default set has no such text: its assets stay as they were
+  const std::vector<GeneratedFile> plain = CubeSetFiles(CubeSetConfig{});
+  EXPECT_EQ(plain[plain.size() - 2].bytes.find("<custom>"), std::string::npos);
+}
+
+TEST(Cubes, BadBlocksNamed) {
+  CubeSetConfig c;
+  c.faces = {"AGMSY"};
+  EXPECT_NE(ErrorOf(c).find("--faces: 'AGMSY' is not six letters"), std::string::npos);
+  c.faces = {"AGMSY?"};
+  EXPECT_NE(ErrorOf(c).find("--faces: 'AGMSY?': '?' is not A-Z or 0-9"), std::string::npos);
+  c.faces = {"AGMSY4", "AGMSY4"};
+  EXPECT_NE(ErrorOf(c).find("--faces: 'AGMSY4' appears twice"), std::string::npos);
+  c.faces = std::vector<std::string>(9, "");
+  for (int i = 0; i < 9; ++i) c.faces[static_cast<std::size_t>(i)] = std::string(5, 'A') + static_cast<char>('1' + i);
+  EXPECT_NE(ErrorOf(c).find("9 cubes need marker ids 0..53"), std::string::npos);
 }
 
 TEST(CubesCommand, BadOptionsExitTwoAndWriteNothing) {
@@ -115,6 +191,9 @@ TEST(CubesCommand, BadOptionsExitTwoAndWriteNothing) {
       {out + scene + " --seed -2", "--seed must be >= 0"},
       {out + " --scene '" + (tmp / "scene.xml") + "' --pa10 '" + (tmp / "nowhere") + "'", "has no pa10.xml"},
       {out + scene + " --size 0.2", "do not fit the table's free area"},
+      {out + " --letters AB --faces AGMSY4", "--letters and --faces exclude each other"},
+      {out + " --faces AGMSY4,BHN", "--faces: 'BHN' is not six letters"},
+      {out + " --faces AGMSY4,", "--faces: '' is not six letters"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = RunVlab("cubes" + args, 60);

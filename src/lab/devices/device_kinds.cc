@@ -12,6 +12,8 @@
 #include "lab/devices/device_scene.h"
 #include "lab/devices/device_sensors.h"
 #include "lab/devices/device_sim.h"
+#include "lab/devices/device_tool.h"
+#include "lab/devices/device_word.h"
 #include "lab/devices/device_wrench.h"
 #include "lab/devices/device_yoyo.h"
 #include "lab/lab_yaml.h"
@@ -38,6 +40,8 @@ const DeviceKindSpec kDeviceKinds[] = {
     {DeviceKind::kYoyo, &ReadYoyoParams, &MakeYoyo},
     {DeviceKind::kCounter, &ReadCounterParams, &MakeCounter},
     {DeviceKind::kScene, &ReadSceneParams, &MakeScene},
+    {DeviceKind::kWord, &ReadWordParams, &MakeWord},
+    {DeviceKind::kTool, &ReadToolParams, &MakeTool},
 };
 
 const char* Name(DeviceKind kind) { return bridge::KindName(static_cast<int>(kind)); }
