@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Success of the lettered-cubes task over seeds (issue 16: stage 1 >= 19/20).
 
-  success.py VLAB OUT_DIR [FIRST_SEED [COUNT [SCENARIO]]]     defaults 1, 20, cases/cubes/stage1.yaml
+  success.py VLAB OUT_DIR [FIRST_SEED [COUNT [SCENARIO]]] [--min N]   defaults 1, 20, cases/cubes/stage1.yaml
 
 Runs the scenario once per seed (`vlab run SCENARIO --seed N`), then prints one row per seed:
 pass/fail, the failed checks (the cause), and the simulated time of each letter: the time at
-which the letter's cube came to within 10 mm of its slot for good (its pose device's `error`,
-log.csv) minus the previous letter's (the first from t = 0, so it includes the first look).
+which the letter's cube came to within 10 mm of its slot for good (the word device's
+word.L.pos_error, log.csv) minus the previous letter's (the first from t = 0, so it includes the first look).
 Last, the success count, the median time per letter and the wall time per run. Exit 0 when
-every run was made (whatever their verdicts), 2 on bad arguments.
+every run was made (whatever their verdicts) and, with --min N, at least N passed; 1 when
+fewer passed; 2 on bad arguments.
 """
 import csv
 import json
@@ -18,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-WORD_DEVICES = ["cube_F", "cube_A", "cube_C", "cube_E"]  # stage 1: FACE, slots 1-4
+WORD = "FACE"  # stage 1, slots 1-4
 IN_SLOT = 0.010  # m, the checks' bound
 
 
@@ -29,8 +30,8 @@ def letter_times(log_path):
     head, rows = rows[0], rows[1:]
     t = [float(r[0]) for r in rows]
     out = []
-    for dev in WORD_DEVICES:
-        col = head.index(dev + ".error")
+    for letter in WORD:
+        col = head.index(f"word.{letter}.pos_error")
         entered = None
         for i, r in enumerate(rows):
             inside = float(r[col]) <= IN_SLOT
@@ -43,13 +44,18 @@ def letter_times(log_path):
 
 
 def main():
-    if len(sys.argv) < 3:
+    args, minimum = sys.argv[1:], None
+    if "--min" in args:
+        i = args.index("--min")
+        minimum = int(args[i + 1])
+        del args[i:i + 2]
+    if len(args) < 2:
         print(__doc__, file=sys.stderr)
         return 2
-    vlab, out = sys.argv[1], Path(sys.argv[2])
-    first = int(sys.argv[3]) if len(sys.argv) > 3 else 1
-    count = int(sys.argv[4]) if len(sys.argv) > 4 else 20
-    scenario = sys.argv[5] if len(sys.argv) > 5 else "cases/cubes/stage1.yaml"
+    vlab, out = args[0], Path(args[1])
+    first = int(args[2]) if len(args) > 2 else 1
+    count = int(args[3]) if len(args) > 3 else 20
+    scenario = args[4] if len(args) > 4 else "cases/cubes/stage1.yaml"
     passed, per_letter, walls = 0, [], []
     print(f"{'seed':>4}  {'verdict':7}  {'s per letter (F A C E)':28}  cause")
     for seed in range(first, first + count):
@@ -85,7 +91,7 @@ def main():
     median = statistics.median(per_letter) if per_letter else float("nan")
     print(f"success {passed}/{count}; median time per letter {median:.1f} s simulated (passing runs); "
           f"wall time per run {statistics.median(walls):.0f} s median")
-    return 0
+    return 1 if minimum is not None and passed < minimum else 0
 
 
 if __name__ == "__main__":
