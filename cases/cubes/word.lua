@@ -159,6 +159,13 @@ function M.run(p)
     local letter = p.word:sub(i, i)
     local t0 = now()
     local c = seen[letter]
+    if not c then
+      -- hidden, or its markers too small or oblique to be valid: the letters moved since may
+      -- have uncovered it
+      say(letter .. ": not seen; looking again")
+      seen = look(vis, p.park)
+      c = seen[letter]
+    end
     assert(c, "letter " .. letter .. " not seen by the webcam")
     local ok, why = move_letter(g, letter, c, p.slots[i])
     if not ok then

@@ -87,9 +87,10 @@ TEST_F(CubesSceneTest, WebcamReadsTheWordLeftToRightAndUpright) {
     EXPECT_GT(up_uv.y(), uv.y());    // the letter's up points up in the image
     previous_u = uv.x();
   }
-  // the placement area of cases/cubes (region x 0.40 .. 0.80, y -0.35 .. 0.35, centres a
-  // footprint (35.4 mm) inside it and within 0.78 m of the base axis): the top faces' outer
-  // edges at the extreme centres are in the picture
+  // a placement area that holds cases/cubes' (stage1.yaml: x 0.45 .. 0.80, y -0.33 .. 0.33):
+  // region x 0.40 .. 0.80, y -0.35 .. 0.35, centres a footprint (35.4 mm) inside it and within
+  // 0.78 m of the base axis: the top faces' outer edges at the extreme centres are in the picture
+  // (in the picture, not necessarily with a valid marker: see cases/cubes/stage1.yaml)
   const double inset = kHalfEdge * std::sqrt(2.0);
   for (const Eigen::Vector2d& centre : {Eigen::Vector2d(0.40 + inset, 0.35 - inset), Eigen::Vector2d(0.70, 0.35 - inset),
                                         Eigen::Vector2d(0.765, 0.15)}) {
