@@ -54,6 +54,10 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
     }
   }
 
+  if (!scenario.randomize.bodies.empty()) {
+    impl->randomizer = Randomizer::Create(m, scenario.randomize, scenario.seed);
+  }
+
   // a run simulates at least one period
   if (std::lround(scenario.duration_s / scenario.control_period_s) < 1) {
     throw InputError(scenario.file + ": duration " + FormatDouble(scenario.duration_s) +

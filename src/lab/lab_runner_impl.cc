@@ -9,10 +9,11 @@ namespace vlab::lab {
 void Lab::Impl::ResetData(mjData* d) const {
   if (keyframe < 0) {
     mj_resetData(model.get(), d);
-    return;
+  } else {
+    mj_resetDataKeyframe(model.get(), d, keyframe);
+    d->time = 0;  // the run's time starts at 0 whatever the keyframe's time
   }
-  mj_resetDataKeyframe(model.get(), d, keyframe);
-  d->time = 0;  // the run's time starts at 0 whatever the keyframe's time
+  if (randomizer) randomizer->Apply(model.get(), d);
 }
 
 void Lab::Impl::ResetState() {

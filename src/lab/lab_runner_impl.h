@@ -32,13 +32,15 @@ struct Lab::Impl {
   std::unique_ptr<Controller> controller;
   SimArm* controller_arm = nullptr;
   int keyframe = -1;  // scene keyframe of every reset (-1: qpos0)
+  std::unique_ptr<Randomizer> randomizer;  // the seeded layout every reset puts back, or null
   std::size_t controller_columns = 0;  // log columns the controller writes
   std::vector<std::string> columns;
   bridge::ArmCommand controller_command;  // the built-in controller's command of the period
   std::unique_ptr<TaskController> task;    // the task-language controller (type task), or null
 
   void ResetState();
-  /// mj_resetData, or mj_resetDataKeyframe of the scenario's keyframe (at time 0).
+  /// mj_resetData, or mj_resetDataKeyframe of the scenario's keyframe (at time 0); then
+  /// the randomised layout, if the scenario has one.
   void ResetData(mjData* d) const;
   void WriteRow(double time_s, std::vector<double>& row) const;
   /// Binds every served device (cameras too); throws InputError.

@@ -405,6 +405,10 @@ Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
   realtime.Finish();
   s.keyframe = r.String("keyframe", "");
   if (r.Has("keyframe")) s.keyframe_where = YamlWhere(path, root["keyframe"]);
+  if (r.Has("randomize")) {
+    MapReader randomize = r.Map("randomize");
+    s.randomize = ReadRandomize(randomize);
+  }
   s.allow_warnings = r.Strings("allow_warnings", {});
   for (const std::string& w : s.allow_warnings) {
     if (WarningIndex(w) < 0 || IsDivergenceWarning(WarningIndex(w))) {

@@ -19,6 +19,7 @@
 #include "control/time_scaling.h"
 #include "core/core_clock.h"
 #include "lab/lab_compare.h"
+#include "lab/lab_randomize.h"
 #include "lab/devices/device_config.h"
 #include "render/renderer.h"
 
@@ -160,6 +161,8 @@ struct Scenario {
   std::string keyframe;        ///< scene keyframe every reset starts from ("": the model's qpos0)
   std::string keyframe_where;  ///< "FILE:LINE" of the keyframe key, for messages
   std::string scene_where;     ///< "FILE:LINE" of the scene key, for messages
+  /// free bodies placed at random from the seed at every reset (empty bodies: none)
+  RandomizeConfig randomize;
   std::vector<DeviceConfig> devices;
   ControllerConfig controller;
   OutputsConfig outputs;

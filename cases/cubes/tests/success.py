@@ -1,0 +1,98 @@
+#!/usr/bin/env python3
+"""Success of the lettered-cubes task over seeds (issue 16: stage 1 >= 19/20).
+
+  success.py VLAB OUT_DIR [FIRST_SEED [COUNT [SCENARIO]]] [--min N]   defaults 1, 20, cases/cubes/stage1.yaml
+
+Runs the scenario once per seed (`vlab run SCENARIO --seed N`), then prints one row per seed:
+pass/fail, the failed checks (the cause), and the simulated time of each letter: the time at
+which the letter's cube came to within 10 mm of its slot for good (the word device's
+word.L.pos_error, log.csv) minus the previous letter's (the first from t = 0, so it includes the first look).
+Last, the success count, the median time per letter and the wall time per run. Exit 0 when
+every run was made (whatever their verdicts) and, with --min N, at least N passed; 1 when
+fewer passed; 2 on bad arguments.
+"""
+import csv
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+WORD = "FACE"  # stage 1, slots 1-4
+IN_SLOT = 0.010  # m, the checks' bound
+
+
+def letter_times(log_path):
+    """Per letter, the time (s) its cube entered its slot for good; None if it never did."""
+    with open(log_path, newline="") as f:
+        rows = list(csv.reader(f))
+    head, rows = rows[0], rows[1:]
+    t = [float(r[0]) for r in rows]
+    out = []
+    for letter in WORD:
+        col = head.index(f"word.{letter}.pos_error")
+        entered = None
+        for i, r in enumerate(rows):
+            inside = float(r[col]) <= IN_SLOT
+            if inside and entered is None:
+                entered = t[i]
+            elif not inside:
+                entered = None
+        out.append(entered)
+    return out
+
+
+def main():
+    args, minimum = sys.argv[1:], None
+    if "--min" in args:
+        i = args.index("--min")
+        minimum = int(args[i + 1])
+        del args[i:i + 2]
+    if len(args) < 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    vlab, out = args[0], Path(args[1])
+    first = int(args[2]) if len(args) > 2 else 1
+    count = int(args[3]) if len(args) > 3 else 20
+    scenario = args[4] if len(args) > 4 else "cases/cubes/stage1.yaml"
+    passed, per_letter, walls = 0, [], []
+    print(f"{'seed':>4}  {'verdict':7}  {'s per letter (F A C E)':28}  cause")
+    for seed in range(first, first + count):
+        folder = out / f"seed{seed}"
+        start = time.monotonic()
+        run = subprocess.run([vlab, "run", scenario, "--seed", str(seed), "--quiet", "--out", str(folder)],
+                             capture_output=True, text=True)
+        walls.append(time.monotonic() - start)
+        summary = folder / "summary.json"
+        cause = ""
+        if summary.exists():
+            s = json.loads(summary.read_text())
+            failed = [c["name"] for c in s.get("checks", []) if not c.get("pass")]
+            cause = ", ".join(failed)
+            if s.get("failure"):
+                cause = (cause + "; " if cause else "") + str(s["failure"])[:100]
+        if run.returncode != 0 and not cause:
+            lines = [l for l in (run.stderr or "").splitlines() if l.strip()]
+            cause = lines[0][:100] if lines else f"exit {run.returncode}"
+        ok = run.returncode == 0
+        passed += ok
+        times = letter_times(folder / "log.csv") if (folder / "log.csv").exists() else [None] * 4
+        steps, prev = [], 0.0
+        for t in times:
+            if t is None:
+                break
+            steps.append(t - prev)
+            prev = t
+        if ok:
+            per_letter += steps
+        text = " ".join(f"{x:5.1f}" for x in steps)
+        print(f"{seed:4d}  {'pass' if ok else 'FAIL':7}  {text:28}  {cause}", flush=True)
+    median = statistics.median(per_letter) if per_letter else float("nan")
+    print(f"success {passed}/{count}; median time per letter {median:.1f} s simulated (passing runs); "
+          f"wall time per run {statistics.median(walls):.0f} s median")
+    return 1 if minimum is not None and passed < minimum else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
