@@ -26,6 +26,11 @@ constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 // the nice value of a worker (and the rasterizer threads) under a control thread that is not realtime
 constexpr int kWorkerNice = 10;
 
+// the seed of frame `id`'s noise (Xoshiro256pp::Seed mixes it further with splitmix64)
+std::uint64_t FrameNoiseSeed(std::uint64_t seed, std::int64_t id) {
+  return seed * 0x9E3779B97F4A7C15ull ^ (static_cast<std::uint64_t>(id) + 0x632BE59BD9B4E019ull);
+}
+
 bool Listed(const std::vector<std::int64_t>& sorted_ids, std::int64_t id) {
   return !sorted_ids.empty() && std::binary_search(sorted_ids.begin(), sorted_ids.end(), id);
 }
@@ -110,7 +115,7 @@ std::unique_ptr<SimCamera> SimCamera::Create(const DeviceContext& context, const
   } catch (const std::invalid_argument& e) {
     throw InputError(who + ": " + e.what());
   }
-  cam->noise_ = sensors::CameraNoiseState(context.seed);
+  cam->noise_seed_ = context.seed;
   // the frames in flight, and room for a worker a few frames behind (realtime)
   cam->queue_.resize(static_cast<std::size_t>(cam->model_->FramesInFlight()) + 4);
   for (Pending& p : cam->queue_) p.frame.data.reserve(static_cast<std::size_t>(mc.width) * mc.height * 3);
@@ -272,7 +277,11 @@ void SimCamera::WorkerMain() {
     bool ok = false;
     try {
       renderer->Render(p.state, camera_, &ideal);
-      // the lens, the sensor's noise (seeded, drawn in frame order), the encoding
+      // the lens, the sensor's noise, the encoding. The noise is drawn from the run's seed
+      // and the frame's id, not from one stream in render order: frames are rendered only
+      // while someone subscribes, and when a client subscribed (a wall-clock matter) then
+      // changed the pixels of every later frame, and what a vision program made of them.
+      noise_.rng.Seed(FrameNoiseSeed(noise_seed_, p.frame.id));
       model_->Apply(ideal.pixels.data(), rgb.data(), &noise_);
       ok = encoder.Encode(config_.width, config_.height, rgb.data(), &p.frame.data);
     } catch (const std::exception&) {

@@ -151,7 +151,8 @@ class SimCamera final : public Device, public OwnTransport {
   int camera_ = -1;
   CameraParams config_;
   std::unique_ptr<sensors::CameraModel> model_;
-  sensors::CameraNoiseState noise_;
+  sensors::CameraNoiseState noise_;  // (the worker's; reseeded for every frame)
+  std::uint64_t noise_seed_ = 1;     // the run's seed
   std::unique_ptr<bridge::CameraServer> server_;
   bool realtime_ = false;  // served on the realtime clock: delivery never waits for the worker
   std::vector<Pending> queue_;  // ring of frames queued, not yet delivered
