@@ -30,6 +30,7 @@ struct TaskArgs {
   std::string arm;
   std::vector<std::string> wrenches;
   std::vector<std::string> devices;  // KIND=HOST:PORT
+  std::vector<std::string> params;   // NAME=VALUE
   std::string scene;
   std::string tip_site;
   std::string base_body = "world";
@@ -47,6 +48,11 @@ int Task(const TaskArgs& a) {
   if (!(a.timeout_s > 0)) throw InputError("task: --timeout must be > 0 s");
   if (a.seed < 0) throw InputError("task: --seed must be >= 0");
   task::CheckSyntax(a.script);  // before any device is contacted: exit 2, nothing has run
+  std::map<std::string, std::string> params;
+  for (const std::string& text : a.params) {
+    const auto [name, value] = task::ParseParam(text);
+    if (!params.emplace(name, value).second) throw InputError("task: --param '" + name + "' given twice");
+  }
   ModelPtr model = LoadModel(a.scene);
   task::UdpDevices devices;
   devices.AddArm(a.arm, a.timeout_s);
@@ -71,6 +77,7 @@ int Task(const TaskArgs& a) {
   p.robot = devices.arm_name();
   p.tip_site = a.tip_site;
   p.base_body = a.base_body;
+  p.params = params;
   rc.programs.push_back(p);
   std::unique_ptr<task::Runtime> runtime = task::Runtime::Create(rc, model.get(), &devices);
 
@@ -117,6 +124,8 @@ Subcommand AddTaskCommand(CLI::App& app) {
   cmd->add_option("--wrench", a->wrenches, "A wrench (force/torque) device: HOST:PORT (repeatable)");
   cmd->add_option("--device", a->devices, "Any float64 device, or a markers device (vlab vision): KIND=HOST:PORT, e.g. "
                   "gripper=127.0.0.1:50020, markers=127.0.0.1:50014 (repeatable)");
+  cmd->add_option("--param", a->params,
+                  "NAME=VALUE: the script's PARAMS.NAME (a number, true/false, or else a string; repeatable)");
   cmd->add_option("--scene", a->scene, "MJCF with the arm's kinematic chain (e.g. scenes/pa10.xml)")->required();
   cmd->add_option("--tip", a->tip_site, "Site at the tool flange (e.g. tool)")->required();
   cmd->add_option("--base", a->base_body, "Body the chain starts from")->capture_default_str();

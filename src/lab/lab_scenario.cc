@@ -12,6 +12,7 @@
 #include "lab/lab_golden.h"
 #include "lab/lab_overrides.h"
 #include "lab/lab_yaml.h"
+#include "task/task_runtime.h"
 
 namespace vlab::lab {
 
@@ -110,6 +111,17 @@ ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
     e.tip_site = p.String("tip_site", "");
     e.base_body = p.String("base_body", e.base_body);
     e.wrench = p.String("wrench", "");
+    // params: {NAME: VALUE}: the script's PARAMS (scalars; docs/tasks.md)
+    const YAML::Node params = p.Raw("params");
+    if (params && !params.IsNull()) {
+      if (!params.IsMap()) p.Fail("params", "expected a mapping NAME: VALUE (e.g. {word: FACE})");
+      for (const auto& kv : params) {
+        const std::string name = kv.first.as<std::string>();
+        task::CheckParamName(name, YamlWhere(r.file(), kv.first) + ": " + p.Child("params"));
+        if (!kv.second.IsScalar()) p.Fail("params", "'" + name + "': expected a number, true/false or a string");
+        e.params[name] = kv.second.as<std::string>();
+      }
+    }
     if (!e.robot.empty() && e.tip_site.empty()) p.Fail("tip_site", "required with a robot (the site at the tool flange)");
     p.Finish();
     c.programs.push_back(e);

@@ -58,6 +58,7 @@ struct TaskProgramEntry {
   std::string tip_site;             ///< ... to this site
   std::string wrench;               ///< default wrench of guarded moves ("": the only one)
   std::string where;                ///< "FILE:LINE" of the entry
+  std::map<std::string, std::string> params;  ///< PARAMS of the script: NAME -> text as given
 };
 
 struct ControllerConfig {

@@ -165,6 +165,7 @@ std::unique_ptr<TaskController> TaskController::Create(const mjModel* model, con
     p.tip_site = e.tip_site;
     p.wrench = e.wrench;
     p.where = e.where;
+    p.params = e.params;
     rc.programs.push_back(p);
     if (!e.robot.empty()) impl->arms.push_back(e.robot);
   }

@@ -2,8 +2,11 @@
 // Lua side of task_program.h). Blocking commands are Lua functions of the
 // prelude below: they start something here, then yield once per period
 // until it is done.
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 
@@ -773,6 +776,29 @@ void OpenApi(Program* p) {
   lua_setglobal(L, "PERIOD");
   lua_pushstring(L, p->config.robot.c_str());
   lua_setglobal(L, "ROBOT");
+  // PARAMS: the program's parameters, numbers and booleans where the text reads as one
+  lua_newtable(L);
+  for (const auto& [name, text] : p->config.params) {
+    const bool plain = !text.empty() && !std::isspace(static_cast<unsigned char>(text[0]));
+    char* end = nullptr;
+    errno = 0;
+    const long long integer = plain ? std::strtoll(text.c_str(), &end, 10) : 0;
+    const bool is_integer = plain && end && *end == '\0' && errno == 0;
+    end = nullptr;
+    const double number = plain ? std::strtod(text.c_str(), &end) : 0.0;
+    const bool is_number = plain && end && *end == '\0' && std::isfinite(number);
+    if (text == "true" || text == "false") {
+      lua_pushboolean(L, text == "true");
+    } else if (is_integer) {
+      lua_pushinteger(L, static_cast<lua_Integer>(integer));
+    } else if (is_number) {
+      lua_pushnumber(L, number);
+    } else {
+      lua_pushlstring(L, text.data(), text.size());
+    }
+    lua_setfield(L, -2, name.c_str());
+  }
+  lua_setglobal(L, "PARAMS");
   // shared: a proxy of the blackboard
   lua_newtable(L);
   lua_newtable(L);

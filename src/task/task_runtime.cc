@@ -1,6 +1,7 @@
 #include "task/task_runtime.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -85,6 +86,20 @@ int WaitingLine(lua_State* co) {
 }
 
 }  // namespace
+
+void CheckParamName(const std::string& name, const std::string& where) {
+  const auto ident = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0])) || !std::all_of(name.begin(), name.end(), ident)) {
+    throw InputError(where + ": parameter '" + name + "': a name is letters, digits and '_', not first a digit");
+  }
+}
+
+std::pair<std::string, std::string> ParseParam(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) throw InputError("--param '" + text + "': expected NAME=VALUE");
+  CheckParamName(text.substr(0, eq), "--param '" + text + "'");
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
 
 void CheckSyntax(const std::string& script) {
   if (!std::filesystem::is_regular_file(script)) throw InputError("script: no file '" + script + "'");

@@ -22,6 +22,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include <mujoco/mujoco.h>
@@ -38,7 +40,18 @@ struct ProgramConfig {
   std::string tip_site;          ///< ... to this site (required with a robot)
   std::string wrench;            ///< default wrench device of guarded moves ("": the only one, if any)
   std::string where;             ///< "FILE:LINE" of its scenario entry, for messages
+  /// The program's parameters, the global table PARAMS: NAME -> text as given. A text
+  /// that reads whole as a number becomes a number, "true" and "false" booleans, any
+  /// other text a string (ParseParam).
+  std::map<std::string, std::string> params;
 };
+
+/// Checks a parameter's name (a Lua identifier: letters, digits, '_', not first a
+/// digit); InputError "`where`: parameter 'NAME': ..." otherwise.
+void CheckParamName(const std::string& name, const std::string& where);
+
+/// Splits "NAME=VALUE" (the first '='), checking NAME; InputError naming `text`.
+std::pair<std::string, std::string> ParseParam(const std::string& text);
 
 struct RuntimeConfig {
   std::vector<ProgramConfig> programs;

@@ -51,6 +51,41 @@ TEST(TaskCli, HelloRunsAgainstKinsim) {
   kinsim.Stop();
 }
 
+// a program's parameters: a scenario's `params` and vlab task's --param give the script the
+// same PARAMS, typed from their text; a bad name is exit 2 naming where it came from
+TEST(TaskCli, ParamsReachTheScriptInProcessAndStandalone) {
+  // printed in name order (pairs is sorted), each line after its "[ROBOT t=...] " prefix
+  const auto typed = [](const std::string& out) {
+    std::string lines;
+    for (const char* name : {"letters", "pitch", "verify", "word"}) {
+      const std::size_t at = out.find(std::string("] param\t") + name + "\t");
+      if (at == std::string::npos) return std::string("no line for ") + name;
+      lines += out.substr(at + 2, out.find('\n', at) - at - 2) + "\n";
+    }
+    return lines;
+  };
+  const std::string expected =
+      "param\tletters\tinteger\t4\nparam\tpitch\tfloat\t0.07\nparam\tverify\tboolean\ttrue\nparam\tword\tstring\tFACE\n";
+  TempDir out;
+  const ProcessResult in = RunVlab("run tests/data/task/params.yaml --out '" + out.path() + "/run'");
+  EXPECT_EQ(in.exit_code, 0) << in.out << in.err;
+  EXPECT_EQ(typed(in.out), expected) << in.out;
+  EXPECT_LT(in.out.find("] param\tletters"), in.out.find("] param\tword"));
+
+  KinsimProcess kinsim({"--scene", "scenes/pa10.xml"});
+  ASSERT_TRUE(kinsim.ok()) << kinsim.start_line();
+  const std::string task = "task tests/data/task/params.lua --arm 127.0.0.1:" + std::to_string(kinsim.port()) +
+                           " --scene scenes/pa10.xml --tip tool";
+  const ProcessResult alone =
+      RunVlab(task + " --param word=FACE --param letters=4 --param pitch=0.07 --param verify=true", 60);
+  EXPECT_EQ(alone.exit_code, 0) << alone.out << alone.err;
+  EXPECT_EQ(typed(alone.out), expected) << alone.out;
+  const ProcessResult bad = RunVlab(task + " --param 2word=FACE", 60);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--param '2word=FACE': parameter '2word'"), std::string::npos) << bad.err;
+  kinsim.Stop();
+}
+
 // same scenario and seed, fast mode: the same bytes, although the script walks a
 // string-keyed table with pairs() and pauses for math.random() seconds
 TEST(TaskCli, TwoRunsGiveByteIdenticalLogs) {

@@ -129,7 +129,8 @@ class RuntimeTest : public test::MujocoTest {
   }
   // a runtime of one program per script (robot "pa10", then "pa10b", then none)
   std::unique_ptr<Runtime> Make(const std::vector<std::pair<std::string, std::string>>& scripts,
-                                std::uint64_t seed = 1, long budget = 1'000'000) {
+                                std::uint64_t seed = 1, long budget = 1'000'000,
+                                const std::map<std::string, std::string>& params = {}) {
     RuntimeConfig c;
     c.period_s = kPeriod;
     c.seed = seed;
@@ -144,6 +145,7 @@ class RuntimeTest : public test::MujocoTest {
       p.script = file;
       p.robot = robot;
       p.tip_site = robot.empty() ? "" : "tool";
+      p.params = params;
       c.programs.push_back(p);
     }
     return Runtime::Create(c, model_, &devices_);
@@ -243,6 +245,23 @@ TEST_F(RuntimeTest, RandomIsSeededFromTheScenarioSeed) {
   }
   EXPECT_EQ(runs[0], runs[1]);
   EXPECT_NE(runs[0], runs[2]);
+}
+
+// PARAMS: the program's parameters, typed from their text (a scenario's `params`, vlab
+// task --param): whole numbers and decimals are numbers, true/false booleans, the rest strings
+TEST_F(RuntimeTest, ParamsReachTheScriptTyped) {
+  auto r = Make({{"", "for k, v in pairs(PARAMS) do print(k, type(v), v) end\n"}}, 1, 1'000'000,
+                {{"word", "FACE"}, {"gain", "2.5"}, {"n", "4"}, {"fast", "true"}, {"list", "1,2"}, {"blank", " 7"},
+                 {"empty", ""}});
+  ASSERT_TRUE(RunFor(*r, 2)) << r->error();
+  EXPECT_EQ(printed_, (std::vector<std::string>{"main.lua@0: blank\tstring\t 7", "main.lua@0: empty\tstring\t",
+                                                "main.lua@0: fast\tboolean\ttrue", "main.lua@0: gain\tnumber\t2.5",
+                                                "main.lua@0: list\tstring\t1,2", "main.lua@0: n\tnumber\t4",
+                                                "main.lua@0: word\tstring\tFACE"}));
+  EXPECT_EQ(ParseParam("word=FACE=1"), (std::pair<std::string, std::string>{"word", "FACE=1"}));
+  EXPECT_THROW(ParseParam("word"), InputError);
+  EXPECT_THROW(ParseParam("2x=1"), InputError);
+  EXPECT_THROW(ParseParam("a-b=1"), InputError);
 }
 
 TEST_F(RuntimeTest, WaitCountsPeriodsAndConditionsTimeOut) {
