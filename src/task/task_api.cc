@@ -625,14 +625,16 @@ int MarkersTake(lua_State* L) {
   PushMarkersState(L, *s);
   return 1;
 }
-int MarkersPoll(lua_State* L) {
-  MarkerChannel* m = MarkersArg(L);
-  const double t0 = Number(L, 2, "markers:next");
+// calls read(state), a markers channel's read that does not wait, and pushes the state it
+// got (1 result) or nothing (0). An exception is a script error, raised once every C++
+// object here is gone (lua_error does not unwind C++ frames).
+template <typename Read>
+int PushMarkersRead(lua_State* L, Read read) {
   auto s = std::make_unique<bridge::MarkersClient::State>();
   char why[512] = "";
   bool got = false;
   try {
-    got = m->Poll(t0, s.get());
+    got = read(s.get());
   } catch (const std::exception& e) {
     std::snprintf(why, sizeof why, "%s", e.what());
   }
@@ -644,23 +646,14 @@ int MarkersPoll(lua_State* L) {
   PushMarkersState(L, *s);
   return 1;
 }
+int MarkersPoll(lua_State* L) {
+  MarkerChannel* m = MarkersArg(L);
+  const double t0 = Number(L, 2, "markers:next");
+  return PushMarkersRead(L, [m, t0](bridge::MarkersClient::State* s) { return m->Poll(t0, s); });
+}
 int MarkersLatest(lua_State* L) {
   MarkerChannel* m = MarkersArg(L);
-  auto s = std::make_unique<bridge::MarkersClient::State>();
-  char why[512] = "";
-  bool got = false;
-  try {
-    got = m->Latest(s.get());
-  } catch (const std::exception& e) {
-    std::snprintf(why, sizeof why, "%s", e.what());
-  }
-  if (why[0]) {
-    s.reset();
-    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
-  }
-  if (!got) return 0;
-  PushMarkersState(L, *s);
-  return 1;
+  return PushMarkersRead(L, [m](bridge::MarkersClient::State* s) { return m->Latest(s); });
 }
 
 // ---- blackboard
