@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "lab/devices/device.h"
+#include "lab/devices/device_arm_chain.h"
 
 namespace vlab::lab {
 
@@ -15,14 +16,9 @@ namespace vlab::lab {
 /// controller's Cartesian position input: a commanded point [x, y, z] that the
 /// device turns into joint velocity commands for its arm every control period
 /// (device_point.cc).
-struct PointParams : DeviceParams {
-  std::string arm;                  ///< the arm device it drives (a device of the same scenario)
-  std::string site = "tool";        ///< the point: an MJCF site at the end of the arm's chain
-  std::string base_body = "world";  ///< the chain starts below this body
-  double k_position = 20.0;         ///< position gain, 1/s
-  double k_orientation = 20.0;      ///< orientation gain (the start orientation is kept), 1/s
-  double k_null = 1.0;              ///< null-space gain toward the start posture, 1/s
-  double damping = 1e-3;            ///< DLS damping of the pseudo-inverse
+/// Its arm, chain and gains are ArmChainParams (device_arm_chain.h): the site is
+/// the point, and the orientation gain keeps the orientation the site had at the start.
+struct PointParams : ArmChainParams {
   double max_speed = 1.0;           ///< m/s: the set-point ramps toward each command at most this fast
   /// Workspace box, world frame, m: commands outside [min, max] are refused (limits).
   std::vector<double> workspace_min = {-std::numeric_limits<double>::infinity(),
@@ -31,7 +27,6 @@ struct PointParams : DeviceParams {
   std::vector<double> workspace_max = {std::numeric_limits<double>::infinity(),
                                        std::numeric_limits<double>::infinity(),
                                        std::numeric_limits<double>::infinity()};
-  CommandInputConfig input;  ///< watchdog_periods, owner_timeout
 };
 
 /// Reads the entry's own keys.

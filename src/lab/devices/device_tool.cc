@@ -40,10 +40,9 @@
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_layouts.h"
-#include "control/robot_model.h"
 #include "control/task_space.h"
 #include "core/core_errors.h"
-#include "lab/devices/device_arm.h"
+#include "lab/devices/device_arm_chain.h"
 #include "lab/devices/device_tool.h"
 #include "lab/lab_yaml.h"
 
@@ -51,79 +50,32 @@ namespace vlab::lab {
 
 namespace {
 
-using Matrix3RowMajor = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 constexpr double kQuaternionNormTolerance = 1e-3;
 constexpr int kCommandValues = 7;
 
 class SimTool final : public Device {
  public:
   SimTool(const DeviceContext& context, const DeviceConfig& c)
-      : Device(c), model_(context.model), config_(c.ParamsAs<ToolParams>()), period_s_(context.control_period_s) {
-    try {
-      chain_ = control::RobotModel::Create(model_, {config_.base_body, config_.site});
-    } catch (const std::invalid_argument& e) {
-      throw InputError(who() + ": " + e.what());
-    }
-    site_ = chain_->tip_site_id();
-    for (int i = 0; i < 3; ++i) {
-      box_min_[i] = config_.workspace_min[i];
-      box_max_[i] = config_.workspace_max[i];
-    }
+      : Device(c), model_(context.model), config_(c.ParamsAs<ToolParams>()), period_s_(context.control_period_s),
+        chain_(MakeArmChain(model_, config_, who())) {
     reach_centre_ = Eigen::Vector3d(config_.reach_centre[0], config_.reach_centre[1], config_.reach_centre[2]);
     reach_radius_ = config_.reach == ToolParams::Reach::kFixed ? config_.reach_radius : INFINITY;
     if (config_.reach == ToolParams::Reach::kAuto) ChainLength();
     tilt_axis_ = Eigen::Vector3d(config_.tilt_axis[0], config_.tilt_axis[1], config_.tilt_axis[2]).normalized();
     cos_max_tilt_ = std::cos(config_.max_tilt_deg * M_PI / 180);
-    q_.setZero(chain_->dof());
-    qd_.setZero(chain_->dof());
-    velocity_.mode = bridge::ArmMode::kVelocity;
-    hold_.mode = bridge::ArmMode::kHold;
   }
 
   // its arm: an arm device of the scenario, driven by this device alone
-  void Bind(const std::vector<Device*>& devices) override {
-    const std::string who = this->who() + ": arm: ";
-    arm_ = nullptr;
-    for (Device* d : devices) {
-      if (d->name() == config_.arm) arm_ = dynamic_cast<SimArm*>(d);
-    }
-    if (!arm_) throw InputError(who + "the scenario has no arm device '" + config_.arm + "'");
-    arm_->SetDriver(name(), who);
-    arm_index_.clear();
-    const std::vector<std::string>& joints = arm_->joint_names();
-    for (const std::string& joint : chain_->joint_names()) {
-      const auto it = std::find(joints.begin(), joints.end(), joint);
-      if (it == joints.end()) {
-        throw InputError(this->who() + ": chain joint '" + joint + "' (from '" + config_.base_body + "' to site '" +
-                         config_.site + "') is not a joint of arm '" + arm_->name() + "'");
-      }
-      arm_index_.push_back(static_cast<int>(it - joints.begin()));
-    }
-    velocity_.value.setZero(arm_->dof());
-  }
+  void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, name(), who()); }
   std::string drives() const override { return config_.arm; }
   int log_rank() const override { return 3; }  // after the other devices, as the point device
 
   void Reset(const mjData& d) override {
-    ReadChain(d);
-    chain_->SetState(q_, qd_);
-    const control::Pose tip = chain_->TipPose();
+    ReadArmChain(chain_, d);
+    const control::Pose tip = chain_.model->TipPose();
     p_set_ = p_cmd_ = tip.p_W;
     R_set_ = R_cmd_ = tip.R_W;
-    // the posture the null-space term keeps: the start posture (allocates: not in the step loop)
-    control::TaskSpaceConfig tc;
-    tc.k_position = config_.k_position;
-    tc.k_orientation = config_.k_orientation;
-    tc.k_null = config_.k_null;
-    tc.damping = config_.damping;
-    tc.q_rest = q_;
-    if (arm_->max_velocity().size() > 0) {
-      double slowest = INFINITY;  // uniform scaling below the slowest chain joint's limit: never refused
-      for (int i : arm_index_) slowest = std::min(slowest, arm_->max_velocity()[i]);
-      tc.max_joint_speed = 0.999 * slowest;
-    }
-    controller_ = control::TaskSpaceController::Create(tc, *chain_);
-    holding_ = true;
+    ResetArmChain(chain_, config_);  // the null-space term keeps the start posture; hold
     Sample(d, d.time);
   }
 
@@ -137,7 +89,7 @@ class SimTool final : public Device {
     if (std::abs(q.norm() - 1) > kQuaternionNormTolerance) return bridge::CommandCheck::kMalformed;
     const Eigen::Vector3d p(c[0], c[1], c[2]);
     for (int i = 0; i < 3; ++i) {
-      if (p[i] < box_min_[i] || p[i] > box_max_[i]) return bridge::CommandCheck::kLimits;
+      if (p[i] < config_.workspace_min[i] || p[i] > config_.workspace_max[i]) return bridge::CommandCheck::kLimits;
     }
     if ((p - reach_centre_).norm() > reach_radius_) return bridge::CommandCheck::kLimits;
     const Eigen::Vector3d tool_z = q.normalized() * Eigen::Vector3d::UnitZ();
@@ -147,26 +99,20 @@ class SimTool final : public Device {
   void Command(const std::vector<double>& c) override {
     p_cmd_ = Eigen::Vector3d(c[0], c[1], c[2]);
     R_cmd_ = Eigen::Quaterniond(c[3], c[4], c[5], c[6]).normalized().toRotationMatrix();
-    resume_ = holding_;
-    holding_ = false;
+    CommandArmChain(chain_);
   }
-  void Hold() override { holding_ = true; }
+  void Hold() override { chain_.holding = true; }
   int watchdog_periods() const override { return config_.input.watchdog_periods; }
   double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
 
   void BeginPeriod(const mjData& d, double) override {
-    if (holding_) {
-      arm_->Command(hold_);
-      return;
-    }
-    ReadChain(d);
-    chain_->SetState(q_, qd_);
-    if (resume_) {  // from a hold: start where the tool is
-      const control::Pose tip = chain_->TipPose();
+    bool resumed = false;
+    if (!BeginArmChainPeriod(chain_, d, &resumed)) return;  // holding
+    if (resumed) {  // from a hold: start where the tool is
+      const control::Pose tip = chain_.model->TipPose();
       p_set_ = tip.p_W;
       R_set_ = tip.R_W;
     }
-    resume_ = false;
     // rate limits: the set-point moves toward the command at most max_speed, turns at most max_angular_speed
     Eigen::Vector3d step = p_cmd_ - p_set_;
     const double longest = config_.max_speed * period_s_;
@@ -179,31 +125,26 @@ class SimTool final : public Device {
     target.pose.R_W = R_set_;
     target.v_W = step / period_s_;
     target.w_W = turn / period_s_;
-    const control::TaskSpaceOutput& out = controller_->Update(*chain_, q_, target);
-    velocity_.value.setZero();
-    for (std::size_t i = 0; i < arm_index_.size(); ++i) velocity_.value[arm_index_[i]] = out.qd_cmd[i];
-    if (!out.ok || !arm_->Command(velocity_)) arm_->Command(hold_);  // non-finite state: hold, never drift
+    DriveArm(chain_, target);
     p_set_ += step;
     if (turn.norm() > 0) R_set_ = Eigen::AngleAxisd(turn.norm(), turn / turn.norm()).toRotationMatrix() * R_set_;
   }
 
   void Sample(const mjData& d, double) override {
     if (config_.reach == ToolParams::Reach::kAuto) {
-      reach_centre_ = Eigen::Map<const Eigen::Vector3d>(d.xanchor + 3 * chain_->joint_ids().front());
+      reach_centre_ = Eigen::Map<const Eigen::Vector3d>(d.xanchor + 3 * chain_.model->joint_ids().front());
     }
-    p_ = Eigen::Map<const Eigen::Vector3d>(d.site_xpos + 3 * site_);
-    const Eigen::Matrix3d R_WS = Eigen::Map<const Matrix3RowMajor>(d.site_xmat + 9 * site_);
-    q_WS_ = Eigen::Quaterniond(R_WS);
+    const SiteMotion site = ReadSiteMotion(model_, d, chain_);
+    p_ = site.p_W;
+    q_WS_ = Eigen::Quaterniond(site.R_WS);
     if (q_WS_.w() < 0) q_WS_.coeffs() *= -1;
-    mjtNum velocity[6];
-    mj_objectVelocity(model_, &d, mjOBJ_SITE, site_, velocity, 0);  // [angular, linear], world frame
-    w_ = Eigen::Vector3d(velocity[0], velocity[1], velocity[2]);
-    v_ = Eigen::Vector3d(velocity[3], velocity[4], velocity[5]);
-    rot_error_ = control::OrientationError(R_set_, R_WS).norm();
+    w_ = site.w_W;
+    v_ = site.v_W;
+    rot_error_ = control::OrientationError(R_set_, site.R_WS).norm();
   }
 
   void State(std::vector<double>* p) const override {
-    p->assign({holding_ ? static_cast<double>(bridge::kStatusHolding) : 0.0, p_.x(), p_.y(), p_.z(), q_WS_.w(),
+    p->assign({chain_.holding ? static_cast<double>(bridge::kStatusHolding) : 0.0, p_.x(), p_.y(), p_.z(), q_WS_.w(),
                q_WS_.x(), q_WS_.y(), q_WS_.z(), v_.x(), v_.y(), v_.z(), w_.x(), w_.y(), w_.z()});
   }
   std::vector<std::string> Columns() const override {
@@ -223,14 +164,8 @@ class SimTool final : public Device {
   }
 
   std::string DescribeFacts() const override {
-    nlohmann::json j;
-    j["layout"] = bridge::LayoutJson(kind());
+    nlohmann::json j = ArmChainFacts(chain_, config_, kind());
     j["units"] = {{"x", "m"}, {"qw", ""}, {"vx", "m/s"}, {"wx", "rad/s"}};
-    j["frame"] = "world";
-    j["arm"] = arm_->name();
-    j["site"] = config_.site;
-    j["status_bits"] = {{"holding", bridge::kStatusHolding}, {"refused", bridge::kStatusRefused},
-                        {"watchdog", bridge::kStatusWatchdog}, {"not_owner", bridge::kStatusNotOwner}};
     // an unbounded side or reach reads null
     j["limits"] = {{"workspace_min", config_.workspace_min}, {"workspace_max", config_.workspace_max},
                    {"reach_centre", {reach_centre_.x(), reach_centre_.y(), reach_centre_.z()}},
@@ -238,12 +173,9 @@ class SimTool final : public Device {
                    {"tilt_axis", config_.tilt_axis},         {"max_tilt_deg", config_.max_tilt_deg},
                    {"speed_max", config_.max_speed},         {"angular_speed_max", config_.max_angular_speed},
                    {"quaternion_norm_tolerance", kQuaternionNormTolerance}};
-    j["gains"] = {{"position", config_.k_position}, {"orientation", config_.k_orientation},
-                  {"null_space", config_.k_null}, {"damping", config_.damping}};
     j["limits"]["reach_mode"] = config_.reach == ToolParams::Reach::kAuto    ? "auto"
                                 : config_.reach == ToolParams::Reach::kFixed ? "fixed"
                                                                               : "off";
-    j["watchdog_periods"] = config_.input.watchdog_periods;
     return j.dump();
   }
 
@@ -255,46 +187,30 @@ class SimTool final : public Device {
     std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(model_), mj_deleteData);
     if (!d) throw InputError(who() + ": cannot allocate MuJoCo data");
     mj_kinematics(model_, d.get());
-    const std::vector<int>& joints = chain_->joint_ids();
+    const std::vector<int>& joints = chain_.model->joint_ids();
     reach_radius_ = 0;
     for (std::size_t i = 0; i < joints.size(); ++i) {
       const Eigen::Map<const Eigen::Vector3d> a(d->xanchor + 3 * joints[i]);
       const Eigen::Map<const Eigen::Vector3d> b(i + 1 < joints.size() ? d->xanchor + 3 * joints[i + 1]
-                                                                      : d->site_xpos + 3 * site_);
+                                                                      : d->site_xpos + 3 * chain_.site);
       reach_radius_ += (b - a).norm();
     }
     reach_centre_ = Eigen::Map<const Eigen::Vector3d>(d->xanchor + 3 * joints.front());
   }
 
-  // the chain's joint positions and velocities out of mjData (no allocation)
-  void ReadChain(const mjData& d) {
-    for (int i = 0; i < chain_->dof(); ++i) {
-      q_[i] = d.qpos[chain_->qpos_addresses()[i]];
-      qd_[i] = d.qvel[chain_->dof_addresses()[i]];
-    }
-  }
-
   const mjModel* model_;
   ToolParams config_;
-  SimArm* arm_ = nullptr;  // bound by Bind
   double period_s_;
-  std::unique_ptr<control::RobotModel> chain_;
-  std::unique_ptr<control::TaskSpaceController> controller_;
-  std::vector<int> arm_index_;  // chain joint i is arm joint arm_index_[i]
-  int site_ = -1;
-  double box_min_[3] = {0, 0, 0}, box_max_[3] = {0, 0, 0};
+  ArmChain chain_;  // the chain, its arm (bound by Bind) and its controller (made by Reset)
   Eigen::Vector3d reach_centre_ = Eigen::Vector3d::Zero(), tilt_axis_ = -Eigen::Vector3d::UnitZ();
   double cos_max_tilt_ = -1;
   double reach_radius_ = INFINITY;  // m
-  Eigen::VectorXd q_, qd_;
-  bridge::ArmCommand velocity_, hold_;
   Eigen::Vector3d p_cmd_ = Eigen::Vector3d::Zero(), p_set_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d R_cmd_ = Eigen::Matrix3d::Identity(), R_set_ = Eigen::Matrix3d::Identity();
   // last sample
   Eigen::Vector3d p_ = Eigen::Vector3d::Zero(), v_ = Eigen::Vector3d::Zero(), w_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_WS_ = Eigen::Quaterniond::Identity();
   double rot_error_ = 0;
-  bool holding_ = true, resume_ = false;
 };
 
 std::vector<double> Vector3(MapReader& r, const std::string& key, std::vector<double> fallback) {
@@ -307,14 +223,7 @@ std::vector<double> Vector3(MapReader& r, const std::string& key, std::vector<do
 
 std::shared_ptr<const DeviceParams> ReadToolParams(MapReader& r) {
   auto p = std::make_shared<ToolParams>();
-  p->arm = r.String("arm");
-  p->site = r.String("site", p->site);
-  p->base_body = r.String("base_body", p->base_body);
-  MapReader gains = r.Map("gains");
-  p->k_position = gains.Number("position", p->k_position);
-  p->k_orientation = gains.Number("orientation", p->k_orientation);
-  p->k_null = gains.Number("null_space", p->k_null);
-  p->damping = gains.Number("damping", p->damping);
+  MapReader gains = ReadArmChainParams(r, p.get());
   if (!(p->k_position > 0 && p->k_orientation > 0 && p->k_null >= 0 && p->damping >= 0)) {
     gains.Fail("position", "position and orientation must be > 0, null_space and damping >= 0");
   }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lab/devices/device.h"
+#include "lab/devices/device_arm_chain.h"
 
 namespace vlab::lab {
 
@@ -16,15 +17,10 @@ namespace vlab::lab {
 /// controller's Cartesian pose input: a commanded tool pose [x, y, z, qw, qx,
 /// qy, qz] that the device turns into joint velocity commands for its arm every
 /// control period (device_tool.cc).
-struct ToolParams : DeviceParams {
+/// Its arm, chain and gains are ArmChainParams (device_arm_chain.h): the site is
+/// the tool frame.
+struct ToolParams : ArmChainParams {
   static constexpr double kInf = std::numeric_limits<double>::infinity();
-  std::string arm;                  ///< the arm device it drives (a device of the same scenario)
-  std::string site = "tool";        ///< the tool frame: an MJCF site at the end of the arm's chain
-  std::string base_body = "world";  ///< the chain starts below this body
-  double k_position = 20.0;         ///< position gain, 1/s
-  double k_orientation = 20.0;      ///< orientation gain, 1/s
-  double k_null = 1.0;              ///< null-space gain toward the start posture, 1/s
-  double damping = 1e-3;            ///< DLS damping of the pseudo-inverse
   double max_speed = 0.5;           ///< m/s: the position set-point ramps toward each command at most this fast
   double max_angular_speed = 1.0;   ///< rad/s: the orientation set-point turns at most this fast
   /// Workspace box, world frame, m: positions outside [min, max] are refused (limits).
@@ -43,7 +39,6 @@ struct ToolParams : DeviceParams {
   /// from tilt_axis are refused (limits); 180: no check.
   std::vector<double> tilt_axis = {0, 0, -1};
   double max_tilt_deg = 180;
-  CommandInputConfig input;  ///< watchdog_periods, owner_timeout
 };
 
 /// Reads the entry's own keys.
