@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
 #include "core/core_errors.h"
 #include "lab/lab_yaml.h"
 

@@ -22,7 +22,7 @@
 
 #include <Eigen/Core>
 #include <mujoco/mujoco.h>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "bridge/bridge_layouts.h"
 #include "control/robot_model.h"
