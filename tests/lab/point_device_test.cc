@@ -4,26 +4,20 @@
 // non-finite and out-of-workspace commands, holds on the watchdog, overrides
 // the arm's own commands, and the scenario rules around it (its arm must exist,
 // one driver per arm).
-#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
 
+#include "arm_driver_fixture.h"
 #include "bridge/bridge_layouts.h"
 #include "control/task_space.h"
-#include "lab/devices/device_arm.h"
-#include "lab/devices/device_kinds.h"
 #include "lab/devices/device_point.h"
-#include "core/core_errors.h"
-#include "core/core_mujoco.h"
-#include "lab/lab_runner.h"
 #include "mujoco_fixture.h"
-#include "test_util.h"
 
 namespace vlab::lab {
 namespace {
 
-constexpr double kPeriod = 0.01;  // s: 10 physics steps of 1 ms
+using namespace arm_driver_rig;  // kPeriod, ColumnOf, ArmConfig, ArmDriverRig, Pa10ScenarioError
 
 // the point device's state payload (docs/protocol.md)
 constexpr int kStatus = bridge::StateIndex(bridge::DeviceKind::kPoint, "status");
@@ -32,25 +26,6 @@ constexpr int kVx = bridge::StateIndex(bridge::DeviceKind::kPoint, "vx");
 constexpr int kVy = bridge::StateIndex(bridge::DeviceKind::kPoint, "vy");
 constexpr int kVz = bridge::StateIndex(bridge::DeviceKind::kPoint, "vz");
 static_assert(bridge::StateIndex(bridge::DeviceKind::kPoint, "z") == kX + 2, "x, y, z follow each other");
-
-// the index of the log column `name` of `device`, -1 when it has none
-int ColumnOf(const Device& device, const std::string& name) {
-  const std::vector<std::string> columns = device.Columns();
-  const auto it = std::find(columns.begin(), columns.end(), name);
-  return it == columns.end() ? -1 : static_cast<int>(it - columns.begin());
-}
-
-DeviceConfig ArmConfig() {
-  DeviceConfig c;
-  c.name = "pa10";
-  c.kind = bridge::DeviceKind::kArm;
-  c.where = "test.yaml:1";
-  c.EditParams<ArmParams>().joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
-  c.EditParams<ArmParams>().actuators = c.EditParams<ArmParams>().joints;  // the motors have the joints' names
-  c.EditParams<ArmParams>().initial = {0, 0.523599, 0, 1.047198, 0, 1.570796, 0};  // ready: tool down
-  c.EditParams<ArmParams>().max_velocity = std::vector<double>(7, 3.1416);
-  return c;
-}
 
 DeviceConfig PointConfig(double max_speed = 0.2) {
   DeviceConfig c;
@@ -64,46 +39,13 @@ DeviceConfig PointConfig(double max_speed = 0.2) {
   return c;
 }
 
-// The arm and its point device on a model and data the fixture owns, stepped
-// like the lab's run loop does.
-struct Rig {
-  mjModel* model;
-  mjData* data;
-  std::unique_ptr<SimArm> arm;
-  std::unique_ptr<Device> point;
-  int tool;
+// The arm and its point device (ArmDriverRig: Period, State, Tool, ToolR).
+struct Rig : ArmDriverRig {
+  Device* point;
 
-  Rig(mjModel* m, mjData* d, double max_speed)
-      : model(m),
-        data(d),
-        arm(SimArm::Create({m, kPeriod, 1, "pa10.xml"}, ArmConfig())),
-        tool(mj_name2id(m, mjOBJ_SITE, "tool")) {
-    point = MakeDevice({model, kPeriod, 1, "pa10.xml"}, PointConfig(max_speed));
-    point->Bind({arm.get(), point.get()});
-    mj_resetData(model, data);
-    arm->SetInitialState(*data);
-    mj_forward(model, data);
-    arm->Start(*data);
-    point->Reset(*data);
-  }
-  void Period() {
-    point->BeginPeriod(*data, data->time);
-    for (int i = 0; i < 10; ++i) {
-      mj_step1(model, data);
-      arm->Actuate(*data, 0.001);
-      mj_step2(model, data);
-    }
-    mj_forward(model, data);  // positions of the state reached, for exact comparisons
-    point->Sample(*data, data->time);
-  }
-  std::vector<double> State() const {
-    std::vector<double> s;
-    point->State(&s);
-    return s;
-  }
-  Eigen::Vector3d Tool() const { return Eigen::Map<const Eigen::Vector3d>(data->site_xpos + 3 * tool); }
-  Eigen::Matrix3d ToolR() const {
-    return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(data->site_xmat + 9 * tool);
+  Rig(mjModel* m, mjData* d, double max_speed) : ArmDriverRig(m, d) {
+    Start(PointConfig(max_speed));
+    point = driver.get();
   }
   // the point's set-point from its log row
   Eigen::Vector3d Setpoint() const {
@@ -209,18 +151,7 @@ TEST_F(PointDeviceTest, OverridesTheArmsOwnCommandsEveryPeriod) {
 
 TEST(PointScenarioTest, ScenarioRules) {
   vlab::testing::TempDir dir;
-  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\nduration: 0.1\n"
-                           "control_period: 0.01\ndevices:\n"
-                           "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n";
-  auto error_of = [&](const std::string& rest) -> std::string {
-    vlab::testing::WriteFile(dir.path() + "/s.yaml", head + rest);
-    try {
-      Lab::Create(LoadScenario(dir.path() + "/s.yaml"));
-    } catch (const InputError& e) {
-      return e.what();
-    }
-    return "";
-  };
+  auto error_of = [&](const std::string& rest) { return Pa10ScenarioError(dir, rest); };
   EXPECT_NE(error_of("  - {name: hand, kind: point, arm: nope}\n").find("no arm device 'nope'"), std::string::npos);
   EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10}\n  - {name: hand2, kind: point, arm: pa10}\n")
                 .find("driven by point device"),

@@ -7,26 +7,22 @@
 // the workspace box or beyond the reach sphere, and tool axes outside the tilt
 // cone; it holds on the watchdog and resumes from where the tool is; and the
 // scenario keys.
-#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include "arm_driver_fixture.h"
 #include "bridge/bridge_layouts.h"
 #include "control/task_space.h"
-#include "core/core_errors.h"
-#include "lab/devices/device_arm.h"
-#include "lab/devices/device_kinds.h"
 #include "lab/devices/device_tool.h"
-#include "lab/lab_runner.h"
 #include "mujoco_fixture.h"
-#include "test_util.h"
 
 namespace vlab::lab {
 namespace {
 
-constexpr double kPeriod = 0.01;  // s: 10 physics steps of 1 ms
+using namespace arm_driver_rig;  // kPeriod, ColumnOf, ArmConfig, ArmDriverRig, Pa10ScenarioError
+
 constexpr double kDeg = M_PI / 180;
 
 // the tool device's state payload (docs/protocol.md)
@@ -36,24 +32,6 @@ constexpr int kQw = bridge::StateIndex(bridge::DeviceKind::kTool, "qw");
 constexpr int kVx = bridge::StateIndex(bridge::DeviceKind::kTool, "vx");
 constexpr int kWx = bridge::StateIndex(bridge::DeviceKind::kTool, "wx");
 static_assert(bridge::CommandIndex(bridge::DeviceKind::kTool, "qw") == 3, "x, y, z, then the quaternion");
-
-int ColumnOf(const Device& device, const std::string& name) {
-  const std::vector<std::string> columns = device.Columns();
-  const auto it = std::find(columns.begin(), columns.end(), name);
-  return it == columns.end() ? -1 : static_cast<int>(it - columns.begin());
-}
-
-DeviceConfig ArmConfig() {
-  DeviceConfig c;
-  c.name = "pa10";
-  c.kind = bridge::DeviceKind::kArm;
-  c.where = "test.yaml:1";
-  c.EditParams<ArmParams>().joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
-  c.EditParams<ArmParams>().actuators = c.EditParams<ArmParams>().joints;
-  c.EditParams<ArmParams>().initial = {0, 0.523599, 0, 1.047198, 0, 1.570796, 0};  // ready: tool down
-  c.EditParams<ArmParams>().max_velocity = std::vector<double>(7, 3.1416);
-  return c;
-}
 
 // the shoulder (S2's axis, scenes/pa10.xml: 0.200 + 0.115 m above the base)
 const Eigen::Vector3d kShoulder(0, 0, 0.315);
@@ -77,45 +55,17 @@ DeviceConfig ToolConfig(double reach) {
   return c;
 }
 
-struct Rig {
-  mjModel* model;
-  mjData* data;
-  std::unique_ptr<SimArm> arm;
-  std::unique_ptr<Device> tool;
-  int site;
+// The arm and its tool device (ArmDriverRig: Period, State, Tool, ToolR).
+struct Rig : ArmDriverRig {
+  Device* tool;
   double reach = 0;  // shoulder to tool site with the arm straight up (q = 0): the farthest it gets
 
-  Rig(mjModel* m, mjData* d) : model(m), data(d), site(mj_name2id(m, mjOBJ_SITE, "tool")) {
+  Rig(mjModel* m, mjData* d) : ArmDriverRig(m, d) {
     mj_resetData(model, data);
     mj_forward(model, data);
     reach = (Tool() - kShoulder).norm();
-    arm = SimArm::Create({m, kPeriod, 1, "pa10.xml"}, ArmConfig());
-    tool = MakeDevice({model, kPeriod, 1, "pa10.xml"}, ToolConfig(reach));
-    tool->Bind({arm.get(), tool.get()});
-    mj_resetData(model, data);
-    arm->SetInitialState(*data);
-    mj_forward(model, data);
-    arm->Start(*data);
-    tool->Reset(*data);
-  }
-  void Period() {
-    tool->BeginPeriod(*data, data->time);
-    for (int i = 0; i < 10; ++i) {
-      mj_step1(model, data);
-      arm->Actuate(*data, 0.001);
-      mj_step2(model, data);
-    }
-    mj_forward(model, data);
-    tool->Sample(*data, data->time);
-  }
-  std::vector<double> State() const {
-    std::vector<double> s;
-    tool->State(&s);
-    return s;
-  }
-  Eigen::Vector3d Tool() const { return Eigen::Map<const Eigen::Vector3d>(data->site_xpos + 3 * site); }
-  Eigen::Matrix3d ToolR() const {
-    return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(data->site_xmat + 9 * site);
+    Start(ToolConfig(reach));
+    tool = driver.get();
   }
   void Command(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
     tool->Command({p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()});
@@ -286,18 +236,7 @@ TEST_F(ToolDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
 
 TEST(ToolScenarioTest, ScenarioKeysAndRules) {
   vlab::testing::TempDir dir;
-  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\nduration: 0.1\n"
-                           "control_period: 0.01\ndevices:\n"
-                           "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n";
-  auto error_of = [&](const std::string& rest) -> std::string {
-    vlab::testing::WriteFile(dir.path() + "/s.yaml", head + rest);
-    try {
-      Lab::Create(LoadScenario(dir.path() + "/s.yaml"));
-    } catch (const InputError& e) {
-      return e.what();
-    }
-    return "";
-  };
+  auto error_of = [&](const std::string& rest) { return Pa10ScenarioError(dir, rest); };
   EXPECT_EQ(error_of("  - {name: tool, kind: tool, arm: pa10, max_speed: 0.1, max_angular_speed: 0.5, "
                      "workspace: {min: [0.3, -0.5, 0.4], max: [1.1, 0.5, 1.2]}, "
                      "reach: {centre: [0, 0, 0.315], radius: 1.0}, tilt: {axis: [0, 0, -1], max_deg: 90}}\n"),
