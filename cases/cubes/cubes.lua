@@ -4,7 +4,25 @@ local M = {}
 
 M.EDGE = 0.050            -- m, cube edge
 M.MARKER_UP = -0.0078125  -- m, marker centre along the face's "up" from the face centre
-M.LETTERS = "ABCDEF"      -- cube i (0-based) carries letter i+1; marker id = 6 i + face
+-- the letters on faces 0-5 of each cube (cube i, 0-based, is entry i + 1; marker id = 6 i + face):
+-- by default the lettered cubes A-F of mjcf/cubes (a cube's letter on every face); M.set_faces
+-- for the alphabet blocks of mjcf/cubes/blocks (a different letter on every face)
+M.CUBE_FACES = {"AAAAAA", "BBBBBB", "CCCCCC", "DDDDDD", "EEEEEE", "FFFFFF"}
+
+-- faces: a list of six-letter strings, one per cube, the letters of its faces 0-5 (the
+-- blocks' README table, the text `<body>.faces` of their assets); a letter on two cubes is an error
+function M.set_faces(faces)
+  local where = {}
+  for i, f in ipairs(faces) do
+    assert(#f == 6, "cube " .. i .. ": '" .. f .. "' is not six letters (faces 0-5)")
+    for k = 1, 6 do
+      local letter = f:sub(k, k)
+      assert(where[letter] == nil or where[letter] == i, "letter " .. letter .. " on cubes " .. tostring(where[letter]) .. " and " .. i)
+      where[letter] = i
+    end
+  end
+  M.CUBE_FACES = faces
+end
 
 -- per face 0-5: outward normal, the printed image's right and up (box frame; README table)
 local FACES = {
@@ -25,11 +43,12 @@ function M.marker_in_cube(f)
   return frame(n * (M.EDGE / 2) + u * M.MARKER_UP, R)
 end
 
--- letter of a marker id, its cube index and face; nil for an id that is no cube's
+-- letter of a marker id (the letter on the marker's face), its cube index and face; nil for
+-- an id that is no cube's
 function M.decode(id)
-  if id < 0 or id >= 6 * #M.LETTERS then return nil end
-  local cube = id // 6
-  return M.LETTERS:sub(cube + 1, cube + 1), cube, id % 6
+  if id < 0 or id >= 6 * #M.CUBE_FACES then return nil end
+  local cube, face = id // 6, id % 6
+  return M.CUBE_FACES[cube + 1]:sub(face + 1, face + 1), cube, face
 end
 
 local function deg(rad) return rad * 180 / math.pi end
@@ -42,40 +61,83 @@ function M.wrap(a)
 end
 
 -- Fuses the markers of one or more vision states into cube poses: every valid marker with a
--- world pose gives its whole cube (X_wc = X_wm X_cm^-1). Per letter: the centre is the mean
+-- world pose gives its whole cube (X_wc = X_wm X_cm^-1). Per cube: the centre is the mean
 -- of the estimates weighted by 1 / (error + 0.1 px), the rotation that of the estimate with
--- the smallest reprojection error; `seen` counts the estimates.
+-- the smallest reprojection error; `seen` counts the estimates. The result is keyed by
+-- letter: every letter of a seen cube, with the face that carries it (`face`; on a cube with
+-- its letter on every face, the face on top).
+--
+-- A cube with no valid marker may still be found from markers that vlab vision flags invalid
+-- only because the two poses a square admits fit about equally well (small, distant markers:
+-- docs/vision.md), never from one whose fit is worse than MAX_ERROR: of the two poses, the one
+-- reported is kept if its face lies as a resting cube's faces do (its normal within FLAT_DEG of
+-- vertical or of horizontal). The other pose is the first mirrored about the line of sight,
+-- its normal turned by about twice the viewing angle: the webcam sees a cube on the table at
+-- 35 deg or more from its top face's normal, so the mirrored pose of a top marker is 70 deg or
+-- more from vertical, and that of a side marker (seen from above) far from horizontal.
+M.MAX_ERROR = 1.0   -- px: vlab vision's default --max-error
+M.FLAT_DEG = 15     -- deg
+local function lies_flat(world)
+  local nz = math.abs((world.rot * vec3(0, 0, 1)).z)
+  local s = math.sin(M.FLAT_DEG * math.pi / 180)
+  return nz >= math.cos(M.FLAT_DEG * math.pi / 180) or nz <= s
+end
+
 function M.fuse(states)
-  local acc = {}
+  local acc, prior = {}, {}
+  local function add(into, cube, face, m)
+    local X = m.world * M.marker_in_cube(face):inv()
+    local w = 1 / (m.error + 0.1)
+    local a = into[cube]
+    if not a then
+      a = {sum = vec3(0, 0, 0), weight = 0, seen = 0, best = math.huge}
+      into[cube] = a
+    end
+    a.sum = a.sum + X.pos * w
+    a.weight = a.weight + w
+    a.seen = a.seen + 1
+    if m.error < a.best then a.best, a.rot = m.error, X.rot end
+  end
   for _, s in ipairs(states) do
     for _, m in ipairs(s.markers) do
-      local letter, _, face = M.decode(m.id)
-      if letter and m.valid and m.world then
-        local X = m.world * M.marker_in_cube(face):inv()
-        local w = 1 / (m.error + 0.1)
-        local a = acc[letter]
-        if not a then
-          a = {sum = vec3(0, 0, 0), weight = 0, seen = 0, best = math.huge}
-          acc[letter] = a
+      local letter, cube, face = M.decode(m.id)
+      if letter and m.world then
+        if m.valid then
+          add(acc, cube, face, m)
+        elseif m.error <= M.MAX_ERROR and lies_flat(m.world) then
+          add(prior, cube, face, m)
         end
-        a.sum = a.sum + X.pos * w
-        a.weight = a.weight + w
-        a.seen = a.seen + 1
-        if m.error < a.best then a.best, a.rot = m.error, X.rot end
       end
     end
   end
+  for cube, a in pairs(prior) do
+    if not acc[cube] then
+      acc[cube] = a
+      a.ambiguous = true
+    end
+  end
   local cubes = {}
-  for letter, a in pairs(acc) do
-    cubes[letter] = M.describe(frame(a.sum / a.weight, a.rot))
-    cubes[letter].seen = a.seen
+  for cube, a in pairs(acc) do
+    local faces = M.CUBE_FACES[cube + 1]
+    for f = 0, 5 do
+      local letter = faces:sub(f + 1, f + 1)
+      if not cubes[letter] then
+        -- a letter on every face: the one on top; else the face that carries it
+        local every = faces == letter:rep(6)
+        cubes[letter] = M.describe(frame(a.sum / a.weight, a.rot), not every and f or nil)
+        cubes[letter].seen = a.seen
+        cubes[letter].cube = cube
+        cubes[letter].ambiguous = a.ambiguous or false
+      end
+    end
   end
   return cubes
 end
 
 -- What a cube pose means for the task: the face on top, how far it tilts (deg), the yaw of
--- its letter's up (deg, world, about z: 0 = +x) and of its reading direction.
-function M.describe(X)
+-- its letter's up (deg, world, about z: 0 = +x) and of its reading direction; the face that
+-- carries the letter (`face`, default the top) and its outward normal in the world (`normal`).
+function M.describe(X, face)
   local best, top = -2, 0
   for f = 0, 5 do
     local z = (X.rot * FACES[f].n).z
@@ -83,8 +145,10 @@ function M.describe(X)
   end
   local up = X.rot * FACES[top].up
   local right = X.rot * FACES[top].right
+  face = face or top
   return {pose = X, pos = X.pos, top = top, tilt = deg(math.acos(math.min(1, best))),
-          up_yaw = deg(math.atan(up.y, up.x)), right_yaw = deg(math.atan(right.y, right.x))}
+          up_yaw = deg(math.atan(up.y, up.x)), right_yaw = deg(math.atan(right.y, right.x)),
+          face = face, normal = X.rot * FACES[face].n}
 end
 
 -- The tool yaws (deg, the tool frame = rpy(180, 0, yaw): tool z down, jaws closing along
@@ -103,6 +167,21 @@ function M.grasp_yaws(up_yaw, goal_up_yaw, natural_pick, natural_place, place_ja
     if cost < best then best, pick, place = cost, g, p end
   end
   return pick, place, turn
+end
+
+-- A tumble turns a cube a quarter turn about a horizontal axis, so that its face whose outward
+-- normal points along yaw `alpha` (deg, world) ends on top: grasped with the jaws closing along
+-- that axis (across the faces at alpha +- 90 deg) and the tool tilted 45 deg over the cube from
+-- the side of that face, lifted back along the tool, turned half a turn about the tool's own
+-- axis (the last wrist joint alone) and set down where it was. The tool rotation at the grasp
+-- (tool z = its approach direction; jaws closing along the tool y, as in grasp_yaws):
+--   R = Rz(alpha) Ry(45) Rx(180)
+-- and the held cube turns by R Rz(180) R^-1, half a turn about the tilted tool axis u: v goes to
+-- 2 (u.v) u - v, so the face at yaw alpha goes up, the face on top to yaw alpha, the face down
+-- to yaw alpha + 180. The tool keeps its lean: where the grasp reaches, so does the set-down.
+M.TUMBLE_TILT = 45   -- deg: the tool's tilt from straight down
+function M.tumble_rotation(alpha)
+  return rotz(alpha) * roty(M.TUMBLE_TILT) * rpy(180, 0, 0)
 end
 
 return M

@@ -62,4 +62,57 @@ for _, phi in ipairs({-170, -91, -45, 0, 12.5, 90, 179}) do
   local k = (pick - 90 - phi) / 90
   near(k, math.floor(k + 0.5), 1e-9, "jaws along a cube axis at " .. phi)
 end
+-- markers flagged invalid: a cube with no valid marker is found from those whose fit is
+-- within MAX_ERROR and whose face lies flat (normal within 15 deg of vertical or horizontal);
+-- a mirrored pose (normal tilted 70 deg) or a bad fit is ignored, and so is any invalid marker
+-- of a cube that has a valid one
+local Y = frame(0.55, 0.2, 0.225) * rotz(30)   -- resting, face 4 (+Z) on top
+local tilt = frame(vec3(0, 0, 0), roty(70))
+seen = cubes.fuse({{markers = {
+  {id = 6 * 0 + 4, valid = false, error = 0.3, world = Y * cubes.marker_in_cube(4)},               -- A: flat, used
+  {id = 6 * 1 + 4, valid = false, error = 0.3, world = Y * cubes.marker_in_cube(4) * tilt},       -- B: mirrored, ignored
+  {id = 6 * 2 + 4, valid = false, error = 1.5, world = Y * cubes.marker_in_cube(4)},              -- C: bad fit, ignored
+  {id = 6 * 3 + 4, valid = true, error = 0.2, world = Y * cubes.marker_in_cube(4)},               -- D: valid ...
+  {id = 6 * 3 + 0, valid = false, error = 0.1, world = frame(0.9, 0.9, 0.225) * cubes.marker_in_cube(0)},  -- ... its invalid one ignored
+}}})
+assert(seen.A and seen.A.ambiguous and not seen.B and not seen.C and seen.D and not seen.D.ambiguous, "invalid markers")
+near_vec(seen.A.pos, Y.pos, 1e-12, "cube from a flat invalid marker")
+near_vec(seen.D.pos, Y.pos, 1e-12, "a valid marker's cube ignores its invalid ones")
+
+-- alphabet blocks (mjcf/cubes/blocks/README.md): the letter of a marker is its face's
+cubes.set_faces({"AGMSY4", "BHNTZ5", "CIOU06", "DJPV17", "EKQW28", "FLRX39"})
+local l2, i2, f2 = cubes.decode(6 * 3 + 2)
+assert(l2 == "P" and i2 == 3 and f2 == 2, "decode a block's face: " .. tostring(l2))
+assert(not pcall(cubes.set_faces, {"ABCDEF", "AGHIJK"}), "a letter on two blocks is refused")
+-- every letter of a seen block, with the face that carries it and that face's world normal:
+-- block 4 (DJPV17) at X (face 3, letter V, down; face 2, letter P, on top)
+markers = {}
+for face = 0, 5 do
+  markers[#markers + 1] = {id = 6 * 3 + face, valid = true, error = 0.2, world = X * cubes.marker_in_cube(face)}
+end
+seen = cubes.fuse({{markers = markers}})
+assert(seen.D and seen.J and seen.P and seen.V and seen["1"] and seen["7"] and not seen.A, "fuse: the six letters of block 4")
+assert(seen.P.face == 2 and seen.P.top == 2 and seen.V.face == 3 and seen.D.face == 0, "faces of the letters")
+near_vec(seen.V.normal, vec3(0, 0, -1), 1e-9, "V faces down")
+near_vec(seen.P.normal, vec3(0, 0, 1), 1e-9, "P faces up")
+near_vec(seen.D.normal, X.rot * vec3(1, 0, 0), 1e-12, "D faces along the block's +X")
+cubes.set_faces({"AAAAAA", "BBBBBB", "CCCCCC", "DDDDDD", "EEEEEE", "FFFFFF"})
+
+-- tumbles: the face at yaw alpha goes up, the top face to yaw alpha, the bottom to alpha + 180;
+-- the jaws (tool y) close along the horizontal axis at alpha + 90 deg; the tool z leans toward
+-- the cube from the side of the face at alpha (direction (-cos alpha, -sin alpha) horizontally)
+for _, alpha in ipairs({-135, -30, 0, 77, 180}) do
+  local r = cubes.tumble_rotation(alpha)
+  local turn = r * rotz(180) * r:inv()
+  local a = alpha * math.pi / 180
+  local side = vec3(math.cos(a), math.sin(a), 0)
+  near_vec(turn * side, vec3(0, 0, 1), 1e-12, "side face up, alpha " .. alpha)
+  near_vec(turn * vec3(0, 0, 1), side, 1e-12, "top face to alpha, alpha " .. alpha)
+  near_vec(turn * vec3(0, 0, -1), side * -1, 1e-12, "bottom face to alpha + 180, alpha " .. alpha)
+  local axis = vec3(-math.sin(a), math.cos(a), 0)
+  near(math.abs((r * vec3(0, 1, 0)):dot(axis)), 1, 1e-12, "jaws along the axis, alpha " .. alpha)
+  local z = r * vec3(0, 0, 1)
+  near(z.z, -math.cos(math.pi / 4), 1e-12, "tilt, alpha " .. alpha)
+  near(z:dot(side), -math.sin(math.pi / 4), 1e-12, "leans from the face's side, alpha " .. alpha)
+end
 print("cubes_test: all checks passed")
