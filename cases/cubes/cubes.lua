@@ -67,27 +67,56 @@ end
 -- letter: every letter of a seen cube, with the face that carries it (`face`; on a cube with
 -- its letter on every face, the face on top).
 --
--- A cube with no valid marker may still be found from markers that vlab vision flags invalid
--- only because the two poses a square admits fit about equally well (small, distant markers:
--- docs/vision.md), never from one whose fit is worse than MAX_ERROR: of the two poses, the one
--- reported is kept if its face lies as a resting cube's faces do (its normal within FLAT_DEG of
--- vertical or of horizontal). The other pose is the first mirrored about the line of sight,
--- its normal turned by about twice the viewing angle: the webcam sees a cube on the table at
--- 35 deg or more from its top face's normal, so the mirrored pose of a top marker is 70 deg or
--- more from vertical, and that of a side marker (seen from above) far from horizontal.
-M.MAX_ERROR = 1.0   -- px: vlab vision's default --max-error
-M.FLAT_DEG = 15     -- deg
-local function lies_flat(world)
-  local nz = math.abs((world.rot * vec3(0, 0, 1)).z)
-  local s = math.sin(M.FLAT_DEG * math.pi / 180)
-  return nz >= math.cos(M.FLAT_DEG * math.pi / 180) or nz <= s
+-- With `rest_z` (the table top, m), cubes are known to rest on it, and that prior is used:
+-- * A marker whose face lies flat (its normal within FLAT_DEG of vertical or of horizontal)
+--   and whose cube centre comes out within HEIGHT_TOL of its resting height has its rotation
+--   snapped to exactly flat (the smallest turn) and its position moved along the camera's
+--   ray through it to where the cube centre lies at its resting height. The depth of a
+--   small marker is its least certain coordinate (1-2 % of the range from its apparent
+--   size: a 16 px marker 0.9 m away measured 17 mm deep along the ray, 12 mm in x); the
+--   ray's direction is certain to a fraction of a pixel.
+-- * A cube with no valid marker may still be found from markers that vlab vision flags
+--   invalid only because the two poses a square admits fit about equally well (small,
+--   distant markers: docs/vision.md), if their fit is within MAX_ERROR and the reported pose
+--   passes the same test. The other pose is the first mirrored about the line of sight, its
+--   normal turned by about twice the viewing angle (35-55 deg from a resting cube's faces to
+--   this webcam): a top face's mirror lies near horizontal, a side face's near vertical, but
+--   then the cube's centre comes out 25-33 mm off its resting height, which the test refuses.
+M.MAX_ERROR = 1.0     -- px: vlab vision's default --max-error
+M.FLAT_DEG = 15       -- deg
+M.HEIGHT_TOL = 0.018  -- m: a depth error of 2 % at 0.9 m moves the centre 12 mm in height
+local function flat_normal(n)
+  if math.abs(n.z) >= math.cos(M.FLAT_DEG * math.pi / 180) then return vec3(0, 0, n.z > 0 and 1 or -1) end
+  if math.abs(n.z) <= math.sin(M.FLAT_DEG * math.pi / 180) then return vec3(n.x, n.y, 0):normalized() end
+  return nil
 end
 
-function M.fuse(states)
+-- the cube pose from marker m on `face`, resting on rest_z: nil when its face does not lie
+-- flat or its centre is not near the resting height
+local function resting_cube(m, face, rest_z)
+  local X_cm_inv = M.marker_in_cube(face):inv()
+  local raw = m.world * X_cm_inv
+  local n = m.world.rot * vec3(0, 0, 1)
+  local target = flat_normal(n)
+  local centre_z = rest_z + M.EDGE / 2
+  if not target or math.abs(raw.pos.z - centre_z) > M.HEIGHT_TOL then return nil end
+  local turned = frame(m.world.rot)
+  local axis = n:cross(target)
+  if axis:norm() > 1e-12 then
+    turned = angleaxis(math.deg(math.atan(axis:norm(), n:dot(target))), axis:normalized()) * turned
+  end
+  local rot = turned.rot
+  local v = rot * X_cm_inv.pos                 -- marker centre -> cube centre, world
+  local cam = (m.world * m.camera:inv()).pos   -- the camera's origin
+  local d = m.world.pos - cam
+  local s = (centre_z - v.z - cam.z) / d.z
+  return frame(cam + d * s + v, rot * X_cm_inv.rot)
+end
+
+function M.fuse(states, rest_z)
   local acc, prior = {}, {}
-  local function add(into, cube, face, m)
-    local X = m.world * M.marker_in_cube(face):inv()
-    local w = 1 / (m.error + 0.1)
+  local function add(into, cube, X, err)
+    local w = 1 / (err + 0.1)
     local a = into[cube]
     if not a then
       a = {sum = vec3(0, 0, 0), weight = 0, seen = 0, best = math.huge}
@@ -96,16 +125,17 @@ function M.fuse(states)
     a.sum = a.sum + X.pos * w
     a.weight = a.weight + w
     a.seen = a.seen + 1
-    if m.error < a.best then a.best, a.rot = m.error, X.rot end
+    if err < a.best then a.best, a.rot = err, X.rot end
   end
   for _, s in ipairs(states) do
     for _, m in ipairs(s.markers) do
       local letter, cube, face = M.decode(m.id)
       if letter and m.world then
+        local resting = rest_z and m.camera and resting_cube(m, face, rest_z)
         if m.valid then
-          add(acc, cube, face, m)
-        elseif m.error <= M.MAX_ERROR and lies_flat(m.world) then
-          add(prior, cube, face, m)
+          add(acc, cube, resting or m.world * M.marker_in_cube(face):inv(), m.error)
+        elseif resting and m.error <= M.MAX_ERROR then
+          add(prior, cube, resting, m.error)
         end
       end
     end

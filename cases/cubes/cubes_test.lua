@@ -62,22 +62,49 @@ for _, phi in ipairs({-170, -91, -45, 0, 12.5, 90, 179}) do
   local k = (pick - 90 - phi) / 90
   near(k, math.floor(k + 0.5), 1e-9, "jaws along a cube axis at " .. phi)
 end
+-- the resting prior (fuse with the table top): a webcam at (1.15, 0, 0.90) looking down at the
+-- table (the scene's), cubes resting on a 0.20 m table (centres at 0.225 m)
+local REST = 0.20
+local CAM = frame(1.15, 0, 0.90) * rpy(0, 141.8, 0)   -- any rotation: only its origin matters here
+local function seen_from(world)   -- a marker state as vlab vision gives it: world and camera frames
+  return world, CAM:inv() * world
+end
+local function marker(id, valid, err, world)
+  local w, c = seen_from(world)
+  return {id = id, valid = valid, error = err, world = w, camera = c}
+end
+local Y = frame(0.55, 0.2, 0.225) * rotz(30)          -- resting, face 4 (+Z) on top
+local top = Y * cubes.marker_in_cube(4)
+
+-- a valid marker 17 mm too deep along the camera's ray and tilted 3 deg: moved back along the
+-- ray to the resting height, its rotation snapped flat; the cube exactly where it is
+local ray = (top.pos - CAM.pos):normalized()
+local off = frame(top.pos + ray * 0.017) * angleaxis(3, vec3(1, 0, 0)) * frame(top.rot)
+seen = cubes.fuse({{markers = {marker(6 * 0 + 4, true, 0.2, off)}}}, REST)
+near_vec(seen.A.pos, Y.pos, 1e-9, "depth corrected along the ray")
+near(seen.A.pose.rot:angle(Y.rot), 0, 1e-6, "rotation snapped flat")
+-- without the table: the estimate as measured
+seen = cubes.fuse({{markers = {marker(6 * 0 + 4, true, 0.2, off)}}})
+assert((seen.A.pos - Y.pos):norm() > 0.010, "no prior without the table top")
+
 -- markers flagged invalid: a cube with no valid marker is found from those whose fit is
--- within MAX_ERROR and whose face lies flat (normal within 15 deg of vertical or horizontal);
--- a mirrored pose (normal tilted 70 deg) or a bad fit is ignored, and so is any invalid marker
--- of a cube that has a valid one
-local Y = frame(0.55, 0.2, 0.225) * rotz(30)   -- resting, face 4 (+Z) on top
-local tilt = frame(vec3(0, 0, 0), roty(70))
+-- within MAX_ERROR and whose face lies flat at the resting height; ignored: a mirrored pose
+-- (normal 70 deg off), a bad fit, a side face's mirror that looks like a top face (normal
+-- vertical, centre 25 mm low), and any invalid marker of a cube that has a valid one
+local side = Y * cubes.marker_in_cube(0)   -- face 0, normal horizontal
+local side_as_top = frame(side.pos, top.rot)
 seen = cubes.fuse({{markers = {
-  {id = 6 * 0 + 4, valid = false, error = 0.3, world = Y * cubes.marker_in_cube(4)},               -- A: flat, used
-  {id = 6 * 1 + 4, valid = false, error = 0.3, world = Y * cubes.marker_in_cube(4) * tilt},       -- B: mirrored, ignored
-  {id = 6 * 2 + 4, valid = false, error = 1.5, world = Y * cubes.marker_in_cube(4)},              -- C: bad fit, ignored
-  {id = 6 * 3 + 4, valid = true, error = 0.2, world = Y * cubes.marker_in_cube(4)},               -- D: valid ...
-  {id = 6 * 3 + 0, valid = false, error = 0.1, world = frame(0.9, 0.9, 0.225) * cubes.marker_in_cube(0)},  -- ... its invalid one ignored
-}}})
-assert(seen.A and seen.A.ambiguous and not seen.B and not seen.C and seen.D and not seen.D.ambiguous, "invalid markers")
-near_vec(seen.A.pos, Y.pos, 1e-12, "cube from a flat invalid marker")
-near_vec(seen.D.pos, Y.pos, 1e-12, "a valid marker's cube ignores its invalid ones")
+  marker(6 * 0 + 4, false, 0.3, top),                                              -- A: flat, used
+  marker(6 * 1 + 4, false, 0.3, Y * cubes.marker_in_cube(4) * roty(70)),            -- B: mirrored, ignored
+  marker(6 * 2 + 4, false, 1.5, top),                                              -- C: bad fit, ignored
+  marker(6 * 3 + 4, true, 0.2, top),                                               -- D: valid ...
+  marker(6 * 3 + 0, false, 0.1, frame(0.9, 0.9, 0.225) * cubes.marker_in_cube(0)), -- ... its invalid one ignored
+  marker(6 * 4 + 0, false, 0.1, side_as_top),                                      -- E: a side face as a top: ignored
+}}}, REST)
+assert(seen.A and seen.A.ambiguous and not seen.B and not seen.C and seen.D and not seen.D.ambiguous and not seen.E,
+       "invalid markers")
+near_vec(seen.A.pos, Y.pos, 1e-9, "cube from a flat invalid marker")
+near_vec(seen.D.pos, Y.pos, 1e-9, "a valid marker's cube ignores its invalid ones")
 
 -- alphabet blocks (mjcf/cubes/blocks/README.md): the letter of a marker is its face's
 cubes.set_faces({"AGMSY4", "BHNTZ5", "CIOU06", "DJPV17", "EKQW28", "FLRX39"})

@@ -57,7 +57,7 @@ local function look(vis, park)
     assert(m, "no markers from the vision program within " .. S.frame_timeout .. " s")
     states[#states + 1] = m
   end
-  return cubes.fuse(states)
+  return cubes.fuse(states, M.table_z)   -- the cubes rest on the table: cubes.fuse's prior
 end
 
 -- a tool frame at `p` (vec3) with yaw `yaw` (deg), tool z down
@@ -206,12 +206,16 @@ local function tumble(g, c, alpha)
   return true
 end
 
--- the cube turned about the vertical in place (picked and set down where it lies) so that its
--- face at yaw `from` (deg) ends at yaw `to`; the jaws across a pair of its faces
-local function turn_in_place(g, c, from, to)
-  local here = frame(vec3(c.pos.x, c.pos.y, c.pos.z))
+-- the cube turned about the vertical (picked, and set down where it lies or at `dest`, a vec3)
+-- so that its face at yaw `from` (deg) ends at yaw `to`; the jaws across a pair of its faces,
+-- closing along one of `jaws` (deg, at the pick; default: any pair)
+local function turn_in_place(g, c, from, to, dest, jaws)
+  local here = frame(dest or vec3(c.pos.x, c.pos.y, c.pos.z))
   local theta = math.atan(c.pos.y, c.pos.x) * 180 / math.pi
-  local yaw_pick, yaw_place = cubes.grasp_yaws(from, to, 180 + theta, 180 + theta, {to, to + 90, to + 180, to + 270})
+  local turn = to - from
+  local place_jaws = {}
+  for _, j in ipairs(jaws or {from, from + 90, from + 180, from + 270}) do place_jaws[#place_jaws + 1] = j + turn end
+  local yaw_pick, yaw_place = cubes.grasp_yaws(from, to, 180 + theta, 180 + theta, place_jaws)
   local ok, why = pick(g, c, yaw_pick)
   if not ok then return false, why end
   place(g, here, yaw_place)
@@ -288,6 +292,7 @@ function M.run(p)
   -- LOOK and PLAN: the word's letters in order, each to the slot of its position
   local seen = look(vis, p.park)
   local times = {}
+  local origins = {}   -- per letter, where its cube was picked from
   for i = 1, #p.word do
     local letter = p.word:sub(i, i)
     local t0 = now()
@@ -301,6 +306,7 @@ function M.run(p)
     end
     assert(c, "letter " .. letter .. " not seen by the webcam")
     c = upright(g, vis, p.park, letter, c)
+    origins[letter] = vec3(c.pos.x, c.pos.y, c.pos.z)
     local ok, why = move_letter(g, letter, c, p.slots[i])
     if not ok then
       say(letter .. ": " .. why .. "; looking again")
@@ -325,7 +331,18 @@ function M.run(p)
     if not c then
       say("verify " .. letter .. ": not seen (no valid marker); left as it is")
     elseif d > S.pos_tolerance or a > S.yaw_tolerance or c.tilt > 5 or c.face ~= c.top then
-      c = upright(g, vis, p.park, letter, c)
+      if c.face ~= c.top then
+        -- the letter turned away in the slot: back where it came from (free since) to be turned
+        -- there; a tumble in the row would reach into the neighbours' 20 mm gaps
+        say(string.format("verify %s: on face %d, face %d on top; back to (%.3f, %.3f) to turn it", letter, c.face,
+                          c.top, origins[letter].x, origins[letter].y))
+        -- the jaws across the row (along the letter's up on the top face), as when it was placed
+        assert(turn_in_place(g, c, c.up_yaw, c.up_yaw, origins[letter], {c.up_yaw, c.up_yaw + 180}),
+               letter .. ": could not take it out of its slot")
+        seen = look(vis, p.park)
+        c = assert(seen[letter], "letter " .. letter .. " not seen after taking it out of its slot")
+        c = upright(g, vis, p.park, letter, c)
+      end
       assert(move_letter(g, letter, c, p.slots[i]), letter .. ": the retry could not grasp it")
       redo = true
     end
