@@ -1,7 +1,9 @@
-// scenes/pa10_cubes_gripper.xml: the numbers its comments state. The keyframe's gripper sits
+// scenes/pa10_cubes_gripper.xml and scenes/pa10_blocks_gripper.xml (the same lab,
+// scenes/cubes_lab/, with the lettered cubes or the alphabet blocks): the numbers their comments state. The keyframe's gripper sits
 // at the weld's pose (else the weld snaps it on the first steps); the slots are 70 mm apart on
 // the table in the reading frame; the webcam sees the slots in reading order and the whole
 // placement area, and not the gripper of the parked arm.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -17,10 +19,10 @@ constexpr double kTableTop = 0.20;   // m, the scene's table
 constexpr double kHalfEdge = 0.025;  // m, 50 mm cubes
 constexpr double kPitch = 0.07;      // m, between slots
 
-class CubesSceneTest : public MujocoTest {
+class CubesSceneTest : public MujocoTest, public ::testing::WithParamInterface<const char*> {
  protected:
   void SetUp() override {
-    m_ = LoadModel("scenes/pa10_cubes_gripper.xml");
+    m_ = LoadModel(GetParam());
     d_ = MakeData(m_);
     const int key = mj_name2id(m_, mjOBJ_KEY, "park");
     ASSERT_GE(key, 0);
@@ -47,7 +49,7 @@ class CubesSceneTest : public MujocoTest {
   mjData* d_ = nullptr;
 };
 
-TEST_F(CubesSceneTest, KeyframeGripperSitsAtTheWeld) {
+TEST_P(CubesSceneTest, KeyframeGripperSitsAtTheWeld) {
   // gripper frame = tool site frame (equality gripper_mount, relpose 0 0 0.165 from tool_body)
   const int tool = Id(mjOBJ_SITE, "tool");
   const int gripper = Id(mjOBJ_BODY, "gripper");
@@ -61,7 +63,7 @@ TEST_F(CubesSceneTest, KeyframeGripperSitsAtTheWeld) {
   EXPECT_NEAR(d_->qpos[14] + d_->qpos[15], 0.068, 1e-12);
 }
 
-TEST_F(CubesSceneTest, SlotsSpellAlongTheReadingFrame) {
+TEST_P(CubesSceneTest, SlotsSpellAlongTheReadingFrame) {
   for (int k = 1; k <= 4; ++k) {
     const int slot = Id(mjOBJ_SITE, ("slot_" + std::to_string(k)).c_str());
     const Eigen::Vector3d p(d_->site_xpos + 3 * slot);
@@ -73,7 +75,7 @@ TEST_F(CubesSceneTest, SlotsSpellAlongTheReadingFrame) {
   }
 }
 
-TEST_F(CubesSceneTest, WebcamReadsTheWordLeftToRightAndUpright) {
+TEST_P(CubesSceneTest, WebcamReadsTheWordLeftToRightAndUpright) {
   double previous_u = -2;
   for (int k = 1; k <= 4; ++k) {
     const int slot = Id(mjOBJ_SITE, ("slot_" + std::to_string(k)).c_str());
@@ -106,7 +108,7 @@ TEST_F(CubesSceneTest, WebcamReadsTheWordLeftToRightAndUpright) {
   }
 }
 
-TEST_F(CubesSceneTest, ParkedGripperIsOutOfThePicture) {
+TEST_P(CubesSceneTest, ParkedGripperIsOutOfThePicture) {
   // every corner of every gripper geom's bounding box (the jaws' tips included)
   const int gripper = Id(mjOBJ_BODY, "gripper");
   int checked = 0;
@@ -127,6 +129,28 @@ TEST_F(CubesSceneTest, ParkedGripperIsOutOfThePicture) {
     }
   }
   EXPECT_GT(checked, 8);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, CubesSceneTest,
+                         ::testing::Values("scenes/pa10_cubes_gripper.xml", "scenes/pa10_blocks_gripper.xml"));
+
+// the blocks scene: six alphabet blocks, each naming its six face letters for the word device
+// (mjcf/cubes/blocks/README.md), every letter A-Z and 0-9 once
+class BlocksSceneTest : public MujocoTest {};
+
+TEST_F(BlocksSceneTest, EveryBlockNamesItsFaceLetters) {
+  const mjModel* m = LoadModel("scenes/pa10_blocks_gripper.xml");
+  std::string all;
+  for (const char* block : {"AGMSY4", "BHNTZ5", "CIOU06", "DJPV17", "EKQW28", "FLRX39"}) {
+    const std::string body = std::string("cube_") + block;
+    EXPECT_GE(mj_name2id(m, mjOBJ_BODY, body.c_str()), 0) << body;
+    const int text = mj_name2id(m, mjOBJ_TEXT, (body + ".faces").c_str());
+    ASSERT_GE(text, 0) << body;
+    EXPECT_EQ(std::string(m->text_data + m->text_adr[text]), block);
+    all += block;
+  }
+  std::sort(all.begin(), all.end());
+  EXPECT_EQ(all, "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/aruco.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
@@ -120,6 +121,61 @@ TEST(MarkerDetector, CornersWithinAThirdOfAPixelUnderRandomHomographies) {
       EXPECT_LT(std::hypot(found[0].corners[k].x() - t.x, found[0].corners[k].y() - t.y), 0.3) << n << " corner " << k;
     }
   }
+}
+
+// Small markers, as the lettered-cubes webcam sees a cube about 1 m away (15-21 px a side
+// there, 13-17 px here), with 2 grey levels of noise and JPEG at quality 90 (its camera
+// device): the detector finds at least 90 % of them (measured 38 of 40), each corner within
+// 0.5 px (its edge refinement at that size; measured 0.25 px), every id right. AprilTag's
+// quads alone (the detector's first pass, run here on the same images as the baseline)
+// found 28 of 40: the contour pass is what finds the rest.
+TEST(MarkerDetector, FindsSmallNoisyMarkers) {
+  const MarkerDetector detector;
+  const cv::Mat source = Source(31);
+  cv::RNG rng(20261126);
+  auto apriltag = cv::aruco::DetectorParameters::create();
+  apriltag->cornerRefinementMethod = cv::aruco::CORNER_REFINE_APRILTAG;
+  const auto dictionary = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50);
+  constexpr int kCount = 40;
+  int found_count = 0, apriltag_count = 0;
+  double worst = 0;
+  for (int n = 0; n < kCount; ++n) {
+    const double side_px = rng.uniform(13.0, 17.0);
+    const cv::Matx33d H = Homography(side_px / kMarker, rng.uniform(-180.0, 180.0), rng.uniform(-0.003, 0.003),
+                                     rng.uniform(-0.003, 0.003), {rng.uniform(100.0, 540.0), rng.uniform(100.0, 380.0)});
+    cv::Mat image = Warp(source, H);
+    cv::Mat noise(image.size(), CV_32FC1);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
+    cv::Mat noisy;
+    image.convertTo(noisy, CV_32FC1);
+    noisy += noise;
+    noisy.convertTo(image, CV_8UC1);  // rounds and saturates
+    std::vector<std::uint8_t> jpeg;
+    cv::imencode(".jpg", image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});
+    image = cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE);
+
+    std::vector<std::vector<cv::Point2f>> corners;
+    std::vector<int> ids;
+    cv::aruco::detectMarkers(image, dictionary, corners, ids, apriltag);
+    apriltag_count += static_cast<int>(!ids.empty());
+
+    std::vector<MarkerDetection> found;
+    detector.Detect(image, 0, &found);
+    ASSERT_LE(found.size(), 1u) << n;
+    if (found.empty()) continue;
+    ++found_count;
+    EXPECT_EQ(found[0].id, 31) << n;
+    const std::vector<cv::Point2d> truth = SourceCorners();
+    for (std::size_t k = 0; k < 4; ++k) {
+      const cv::Point2d t = Apply(H, truth[k]);
+      const double e = std::hypot(found[0].corners[k].x() - t.x, found[0].corners[k].y() - t.y);
+      worst = std::max(worst, e);
+      EXPECT_LT(e, 0.5) << n << " corner " << k;
+    }
+  }
+  std::printf("markers of 13-17 px with noise and JPEG: %d of %d found (AprilTag quads alone: %d), worst corner %.2f px\n",
+              found_count, kCount, apriltag_count, worst);
+  EXPECT_GE(found_count, kCount * 9 / 10);
 }
 
 TEST(MarkerEdges, NoEdgeNoChange) {
