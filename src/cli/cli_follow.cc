@@ -7,7 +7,8 @@
 // with a real arm's driver as the source the simulator mirrors the real arm.
 //
 // Ports
-//   input   source arm states (newest first, not waited for); target arm states,
+//   input   source arm states (the newest; when none is new at a target period,
+//           waited for up to 0.3 of that period); target arm states,
 //           one per target period (the loop's clock: lockstep or realtime alike)
 //   output  target arm commands: position mode, seq = the target state's seq
 // The follower owns the target's command input (docs/protocol.md, "Ownership"):
@@ -42,6 +43,9 @@ using Clock = std::chrono::steady_clock;
 
 constexpr double kRestSpeed = 1e-3;  // rad/s: a source joint slower than this stands still
 constexpr double kKeepAlive_s = 1.0;  // the source never gets commands: renew its subscription
+// with no new source state at a target period, wait for one up to this fraction of the period:
+// the command still reaches the target well before its next period
+constexpr double kSourceWait = 0.3;
 
 struct FollowArgs {
   std::string from, to;
@@ -89,6 +93,16 @@ Arm ConnectArm(const std::string& option, const std::string& text, double timeou
   }
 }
 
+// the newest state of `arm` within timeout_s into `state`; false when none came
+bool Fresh(Arm& arm, double timeout_s, Arm::State* state) {
+  try {
+    arm.ReadLatest(std::max(0.0, timeout_s), state);
+    return true;
+  } catch (const bridge::TimeoutError&) {
+    return false;
+  }
+}
+
 std::string JointList(const Arm& arm) {
   std::string s;
   for (const std::string& j : arm.joint_names()) s += (s.empty() ? "" : ", ") + j;
@@ -122,6 +136,7 @@ int Follow(const FollowArgs& a) {
 
   FollowCounters c;
   Clock::time_point source_heard = Clock::now(), renewed = Clock::now(), owned = Clock::now();
+  double last_target_time = -1;
   double rest_since = source.qd.cwiseAbs().maxCoeff() <= kRestSpeed ? source.time : -1;
   while (!program::Stopped()) {
     // the target's clock: its next state (lockstep: the one it waits on; realtime: the newest)
@@ -129,16 +144,18 @@ int Follow(const FollowArgs& a) {
       if (program::Stopped()) break;
       throw bridge::TimeoutError(to.Label() + ": no state for " + Num(a.timeout_s) + " s");
     }
-    // the source's newest state, without waiting for one
-    try {
-      from.ReadLatest(0.0, &source);
+    // the source's newest state; when none came since the last period, wait for one a short
+    // while (two clocks of one rate drift in and out of phase: the next state may be on its way)
+    const double period_s = last_target_time < target.time ? target.time - last_target_time : 0;
+    last_target_time = target.time;
+    if (Fresh(from, 0.0, &source) || Fresh(from, kSourceWait * period_s, &source)) {
       source_heard = Clock::now();
       if (source.qd.cwiseAbs().maxCoeff() > kRestSpeed) {
         rest_since = -1;
       } else if (rest_since < 0) {
         rest_since = source.time;
       }
-    } catch (const bridge::TimeoutError&) {
+    } else {
       ++c.stale_source;
       if (Seconds(source_heard) > a.timeout_s) {
         throw bridge::TimeoutError(from.Label() + ": no state for " + Num(a.timeout_s) + " s");
@@ -180,7 +197,7 @@ int Follow(const FollowArgs& a) {
   }
 
   std::printf("vlab follow: %ld periods, %ld commands (%ld not sent), target states with refused %ld, not owner "
-              "%ld; source stale %ld periods\n",
+              "%ld; no new source state %ld\n",
               c.periods, c.commands, c.send_failed, c.refused, c.not_owner, c.stale_source);
   std::printf("vlab follow: tracking error max %.6f rad while the source moved, %.6f rad at rest (%ld periods",
               c.max_moving, c.max_rest, c.rest_periods);
