@@ -43,6 +43,9 @@ using Clock = std::chrono::steady_clock;
 
 constexpr double kRestSpeed = 1e-3;  // rad/s: a source joint slower than this stands still
 constexpr double kKeepAlive_s = 1.0;  // the source never gets commands: renew its subscription
+// one connect attempt: a handshake resends its request only every 0.25 s, so to answer within
+// a few tens of ms of a device's start, try afresh this often
+constexpr double kConnectTry_s = 0.1;
 // with no new source state at a target period, wait for one up to this fraction of the period:
 // the command still reaches the target well before its next period
 constexpr double kSourceWait = 0.3;
@@ -62,6 +65,7 @@ struct FollowCounters {
   long rest_periods = 0;
   int rest_joint = -1;
   double rest_time = 0;  // s, the target's time of max_rest
+  double clock_offset = 0;  // s, source time - target time at the first command
 };
 
 // "2" or "0.5" for messages
@@ -73,14 +77,20 @@ std::string Num(double x) {
 
 double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
 
-// connects to an arm, trying until timeout_s (the device's program may be starting)
-Arm ConnectArm(const std::string& option, const std::string& text, double timeout_s) {
+// HOST:PORT of an arm option, or exit 2 naming the option
+program::Address ParseArm(const std::string& option, const std::string& text) {
   program::Address a;
   if (!program::ParseAddress(text, &a)) throw InputError("follow: " + option + " '" + text + "': expected HOST:PORT");
+  return a;
+}
+
+// connects to an arm, trying until timeout_s (the device's program may be starting)
+Arm ConnectArm(const std::string& option, const std::string& text, double timeout_s) {
+  const program::Address a = ParseArm(option, text);
   const Clock::time_point start = Clock::now();
   for (;;) {
     try {
-      return Arm::Connect(a.host, a.port, std::min(1.0, timeout_s));
+      return Arm::Connect(a.host, a.port, std::min(kConnectTry_s, timeout_s));
     } catch (const bridge::ProtocolError& e) {
       throw InputError("follow: " + option + " " + text + ": " + e.what());
     } catch (const bridge::BridgeError& e) {
@@ -88,7 +98,7 @@ Arm ConnectArm(const std::string& option, const std::string& text, double timeou
         throw InputError("follow: " + option + " " + text + ": no arm answered within " +
                          Num(timeout_s) + " s (" + e.what() + ")");
       }
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
 }
@@ -123,8 +133,12 @@ int Follow(const FollowArgs& a) {
   if (!(a.timeout_s > 0)) throw InputError("follow: --timeout must be > 0 s");
   if (!(a.settle_s >= 0)) throw InputError("follow: --settle must be >= 0 s");
   if (!(a.max_rest_error >= 0)) throw InputError("follow: --max-rest-error must be >= 0 rad");
-  Arm from = ConnectArm("--from", a.from, a.connect_timeout_s);
+  ParseArm("--from", a.from);
+  ParseArm("--to", a.to);
+  // the target first: a lab in lockstep or realtime waits for its period 0 to be answered, so
+  // its clock starts as soon as the source has sent a state (the source may start later)
   Arm to = ConnectArm("--to", a.to, a.connect_timeout_s);
+  Arm from = ConnectArm("--from", a.from, a.connect_timeout_s);
   CheckJoints(from, to);
   Arm::State source, target;
   if (!program::ReadNext(from, a.timeout_s, &source)) {
@@ -166,6 +180,7 @@ int Follow(const FollowArgs& a) {
       renewed = Clock::now();
     }
     if (to.Write(ArmMode::kPosition, source.q, target.seq)) {
+      if (c.commands == 0) c.clock_offset = source.time - target.time;
       ++c.commands;
     } else {
       ++c.send_failed;
@@ -197,8 +212,8 @@ int Follow(const FollowArgs& a) {
   }
 
   std::printf("vlab follow: %ld periods, %ld commands (%ld not sent), target states with refused %ld, not owner "
-              "%ld; no new source state %ld\n",
-              c.periods, c.commands, c.send_failed, c.refused, c.not_owner, c.stale_source);
+              "%ld; no new source state %ld; source time - target time at the first command %.3f s\n",
+              c.periods, c.commands, c.send_failed, c.refused, c.not_owner, c.stale_source, c.clock_offset);
   std::printf("vlab follow: tracking error max %.6f rad while the source moved, %.6f rad at rest (%ld periods",
               c.max_moving, c.max_rest, c.rest_periods);
   if (c.rest_joint >= 0) {

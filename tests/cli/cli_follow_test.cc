@@ -144,7 +144,7 @@ TEST(Follow, RefusesBadOptions) {
   out.clear();
   EXPECT_EQ(RunCapture(std::string(kVlab) + " follow --from 127.0.0.1:9 --to 127.0.0.1:9 --connect-timeout 0.3", &out),
             2);
-  EXPECT_NE(out.find("--from 127.0.0.1:9: no arm answered within 0.3 s"), std::string::npos) << out;
+  EXPECT_NE(out.find("--to 127.0.0.1:9: no arm answered within 0.3 s"), std::string::npos) << out;
 }
 
 // A source that goes silent ends the follower with exit 1 after --timeout.
