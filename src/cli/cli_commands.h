@@ -76,6 +76,7 @@ Subcommand AddSweepCommand(CLI::App& app);    // cli_sweep.cc
 Subcommand AddCollectCommand(CLI::App& app);  // cli_collect.cc
 Subcommand AddViewCommand(CLI::App& app);    // cli_view.cc
 Subcommand AddExportCommand(CLI::App& app);  // cli_view.cc
+Subcommand AddFollowCommand(CLI::App& app);  // cli_follow.cc
 
 /// Runs a sweep's runs here, `jobs` at a time, into out/ID, skipping complete runs
 /// (cli_sweep.cc); quiet: no lines printed. Returns 0 when every run passed.

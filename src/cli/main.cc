@@ -92,7 +92,8 @@ int main(int argc, char** argv) {
                                                    vlab::cli::AddTaskCommand(app), vlab::cli::AddCompareCommand(app),
                                                    vlab::cli::AddGoldenCommand(app), vlab::cli::AddSweepCommand(app),
                                                    vlab::cli::AddCollectCommand(app), vlab::cli::AddViewCommand(app),
-                                                   vlab::cli::AddExportCommand(app)};
+                                                   vlab::cli::AddExportCommand(app),
+                                                   vlab::cli::AddFollowCommand(app)};
 
   try {
     app.parse(argc, argv);
