@@ -86,6 +86,20 @@ local function relax()
   if math.abs(s3) > 5 then selfmove{joint = 3, by = -s3, t = math.max(0.5, math.abs(s3) / 45)} end
 end
 
+-- closes the jaws on the cube between them with the grip force: true when they hold it
+-- (`grasped` within 2 s, an opening of a cube held across two faces); else opens them again
+-- and returns false and what it found
+local function close_on_cube(g)
+  g:close(S.grip_force)
+  local held = wait(function() return g:grasped() end, 2.0)
+  wait(0.2)
+  local w = g:opening()
+  if held and w >= S.grasp_min and w <= S.grasp_max then return true end
+  g:open(S.open)
+  wait(function() return g:opening() > S.open - 0.004 end, 2.0)
+  return false, string.format("grasped %s, opening %.1f mm", tostring(held), w * 1000)
+end
+
 -- PICK: the cube `c` (from cubes.describe) with the tool at `yaw`
 local function pick(g, c, yaw)
   local above = at(c.pos + vec3(0, 0, S.lift), yaw)
@@ -96,17 +110,9 @@ local function pick(g, c, yaw)
   movel(above)
   wait(function() return g:opening() > S.open - 0.004 end, 2.0)
   movel(grasp, {v = S.v_near})
-  g:close(S.grip_force)
-  local held = wait(function() return g:grasped() end, 2.0)
-  wait(0.2)
-  local w = g:opening()
-  if not held or w < S.grasp_min or w > S.grasp_max then
-    g:open(S.open)
-    wait(function() return g:opening() > S.open - 0.004 end, 2.0)
-    movel(above, {v = S.v_near})
-    return false, string.format("no grasp (grasped %s, opening %.1f mm)", tostring(held), w * 1000)
-  end
+  local held, why = close_on_cube(g)
   movel(above, {v = S.v_near})
+  if not held then return false, "no grasp (" .. why .. ")" end
   return true
 end
 
@@ -183,17 +189,9 @@ local function tumble(g, c, alpha)
   local fix = sag_correction(grasp * back)
   movel(fix(grasp * back))
   movel(fix(grasp), {v = S.v_near})
-  g:close(S.grip_force)
-  local held = wait(function() return g:grasped() end, 2.0)
-  wait(0.2)
-  local w = g:opening()
-  if not held or w < S.grasp_min or w > S.grasp_max then
-    g:open(S.open)
-    wait(function() return g:opening() > S.open - 0.004 end, 2.0)
-    movel(fix(grasp * back), {v = S.v_near})
-    return false, string.format("no grasp to turn it (grasped %s, opening %.1f mm)", tostring(held), w * 1000)
-  end
+  local held, why = close_on_cube(g)
   movel(fix(grasp * back), {v = S.v_near})
+  if not held then return false, "no grasp to turn it (" .. why .. ")" end
   -- half a turn of W2, the way that leaves it nearer 0 (range +-255 deg)
   local q = joints()
   q[7] = (math.abs(q[7] + 180) < math.abs(q[7] - 180)) and q[7] + 180 or q[7] - 180
