@@ -27,6 +27,19 @@ Eigen::Matrix3d RotationOf(const cv::Mat& rvec) {
   return out;
 }
 
+// an ArUco detection with its corners moved by `shift` px into the pixel-centre convention
+MarkerDetection MakeDetection(int dictionary, int id, const std::vector<cv::Point2f>& corners, double shift) {
+  MarkerDetection d;
+  d.dictionary = dictionary;
+  d.id = id;
+  for (std::size_t k = 0; k < 4; ++k) d.corners[k] = Eigen::Vector2d(corners[k].x + shift, corners[k].y + shift);
+  return d;
+}
+
+Eigen::Vector2d Centre(const MarkerDetection& d) {
+  return (d.corners[0] + d.corners[1] + d.corners[2] + d.corners[3]) / 4;
+}
+
 }  // namespace
 
 void CheckCameraModel(const CameraModel& c, const std::string& what) {
@@ -76,13 +89,7 @@ void MarkerDetector::Detect(const cv::Mat& grey, int dictionary, std::vector<Mar
   impl_->ids.clear();
   cv::aruco::detectMarkers(grey, dict, impl_->corners, impl_->ids, impl_->parameters);
   for (std::size_t i = 0; i < impl_->ids.size(); ++i) {
-    MarkerDetection d;
-    d.dictionary = dictionary;
-    d.id = impl_->ids[i];
-    for (int k = 0; k < 4; ++k) {
-      const cv::Point2f& p = impl_->corners[i][static_cast<std::size_t>(k)];
-      d.corners[static_cast<std::size_t>(k)] = Eigen::Vector2d(p.x - 0.5, p.y - 0.5);
-    }
+    MarkerDetection d = MakeDetection(dictionary, impl_->ids[i], impl_->corners[i], -0.5);  // AprilTag: pixel corners
     if (config_.refine_edges) RefineMarkerEdges(grey, info->bits + 2, &d.corners);  // kept as found if it fails
     found->push_back(d);
   }
@@ -92,22 +99,12 @@ void MarkerDetector::Detect(const cv::Mat& grey, int dictionary, std::vector<Mar
   impl_->ids.clear();
   cv::aruco::detectMarkers(grey, dict, impl_->corners, impl_->ids, impl_->contour_parameters);
   for (std::size_t i = 0; i < impl_->ids.size(); ++i) {
-    MarkerDetection d;
-    d.dictionary = dictionary;
-    d.id = impl_->ids[i];
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (int k = 0; k < 4; ++k) {
-      const cv::Point2f& p = impl_->corners[i][static_cast<std::size_t>(k)];
-      d.corners[static_cast<std::size_t>(k)] = Eigen::Vector2d(p.x, p.y);
-      centre += d.corners[static_cast<std::size_t>(k)] / 4;
-    }
+    MarkerDetection d = MakeDetection(dictionary, impl_->ids[i], impl_->corners[i], 0.0);  // contours: pixel centres
     // the same marker as one of the first pass: its centre within 2 px
     bool known = false;
     for (std::size_t j = 0; j < first_pass && !known; ++j) {
       const MarkerDetection& f = (*found)[j];
-      if (f.dictionary != d.dictionary || f.id != d.id) continue;
-      const Eigen::Vector2d c = (f.corners[0] + f.corners[1] + f.corners[2] + f.corners[3]) / 4;
-      known = (c - centre).norm() < 2.0;
+      known = f.dictionary == d.dictionary && f.id == d.id && (Centre(f) - Centre(d)).norm() < 2.0;
     }
     if (!known && RefineMarkerEdges(grey, info->bits + 2, &d.corners)) found->push_back(d);
   }
