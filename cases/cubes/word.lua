@@ -86,6 +86,9 @@ local function relax()
   if math.abs(s3) > 5 then selfmove{joint = 3, by = -s3, t = math.max(0.5, math.abs(s3) / 45)} end
 end
 
+-- waits until the jaws stand open (after g:open), at most 2 s
+local function jaws_open(g) return wait(function() return g:opening() > S.open - 0.004 end, 2.0) end
+
 -- closes the jaws on the cube between them with the grip force: true when they hold it
 -- (`grasped` within 2 s, an opening of a cube held across two faces); else opens them again
 -- and returns false and what it found
@@ -96,7 +99,7 @@ local function close_on_cube(g)
   local w = g:opening()
   if held and w >= S.grasp_min and w <= S.grasp_max then return true end
   g:open(S.open)
-  wait(function() return g:opening() > S.open - 0.004 end, 2.0)
+  jaws_open(g)
   return false, string.format("grasped %s, opening %.1f mm", tostring(held), w * 1000)
 end
 
@@ -108,7 +111,7 @@ local function pick(g, c, yaw)
   relax()
   turn_to(yaw)
   movel(above)
-  wait(function() return g:opening() > S.open - 0.004 end, 2.0)
+  jaws_open(g)
   movel(grasp, {v = S.v_near})
   local held, why = close_on_cube(g)
   movel(above, {v = S.v_near})
@@ -125,7 +128,7 @@ local function place(g, slot, yaw)
   movel(over)
   movel(down, {v = S.v_near})
   g:open(S.open)
-  wait(function() return g:opening() > S.open - 0.004 end, 2.0)
+  jaws_open(g)
   movel(over, {v = S.v_near})
 end
 
@@ -182,9 +185,9 @@ local function tumble(g, c, alpha)
   turn_to(alpha)
   movel(at(centre + vec3(0, 0, S.lift), alpha))
   movel(grasp * back)   -- the first tilted pose: a planning error here leaves the cube untouched
-  wait(function() return g:opening() > S.open - 0.004 end, 2.0)
+  jaws_open(g)
   -- tilted, the arm sags under the gripper's weight, which its servo does not compensate
-  -- (1.4 kg on the weld; measured 13 mm and 1.7 deg at the grasp): the poses from here on are
+  -- (1.4 kg on the weld; measured 12-17 mm and 1.8-2.4 deg): the poses from here on are
   -- commanded corrected by the error measured at rest in this first tilted pose
   local fix = sag_correction(grasp * back)
   movel(fix(grasp * back))
@@ -196,10 +199,10 @@ local function tumble(g, c, alpha)
   local q = joints()
   q[7] = (math.abs(q[7] + 180) < math.abs(q[7] - 180)) and q[7] + 180 or q[7] - 180
   movej(q)
-  local set = frame(centre + vec3(0, 0, S.place_up), cubes.tumble_rotation(alpha) * rotz(180))
+  local set = frame(centre + vec3(0, 0, S.place_up), grasp.rot) * rotz(180)
   movel(fix(set), {v = S.v_near})
   g:open(S.open)
-  wait(function() return g:opening() > S.open - 0.004 end, 2.0)
+  jaws_open(g)
   movel(fix(set * back), {v = S.v_near})
   return true
 end
@@ -228,7 +231,8 @@ end
 -- facing sideways is tumbled from its side; one facing away from the base (more than 135 deg
 -- from the base's direction), or whose tumble is out of reach, is first turned in place to face
 -- across. A letter facing down is tumbled from the side face nearest to base + 90 deg, which
--- leaves it facing the opposite way (within 45 deg of base - 90 deg), and then from there. Returns the cube as seen with the letter on top.
+-- leaves it facing the opposite way (within 45 deg of base - 90 deg), and then from there.
+-- Returns the cube as seen with the letter on top.
 local function upright(g, vis, park, letter, c)
   local turned_in_place = false
   for _ = 1, 4 do
