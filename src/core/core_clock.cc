@@ -57,7 +57,7 @@ class LockstepClock final : public Clock {
         ++stats_.timeouts;
         return config_.on_timeout == OnTimeout::kFail ? PeriodStart::kFail : PeriodStart::kTimedOut;
       }
-      source->Poll(Slice(left, stop_));
+      source->Poll(Slice(left, stop_), PollWait::kSpin);
     }
     return PeriodStart::kReady;
   }
@@ -89,7 +89,7 @@ class RealtimeClock final : public Clock {
       const double until = WallNow() + start_timeout_s_;
       while (!source->Answered(0) && WallNow() < until) {
         if (Stopped(stop_)) return PeriodStart::kStopped;
-        source->Poll(Slice(until - WallNow(), stop_));
+        source->Poll(Slice(until - WallNow(), stop_), PollWait::kSleep);
       }
     }
     if (!anchored_) {
@@ -105,7 +105,7 @@ class RealtimeClock final : public Clock {
     while (now < deadline) {
       if (Stopped(stop_)) return PeriodStart::kStopped;
       if (source) {
-        source->Poll(Slice(deadline - now, stop_));
+        source->Poll(Slice(deadline - now, stop_), PollWait::kSleep);
       } else {
         SleepUntil(std::min(deadline, now + Slice(deadline - now, stop_)));
       }

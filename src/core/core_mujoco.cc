@@ -6,6 +6,8 @@
 #include <fstream>
 #include <mutex>
 
+#include <mujoco/mjxmacro.h>
+
 #include "core/core_errors.h"
 
 namespace vlab {
@@ -114,6 +116,40 @@ int WarningIndex(const std::string& name) {
 }
 
 bool IsDivergenceWarning(int i) { return i == mjWARN_BADQPOS || i == mjWARN_BADQVEL || i == mjWARN_BADQACC; }
+
+void CopyDrawnState(const mjModel* m, const mjData* src, mjData* dst) {
+  // the scalars (not the sizes and the stack's top: those are dst's own)
+  dst->maxuse_stack = src->maxuse_stack;
+  dst->maxuse_con = src->maxuse_con;
+  dst->maxuse_efc = src->maxuse_efc;
+  std::memcpy(dst->warning, src->warning, sizeof(src->warning));
+  std::memcpy(dst->timer, src->timer, sizeof(src->timer));
+  std::memcpy(dst->solver, src->solver, sizeof(src->solver));
+  dst->solver_iter = src->solver_iter;
+  dst->solver_nnz = src->solver_nnz;
+  std::memcpy(dst->solver_fwdinv, src->solver_fwdinv, sizeof(src->solver_fwdinv));
+  dst->ne = src->ne;
+  dst->nf = src->nf;
+  dst->nefc = src->nefc;
+  dst->ncon = src->ncon;
+  dst->time = src->time;
+  std::memcpy(dst->energy, src->energy, sizeof(src->energy));
+  // the arrays, by MuJoCo's own list of them (mjxmacro.h): a field added to mjData is copied
+  MJDATA_POINTERS_PREAMBLE(m)
+  (void)nv;
+  (void)njmax;
+#define X(type, name, nr, nc)                                                                  \
+  {                                                                                             \
+    std::size_t rows = static_cast<std::size_t>(m->nr);                                         \
+    const std::size_t cols = static_cast<std::size_t>(nc);                                      \
+    const bool constraint = std::strncmp(#name, "efc_", 4) == 0;                                \
+    if (&m->nr == &m->nconmax) rows = static_cast<std::size_t>(src->ncon);                      \
+    if (constraint && &m->nr == &m->njmax) rows = static_cast<std::size_t>(src->nefc);           \
+    if (!(constraint && cols != 1)) std::memcpy(dst->name, src->name, sizeof(type) * rows * cols); \
+  }
+  MJDATA_POINTERS
+#undef X
+}
 
 std::string MujocoVersion() { return mj_versionString(); }
 

@@ -133,20 +133,22 @@ void LabBridge::CheckPeerExit() {
   fds_.erase(std::remove(fds_.begin(), fds_.end(), peer_exit_fd_), fds_.end());
 }
 
-void LabBridge::Poll(double timeout_s) {
+void LabBridge::Poll(double timeout_s, PollWait wait) {
   if (fds_.empty()) return;
-  // spin briefly first: an answer usually comes within tens of microseconds, and
-  // a sleeping thread's wake-up costs about as much again
-  const double spin_until = WallNow() + std::min(timeout_s, kSpinSeconds);
-  do {
+  // kSpin: briefly first, as an answer usually comes within tens of microseconds,
+  // and a sleeping thread's wake-up costs about as much again (core_clock.h)
+  const double spin_s = wait == PollWait::kSpin ? std::min(timeout_s, kSpinSeconds) : 0.0;
+  const double spin_until = WallNow() + spin_s;
+  for (;;) {
     if (bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), 0.0)) {
       ReceiveAll();
       CheckPeerExit();
       return;
     }
+    if (WallNow() >= spin_until) break;
     ::sched_yield();  // a controller on this core runs at once (it polls too)
-  } while (WallNow() < spin_until);
-  const double left = timeout_s - kSpinSeconds;
+  }
+  const double left = timeout_s - spin_s;
   if (left <= 0 || !bridge::WaitReadable(fds_.data(), static_cast<int>(fds_.size()), left)) return;
   ReceiveAll();
   CheckPeerExit();

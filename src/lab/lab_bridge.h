@@ -59,7 +59,7 @@ class LabBridge final : public CommandSource {
   ~LabBridge() override;
 
   // CommandSource
-  void Poll(double timeout_s) override;
+  void Poll(double timeout_s, PollWait wait) override;
   /// Lockstep: every served device whose commands are waited for, and that has
   /// an owner, has a command answering k (for k = 0, every served arm has an
   /// owner: the run waits for its controllers).

@@ -93,7 +93,7 @@ void RunSession::Prepare() {
   if (serve) {
     bridge_ = s_.MakeBridge(*serve, clock_->name());
     // a task program waiting in wall time (markers) lets the lab serve meanwhile
-    if (s_.task) s_.task->SetIdle([b = bridge_.get()] { b->Poll(0.0); });
+    if (s_.task) s_.task->SetIdle([b = bridge_.get()] { b->Poll(0.0, PollWait::kSleep); });
     if (options_.on_serving && !external_) options_.on_serving(bridge_->Devices());
   }
   // outputs: staging folder (removed on a MuJoCo error too), log
@@ -240,7 +240,7 @@ bool RunSession::Period() {
   // 0. the sim device: pause, resume, step, reset, pace
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
   if (paused_) {
-    bridge_->Poll(0.02);
+    bridge_->Poll(0.02, PollWait::kSpin);
     // an owner that paused and fell silent loses the sim: nobody else could resume
     if (bridge_->ReleaseSilentOwner(*s_.sim) && s_.sim->on_owner_lost() == OnOwnerLost::kResume) {
       paused_ = false;
@@ -291,7 +291,7 @@ void RunSession::AwaitFinalAnswer() {
                                             std::min(s_.scenario.lockstep.timeout_s, kFinalAnswerWait_s)));
   while (!bridge_->Answered(k_) && !controller_->Exited() && WallClock::now() < until) {
     if (options_.interrupt && *options_.interrupt != 0) return;
-    bridge_->Poll(0.001);
+    bridge_->Poll(0.001, PollWait::kSpin);
   }
 }
 

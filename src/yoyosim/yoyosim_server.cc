@@ -130,7 +130,7 @@ void YoyoSimServer::Receive() {
   }
 }
 
-void YoyoSimServer::Poll(double timeout_s) {
+void YoyoSimServer::Poll(double timeout_s, vlab::PollWait) {
   if (stop_ && *stop_) return;
   const int fds[2] = {point_socket_->fd(), yoyo_socket_->fd()};
   if (bridge::WaitReadable(fds, 2, std::min(timeout_s, kPollSlice_s))) Receive();

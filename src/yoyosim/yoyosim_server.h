@@ -76,7 +76,7 @@ class YoyoSimServer final : public vlab::CommandSource {
   int Run(const volatile std::sig_atomic_t* stop);
 
   /// vlab::CommandSource: receives on both sockets for up to timeout_s.
-  void Poll(double timeout_s) override;
+  void Poll(double timeout_s, vlab::PollWait wait) override;  // (sleeps: it never spins)
   /// vlab::CommandSource: the point's owner has answered period k (period 0:
   /// some client owns the point; later: true while nobody owns it).
   bool Answered(std::int64_t k) const override;

@@ -5,6 +5,7 @@
 // slices can end the wait. Without a flag, waits end as before.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -18,7 +19,7 @@ namespace {
 // never answers; each Poll sleeps its whole timeout, like a wait nobody wakes
 class SilentSource final : public CommandSource {
  public:
-  void Poll(double timeout_s) override {
+  void Poll(double timeout_s, PollWait) override {
     ++polls;
     std::this_thread::sleep_for(std::chrono::duration<double>(timeout_s));
   }
@@ -104,6 +105,36 @@ TEST(ClockStop, WithoutAFlagTheWaitsAreAsBefore) {
   c.lockstep.timeout_s = 0.05;
   EXPECT_EQ(MakeClock(c, 10)->BeginPeriod(3, &source), PeriodStart::kFail);
   EXPECT_EQ(MakeClock(Config(ClockMode::kFast, nullptr), 10)->BeginPeriod(0, &source), PeriodStart::kReady);
+}
+
+// how each clock waits (core_clock.h, PollWait): lockstep spins before it sleeps (an
+// answer comes within microseconds), realtime sleeps at once (a yield would hand the
+// CPU to the camera workers below it for a whole scheduler slice)
+class RecordingSource final : public CommandSource {
+ public:
+  void Poll(double timeout_s, PollWait wait) override {
+    (wait == PollWait::kSpin ? spins : sleeps) += 1;
+    std::this_thread::sleep_for(std::chrono::duration<double>(std::min(timeout_s, 0.0005)));
+    if (spins + sleeps >= 3) answered = true;  // period 0 answered after three polls
+  }
+  bool Answered(std::int64_t) const override { return answered; }
+  int spins = 0, sleeps = 0;
+  bool answered = false;
+};
+
+TEST(ClockWait, LockstepSpinsAndRealtimeSleeps) {
+  RecordingSource lockstep_source;
+  std::unique_ptr<Clock> lockstep = MakeClock(Config(ClockMode::kLockstep, nullptr), 10);
+  ASSERT_EQ(lockstep->BeginPeriod(0, &lockstep_source), PeriodStart::kReady);
+  EXPECT_EQ(lockstep_source.spins, 3);
+  EXPECT_EQ(lockstep_source.sleeps, 0);
+
+  RecordingSource realtime_source;
+  std::unique_ptr<Clock> realtime = MakeClock(Config(ClockMode::kRealtime, nullptr), 10);
+  ASSERT_EQ(realtime->BeginPeriod(0, &realtime_source), PeriodStart::kReady);  // waits for the controllers
+  ASSERT_EQ(realtime->BeginPeriod(1, &realtime_source), PeriodStart::kReady);  // waits for its deadline
+  EXPECT_EQ(realtime_source.spins, 0);
+  EXPECT_GE(realtime_source.sleeps, 4) << "three polls for period 0, at least one until period 1's deadline";
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <semaphore.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -15,6 +16,7 @@
 
 #include "bridge/bridge_errors.h"
 #include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "core/core_realtime.h"
 #include "lab/lab_log.h"
 #include "lab/lab_yaml.h"
@@ -117,7 +119,8 @@ std::unique_ptr<SimCamera> SimCamera::Create(const DeviceContext& context, const
   }
   cam->noise_seed_ = context.seed;
   // the frames in flight, and room for a worker a few frames behind (realtime)
-  cam->queue_.resize(static_cast<std::size_t>(cam->model_->FramesInFlight()) + 4);
+  // (a new vector, not resize: a Pending, with its atomic, does not move)
+  cam->queue_ = std::vector<Pending>(static_cast<std::size_t>(cam->model_->FramesInFlight()) + 4);
   for (Pending& p : cam->queue_) p.frame.data.reserve(static_cast<std::size_t>(mc.width) * mc.height * 3);
   return cam;
 }
@@ -160,15 +163,17 @@ void SimCamera::Serve(const std::string& address, int port, const std::string& s
 // ---- the worker: renders, models the lens and sensor, encodes ----
 
 struct SimCamera::Worker {
+  Worker() { ::sem_init(&jobs, 0, 0); }
+  ~Worker() { ::sem_destroy(&jobs); }
   std::thread thread;
+  sem_t jobs;                    // to the worker: one post per frame queued, and one to stop
+  std::atomic<bool> stop{false};
   std::mutex mutex;
-  std::condition_variable wake;  // to the worker: a frame was queued, or stop
-  std::condition_variable done;  // to the control thread: a frame is done, or the worker is ready
-  long queued = 0;               // (mutex) frames handed to the worker
+  std::condition_variable done;  // to a waiting control thread: a frame is done, or the worker is ready
+  long queued = 0;               // (control thread's) frames handed to the worker
   long finished = 0;             // (mutex) frames it has done
-  std::size_t at = 0;            // (mutex) ring index of the next frame it renders
+  std::size_t at = 0;            // (worker's; reset by the control thread while it is idle) next ring index
   bool ready = false;            // (mutex) renderer made, warm-up drawn (or error set)
-  bool stop = false;             // (mutex)
   std::string error;             // (mutex) why the renderer could not be made
   long rendered = 0;             // (mutex)
   std::atomic<long> tid{0};      // the worker's thread id, once it runs
@@ -206,11 +211,8 @@ void SimCamera::StartWorker(mjData* d) {
 
 void SimCamera::StopWorker() {
   if (!worker_) return;
-  {
-    std::lock_guard<std::mutex> lock(worker_->mutex);
-    worker_->stop = true;
-  }
-  worker_->wake.notify_one();
+  worker_->stop = true;
+  ::sem_post(&worker_->jobs);
   worker_->thread.join();
   worker_.reset();
 }
@@ -225,6 +227,9 @@ void SimCamera::WorkerMain() {
   // first (autogroup), so work started from another terminal took the workers' share
   // whatever their nice value (yo-yo stage 3 beside a build: 36 frames dropped, 1022
   // late, a bad swing).
+  // It starts at the control thread's priority, which waits for it: the GL context, the
+  // shaders and the warm-up draw took more than 5 s at nice 10 beside two CPU-bound
+  // processes, and no describe request was answered meanwhile.
   int policy = 0;
   sched_param param{};
   const bool realtime_loop = ::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO;
@@ -232,12 +237,16 @@ void SimCamera::WorkerMain() {
   ::pthread_setname_np(::pthread_self(), kWorkerThreadName);  // (for ps -L and top -H)
   const int worker_policy = realtime_loop ? SCHED_FIFO : SCHED_OTHER;
   const int worker_value = realtime_loop ? std::max(kMinRealtimePriority, param.sched_priority - 1) : kWorkerNice;
-  if (realtime_loop) {
-    SetThreadRealtime(worker_value);
-  } else {
-    ::setpriority(PRIO_PROCESS, tid, worker_value);
-    SetThreadSlice(0);  // the scheduler's default slice, not the control thread's short one it inherited
-  }
+  const auto go_below = [&] {
+    if (realtime_loop) {
+      SetThreadRealtime(worker_value);
+    } else {
+      ::setpriority(PRIO_PROCESS, tid, worker_value);
+      SetThreadSlice(0);  // the scheduler's default slice, not the control thread's short one it inherited
+    }
+    // the rasterizer threads it waits for: as it is, wherever they were made
+    render::SetRasterizerScheduling(worker_policy, worker_value);
+  };
   w.tid = static_cast<long>(tid);  // (set: for the tests)
   // everything GL lives and dies on this thread
   std::unique_ptr<render::Renderer> renderer;
@@ -253,9 +262,8 @@ void SimCamera::WorkerMain() {
     o.profile = config_.profile;
     o.scene = scene_;
     renderer = render::Renderer::Create(m_, o);
-    // the rasterizer threads it waits for: as it is, wherever they were made
-    render::SetRasterizerScheduling(worker_policy, worker_value);
     renderer->Render(w.warm, camera_, &ideal);
+    go_below();
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(w.mutex);
     w.error = who() + ": " + e.what();
@@ -268,12 +276,11 @@ void SimCamera::WorkerMain() {
   w.done.notify_all();
   if (!renderer) return;
 
-  std::unique_lock<std::mutex> lock(w.mutex);
   for (;;) {
-    w.wake.wait(lock, [&w] { return w.stop || w.finished < w.queued; });
+    while (::sem_wait(&w.jobs) != 0) {
+    }  // (only EINTR: retried)
     if (w.stop) break;  // what is still queued would not be sent: the camera is no longer served
     Pending& p = queue_[w.at];
-    lock.unlock();
     bool ok = false;
     try {
       renderer->Render(p.state, camera_, &ideal);
@@ -287,15 +294,16 @@ void SimCamera::WorkerMain() {
     } catch (const std::exception&) {
       ok = false;  // (never for a valid camera and size: both were checked at creation)
     }
-    lock.lock();
-    p.ok = ok;
-    p.done = true;
-    ++w.rendered;
-    ++w.finished;
     w.at = (w.at + 1) % queue_.size();
+    p.ok = ok;
+    {
+      std::lock_guard<std::mutex> lock(w.mutex);  // (for a control thread that waits: lockstep, fast)
+      p.done.store(true, std::memory_order_release);
+      ++w.rendered;
+      ++w.finished;
+    }
     w.done.notify_all();
   }
-  lock.unlock();
   renderer.reset();
   render::SetRasterizerScheduling(SCHED_OTHER, 0);  // (the pool outlives this camera)
 }
@@ -307,9 +315,11 @@ void SimCamera::Drain() {
 }
 
 bool SimCamera::WaitDone(Pending& p, bool wait) {
+  if (p.done.load(std::memory_order_acquire)) return true;
+  if (!wait) return false;  // (realtime: never the mutex)
   std::unique_lock<std::mutex> lock(worker_->mutex);
-  if (wait) worker_->done.wait(lock, [&p] { return p.done; });
-  return p.done;
+  worker_->done.wait(lock, [&p] { return p.done.load(std::memory_order_acquire); });
+  return true;
 }
 
 // ---- the control thread ----
@@ -382,7 +392,7 @@ void SimCamera::QueueDue(mjData* d) {
     }
     Pending& slot = queue_[(head_ + count_) % queue_.size()];
     // (the worker is not reading this slot: it is free)
-    mj_copyData(slot.state, m_, d);
+    CopyDrawnState(m_, d, slot.state);
     slot.frame.id = id_base_ + i;
     slot.frame.time_s = due_t_;
     slot.frame.width = config_.width;
@@ -397,12 +407,9 @@ void SimCamera::QueueDue(mjData* d) {
     slot.frame.pose.q_WC = Eigen::Quaterniond(r).normalized();
     next_id_ = id_base_ + i + 1;
     ++count_;
-    {
-      std::lock_guard<std::mutex> lock(worker_->mutex);
-      slot.done = false;
-      ++worker_->queued;
-    }
-    worker_->wake.notify_one();
+    slot.done.store(false, std::memory_order_relaxed);  // (published to the worker by the post)
+    ++worker_->queued;
+    ::sem_post(&worker_->jobs);  // never blocks
   }
   due_.first = due_.end;
 }

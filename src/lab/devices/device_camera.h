@@ -13,14 +13,17 @@
 //           at the first period end at or after stamp + latency
 // Threading: a served camera renders and encodes on its own worker thread,
 // with its own GL context, from a copy of the state taken at the frame's
-// stamp (mj_copyData); the control thread only copies the state and sends the
+// stamp (CopyDrawnState: what drawing reads, not the constraint matrices and
+// the stack); the control thread only copies the state and sends the
 // chunks. In lockstep and fast runs a frame whose delivery time has come is
 // waited for, so the frame of stamp t has the same bytes and goes out in the
 // same period whatever the load; in realtime runs the control thread never
 // waits: a frame not ready in time goes out at the first period end after it
-// is (counted late). A worker runs below the control thread: one priority
-// below a SCHED_FIFO one (core_realtime.h), at nice 10 under a normal one;
-// llvmpipe's rasterizer threads follow the worker. Rendering several cameras
+// is (counted late), and it never blocks on the worker (see Pending). A worker
+// runs below the control thread: one priority below a SCHED_FIFO one
+// (core_realtime.h), at nice 10 under a normal one; llvmpipe's rasterizer
+// threads follow the worker. It makes its GL context and draws its first frame
+// before it drops there, at the control thread's priority (which waits for it). Rendering several cameras
 // at realtime priority can spend the kernel's realtime budget (95 % of each
 // second by default) and get the control thread throttled with it.
 // Rendering reads the state and never changes it; nothing is rendered while
@@ -131,11 +134,15 @@ class SimCamera final : public Device, public OwnTransport {
  private:
   // a frame in flight: queued by the control thread (state copied), rendered and
   // encoded by the worker (done), sent by the control thread once its time has come
+  // The control thread never takes the worker's mutex in a realtime run: a worker at
+  // nice 10 preempted while holding it kept the control thread waiting for milliseconds
+  // (priority inversion). It hands frames over with a semaphore (sem_post never blocks)
+  // and reads `done` as an atomic; only lockstep and fast runs wait on the mutex.
   struct Pending {
     mjData* state = nullptr;  // the state at the stamp (owned; made with the ring)
     bridge::CameraFrame frame;
-    bool done = false;  // (mutex_) the worker has filled frame
-    bool ok = false;    // (with done) the encoder succeeded
+    std::atomic<bool> done{false};  // the worker has filled frame (release; set under the mutex)
+    bool ok = false;                // (with done) the encoder succeeded
   };
   struct Worker;
   explicit SimCamera(const DeviceConfig& config);
