@@ -105,7 +105,7 @@ TEST(DrawnStateTest, TheCopyDrawsTheSameSceneWithoutTheConstraintMatrices) {
   EXPECT_GT(drawn.ngeom, m->ngeom + d->ncon) << "contacts, tendons and frames were drawn";
   EXPECT_TRUE(SameScene(drawn, from_copy));
 
-  // the comparison sees a copy that lost its contact forces (the forces drawn change)
+  // the comparison sees a copy whose contact forces differ (the forces drawn change)
   for (int i = 0; i < copy->nefc; ++i) copy->efc_force[i] *= 2;
   mjvScene doubled = Draw(m.get(), copy.get());
   EXPECT_FALSE(SameScene(drawn, doubled));
