@@ -158,6 +158,16 @@ int SetRasterizerScheduling(int policy, int value) {
   });
 }
 
+int BindRasterizers(const std::vector<int>& cpus) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  for (const int c : cpus) {
+    if (c >= 0 && c < CPU_SETSIZE) CPU_SET(c, &set);
+  }
+  if (CPU_COUNT(&set) == 0) return 0;
+  return ForEachRasterizer([&set](int tid) { return ::sched_setaffinity(tid, sizeof(set), &set) == 0; });
+}
+
 Renderer::~Renderer() = default;
 int Renderer::width() const { return impl_->options.width; }
 int Renderer::height() const { return impl_->options.height; }

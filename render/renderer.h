@@ -80,6 +80,8 @@ int CameraId(const mjModel* m, const std::string& name);
 /// Returns how many threads it changed (0 when there are none yet, or when not
 /// permitted).
 int SetRasterizerScheduling(int policy, int value);
+/// Binds every such thread to `cpus` (sched_setaffinity); returns how many.
+int BindRasterizers(const std::vector<int>& cpus);
 
 class Renderer {
  public:

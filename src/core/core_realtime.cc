@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <stdexcept>
 
 namespace vlab {
@@ -43,7 +44,63 @@ std::string SliceText(std::uint64_t ns) {
   return text;
 }
 
+// the device CPUs of the last grant that kept a CPU (BindDeviceThread)
+std::mutex g_device_cpus_mutex;
+DeviceCpus g_device_cpus;
+
+std::string CpuListText(const std::vector<int>& cpus) {
+  std::string text;
+  for (const int c : cpus) text += (text.empty() ? "" : ",") + std::to_string(c);
+  return text;
+}
+
+// keeps the CPU the calling thread runs on for it, the others for device threads
+void KeepCpu(RealtimeGrant* g) {
+  const std::vector<int> allowed = ThreadCpus();
+  const int cpu = ::sched_getcpu();
+  if (allowed.size() < 2 || cpu < 0 || !BindThread(0, {cpu})) return;
+  g->loop_cpu = cpu;
+  g->allowed_cpus = allowed;
+  for (const int c : allowed) {
+    if (c != cpu) g->device_cpus.push_back(c);
+  }
+  std::lock_guard<std::mutex> lock(g_device_cpus_mutex);
+  g_device_cpus = {g->device_cpus, allowed};
+}
+
 }  // namespace
+
+std::vector<int> ThreadCpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  std::vector<int> cpus;
+  if (::sched_getaffinity(0, sizeof(set), &set) != 0) return cpus;
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (CPU_ISSET(c, &set)) cpus.push_back(c);
+  }
+  return cpus;
+}
+
+bool BindThread(int tid, const std::vector<int>& cpus) {
+  if (cpus.empty()) return false;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  for (const int c : cpus) {
+    if (c < 0 || c >= CPU_SETSIZE) return false;
+    CPU_SET(c, &set);
+  }
+  return ::sched_setaffinity(tid, sizeof(set), &set) == 0;
+}
+
+DeviceCpus BindDeviceThread() {
+  DeviceCpus cpus;
+  {
+    std::lock_guard<std::mutex> lock(g_device_cpus_mutex);
+    cpus = g_device_cpus;
+  }
+  if (cpus.device.empty() || !BindThread(0, cpus.device)) return {};
+  return cpus;
+}
 
 std::uint64_t ThreadSlice() {
   SchedAttr a{};
@@ -63,7 +120,10 @@ std::uint64_t SetThreadSlice(std::uint64_t ns) {
 }
 
 std::string RealtimeGrant::Line() const {
-  const std::string slice = SliceText(slice_ns);
+  std::string slice = SliceText(slice_ns);
+  if (loop_cpu >= 0) {
+    slice += ", alone on CPU " + std::to_string(loop_cpu) + " (device threads on " + CpuListText(device_cpus) + ")";
+  }
   if (requested == 0) return "realtime priority not requested; " + slice;
   const std::string p = "realtime priority " + std::to_string(requested);
   if (!granted) return p + " not granted: " + reason + "; running at normal priority with " + slice;
@@ -98,7 +158,7 @@ bool SetThreadRealtime(int priority) {
   return error == 0;
 }
 
-RealtimeGrant RequestRealtime(int priority) {
+RealtimeGrant RequestRealtime(int priority, bool keep_cpu) {
   if (priority < 0 || priority > kMaxRealtimePriority) {
     throw std::invalid_argument("realtime priority " + std::to_string(priority) + " is outside 0..99");
   }
@@ -106,11 +166,13 @@ RealtimeGrant RequestRealtime(int priority) {
   g.requested = priority;
   if (priority == 0) {
     g.slice_ns = SetThreadSlice(kLoopSlice_ns);
+    if (keep_cpu) KeepCpu(&g);
     return g;
   }
   if (!SetThreadRealtime(priority)) {
     g.reason = RealtimeRefusal(priority, errno);
     g.slice_ns = SetThreadSlice(kLoopSlice_ns);
+    if (keep_cpu) KeepCpu(&g);
     return g;
   }
   g.granted = true;
@@ -124,6 +186,11 @@ RealtimeGrant RequestRealtime(int priority) {
 
 void DropRealtime(const RealtimeGrant& grant) {
   if (grant.slice_ns != 0) SetThreadSlice(0);
+  if (grant.loop_cpu >= 0) {
+    BindThread(0, grant.allowed_cpus);
+    std::lock_guard<std::mutex> lock(g_device_cpus_mutex);
+    if (g_device_cpus.device == grant.device_cpus) g_device_cpus = {};
+  }
   if (!grant.granted) return;
   sched_param param{};
   param.sched_priority = 0;

@@ -23,10 +23,24 @@
 // the running one preempts it at once. The slice does not change a thread's share
 // of the CPU, only when it gets it. Older kernels ignore the request; the grant
 // then says so.
+//
+// A short slice is not enough beside threads that render: a loop thread woken
+// for its deadline was still queued behind a camera worker (or a client
+// decoding its frames) on its own CPU for up to a 4 ms tick while the other CPU
+// sat idle, whatever the worker's nice value; 1.2-2.4 % of a 1 kHz loop's
+// deadlines were missed beside two 30 Hz cameras on 2 CPUs (vlab bench
+// realtime, quiet). So a loop thread without SCHED_FIFO may keep a CPU for
+// itself (keep_cpu): it binds itself to the CPU it runs on, and the threads
+// that serve its devices (BindDeviceThread) run on the other allowed CPUs; the
+// same bench then missed 0.12 %. Other processes still share that CPU; a
+// client placed on the other CPUs (taskset) leaves it to the loop. With
+// SCHED_FIFO no CPU is kept: the priority does the work, and the devices'
+// threads keep every CPU (four cameras need them).
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace vlab {
 
@@ -44,6 +58,14 @@ struct RealtimeGrant {
   /// (kLoopSlice_ns when the kernel took the request), 0 where the kernel keeps no
   /// per-thread slice (before Linux 6.12) or a SCHED_FIFO thread needs none.
   std::uint64_t slice_ns = 0;
+  /// Without SCHED_FIFO, asked to keep a CPU (RequestRealtime's keep_cpu) with
+  /// two or more allowed: the CPU the thread is bound to, -1 otherwise.
+  int loop_cpu = -1;
+  /// The CPUs the device threads run on (the allowed ones but loop_cpu); empty
+  /// when loop_cpu is -1.
+  std::vector<int> device_cpus;
+  /// The CPUs the thread was allowed before (restored by DropRealtime).
+  std::vector<int> allowed_cpus;
   /// One line: "realtime priority 50 granted (SCHED_FIFO, memory locked)",
   /// "realtime priority 50 not granted: ...; running at normal priority", or
   /// "realtime priority not requested".
@@ -56,16 +78,36 @@ inline constexpr std::uint64_t kLoopSlice_ns = 100'000;
 
 /// Puts the calling thread on SCHED_FIFO at `priority` (1..99) and locks the
 /// process's memory. priority 0 asks for no SCHED_FIFO (granted false, no
-/// reason). Without SCHED_FIFO, the thread asks for a kLoopSlice_ns slice (above).
+/// reason). Without SCHED_FIFO, the thread asks for a kLoopSlice_ns slice (above),
+/// and with `keep_cpu` keeps the CPU it runs on for itself when two or more are
+/// allowed: later BindDeviceThread calls put device threads on the others.
 /// Throws std::invalid_argument for a priority outside 0..99.
-RealtimeGrant RequestRealtime(int priority);
+RealtimeGrant RequestRealtime(int priority, bool keep_cpu = false);
+
+/// Where a device thread runs while a loop keeps a CPU.
+struct DeviceCpus {
+  std::vector<int> device;   ///< the CPUs it is bound to (empty: no CPU is kept, nothing bound)
+  std::vector<int> allowed;  ///< every CPU the loop was allowed (for threads given back)
+};
+/// Binds the calling thread (a device's worker) to the device CPUs of the
+/// last grant of this process that kept a CPU, and says which; nothing, and
+/// empty lists, when no CPU is kept.
+DeviceCpus BindDeviceThread();
+
+/// The CPUs the calling thread may run on, ascending.
+std::vector<int> ThreadCpus();
+
+/// Binds thread `tid` (0: the calling thread) to `cpus`; false when refused.
+bool BindThread(int tid, const std::vector<int>& cpus);
 
 /// Puts the calling thread on SCHED_FIFO at `priority` (1..99), nothing else;
 /// false (errno kept) when refused. For the threads that serve a realtime loop.
 bool SetThreadRealtime(int priority);
 
 /// Back to SCHED_OTHER with the default slice for the calling thread, and
-/// unlocks memory if `grant` locked it. Nothing when nothing was granted.
+/// unlocks memory if `grant` locked it; a kept CPU is given back (the thread
+/// may run on its allowed CPUs again, and device threads bound later stay
+/// where they are). Nothing when nothing was granted.
 void DropRealtime(const RealtimeGrant& grant);
 
 /// Asks the fair scheduler for a slice of `ns` (0: the default) for the calling

@@ -163,7 +163,10 @@ void RunSession::RequestPriority() {
   // the threads made before (the log writer, in Prepare) keep normal priority
   const int priority = options_.realtime_priority.value_or(s_.scenario.realtime.priority);
   if (clock_->mode() != ClockMode::kFast) {
-    result_.realtime = RequestRealtime(priority);
+    // realtime beside cameras without SCHED_FIFO: the loop keeps a CPU, their workers take the others
+    bool cameras = false;
+    for (const auto& device : s_.devices) cameras = cameras || device->kind() == bridge::DeviceKind::kCamera;
+    result_.realtime = RequestRealtime(priority, cameras && clock_->mode() == ClockMode::kRealtime);
   } else if (priority > 0) {
     result_.realtime.requested = priority;
     result_.realtime.reason = "not used: the fast clock has no deadlines";

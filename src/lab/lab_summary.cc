@@ -79,7 +79,8 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
   }
   const auto grant = [](const RealtimeGrant& g) {
     return json{{"requested", g.requested}, {"granted", g.granted}, {"memory_locked", g.memory_locked},
-                {"reason", g.reason}, {"slice_ns", g.slice_ns}};
+                {"reason", g.reason}, {"slice_ns", g.slice_ns}, {"loop_cpu", g.loop_cpu},
+                {"device_cpus", g.device_cpus}};
   };
   json overrides = json::object();
   for (const auto& [key, value] : sc.overrides) overrides[key] = value;

@@ -14,7 +14,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <stdexcept>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -139,6 +141,54 @@ TEST(Realtime, ARefusalNamesWhatWouldGrantIt) {
   const std::string why = RealtimeRefusal(50, EPERM);
   EXPECT_NE(why.find("root, CAP_SYS_NICE or an rtprio limit >= 50"), std::string::npos) << why;
   EXPECT_NE(why.find("ulimit -r is "), std::string::npos) << why;
+}
+
+// without SCHED_FIFO, a loop that keeps a CPU is bound to the one it runs on, and
+// device threads bound afterwards run on the others; the CPU is given back after
+TEST(Realtime, ALoopWithoutPriorityKeepsItsCpuAndDeviceThreadsTakeTheOthers) {
+  std::thread loop([] {
+    const std::vector<int> allowed = ThreadCpus();
+    ASSERT_FALSE(allowed.empty());
+    const RealtimeGrant g = RequestRealtime(0, /*keep_cpu=*/true);
+    if (allowed.size() < 2) {  // one CPU: nothing to keep
+      EXPECT_EQ(g.loop_cpu, -1);
+      EXPECT_TRUE(BindDeviceThread().device.empty());
+      DropRealtime(g);
+      return;
+    }
+    ASSERT_GE(g.loop_cpu, 0);
+    EXPECT_EQ(ThreadCpus(), std::vector<int>{g.loop_cpu});
+    EXPECT_EQ(g.allowed_cpus, allowed);
+    std::vector<int> others;
+    for (const int c : allowed) {
+      if (c != g.loop_cpu) others.push_back(c);
+    }
+    EXPECT_EQ(g.device_cpus, others);
+    EXPECT_NE(g.Line().find("alone on CPU " + std::to_string(g.loop_cpu)), std::string::npos) << g.Line();
+    // a device thread made by the loop inherits its one CPU, then moves to the others
+    std::thread device([&] {
+      EXPECT_EQ(ThreadCpus(), std::vector<int>{g.loop_cpu});
+      const DeviceCpus cpus = BindDeviceThread();
+      EXPECT_EQ(cpus.device, others);
+      EXPECT_EQ(cpus.allowed, allowed);
+      EXPECT_EQ(ThreadCpus(), others);
+    });
+    device.join();
+    DropRealtime(g);
+    EXPECT_EQ(ThreadCpus(), allowed);
+    std::thread late([] { EXPECT_TRUE(BindDeviceThread().device.empty()); });  // nothing kept now
+    late.join();
+  });
+  loop.join();
+  // not asked: nothing kept
+  std::thread plain([] {
+    const std::vector<int> allowed = ThreadCpus();
+    const RealtimeGrant g = RequestRealtime(0);
+    EXPECT_EQ(g.loop_cpu, -1);
+    EXPECT_EQ(ThreadCpus(), allowed);
+    DropRealtime(g);
+  });
+  plain.join();
 }
 
 }  // namespace

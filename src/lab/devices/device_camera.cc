@@ -237,6 +237,9 @@ void SimCamera::WorkerMain() {
   ::pthread_setname_np(::pthread_self(), kWorkerThreadName);  // (for ps -L and top -H)
   const int worker_policy = realtime_loop ? SCHED_FIFO : SCHED_OTHER;
   const int worker_value = realtime_loop ? std::max(kMinRealtimePriority, param.sched_priority - 1) : kWorkerNice;
+  // a realtime loop without SCHED_FIFO that keeps its CPU: the worker, and the
+  // rasterizer threads its first context makes, run on the others (core_realtime.h)
+  const DeviceCpus cpus = realtime_loop ? DeviceCpus{} : BindDeviceThread();
   const auto go_below = [&] {
     if (realtime_loop) {
       SetThreadRealtime(worker_value);
@@ -246,6 +249,7 @@ void SimCamera::WorkerMain() {
     }
     // the rasterizer threads it waits for: as it is, wherever they were made
     render::SetRasterizerScheduling(worker_policy, worker_value);
+    if (!cpus.device.empty()) render::BindRasterizers(cpus.device);
   };
   w.tid = static_cast<long>(tid);  // (set: for the tests)
   // everything GL lives and dies on this thread
@@ -306,6 +310,7 @@ void SimCamera::WorkerMain() {
   }
   renderer.reset();
   render::SetRasterizerScheduling(SCHED_OTHER, 0);  // (the pool outlives this camera)
+  if (!cpus.allowed.empty()) render::BindRasterizers(cpus.allowed);
 }
 
 void SimCamera::Drain() {

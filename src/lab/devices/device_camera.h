@@ -22,7 +22,9 @@
 // is (counted late), and it never blocks on the worker (see Pending). A worker
 // runs below the control thread: one priority below a SCHED_FIFO one
 // (core_realtime.h), at nice 10 under a normal one; llvmpipe's rasterizer
-// threads follow the worker. It makes its GL context and draws its first frame
+// threads follow the worker. Under a realtime loop without SCHED_FIFO that
+// keeps its CPU (core_realtime.h), the worker and the rasterizer threads run
+// on the other CPUs. It makes its GL context and draws its first frame
 // before it drops there, at the control thread's priority (which waits for it). Rendering several cameras
 // at realtime priority can spend the kernel's realtime budget (95 % of each
 // second by default) and get the control thread throttled with it.
