@@ -11,9 +11,10 @@
 //   loaded      two CPU-bound processes that the benchmark starts and stops,
 //               at normal priority (both cores busy, as on a lab PC that is
 //               also compiling);
-//   loaded, rt  the same load, the control thread at SCHED_FIFO 50 (its
-//               workers at 49) when permitted; not measured, and said so,
-//               when not.
+//   loaded, rt  the same load, the control thread at realtime priority 50
+//               when permitted (SCHED_DEADLINE, else SCHED_FIFO 50: see
+//               core_realtime.h; its workers at SCHED_FIFO 49); not measured,
+//               and said so, when not.
 // Without priority the loop keeps a CPU (core_realtime.h) and each receiver,
 // once its first frame is in, moves to the CPUs the camera workers run on, as a
 // user would place a vision program.
@@ -231,7 +232,7 @@ int BenchRealtime(const BenchArgs& args) {
     // may this process have SCHED_FIFO? asked on a scratch thread, given back at once
     RealtimeGrant probe;
     std::thread([&probe] {
-      probe = RequestRealtime(kPriority);
+      probe = RequestRealtime(kPriority, false, 0.001);  // (as the loop asks: a 1 ms period)
       DropRealtime(probe);
     }).join();
     std::printf("  load: 2 CPU-bound processes at normal priority, started and stopped here\n");

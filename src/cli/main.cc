@@ -33,8 +33,9 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
   const char* rt_help =
       "SCHED_FIFO priority (1-99) of the control thread in lockstep and realtime runs, with memory locked, "
-      "when permitted (root, CAP_SYS_NICE or ulimit -r); 0: normal priority (default: the scenario's "
-      "realtime.priority); what was granted is printed and recorded in summary.json";
+      "when permitted (root, CAP_SYS_NICE or ulimit -r); on the realtime clock it then asks for "
+      "SCHED_DEADLINE too (90 % of each period; root or CAP_SYS_NICE); 0: normal priority (default: the "
+      "scenario's realtime.priority); what was granted is printed and recorded in summary.json";
   run_cmd->add_option("--rt-priority", run.rt_priority, rt_help)->check(CLI::Range(0, 99));
   run_cmd->add_option("--set", run.sets,
                       "KEY=VALUE: override a scenario key by its dotted path, list items by name or index "

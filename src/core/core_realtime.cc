@@ -7,7 +7,10 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <mutex>
@@ -47,6 +50,32 @@ std::string SliceText(std::uint64_t ns) {
 // the device CPUs of the last grant that kept a CPU (BindDeviceThread)
 std::mutex g_device_cpus_mutex;
 DeviceCpus g_device_cpus;
+// the priority of the last SCHED_DEADLINE loop granted in this process (0: none)
+std::atomic<int> g_deadline_priority{0};
+
+constexpr std::uint32_t kSchedDeadline = 6;             // SCHED_DEADLINE (linux/sched.h)
+constexpr std::uint64_t kSchedFlagResetOnFork = 0x01;  // SCHED_FLAG_RESET_ON_FORK
+constexpr std::uint64_t kSchedFlagReclaim = 0x02;      // SCHED_FLAG_RECLAIM
+
+// the calling thread on SCHED_DEADLINE: `runtime_ns` of every `period_ns`, due by the
+// period's end; threads it makes start at normal priority (a SCHED_DEADLINE thread may
+// not pass its reservation on), and it may use bandwidth other reservations leave
+bool SetThreadDeadline(std::uint64_t runtime_ns, std::uint64_t period_ns) {
+  SchedAttr a{};
+  a.size = sizeof(SchedAttr);
+  a.sched_policy = kSchedDeadline;
+  a.sched_flags = kSchedFlagResetOnFork | kSchedFlagReclaim;
+  a.sched_runtime = runtime_ns;
+  a.sched_deadline = period_ns;
+  a.sched_period = period_ns;
+  return ::syscall(SYS_sched_setattr, 0, &a, 0) == 0;
+}
+
+std::string Millis(std::uint64_t ns) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g ms", static_cast<double>(ns) * 1e-6);
+  return text;
+}
 
 std::string CpuListText(const std::vector<int>& cpus) {
   std::string text;
@@ -92,6 +121,8 @@ bool BindThread(int tid, const std::vector<int>& cpus) {
   return ::sched_setaffinity(tid, sizeof(set), &set) == 0;
 }
 
+int DeadlineLoopPriority() { return g_deadline_priority.load(); }
+
 DeviceCpus BindDeviceThread() {
   DeviceCpus cpus;
   {
@@ -127,9 +158,16 @@ std::string RealtimeGrant::Line() const {
   if (requested == 0) return "realtime priority not requested; " + slice;
   const std::string p = "realtime priority " + std::to_string(requested);
   if (!granted) return p + " not granted: " + reason + "; running at normal priority with " + slice;
-  if (memory_locked) return p + " granted (SCHED_FIFO, memory locked)";
-  if (reason.empty()) return p + " granted (SCHED_FIFO)";
-  return p + " granted (SCHED_FIFO, memory not locked: " + reason + ")";
+  std::string how = "SCHED_FIFO";
+  if (deadline_period_ns > 0) {
+    how = "SCHED_DEADLINE " + Millis(deadline_runtime_ns) + " of every " + Millis(deadline_period_ns) +
+          ", device threads SCHED_FIFO " + std::to_string(std::max(kMinRealtimePriority, requested - 1));
+  } else if (!deadline_refused.empty()) {
+    how += "; SCHED_DEADLINE refused: " + deadline_refused;
+  }
+  if (memory_locked) return p + " granted (" + how + ", memory locked)";
+  if (reason.empty()) return p + " granted (" + how + ")";
+  return p + " granted (" + how + ", memory not locked: " + reason + ")";
 }
 
 std::string RealtimeRefusal(int priority, int error) {
@@ -158,7 +196,7 @@ bool SetThreadRealtime(int priority) {
   return error == 0;
 }
 
-RealtimeGrant RequestRealtime(int priority, bool keep_cpu) {
+RealtimeGrant RequestRealtime(int priority, bool keep_cpu, double period_s) {
   if (priority < 0 || priority > kMaxRealtimePriority) {
     throw std::invalid_argument("realtime priority " + std::to_string(priority) + " is outside 0..99");
   }
@@ -176,6 +214,17 @@ RealtimeGrant RequestRealtime(int priority, bool keep_cpu) {
     return g;
   }
   g.granted = true;
+  if (period_s > 0) {
+    const auto period_ns = static_cast<std::uint64_t>(std::llround(period_s * 1e9));
+    const auto runtime_ns = static_cast<std::uint64_t>(std::llround(period_s * kDeadlineShare * 1e9));
+    if (SetThreadDeadline(runtime_ns, period_ns)) {
+      g.deadline_runtime_ns = runtime_ns;
+      g.deadline_period_ns = period_ns;
+      g_deadline_priority = priority;
+    } else {
+      g.deadline_refused = std::strerror(errno);  // (still SCHED_FIFO)
+    }
+  }
   if (::mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
     g.memory_locked = true;
   } else {
@@ -192,6 +241,10 @@ void DropRealtime(const RealtimeGrant& grant) {
     if (g_device_cpus.device == grant.device_cpus) g_device_cpus = {};
   }
   if (!grant.granted) return;
+  if (grant.deadline_period_ns > 0) {
+    int expected = grant.requested;
+    g_deadline_priority.compare_exchange_strong(expected, 0);
+  }
   sched_param param{};
   param.sched_priority = 0;
   ::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &param);

@@ -36,6 +36,21 @@
 // client placed on the other CPUs (taskset) leaves it to the loop. With
 // SCHED_FIFO no CPU is kept: the priority does the work, and the devices'
 // threads keep every CPU (four cameras need them).
+//
+// A periodic loop (the realtime clock: RequestRealtime's period_s) that may
+// have SCHED_FIFO asks for SCHED_DEADLINE next: kDeadlineShare of each period,
+// due by the period's end. The kernel keeps a share of every CPU for normal
+// threads (its fair server, 50 ms of each second, which replaced realtime
+// throttling in Linux 6.12): when realtime threads keep a CPU busy, the starved
+// normal threads run for up to 50 ms at once, above every SCHED_FIFO priority.
+// Four 30 Hz cameras' workers at SCHED_FIFO do that on 2 CPUs, and a SCHED_FIFO
+// loop then waited 50 ms (1-4 % of deadlines missed in most runs of vlab bench
+// realtime); a SCHED_DEADLINE loop's deadline comes first (0.00-0.06 %).
+// Its device threads run at SCHED_FIFO one below the priority asked for, as
+// under a SCHED_FIFO loop, and so do the programs vlab starts when asked. The
+// kernel grants SCHED_DEADLINE to root or CAP_SYS_NICE (not to an rtprio
+// limit), to a thread allowed on every CPU, and while its admission test
+// leaves room; refused, the loop stays at SCHED_FIFO and the grant says why.
 #pragma once
 
 #include <cstdint>
@@ -66,6 +81,12 @@ struct RealtimeGrant {
   std::vector<int> device_cpus;
   /// The CPUs the thread was allowed before (restored by DropRealtime).
   std::vector<int> allowed_cpus;
+  /// SCHED_DEADLINE (granted, asked with a period): the runtime and period, ns;
+  /// 0 when the thread is at SCHED_FIFO.
+  std::uint64_t deadline_runtime_ns = 0;
+  std::uint64_t deadline_period_ns = 0;
+  /// Why SCHED_DEADLINE was refused when asked (the thread is at SCHED_FIFO).
+  std::string deadline_refused;
   /// One line: "realtime priority 50 granted (SCHED_FIFO, memory locked)",
   /// "realtime priority 50 not granted: ...; running at normal priority", or
   /// "realtime priority not requested".
@@ -76,13 +97,24 @@ struct RealtimeGrant {
 /// kernel's smallest (0.1 ms).
 inline constexpr std::uint64_t kLoopSlice_ns = 100'000;
 
+/// A SCHED_DEADLINE loop's runtime, as a share of its period.
+inline constexpr double kDeadlineShare = 0.9;
+
 /// Puts the calling thread on SCHED_FIFO at `priority` (1..99) and locks the
 /// process's memory. priority 0 asks for no SCHED_FIFO (granted false, no
 /// reason). Without SCHED_FIFO, the thread asks for a kLoopSlice_ns slice (above),
 /// and with `keep_cpu` keeps the CPU it runs on for itself when two or more are
 /// allowed: later BindDeviceThread calls put device threads on the others.
+/// With SCHED_FIFO granted and `period_s` > 0 (a loop with that period), it
+/// then asks for SCHED_DEADLINE (above), and stays at SCHED_FIFO if refused.
 /// Throws std::invalid_argument for a priority outside 0..99.
-RealtimeGrant RequestRealtime(int priority, bool keep_cpu = false);
+RealtimeGrant RequestRealtime(int priority, bool keep_cpu = false, double period_s = 0);
+
+/// The priority asked for by the SCHED_DEADLINE loop of this process (its
+/// device threads run one below it, at SCHED_FIFO); 0 when there is none.
+/// Threads a SCHED_DEADLINE thread makes start at normal priority, so they
+/// ask here instead of reading their own.
+int DeadlineLoopPriority();
 
 /// Where a device thread runs while a loop keeps a CPU.
 struct DeviceCpus {

@@ -166,7 +166,9 @@ void RunSession::RequestPriority() {
     // realtime beside cameras without SCHED_FIFO: the loop keeps a CPU, their workers take the others
     bool cameras = false;
     for (const auto& device : s_.devices) cameras = cameras || device->kind() == bridge::DeviceKind::kCamera;
-    result_.realtime = RequestRealtime(priority, cameras && clock_->mode() == ClockMode::kRealtime);
+    // and a realtime loop asks for SCHED_DEADLINE over its period (core_realtime.h)
+    const bool realtime = clock_->mode() == ClockMode::kRealtime;
+    result_.realtime = RequestRealtime(priority, cameras && realtime, realtime ? period_ : 0.0);
   } else if (priority > 0) {
     result_.realtime.requested = priority;
     result_.realtime.reason = "not used: the fast clock has no deadlines";

@@ -9,9 +9,11 @@
 #include <sys/utsname.h>
 
 #include <sys/resource.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -36,6 +38,29 @@ bool FifoPermitted(int priority) {
   probe.join();
   return permitted;
 }
+
+// SCHED_DEADLINE for a scratch thread, through the raw system call (the kernel's
+// struct sched_attr, the first 48 bytes), not through the code under test
+bool DeadlinePermitted(std::uint64_t runtime_ns, std::uint64_t period_ns) {
+  bool permitted = false;
+  std::thread probe([&] {
+    struct {
+      std::uint32_t size, policy;
+      std::uint64_t flags;
+      std::int32_t nice;
+      std::uint32_t priority;
+      std::uint64_t runtime, deadline, period;
+    } a{48, 6 /* SCHED_DEADLINE */, 0x01 /* reset on fork */, 0, 0, runtime_ns, period_ns, period_ns};
+    permitted = ::syscall(SYS_sched_setattr, 0, &a, 0) == 0;
+    sched_param p{};
+    if (permitted) ::sched_setscheduler(0, SCHED_OTHER, &p);
+  });
+  probe.join();
+  return permitted;
+}
+
+// the calling thread's policy without the reset-on-fork flag
+int Policy() { return ::sched_getscheduler(0) & ~SCHED_RESET_ON_FORK; }
 
 // Linux 6.12 and later keep a fair-scheduler slice per thread (sched_setattr's
 // sched_runtime); read from the kernel's release, not from the code under test
@@ -141,6 +166,54 @@ TEST(Realtime, ARefusalNamesWhatWouldGrantIt) {
   const std::string why = RealtimeRefusal(50, EPERM);
   EXPECT_NE(why.find("root, CAP_SYS_NICE or an rtprio limit >= 50"), std::string::npos) << why;
   EXPECT_NE(why.find("ulimit -r is "), std::string::npos) << why;
+}
+
+// a loop with a period asks for SCHED_DEADLINE once SCHED_FIFO is granted: the
+// threads it makes start at normal priority and learn its priority; refused, it
+// stays at SCHED_FIFO and says why; given back, it is a normal thread again
+TEST(Realtime, APeriodicLoopGetsDeadlineSchedulingWhenTheKernelAdmitsIt) {
+  const bool fifo = FifoPermitted(20);
+  const bool deadline = fifo && DeadlinePermitted(900'000, 1'000'000);
+  std::thread loop([&] {
+    const RealtimeGrant g = RequestRealtime(20, false, 0.001);
+    EXPECT_EQ(g.granted, fifo) << g.Line();
+    if (deadline) {
+      EXPECT_EQ(Policy(), 6) << g.Line();  // SCHED_DEADLINE
+      EXPECT_EQ(g.deadline_runtime_ns, 900'000u);
+      EXPECT_EQ(g.deadline_period_ns, 1'000'000u);
+      EXPECT_TRUE(g.deadline_refused.empty());
+      EXPECT_EQ(DeadlineLoopPriority(), 20);
+      EXPECT_EQ(g.Line().rfind("realtime priority 20 granted (SCHED_DEADLINE 0.9 ms of every 1 ms, device threads "
+                               "SCHED_FIFO 19",
+                               0),
+                0u)
+          << g.Line();
+      std::thread made([] { EXPECT_EQ(Policy(), SCHED_OTHER); });  // (it may not pass its reservation on)
+      made.join();
+    } else if (fifo) {
+      EXPECT_EQ(Policy(), SCHED_FIFO);
+      EXPECT_EQ(g.deadline_period_ns, 0u);
+      EXPECT_FALSE(g.deadline_refused.empty());
+      EXPECT_EQ(DeadlineLoopPriority(), 0);
+      EXPECT_NE(g.Line().find("SCHED_DEADLINE refused: "), std::string::npos) << g.Line();
+    } else {
+      EXPECT_EQ(Policy(), SCHED_OTHER);
+      EXPECT_EQ(g.deadline_period_ns, 0u);
+    }
+    DropRealtime(g);
+    EXPECT_EQ(Policy(), SCHED_OTHER);
+    EXPECT_EQ(DeadlineLoopPriority(), 0);
+  });
+  loop.join();
+  // without a period: SCHED_FIFO, as before
+  std::thread plain([&] {
+    const RealtimeGrant g = RequestRealtime(20);
+    EXPECT_EQ(g.deadline_period_ns, 0u);
+    EXPECT_TRUE(g.deadline_refused.empty());
+    EXPECT_EQ(Policy(), fifo ? SCHED_FIFO : SCHED_OTHER);
+    DropRealtime(g);
+  });
+  plain.join();
 }
 
 // without SCHED_FIFO, a loop that keeps a CPU is bound to the one it runs on, and

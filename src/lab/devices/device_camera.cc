@@ -232,11 +232,18 @@ void SimCamera::WorkerMain() {
   // processes, and no describe request was answered meanwhile.
   int policy = 0;
   sched_param param{};
-  const bool realtime_loop = ::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO;
+  int loop_priority = ::pthread_getschedparam(::pthread_self(), &policy, &param) == 0 && policy == SCHED_FIFO
+                          ? param.sched_priority
+                          : 0;
+  if (loop_priority == 0 && realtime_ && (loop_priority = DeadlineLoopPriority()) > 0) {
+    // made by a SCHED_DEADLINE loop, which cannot pass its policy on: its priority, asked
+    SetThreadRealtime(loop_priority);
+  }
+  const bool realtime_loop = loop_priority > 0;
   const id_t tid = static_cast<id_t>(::gettid());
   ::pthread_setname_np(::pthread_self(), kWorkerThreadName);  // (for ps -L and top -H)
   const int worker_policy = realtime_loop ? SCHED_FIFO : SCHED_OTHER;
-  const int worker_value = realtime_loop ? std::max(kMinRealtimePriority, param.sched_priority - 1) : kWorkerNice;
+  const int worker_value = realtime_loop ? std::max(kMinRealtimePriority, loop_priority - 1) : kWorkerNice;
   // a realtime loop without SCHED_FIFO that keeps its CPU: the worker, and the
   // rasterizer threads its first context makes, run on the others (core_realtime.h)
   const DeviceCpus cpus = realtime_loop ? DeviceCpus{} : BindDeviceThread();
