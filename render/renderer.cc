@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "core/core_errors.h"
+#include "core/core_realtime.h"
 #include "render/render_context.h"
 
 namespace vlab::render {
@@ -159,13 +160,7 @@ int SetRasterizerScheduling(int policy, int value) {
 }
 
 int BindRasterizers(const std::vector<int>& cpus) {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  for (const int c : cpus) {
-    if (c >= 0 && c < CPU_SETSIZE) CPU_SET(c, &set);
-  }
-  if (CPU_COUNT(&set) == 0) return 0;
-  return ForEachRasterizer([&set](int tid) { return ::sched_setaffinity(tid, sizeof(set), &set) == 0; });
+  return ForEachRasterizer([&cpus](int tid) { return BindThread(tid, cpus); });
 }
 
 Renderer::~Renderer() = default;

@@ -28,6 +28,7 @@
 
 #include "cli/cli_commands.h"
 #include "cli/cli_cpus.h"
+#include "core/core_realtime.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 
@@ -80,9 +81,9 @@ int BenchCommand(const BenchArgs& args) {
     const lab::RunResult recorded = lab->Run(record);
     const std::vector<double> final_qpos = lab->FinalQpos();
 
-    const std::vector<int> allowed = AllowedCpus();
+    const std::vector<int> allowed = ThreadCpus();
     std::printf("  CPUs: %zu allowed (%s) of %ld online; log.csv is formatted on a writer thread\n", allowed.size(),
-                CpuList(allowed).c_str(), sysconf(_SC_NPROCESSORS_ONLN));
+                CpuListText(allowed).c_str(), sysconf(_SC_NPROCESSORS_ONLN));
 
     // a and b, best of --repeat; c too when `live` is given
     bool same_all = true;
@@ -111,15 +112,15 @@ int BenchCommand(const BenchArgs& args) {
     double live = 0;
     const Rates all = measure(&live);
     const std::vector<int> one = {allowed.empty() ? 0 : allowed.front()};
-    PinTo(one);
+    BindThread(0, one);
     const Rates single = measure(nullptr);
-    PinTo(allowed);
+    BindThread(0, allowed);
     std::error_code ec;
     std::filesystem::remove_all(out_dir, ec);
 
     const double ratio = all.replayed / all.bare;
     const double ratio_one = single.replayed / single.bare;
-    std::printf("  on the CPUs allowed (%s), the log writer %s:\n", CpuList(allowed).c_str(),
+    std::printf("  on the CPUs allowed (%s), the log writer %s:\n", CpuListText(allowed).c_str(),
                 allowed.size() > 1 ? "free to run beside the loop" : "sharing the one CPU with the loop");
     std::printf("    a. bare mj_step, recorded controls           %9.0f steps/s  (%.0fx real time)\n", all.bare,
                 all.bare * m->opt.timestep);
@@ -127,7 +128,7 @@ int BenchCommand(const BenchArgs& args) {
                 ratio);
     std::printf("    c. lab with the built-in controller live     %9.0f steps/s  ratio c/a %.3f\n", live,
                 live / all.bare);
-    std::printf("  on one CPU (%s), the log writer sharing it with the loop:\n", CpuList(one).c_str());
+    std::printf("  on one CPU (%s), the log writer sharing it with the loop:\n", CpuListText(one).c_str());
     std::printf("    a. bare mj_step, recorded controls           %9.0f steps/s\n", single.bare);
     std::printf("    b. lab: servo + JR3 8 kHz + log.csv + checks %9.0f steps/s  ratio b/a %.3f\n", single.replayed,
                 ratio_one);

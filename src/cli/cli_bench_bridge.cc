@@ -39,6 +39,7 @@
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
 #include "cli/cli_cpus.h"
+#include "core/core_realtime.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 #include "lab/lab_stats.h"
@@ -61,8 +62,8 @@ struct Layout {
   // "same core  (lab cpu 0, peer cpu 0)"; unpinned: the CPUs both may use
   std::string Text(const std::vector<int>& allowed) const {
     std::string text = name + std::string(name.size() < 10 ? 10 - name.size() : 0, ' ');
-    if (lab_cpus.empty()) return text + " (lab and peer on cpus " + CpuList(allowed) + ")";
-    return text + " (lab cpu " + CpuList(lab_cpus) + ", peer cpu " + CpuList(peer_cpus) + ")";
+    if (lab_cpus.empty()) return text + " (lab and peer on cpus " + CpuListText(allowed) + ")";
+    return text + " (lab cpu " + CpuListText(lab_cpus) + ", peer cpu " + CpuListText(peer_cpus) + ")";
   }
 };
 
@@ -81,7 +82,7 @@ pid_t ForkPeer(const std::vector<int>& cpus, Body body) {
   const pid_t pid = fork();
   if (pid == 0) {
     prctl(PR_SET_PDEATHSIG, SIGKILL);
-    PinTo(cpus);
+    BindThread(0, cpus);
     body();
     _exit(127);
   }
@@ -129,8 +130,8 @@ std::vector<double> EchoRoundTrips(int count, const Layout& layout) {
       if (n > 0) echo->SendTo(buf, static_cast<std::size_t>(n), from);
     }
   });
-  const std::vector<int> all = AllowedCpus();
-  PinTo(layout.lab_cpus);
+  const std::vector<int> all = ThreadCpus();
+  BindThread(0, layout.lab_cpus);
   std::vector<unsigned char> packet(200, 0x5A);
   unsigned char buf[2048];
   std::vector<double> rtt;
@@ -141,7 +142,7 @@ std::vector<double> EchoRoundTrips(int count, const Layout& layout) {
     if (ReceiveAsLab(*client, buf, sizeof(buf), 1.0) < 0) continue;
     if (i >= 100) rtt.push_back(vlab::WallNow() - t0);  // the first 100 warm up
   }
-  PinTo(all);
+  BindThread(0, all);
   StopPeer(peer);
   return rtt;
 }
@@ -155,8 +156,8 @@ double PhysicsStepSeconds(const lab::Scenario& scenario, const std::vector<int>&
   vlab::DataPtr data = vlab::MakeData(m);
   mjData* d = data.get();
   lab->InitialState(d);
-  const std::vector<int> all = AllowedCpus();
-  PinTo(cpus);
+  const std::vector<int> all = ThreadCpus();
+  BindThread(0, cpus);
   std::vector<double> steps(5000);
   for (double& step : steps) {
     const double t0 = vlab::WallNow();
@@ -167,7 +168,7 @@ double PhysicsStepSeconds(const lab::Scenario& scenario, const std::vector<int>&
     mj_step2(m, d);
     step = vlab::WallNow() - t0;
   }
-  PinTo(all);
+  BindThread(0, all);
   return Percentile(steps, 50);
 }
 
@@ -191,8 +192,8 @@ lab::RunResult ServeWithController(lab::Scenario scenario, ClockMode clock, doub
   for (auto& d : scenario.devices) d.port = 0;
   lab::BridgeOptions options;
   options.ports["pa10"] = port;
-  const std::vector<int> all = AllowedCpus();
-  PinTo(layout.lab_cpus);
+  const std::vector<int> all = ThreadCpus();
+  BindThread(0, layout.lab_cpus);
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
   // the controller runs a little longer than the lab, so every period has its answer
   const std::string arm = "127.0.0.1:" + std::to_string(port);
@@ -216,7 +217,7 @@ lab::RunResult ServeWithController(lab::Scenario scenario, ClockMode clock, doub
     for (std::size_t i = 1; i < ends.size(); ++i) periods_s->push_back(ends[i] - ends[i - 1]);
   }
   StopPeer(controller);
-  PinTo(all);
+  BindThread(0, all);
   return result;
 }
 
@@ -228,8 +229,8 @@ int BenchBridge(const BenchArgs& args) {
     const lab::Scenario scenario =
         lab::LoadScenario(lab::ResolveScenarioPath(args.scenario.empty() ? "scenes/pa10_serve" : args.scenario));
     std::printf("vlab bench bridge: scenario %s, 1 kHz, controller %s\n", scenario.name.c_str(), example.c_str());
-    const std::vector<int> allowed = AllowedCpus();
-    std::printf("  CPUs: %zu allowed (%s) of %ld online\n", allowed.size(), CpuList(allowed).c_str(),
+    const std::vector<int> allowed = ThreadCpus();
+    std::printf("  CPUs: %zu allowed (%s) of %ld online\n", allowed.size(), CpuListText(allowed).c_str(),
                 sysconf(_SC_NPROCESSORS_ONLN));
     std::printf("  the lab waits as it does when serving (spin %.0f us, then ppoll); its peer, a child process,\n"
                 "  waits as the client library does (polls %.0f us, yielding, then ppoll): within the spins both\n"
@@ -248,7 +249,7 @@ int BenchBridge(const BenchArgs& args) {
     }
     const double physics = PhysicsStepSeconds(scenario, layouts.front().lab_cpus);
     std::printf("  physics step: p50 %.1f us (bare mj_step, arm held, cpu %s)\n", physics * 1e6,
-                CpuList(layouts.front().lab_cpus).c_str());
+                CpuListText(layouts.front().lab_cpus).c_str());
 
     const double lockstep_s = args.duration_s > 0 ? args.duration_s : 5.0;
     std::printf("  lockstep, %.0f periods: the wall time of a period, p50 and mean; ratio = period p50 / that\n"

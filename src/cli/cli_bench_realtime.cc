@@ -223,11 +223,11 @@ int BenchRealtime(const BenchArgs& args) {
     base.outputs.images.clear();
     base.controller = lab::ControllerConfig{};
     for (lab::DeviceConfig& d : base.devices) d.port = 0;  // nothing else served: nothing to wait for
-    const std::vector<int> allowed = AllowedCpus();
+    const std::vector<int> allowed = ThreadCpus();
     std::printf("vlab bench realtime: scenario %s at 1 kHz (realtime clock, arm holding), cameras 640x480 at 30 Hz\n"
                 "  (MJCF camera 'overview', JPEG q90, each rendered and encoded on its own worker), %.0f s each way\n",
                 base.name.c_str(), duration);
-    std::printf("  CPUs: %zu allowed (%s) of %ld online\n", allowed.size(), CpuList(allowed).c_str(),
+    std::printf("  CPUs: %zu allowed (%s) of %ld online\n", allowed.size(), CpuListText(allowed).c_str(),
                 sysconf(_SC_NPROCESSORS_ONLN));
     // may this process have SCHED_FIFO? asked on a scratch thread, given back at once
     RealtimeGrant probe;

@@ -14,6 +14,7 @@
 #include "cli/cli_commands.h"
 #include "cli/cli_cpus.h"
 #include "core/core_errors.h"
+#include "core/core_realtime.h"
 #include "lab/lab_scenario.h"
 #include "lab/lab_sweep.h"
 
@@ -34,8 +35,8 @@ int BenchSweep(const BenchArgs& args) {
     lab::Sweep sweep = lab::LoadSweep(args.scenario.empty() ? kDefaultSweep : args.scenario);
     if (args.duration_s > 0) sweep.duration_s = args.duration_s;
     const lab::Scenario scenario = lab::LoadScenario(sweep.scenario, sweep.runs.at(0).sets);
-    const std::vector<int> cpus = AllowedCpus();
-    std::printf("CPUs: %zu allowed (%s); %ld online\n", cpus.size(), CpuList(cpus).c_str(), ::sysconf(_SC_NPROCESSORS_ONLN));
+    const std::vector<int> cpus = ThreadCpus();
+    std::printf("CPUs: %zu allowed (%s); %ld online\n", cpus.size(), CpuListText(cpus).c_str(), ::sysconf(_SC_NPROCESSORS_ONLN));
     std::printf("sweep %s: %zu runs of %s%s, %.3g s simulated each\n", sweep.name.c_str(), sweep.runs.size(),
                 sweep.scenario.c_str(), scenario.outputs.images.empty() ? " (no cameras)" : " (WITH camera images)",
                 sweep.duration_s > 0 ? sweep.duration_s : scenario.duration_s);

@@ -19,6 +19,7 @@
 #include "cli/cli_commands.h"
 #include "cli/cli_cpus.h"
 #include "core/core_errors.h"
+#include "core/core_realtime.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
 
@@ -35,11 +36,11 @@ int BenchTask(const BenchArgs& args) {
     }
     const std::string out_dir =
         (std::filesystem::temp_directory_path() / ("vlab-bench-task-" + std::to_string(::getpid()))).string();
-    const std::vector<int> allowed = AllowedCpus();
+    const std::vector<int> allowed = ThreadCpus();
     std::printf("vlab bench task: %s (built-in task_space) vs %s (task script), %.2f s simulated each, best of %d\n",
                 builtin.name.c_str(), script.name.c_str(), builtin.duration_s, args.repeat);
     std::printf("  CPUs: %zu allowed (%s) of %ld online; log.csv written by both\n", allowed.size(),
-                CpuList(allowed).c_str(), sysconf(_SC_NPROCESSORS_ONLN));
+                CpuListText(allowed).c_str(), sysconf(_SC_NPROCESSORS_ONLN));
     double best_a = std::numeric_limits<double>::infinity(), best_b = best_a;
     bool passed = true;
     for (int i = 0; i < args.repeat; ++i) {

@@ -28,6 +28,7 @@
 #include "core/core_errors.h"
 #include "core/core_clock.h"
 #include "core/core_mujoco.h"
+#include "core/core_realtime.h"
 #include "lab/devices/device_scene.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
@@ -165,10 +166,10 @@ int BenchView(const BenchArgs& args) {
     if (!scene || scene->port == 0) {
       throw vlab::InputError(with.file + ": bench view needs a served device of kind scene (e.g. " + kDefaultScenario + ")");
     }
-    const std::vector<int> cpus = AllowedCpus();
+    const std::vector<int> cpus = ThreadCpus();
     std::printf("vlab bench view: scenario %s, %.1f s simulated per run, control period %.3f ms, best of %d\n",
                 with.name.c_str(), with.duration_s, with.control_period_s * 1e3, args.repeat);
-    std::printf("  CPUs: %zu allowed (%s); fast clock, served\n", cpus.size(), CpuList(cpus).c_str());
+    std::printf("  CPUs: %zu allowed (%s); fast clock, served\n", cpus.size(), CpuListText(cpus).c_str());
     double a = 1e9, b = 1e9;
     long frames = 0, bytes = 0;
     bool late = false;

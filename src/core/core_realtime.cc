@@ -77,12 +77,6 @@ std::string Millis(std::uint64_t ns) {
   return text;
 }
 
-std::string CpuListText(const std::vector<int>& cpus) {
-  std::string text;
-  for (const int c : cpus) text += (text.empty() ? "" : ",") + std::to_string(c);
-  return text;
-}
-
 // keeps the CPU the calling thread runs on for it, the others for device threads
 void KeepCpu(RealtimeGrant* g) {
   const std::vector<int> allowed = ThreadCpus();
@@ -119,6 +113,12 @@ bool BindThread(int tid, const std::vector<int>& cpus) {
     CPU_SET(c, &set);
   }
   return ::sched_setaffinity(tid, sizeof(set), &set) == 0;
+}
+
+std::string CpuListText(const std::vector<int>& cpus) {
+  std::string text;
+  for (const int c : cpus) text += (text.empty() ? "" : ",") + std::to_string(c);
+  return text;
 }
 
 int DeadlineLoopPriority() { return g_deadline_priority.load(); }

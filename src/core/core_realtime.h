@@ -130,7 +130,11 @@ DeviceCpus BindDeviceThread();
 std::vector<int> ThreadCpus();
 
 /// Binds thread `tid` (0: the calling thread) to `cpus`; false when refused.
+/// Threads and processes it starts later inherit the binding.
 bool BindThread(int tid, const std::vector<int>& cpus);
+
+/// "0,1".
+std::string CpuListText(const std::vector<int>& cpus);
 
 /// Puts the calling thread on SCHED_FIFO at `priority` (1..99), nothing else;
 /// false (errno kept) when refused. For the threads that serve a realtime loop.
