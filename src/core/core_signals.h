@@ -21,10 +21,13 @@ inline volatile std::sig_atomic_t g_stop_requested = 0;
 /// (the clocks of core_clock.h look at it at least every kStopCheck_s).
 inline void InstallStopSignals() {
   struct sigaction action {};
+  // the first signal stays: a compare-and-swap, since two threads may each run the handler
+  // at once (SIGINT on one, SIGTERM on another: sa_mask below blocks a second signal only in
+  // the thread that runs the first handler), and a plain test-and-set let the later one win
   action.sa_handler = [](int signal_number) {
-    if (g_stop_requested == 0) g_stop_requested = signal_number;
+    __sync_bool_compare_and_swap(&g_stop_requested, 0, signal_number);  // (lock-free: signal-safe)
   };
-  // one handler at a time: a second signal waits for the first one's handler (which then wins)
+  // one handler at a time in a thread
   sigemptyset(&action.sa_mask);
   sigaddset(&action.sa_mask, SIGINT);
   sigaddset(&action.sa_mask, SIGTERM);
