@@ -27,11 +27,21 @@ namespace vlab::render {
 enum class Profile {
   kFast,     ///< no shadows, no reflections, no multisampling
   kQuality,  ///< shadows, reflections, 4x multisampling
+  kDraft,    ///< fast, and no skybox (nor haze); round geoms of kDraftSlices x kDraftStacks
 };
-/// "fast" / "quality" -> Profile; throws InputError for anything else.
+/// Round geoms (spheres, capsules, cylinders, ellipsoids) of the draft profile:
+/// slices around the axis and stacks along it, for MuJoCo's 28 and 16
+/// (<visual><quality numslices numstacks>, which the other profiles keep).
+constexpr int kDraftSlices = 16;
+constexpr int kDraftStacks = 8;
+/// "draft" / "fast" / "quality" -> *profile; false (and *profile unchanged) for anything else.
+bool ParseProfile(const std::string& name, Profile* profile);
+/// "draft" / "fast" / "quality" -> Profile; throws InputError for anything else.
 Profile ProfileFromName(const std::string& name);
-/// Profile -> "fast" / "quality".
+/// Profile -> "draft" / "fast" / "quality".
 const char* ProfileName(Profile profile);
+/// The names ProfileFromName takes, for messages: "draft, fast or quality".
+const char* ProfileNames();
 
 /// 8-bit RGB, rows top-down, 3 bytes per pixel (R, G, B).
 struct RgbImage {

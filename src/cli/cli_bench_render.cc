@@ -4,7 +4,7 @@
 // variant, best of --repeat measurements of --duration wall seconds each
 // (default 2 s):
 //   a. Render() (scene update, GL render, read-back, row flip) at 640x480 and
-//      320x240 in the fast and the quality profile;
+//      320x240 in the fast and the quality profile, and at 640x480 in the draft one;
 //   b. render + JPEG encoding (cv::imencode, quality 90) at 640x480, fast;
 //   c. render + JPEG + send over the camera wire: a camera server on loopback
 //      (the one `vlab serve` and `vlab camera` use) sends every frame in chunks
@@ -174,7 +174,7 @@ int BenchRender(const BenchArgs& args) {
     render::RgbImage rgb;
     double fast_vga = 0;
     std::string gl;
-    for (render::Profile profile : {render::Profile::kFast, render::Profile::kQuality}) {
+    for (render::Profile profile : {render::Profile::kFast, render::Profile::kQuality, render::Profile::kDraft}) {
       render::Renderer::Options options;
       options.profile = profile;
       options.scene = scenario.scene;
@@ -185,6 +185,7 @@ int BenchRender(const BenchArgs& args) {
         std::printf("  GL: %s\n", gl.c_str());
       }
       for (auto [w, h] : {std::pair{640, 480}, std::pair{320, 240}}) {
+        if (profile == render::Profile::kDraft && w != 640) continue;  // (the size many cameras are served at)
         const double fps = Best(args.repeat, [&, w = w, h = h] {
           return Rate([&] {
             rgb.width = w;

@@ -252,7 +252,8 @@ Subcommand AddRenderCommand(CLI::App& app) {
   cmd->add_flag("--segmentation", args->segmentation, "Also write seg_NNNNNN.png (16-bit, geom id + 1)");
   cmd->add_option("--width", args->width, "Image width, pixels (default: the scenario's for this camera, or 640)");
   cmd->add_option("--height", args->height, "Image height, pixels (default: the scenario's, or 480)");
-  cmd->add_option("--profile", args->profile, "fast (no shadows, reflections, MSAA) | quality (default)");
+  cmd->add_option("--profile", args->profile,
+                  "draft (fast, no sky, coarser round geoms) | fast (no shadows, reflections, MSAA) | quality (default)");
   cmd->add_flag("-q,--quiet", args->quiet, "No GL renderer line, progress bar or notes");
   return {cmd, [args, cmd] { return WithErrorReport([&] { return Render(*args, *cmd); }); }};
 }

@@ -66,8 +66,7 @@ ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& nod
     r.Fail("video", "must be a file name ending in .mp4, written in the output folder");
   }
   const std::string profile = r.String("profile", "quality");
-  if (profile != "fast" && profile != "quality") r.Fail("profile", "must be fast or quality");
-  o.profile = render::ProfileFromName(profile);
+  if (!render::ParseProfile(profile, &o.profile)) r.Fail("profile", std::string("must be ") + render::ProfileNames());
   if (!o.png && !o.depth && !o.segmentation && o.video.empty()) r.Fail("png", "nothing to write: png, depth, segmentation and video are all off");
   r.Finish();
   return o;

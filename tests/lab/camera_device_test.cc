@@ -3,16 +3,19 @@
 // C++ camera client. Frames come at the camera's rate with consecutive ids,
 // stamped with the simulated time they show, carrying the camera's pose; the
 // describe reply has the intrinsics of the MJCF camera; a red box lies where
-// the intrinsics project it. Bad bindings fail at creation with the device's name.
+// the intrinsics project it. Bad bindings fail at creation with the device's name;
+// the render profile is draft, fast or quality.
 #include <cmath>
 #include <future>
 #include <thread>
+#include <utility>
 
 #include <gtest/gtest.h>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"
 #include "core/core_errors.h"
+#include "lab/devices/device_camera.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
 
@@ -180,6 +183,32 @@ TEST(CameraDeviceTest, BadBindingsNameTheDevice) {
   const std::string big = message("top", 1280);
   EXPECT_NE(big.find("device 'webcam'"), std::string::npos) << big;
   EXPECT_NE(big.find("offscreen buffer"), std::string::npos) << big;
+}
+
+TEST(CameraDeviceTest, ProfileIsDraftFastOrQuality) {
+  vlab::testing::TempDir dir;
+  vlab::testing::WriteFile(dir / "scene.xml", kSceneXml);
+  const auto with_profile = [&](const std::string& profile) {
+    std::string yaml = Scenario();
+    yaml.replace(yaml.find("encoding: raw"), 13, "encoding: raw, profile: " + profile);
+    vlab::testing::WriteFile(dir / "camera.yaml", yaml);
+    return dir / "camera.yaml";
+  };
+  for (const auto& [name, profile] : {std::pair{"draft", render::Profile::kDraft},
+                                      std::pair{"fast", render::Profile::kFast},
+                                      std::pair{"quality", render::Profile::kQuality}}) {
+    const auto scenario = LoadScenario(with_profile(name));
+    ASSERT_EQ(scenario.devices.size(), 1u);
+    EXPECT_EQ(scenario.devices[0].ParamsAs<CameraParams>().profile, profile) << name;
+  }
+  try {
+    LoadScenario(with_profile("drafty"));
+    ADD_FAILURE() << "profile 'drafty' was taken";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("profile"), std::string::npos) << message;
+    EXPECT_NE(message.find("must be draft, fast or quality"), std::string::npos) << message;
+  }
 }
 
 }  // namespace

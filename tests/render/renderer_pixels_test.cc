@@ -1,6 +1,7 @@
 // Pixel facts: a small red ball appears where the pinhole projection with
 // CameraIntrinsics puts it (centroid within 1 px), for a fixed camera, a
-// camera carried by a moving body, both profiles and two image sizes.
+// camera carried by a moving body, every profile and two image sizes. The
+// draft profile draws no sky, and spheres with 16 slices instead of 28.
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -69,7 +70,7 @@ TEST_F(PixelTest, IntrinsicsFollowFovy) {
 }
 
 TEST_F(PixelTest, BallAtItsProjectionInAFixedCamera) {
-  for (Profile profile : {Profile::kFast, Profile::kQuality}) {
+  for (Profile profile : {Profile::kDraft, Profile::kFast, Profile::kQuality}) {
     Renderer::Options options;
     options.profile = profile;
     options.log_renderer = false;
@@ -124,6 +125,73 @@ TEST_F(PixelTest, ImagesAreTopDownRgb) {
   const std::uint8_t* p = img.pixels.data() + 3 * (static_cast<std::size_t>(std::lround(c.v)) * 640 + std::lround(c.u));
   EXPECT_GT(p[0], 200);
   EXPECT_LT(p[2], 50);
+}
+
+TEST_F(PixelTest, DraftDrawsNoSkyAndSpheresOfFewerSlices) {
+  Renderer::Options options;
+  options.log_renderer = false;
+  options.profile = Profile::kDraft;
+  auto draft = Renderer::Create(m_, options);
+  // the model's own settings are what the next renderer reads: unchanged
+  EXPECT_EQ(m_->vis.quality.numslices, 28);
+  EXPECT_EQ(m_->vis.quality.numstacks, 16);
+  options.profile = Profile::kFast;
+  auto fast = Renderer::Create(m_, options);
+
+  // "tilted" sees the floor slab and the sky beyond it: the sky is black in draft,
+  // and everything else (flat faces, one light, no haze: no infinite plane) is the
+  // same bytes as in fast
+  const int tilted = CameraId(m_, "tilted");
+  RgbImage a, b;
+  SegmentationImage seg;
+  fast->Render(d_, tilted, &a);
+  draft->Render(d_, tilted, &b);
+  fast->RenderSegmentation(d_, tilted, &seg);
+  const int ball = Id(mjOBJ_GEOM, "ball");
+  int sky = 0, same = 0, near_ball = 0;
+  for (int y = 0; y < a.height; ++y) {
+    for (int x = 0; x < a.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * a.width + x;
+      const std::uint8_t* pa = a.pixels.data() + 3 * i;
+      const std::uint8_t* pb = b.pixels.data() + 3 * i;
+      if (seg.geom[i] < 0) {
+        ++sky;
+        ASSERT_TRUE(pb[0] == 0 && pb[1] == 0 && pb[2] == 0) << "draft sky at " << x << ", " << y;
+        ASSERT_GT(pa[0] + pa[1] + pa[2], 100) << "fast sky at " << x << ", " << y;
+        continue;
+      }
+      // the ball's outline (and its anti-aliasing-free edge pixels) differ by the slices
+      bool by_ball = false;
+      for (int dy = -2; dy <= 2 && !by_ball; ++dy) {
+        for (int dx = -2; dx <= 2 && !by_ball; ++dx) {
+          const int u = x + dx, v = y + dy;
+          by_ball = u >= 0 && v >= 0 && u < a.width && v < a.height &&
+                    seg.geom[static_cast<std::size_t>(v) * a.width + u] == ball;
+        }
+      }
+      if (by_ball) {
+        ++near_ball;
+        continue;
+      }
+      ASSERT_TRUE(pa[0] == pb[0] && pa[1] == pb[1] && pa[2] == pb[2]) << "at " << x << ", " << y;
+      ++same;
+    }
+  }
+  EXPECT_GT(sky, a.width * a.height / 20);
+  EXPECT_GT(same, a.width * a.height / 2);
+
+  // a sphere seen along its axis from close by: its outline is the equator's polygon,
+  // of area (n/2) sin(2 pi / n) r^2 for n slices; 16 against 28: 0.98272 of the area
+  Place("ball", 0, 0, 1.7);  // 0.3 m below "down": radius 0.02 m is about 39 px
+  const int down = CameraId(m_, "down");
+  fast->Render(d_, down, &a);
+  draft->Render(d_, down, &b);
+  const auto polygon = [](int n) { return 0.5 * n * std::sin(2 * M_PI / n); };
+  const double expected = polygon(kDraftSlices) / polygon(28);
+  const Centroid ca = RedCentroid(a), cb = RedCentroid(b);
+  ASSERT_GT(ca.pixels, 3000);
+  EXPECT_NEAR(static_cast<double>(cb.pixels) / ca.pixels, expected, 0.005)
+      << cb.pixels << " red pixels in draft, " << ca.pixels << " in fast";
 }
 
 TEST_F(PixelTest, RenderingLeavesTheStateUnchanged) {

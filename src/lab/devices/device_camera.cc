@@ -62,8 +62,7 @@ std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r) {
   c->jpeg_quality = r.Integer("jpeg_quality", c->jpeg_quality);
   if (c->jpeg_quality < 1 || c->jpeg_quality > 100) r.Fail("jpeg_quality", "must be 1 to 100");
   const std::string profile = r.String("profile", "fast");
-  if (profile != "fast" && profile != "quality") r.Fail("profile", "must be fast or quality");
-  c->profile = render::ProfileFromName(profile);
+  if (!render::ParseProfile(profile, &c->profile)) r.Fail("profile", std::string("must be ") + render::ProfileNames());
   const auto ids = [&r](const char* key) {
     std::vector<std::int64_t> out;
     for (double v : r.Numbers(key, {})) {

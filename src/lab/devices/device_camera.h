@@ -65,7 +65,7 @@ struct CameraParams : DeviceParams {
   double noise = 0.0;            ///< pixel noise standard deviation, 8-bit grey levels
   bridge::CameraEncoding encoding = bridge::CameraEncoding::kJpeg;  ///< frames on the wire (jpeg | raw)
   int jpeg_quality = 90;         ///< 1-100
-  render::Profile profile = render::Profile::kFast;  ///< fast | quality
+  render::Profile profile = render::Profile::kFast;  ///< draft | fast | quality
   // Faults injected on purpose, to test that a client survives them (frame ids as
   // sent, 0 the first): a dropped frame is rendered and never sent (counted
   // dropped), as a frame lost on the way; a late frame is held `late_by_s` past
