@@ -70,8 +70,9 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("what", bench.what,
                         "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
                         "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
-                        "| render | realtime (1 kHz beside 2 and 4 served 640x480 cameras: quiet, under 2 CPU hogs, "
-                        "and under them at realtime priority when permitted) "
+                        "| render (fps per size and profile, JPEG, send) | realtime (1 kHz beside 2 and 4 served 640x480 cameras: quiet, under 2 CPU hogs, "
+                        "and under them at realtime priority when permitted; 4 cameras at priority in the draft "
+                        "profile too) "
                         "| task (a task script vs the built-in task_space controller, period time) "
                         "| sweep (runs per minute of vlab sweep -j 2 vs -j 1) "
                         "| view (lab period with and without the scene stream + one viewer)")
