@@ -114,6 +114,9 @@ class RealtimeClock final : public Clock {
     const double lateness = now - deadline;
     stats_.max_lateness_s = std::max(stats_.max_lateness_s, lateness);
     if (stats_.lateness_s.size() < stats_.lateness_s.capacity()) stats_.lateness_s.push_back(lateness);
+    // what the control thread waited on: a period counts as late a whole step after its deadline
+    probe_.Sample(k, lateness, step, now);
+    stats_.stall = probe_.report();
     return PeriodStart::kReady;
   }
   void set_factor(double factor) override {
@@ -135,6 +138,7 @@ class RealtimeClock final : public Clock {
   bool anchored_ = false;
   double anchor_ = 0;
   std::int64_t anchor_k_ = 0;
+  StallProbe probe_;
   ClockStats stats_;
 };
 

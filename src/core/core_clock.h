@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "core/core_stall_probe.h"
 
 namespace vlab {
 
@@ -96,6 +97,11 @@ struct ClockStats {
   double max_lateness_s = 0.0;        ///< realtime: worst start after a deadline
   std::vector<double> lateness_s;     ///< realtime: start - deadline of every period (jitter)
   std::int64_t timeouts = 0;          ///< lockstep: periods that began without their commands
+  /// realtime: the control thread's counters and the machine's steal time over the
+  /// run, and the worst period with what it waited on (core_stall_probe.h); the steal
+  /// is counted up to the last read of /proc/stat (at most StallProbe::kStealEvery
+  /// periods before the end)
+  StallReport stall;
 };
 
 /// How a wait for a period ended: it may begin (with its commands, or without

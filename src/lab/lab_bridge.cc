@@ -83,6 +83,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
   b->buffer_.resize(65536);
   b->payload_.reserve(bridge::kMaxPacketValues);
   b->latencies_.reserve(1 << 20);
+  b->command_ages_.reserve(1 << 20);
   for (Served& d : b->devices_) d.last_state.reserve(bridge::kMaxPacketValues * sizeof(double));
   return b;
 }
@@ -180,6 +181,10 @@ void LabBridge::ApplyCommands(std::int64_t k) {
   const double now = WallNow();
   for (Served& d : devices_) {
     if (!d.endpoint || !Applied(d.device->command_role())) continue;
+    // how old the newest command is as the period starts: a stalled controller shows here
+    if (d.endpoint->has_owner() && d.command_arrival >= 0 && command_ages_.size() < command_ages_.capacity()) {
+      command_ages_.push_back(now - d.command_arrival);
+    }
     if (d.endpoint->BeginPeriod(k)) d.device->Hold();
     if (d.device->TakeCommand(*d.endpoint, &payload_) && d.command_arrival >= 0 &&
         latencies_.size() < latencies_.capacity()) {

@@ -96,6 +96,9 @@ class LabBridge final : public CommandSource {
   std::vector<ServedDevice> Devices() const;
   /// Command arrival-to-apply latencies, s (commands applied so far).
   const std::vector<double>& latencies() const { return latencies_; }
+  /// Age of the newest command of each owned commanded device at the start of
+  /// each period, s (wall time since it arrived; one value per device and period).
+  const std::vector<double>& command_ages() const { return command_ages_; }
 
  private:
   struct Served {
@@ -118,6 +121,7 @@ class LabBridge final : public CommandSource {
   std::int64_t period_ = 0;
   int consecutive_timeouts_ = 0;
   std::vector<double> latencies_;
+  std::vector<double> command_ages_;
   // scratch, sized at creation
   std::vector<unsigned char> buffer_;
   std::vector<double> payload_;

@@ -1,6 +1,8 @@
 #include "lab/lab_log.h"
 
+#include <cerrno>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -19,6 +21,23 @@ std::unique_ptr<CsvLog> CsvLog::Open(const std::string& path, std::vector<std::s
   return std::unique_ptr<CsvLog>(new CsvLog(file, path, std::move(columns)));
 }
 
+bool CsvLog::Ring::Push(int block) {
+  const int tail = tail_.load(std::memory_order_relaxed);
+  const int next = (tail + 1) % (kBlocks + 1);
+  if (next == head_.load(std::memory_order_acquire)) return false;  // full
+  slots_[tail] = block;
+  tail_.store(next, std::memory_order_release);
+  return true;
+}
+
+bool CsvLog::Ring::Pop(int* block) {
+  const int head = head_.load(std::memory_order_relaxed);
+  if (head == tail_.load(std::memory_order_acquire)) return false;  // empty
+  *block = slots_[head];
+  head_.store((head + 1) % (kBlocks + 1), std::memory_order_release);
+  return true;
+}
+
 CsvLog::CsvLog(std::FILE* file, std::string path, std::vector<std::string> columns)
     : file_(file), path_(std::move(path)), columns_(std::move(columns)) {
   std::string header;
@@ -26,12 +45,14 @@ CsvLog::CsvLog(std::FILE* file, std::string path, std::vector<std::string> colum
   header += "\n";
   if (std::fwrite(header.data(), 1, header.size(), file_) != header.size()) write_error_ = true;
   blocks_.resize(kBlocks);
-  for (auto& block : blocks_) {
-    block.resize(static_cast<std::size_t>(kRowsPerBlock) * columns_.size());
-    free_.push_back(&block);
+  rows_.assign(kBlocks, 0);
+  for (int b = 0; b < kBlocks; ++b) {
+    blocks_[b].resize(static_cast<std::size_t>(kRowsPerBlock) * columns_.size());
+    if (b > 0) free_.Push(b);
   }
-  current_ = free_.back();
-  free_.pop_back();
+  current_ = 0;
+  sem_init(&work_, 0, 0);
+  sem_init(&freed_, 0, 0);
   writer_ = std::thread(&CsvLog::WriterLoop, this);
 }
 
@@ -41,41 +62,47 @@ CsvLog::~CsvLog() {
   } catch (...) {
     // destructor: the error was already reported by an explicit Close(), or is moot
   }
+  sem_destroy(&work_);
+  sem_destroy(&freed_);
 }
 
 void CsvLog::Append(const double* row) {
-  std::memcpy(current_->data() + static_cast<std::size_t>(rows_in_current_) * columns_.size(), row,
+  std::memcpy(blocks_[current_].data() + static_cast<std::size_t>(rows_in_current_) * columns_.size(), row,
               columns_.size() * sizeof(double));
   if (++rows_in_current_ == kRowsPerBlock) Submit();
 }
 
 void CsvLog::Submit() {
-  std::unique_lock<std::mutex> lock(mutex_);
-  full_.emplace_back(current_, rows_in_current_);
-  cv_.notify_all();
-  // back-pressure: wait for a free block only if the writer fell 8 blocks behind
-  cv_.wait(lock, [this] { return !free_.empty(); });
-  current_ = free_.back();
-  free_.pop_back();
+  rows_[current_] = rows_in_current_;
+  full_.Push(current_);  // never full: kBlocks + 1 slots for kBlocks blocks
+  sem_post(&work_);
   rows_in_current_ = 0;
+  if (free_.Pop(&current_)) return;
+  // back-pressure: the writer is kBlocks blocks behind; wait for it, never drop a row
+  const auto start = std::chrono::steady_clock::now();
+  while (!free_.Pop(&current_)) {
+    while (sem_wait(&freed_) != 0 && errno == EINTR) {
+    }
+  }
+  ++waits_;
+  wait_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void CsvLog::WriterLoop() {
   std::string text;
   const std::size_t n = columns_.size();
   for (;;) {
-    std::pair<std::vector<double>*, int> job;
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      cv_.wait(lock, [this] { return closing_ || !full_.empty(); });
-      if (full_.empty()) return;
-      job = full_.front();
-      full_.pop_front();
+    while (sem_wait(&work_) != 0 && errno == EINTR) {
+    }
+    int block = 0;
+    if (!full_.Pop(&block)) {
+      if (closing_.load(std::memory_order_acquire)) return;
+      continue;
     }
     text.clear();
     char buffer[32];
-    for (int r = 0; r < job.second; ++r) {
-      const double* row = job.first->data() + static_cast<std::size_t>(r) * n;
+    for (int r = 0; r < rows_[block]; ++r) {
+      const double* row = blocks_[block].data() + static_cast<std::size_t>(r) * n;
       for (std::size_t c = 0; c < n; ++c) {
         if (c) text.push_back(',');
         const auto result = std::to_chars(buffer, buffer + sizeof(buffer), row[c]);
@@ -83,24 +110,25 @@ void CsvLog::WriterLoop() {
       }
       text.push_back('\n');
     }
-    const bool ok = std::fwrite(text.data(), 1, text.size(), file_) == text.size();
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!ok) write_error_ = true;
-    free_.push_back(job.first);
-    cv_.notify_all();
+    if (std::fwrite(text.data(), 1, text.size(), file_) != text.size()) {
+      write_error_.store(true, std::memory_order_relaxed);
+    }
+    free_.Push(block);
+    sem_post(&freed_);
   }
 }
 
 void CsvLog::Close() {
   if (closed_) return;
   closed_ = true;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (rows_in_current_ > 0) full_.emplace_back(current_, rows_in_current_);
+  if (rows_in_current_ > 0) {
+    rows_[current_] = rows_in_current_;
+    full_.Push(current_);
+    sem_post(&work_);
     rows_in_current_ = 0;
-    closing_ = true;
-    cv_.notify_all();
   }
+  closing_.store(true, std::memory_order_release);
+  sem_post(&work_);
   writer_.join();
   const bool flush_failed = std::fflush(file_) != 0;
   const bool close_failed = std::fclose(file_) != 0;

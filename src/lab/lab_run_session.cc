@@ -320,6 +320,7 @@ RunResult RunSession::Finish() {
   if (bridge_) {
     result_.served = bridge_->Devices();
     result_.latencies_s = bridge_->latencies();
+    result_.command_ages_s = bridge_->command_ages();
   }
   if (result_.failure.empty()) result_.failure = Verdict(result_, diverged_, NoController());
   result_.exit_code = result_.failure.empty() ? 0 : 1;
@@ -330,7 +331,11 @@ RunResult RunSession::Finish() {
 }
 
 void RunSession::WriteOutputs() {
-  if (log_) log_->Close();
+  if (log_) {
+    log_->Close();
+    result_.log_waits = log_->waits();
+    result_.log_wait_s = log_->wait_s();
+  }
   EvaluateGoldenChecks();
   if (images_) images_->Finish();
   if (poses_) poses_->Finish();

@@ -103,6 +103,9 @@ struct RunResult {
   ClockStats clock_stats;
   std::vector<ServedDevice> served;  ///< served devices with their counters (vlab serve)
   std::vector<double> latencies_s;   ///< command arrival-to-apply latencies (vlab serve)
+  long log_waits = 0;       ///< times the step loop waited for the log writer (it fell behind)
+  double log_wait_s = 0;    ///< and how long in all, s
+  std::vector<double> command_ages_s;  ///< newest command's age at each period's start (vlab serve)
   /// Plots not drawn, each "FILE: why": a CSV an external controller writes, where the lab
   /// did not start the controller (vlab serve) and nobody wrote it.
   std::vector<std::string> plots_skipped;

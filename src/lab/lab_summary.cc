@@ -4,6 +4,8 @@
 #include <vector>
 #include <string>
 
+#include <unistd.h>
+
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
@@ -25,6 +27,36 @@ nlohmann::json Distribution(const std::vector<double>& v) {
           {"p50", number(Percentile(v, 50))},
           {"p99", number(Percentile(v, 99))},
           {"max", number(v.empty() ? std::nan("") : *std::max_element(v.begin(), v.end()))}};
+}
+
+// a time the kernel may not give (-1) as null
+nlohmann::json Known(double s) { return s >= 0 ? nlohmann::json(s) : nlohmann::json(nullptr); }
+
+// the control thread's counters and the machine's steal over a realtime run, and its worst period
+nlohmann::json StallJson(const StallReport& r) {
+  const long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+  const StallRecord& w = r.worst;
+  nlohmann::json worst = {{"period", w.period},
+                          {"lateness_s", w.lateness_s},
+                          {"cause", w.Cause()},
+                          {"run_delay_s", Known(w.run_delay_s)},
+                          {"steal_s", Known(w.steal_s)},
+                          {"steal_window_s", w.steal_window_s},
+                          {"involuntary_switches", w.involuntary_switches},
+                          {"voluntary_switches", w.voluntary_switches},
+                          {"minor_faults", w.minor_faults},
+                          {"major_faults", w.major_faults}};
+  return {{"steal_s", Known(r.steal_s)},
+          {"steal_fraction", r.steal_s >= 0 && r.wall_s > 0 && cpus > 0
+                                 ? nlohmann::json(r.steal_s / (r.wall_s * static_cast<double>(cpus)))
+                                 : nlohmann::json(nullptr)},
+          {"control_thread",
+           {{"run_delay_s", Known(r.run_delay_s)},
+            {"involuntary_switches", r.involuntary_switches},
+            {"voluntary_switches", r.voluntary_switches},
+            {"minor_faults", r.minor_faults},
+            {"major_faults", r.major_faults}}},
+          {"worst_period", worst}};
 }
 
 }  // namespace
@@ -56,6 +88,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                                                            static_cast<double>(r.clock_stats.periods)
                                                      : 0.0;
     clock["lateness_s"] = Distribution(r.clock_stats.lateness_s);
+    clock["stall"] = StallJson(r.clock_stats.stall);
   }
   if (r.clock == ClockMode::kLockstep) clock["timeouts"] = r.clock_stats.timeouts;
   json served = json::array();
@@ -102,7 +135,8 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"checks", checks},
       {"clock_stats", clock},
       {"realtime_priority", {{"lab", grant(r.realtime)}, {"controller", grant(r.controller.realtime)}}},
-      {"bridge", {{"devices", served}, {"command_latency_s", Distribution(r.latencies_s)}}},
+      {"bridge", {{"devices", served}, {"command_latency_s", Distribution(r.latencies_s)},
+                  {"command_age_s", Distribution(r.command_ages_s)}}},
       {"controller", {{"type", ControllerTypeName(sc.controller.type)},
                       {"program", r.controller.program},
                       {"outcome", r.controller.outcome}}},
@@ -115,7 +149,8 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"timings",
        {{"sim_time_s", r.sim_time_s}, {"steps", r.steps}, {"control_periods", r.periods},
         {"loop_wall_s", r.loop_wall_s}, {"total_wall_s", r.total_wall_s},
-        {"steps_per_s", r.loop_wall_s > 0 ? r.steps / r.loop_wall_s : 0.0}, {"realtime_factor", rtf}}},
+        {"steps_per_s", r.loop_wall_s > 0 ? r.steps / r.loop_wall_s : 0.0}, {"realtime_factor", rtf},
+        {"log_writer_waits", r.log_waits}, {"log_writer_wait_s", r.log_wait_s}}},
   };
   // which signal stopped the run, and where: the log holds the periods up to sim_time_s
   if (r.interrupted_by) {

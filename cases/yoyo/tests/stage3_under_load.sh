@@ -4,7 +4,8 @@
 # busy. Each run is the full stage (46 s of wall-clock time) at the scenario's realtime
 # priority (granted to root, CAP_SYS_NICE or an rtprio limit; summary.json says what it
 # got). Prints per run the verdict, the priority granted, missed deadlines, the worst
-# period-start lateness and the swing check; then "passed K of N". Exit 0 when all passed.
+# period-start lateness and the swing check, then the steal time, the worst period's cause and the
+# newest command's age (summary.json's clock_stats.stall, bridge.command_age_s); then "passed K of N". Exit 0 when all passed.
 #   cases/yoyo/tests/stage3_under_load.sh [N] [VLAB] [OUT]
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -46,6 +47,15 @@ print(f"run {i}: {s['result']}; priority lab {lab.get('requested')} {'granted' i
       f"controller {ctl.get('requested')} {'granted' if ctl.get('granted') else 'not granted'}; "
       f"missed {c.get('missed_deadlines')} of {c.get('periods')}, lateness max {c['lateness_s']['max'] * 1e3:.2f} ms; "
       f"lowest swing top {swing['value']:.4f} m (>= {swing['bound']['min']})" if swing else "")
+stall = c.get("stall")
+if stall:
+    w = stall["worst_period"]
+    steal = stall.get("steal_fraction")
+    print(f"  steal {steal * 100:.2f} % of the CPUs' time" if steal is not None else "  steal unknown",
+          f"; worst period {w['period']} ({w['lateness_s'] * 1e3:.2f} ms late): {w['cause']}", sep="")
+ages = s.get("bridge", {}).get("command_age_s")
+if ages and ages.get("count"):
+    print(f"  newest command's age at a period start: p99 {ages['p99'] * 1e3:.2f} ms, max {ages['max'] * 1e3:.2f} ms")
 EOF
 done
 echo "passed $passed of $runs (two CPU-bound processes beside every run; output in $out)"
