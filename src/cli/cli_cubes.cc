@@ -11,6 +11,7 @@
 #include "bridge/bridge_markers.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "lab/lab_yaml.h"
 #include "vision/vision_cubes.h"
 #include "vision/vision_scene.h"
 
@@ -115,7 +116,8 @@ Subcommand AddCubesCommand(CLI::App& app) {
   cmd->add_option("--first-id", args->first_id, "Marker id of the first cube's first face (default 0)");
   cmd->add_option("--scene", args->scene, "Also write the cube scene (MJCF) to this file, e.g. scenes/pa10_cubes.xml");
   cmd->add_option("--count", args->count, "Cubes in the scene: the first N letters or blocks (default 6)");
-  cmd->add_option("--seed", args->seed, "Seed of the cubes' poses (default 1)");
+  cmd->add_option("--seed", args->seed, "Seed of the cubes' poses, an integer from 0 to 2^53 (default 1)")
+      ->check(CLI::Validator(lab::CheckSeedText, ""));
   cmd->add_option("--pa10", args->pa10_dir, "The PA10 model folder the scene includes (default mjcf/pa10)");
   cmd->add_flag("-q,--quiet", args->quiet, "No summary lines");
   return {cmd, [args, cmd] { return WithErrorReport([&] { return Cubes(*args, *cmd); }); }};

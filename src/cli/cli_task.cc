@@ -18,6 +18,7 @@
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "core/core_signals.h"
+#include "lab/lab_yaml.h"
 #include "task/task_runtime.h"
 #include "task/task_udp.h"
 
@@ -130,7 +131,9 @@ Subcommand AddTaskCommand(CLI::App& app) {
   cmd->add_option("--tip", a->tip_site, "Site at the tool flange (e.g. tool)")->required();
   cmd->add_option("--base", a->base_body, "Body the chain starts from")->capture_default_str();
   cmd->add_option("--period", a->period_s, "Control period, s (default: from the arm's describe reply)");
-  cmd->add_option("--seed", a->seed, "Seed of math.random")->capture_default_str();
+  cmd->add_option("--seed", a->seed, "Seed of math.random, an integer from 0 to 2^53")
+      ->capture_default_str()
+      ->check(CLI::Validator(lab::CheckSeedText, ""));
   cmd->add_option("--timeout", a->timeout_s, "Seconds to wait for a device's state")->capture_default_str();
   cmd->add_flag("--hold", a->hold,
                 "After the script ends, keep holding the arm until its states stop or SIGINT/SIGTERM (for vlab run's "

@@ -7,6 +7,7 @@
 
 #include "cli/cli_commands.h"
 #include "lab/lab_scenario.h"
+#include "lab/lab_yaml.h"
 
 #ifndef VLAB_VERSION
 #define VLAB_VERSION "0.0.0"
@@ -29,7 +30,8 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--out", run.out_dir, "Output folder (default: out/<scenario name>); an existing one is replaced only if vlab wrote it or it is empty");
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress bar and no per-check lines");
   run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
-  run_cmd->add_option("--seed", run.seed, "Override the scenario's seed (>= 0)");
+  run_cmd->add_option("--seed", run.seed, "Override the scenario's seed: an integer from 0 to 2^53")
+      ->check(CLI::Validator(vlab::lab::CheckSeedText, ""));
   run_cmd->add_flag("--list-signals", run.list_signals, "Print the log columns (usable in checks) and exit");
   const char* rt_help =
       "SCHED_FIFO priority (1-99) of the control thread in lockstep and realtime runs, with memory locked, "

@@ -3,12 +3,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
+#include <filesystem>
 #include <mutex>
 
 #include <mujoco/mjxmacro.h>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
 
 namespace vlab {
 
@@ -54,6 +55,44 @@ std::string OneLine(const char* text) {
   return out;
 }
 
+// The file="..." of each <include> element of an MJCF text, comments left out.
+std::vector<std::string> IncludedFiles(const std::string& text) {
+  std::string xml;
+  for (std::size_t at = 0; at < text.size();) {
+    const std::size_t comment = text.find("<!--", at);
+    xml.append(text, at, comment == std::string::npos ? std::string::npos : comment - at);
+    if (comment == std::string::npos) break;
+    const std::size_t end = text.find("-->", comment + 4);
+    at = end == std::string::npos ? text.size() : end + 3;
+  }
+  std::vector<std::string> files;
+  for (std::size_t at = xml.find("<include"); at != std::string::npos; at = xml.find("<include", at + 1)) {
+    const std::size_t end = xml.find('>', at);
+    const std::size_t attribute = xml.find("file", at);
+    if (end == std::string::npos || attribute == std::string::npos || attribute > end) continue;
+    const std::size_t open = xml.find_first_of("\"'", attribute);
+    if (open == std::string::npos || open > end) continue;
+    const std::size_t close = xml.find(xml[open], open + 1);
+    if (close == std::string::npos || close > end) continue;
+    files.push_back(xml.substr(open + 1, close - open - 1));
+  }
+  return files;
+}
+
+// The scene and the files it includes, before MuJoCo opens them: regular files
+// (a FIFO would block MuJoCo, a device fill memory), UTF-8, at most
+// kMaxSceneBytes. MuJoCo resolves an include relative to the top scene's folder.
+void CheckSceneFiles(const std::string& path, const std::string& what, const std::filesystem::path& top_dir,
+                     int depth) {
+  const std::string xml = ReadInputFile(path, what, kMaxSceneBytes);
+  if (depth >= 8) return;  // MuJoCo itself refuses what nests deeper than it allows
+  for (const std::string& file : IncludedFiles(xml)) {
+    const std::filesystem::path included =
+        std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : top_dir / file;
+    CheckSceneFiles(included.string(), what + ": include '" + file + "'", top_dir, depth + 1);
+  }
+}
+
 }  // namespace
 
 void InstallMujocoHandlers() {
@@ -75,8 +114,7 @@ std::vector<std::string> TakeMujocoWarningTexts() {
 
 ModelPtr LoadModel(const std::string& path) {
   InstallMujocoHandlers();
-  std::ifstream probe(path);
-  if (!probe) throw InputError("scene '" + path + "': cannot open file");
+  CheckSceneFiles(path, "scene '" + path + "'", std::filesystem::path(path).parent_path(), 0);
   char error[1024] = "";
   mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
   if (!m) throw InputError("scene '" + path + "': " + (error[0] ? OneLine(error) : "failed to compile"));

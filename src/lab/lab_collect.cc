@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
 #include "lab/lab_log.h"
 #include "lab/lab_plot.h"
 
@@ -63,8 +64,7 @@ CollectedTable CollectRuns(const std::string& dir, bool timings) {
   CollectedTable t;
   for (const std::string& id : ids) {
     const std::string file = dir + "/" + id + "/summary.json";
-    std::ifstream in(file);
-    const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
+    const nlohmann::json s = nlohmann::json::parse(ReadInputFile(file, "'" + file + "'", kMaxJsonBytes), nullptr, false);
     if (s.is_discarded() || !s.is_object()) throw InputError(file + ": not a summary.json (not JSON)");
     std::map<std::string, std::string> v;
     v["id"] = id;

@@ -5,10 +5,10 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
 #include "lab/lab_log.h"
 
 namespace vlab::lab {
@@ -76,8 +76,7 @@ int CsvTable::Column(const std::string& name) const {
 }
 
 CsvTable ReadCsvTable(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open file");
+  std::istringstream in(ReadInputFile(path, "CSV log '" + path + "'", kMaxCsvBytes));
   CsvTable t;
   t.file = path;
   std::string line;

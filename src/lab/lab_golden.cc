@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
 #include "lab/lab_yaml.h"
 
 namespace vlab::lab {
@@ -15,20 +16,24 @@ namespace fs = std::filesystem;
 
 GoldenSpec LoadGolden(const std::string& dir) {
   const std::string file = dir + "/golden.yaml";
-  if (!fs::is_regular_file(file)) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) {
     throw InputError(dir + ": not a golden folder (no golden.yaml; see docs/sweeps.md, golden runs)");
   }
-  const YAML::Node root = LoadYamlFile(file);
+  const YAML::Node root = LoadYamlFile(file, "golden");
   MapReader r(file, root, "");
   GoldenSpec g;
   g.dir = dir;
   g.scenario = (fs::path(dir) / r.String("scenario")).lexically_normal().string();
-  if (!fs::is_regular_file(g.scenario)) r.Fail("scenario", "no such file: " + g.scenario);
+  if (!fs::exists(g.scenario, ec)) r.Fail("scenario", "no such file: " + g.scenario);
+  try {
+    CheckInputFile(g.scenario, "'" + g.scenario + "'", kMaxYamlBytes);
+  } catch (const InputError& e) {
+    r.Fail("scenario", e.what());
+  }
   g.duration_s = r.Number("duration", 0.0);
   if (r.Has("duration") && !(g.duration_s > 0 && g.duration_s <= 1e6)) r.Fail("duration", "must be > 0 s and at most 1e6 s");
-  const int seed = r.Integer("seed", -1);
-  if (r.Has("seed") && seed < 0) r.Fail("seed", "must be >= 0");
-  g.seed = seed;
+  if (r.Has("seed")) g.seed = static_cast<long long>(YamlSeed(file, r.Raw("seed"), "seed"));
   g.sets = r.Strings("set", {});
   g.every = r.Integer("every", 1);
   if (g.every < 1) r.Fail("every", "must be >= 1");
@@ -37,6 +42,10 @@ GoldenSpec LoadGolden(const std::string& dir) {
   if (g.compare.to_s < g.compare.from_s) r.Fail("to", "must be >= from");
   g.compare.tolerances = ReadTolerances(file, r.Sequence("tolerances"), "tolerances");
   r.Finish();
+  // the golden log, where there is one, is judged now, not after the run
+  if (fs::exists(g.log(), ec) || fs::is_symlink(g.log(), ec)) {
+    CheckInputFile(g.log(), "golden log '" + g.log() + "'", kMaxCsvBytes);
+  }
   return g;
 }
 

@@ -1,8 +1,11 @@
 #include "lab/lab_overrides.h"
 
 #include <cctype>
+#include <cstdio>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
+#include "lab/lab_yaml_check.h"
 
 namespace vlab::lab {
 
@@ -47,6 +50,8 @@ YAML::Node Unmarked(const YAML::Node& node) {
 }
 
 YAML::Node ParseValue(const Override& o) {
+  // duplicate keys, alias bombs and deep nesting are refused before a tree exists
+  CheckYamlText(Flag(o), o.value, false);
   try {
     return Unmarked(YAML::Load(o.value));
   } catch (const YAML::Exception& e) {
@@ -90,6 +95,13 @@ bool HasKey(const YAML::Node& map, const std::string& key) {
 }  // namespace
 
 Override ParseOverride(const std::string& text) {
+  const std::size_t bad = FirstNonUtf8(text);
+  if (bad != std::string::npos) {
+    char byte[8];
+    std::snprintf(byte, sizeof byte, "0x%02X", static_cast<unsigned char>(text[bad]));
+    throw InputError("--set: byte " + std::string(byte) + " at column " + std::to_string(bad + 1) +
+                     " of KEY=VALUE is not UTF-8 (input text must be UTF-8)");
+  }
   const std::size_t eq = text.find('=');
   if (eq == std::string::npos) {
     throw InputError("--set '" + text + "': expected KEY=VALUE (KEY a dotted scenario path, e.g. devices.jr3.filter=2)");

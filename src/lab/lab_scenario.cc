@@ -3,9 +3,9 @@
 #include <cmath>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
 #include "core/core_mujoco.h"
 #include "core/core_realtime.h"
 #include "lab/devices/device_kinds.h"
@@ -76,7 +76,9 @@ ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& nod
 ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
   c.type = ControllerType::kTask;
   const double budget = r.Number("instruction_budget", static_cast<double>(c.instruction_budget));
-  if (!(budget >= 1000 && budget <= 1e12)) r.Fail("instruction_budget", "must be between 1000 and 1e12");
+  if (!(budget >= 1000 && budget <= 1e12) || budget != std::floor(budget)) {
+    r.Fail("instruction_budget", "must be a whole number between 1000 and 1e12");
+  }
   c.instruction_budget = static_cast<long>(budget);
   // markers: {NAME: HOST:PORT}: vision programs beside the lab (docs/tasks.md)
   const YAML::Node markers = r.Raw("markers");
@@ -86,12 +88,11 @@ ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
       const std::string name = kv.first.as<std::string>();
       const std::string endpoint = kv.second.IsScalar() ? kv.second.as<std::string>() : "";
       const auto colon = endpoint.rfind(':');
-      int port = 0;
-      try {
-        port = colon == std::string::npos ? 0 : std::stoi(endpoint.substr(colon + 1));
-      } catch (const std::exception&) {
-        port = 0;
-      }
+      // the port: 1 to 5 decimal digits, nothing after them
+      const std::string digits = colon == std::string::npos ? "" : endpoint.substr(colon + 1);
+      const bool numeric = !digits.empty() && digits.size() <= 5 &&
+                           digits.find_first_not_of("0123456789") == std::string::npos;
+      const int port = numeric ? std::stoi(digits) : 0;
       if (colon == std::string::npos || colon == 0 || port < 1 || port > 65535) {
         r.Fail("markers", "'" + name + "': expected HOST:PORT (port 1..65535), got '" + endpoint + "'");
       }
@@ -334,17 +335,13 @@ Scenario ParseScenario(const std::string& path, const YAML::Node& root);
 
 Scenario LoadScenario(const std::string& path, const std::vector<std::string>& sets) {
   // an MJCF scene where a scenario is expected: say so, not what YAML makes of XML
-  {
-    std::ifstream in(path);
-    char first = 0;
-    while (in.get(first) && std::isspace(static_cast<unsigned char>(first))) {
-    }
-    if (in && first == '<') {
-      throw InputError(path + ": this is an MJCF scene, not a scenario: a scenario is a YAML file that names its "
-                       "scene (scene: FILE.xml), its devices and checks (docs/scenarios.md)");
-    }
+  const std::string text = ReadInputFile(path, "scenario '" + path + "'", kMaxYamlBytes);
+  const std::size_t first = text.find_first_not_of(" \t\r\n\f\v");
+  if (first != std::string::npos && text[first] == '<') {
+    throw InputError(path + ": this is an MJCF scene, not a scenario: a scenario is a YAML file that names its "
+                     "scene (scene: FILE.xml), its devices and checks (docs/scenarios.md)");
   }
-  const YAML::Node root = LoadYamlFile(path);
+  const YAML::Node root = ParseYamlText(path, text);
   if (!root.IsMap()) throw InputError(path + ": a scenario must be a YAML mapping");
   std::vector<Override> overrides;
   for (const std::string& set : sets) overrides.push_back(ParseOverride(set));
@@ -385,9 +382,7 @@ Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
   if (!(s.control_period_s > 0 && s.control_period_s <= kMaxControlPeriod_s)) {
     r.Fail("control_period", "must be > 0 s and at most 10 s");
   }
-  const double seed = r.Number("seed", 1);
-  if (seed < 0 || seed != std::floor(seed) || seed > 9007199254740992.0) r.Fail("seed", "must be a non-negative integer");
-  s.seed = static_cast<std::uint64_t>(seed);
+  s.seed = r.Has("seed") ? YamlSeed(path, r.Raw("seed"), "seed") : 1;
   if (r.Has("clock")) {
     const std::string clock = r.String("clock");
     if (clock != "fast" && clock != "lockstep" && clock != "realtime") {

@@ -31,11 +31,7 @@ std::vector<long long> ReadSeeds(MapReader& r) {
   std::vector<long long> seeds;
   if (!n.IsDefined()) return {-1};
   auto seed = [&](const YAML::Node& s, const std::string& path) {
-    const double v = YamlNumber(r.file(), s, path);
-    if (v < 0 || v != std::floor(v) || v > 9007199254740992.0) {
-      throw InputError(YamlError(r.file(), s, path, "must be a non-negative integer"));
-    }
-    return static_cast<long long>(v);
+    return static_cast<long long>(YamlSeed(r.file(), s, path));  // never rounded: 2^53 + 1 is refused
   };
   if (n.IsSequence()) {
     for (std::size_t i = 0; i < n.size(); ++i) seeds.push_back(seed(n[i], "seeds[" + std::to_string(i) + "]"));
@@ -44,6 +40,7 @@ std::vector<long long> ReadSeeds(MapReader& r) {
     const long long from = seed(m.Raw("from").IsDefined() ? m.Raw("from") : YAML::Node(1), "seeds.from");
     const int count = m.Integer("count", 0);
     if (count < 1 || count > 100000) m.Fail("count", "must be 1 to 100000");
+    if (static_cast<unsigned long long>(from) + count - 1 > kMaxSeed) m.Fail("count", "takes the seeds past 2^53");
     m.Finish();
     for (int i = 0; i < count; ++i) seeds.push_back(from + i);
   } else {

@@ -1,10 +1,12 @@
 #include "lab/lab_yaml.h"
 
+#include <cerrno>
 #include <cmath>
-#include <fstream>
-#include <sstream>
+#include <cstdlib>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
+#include "lab/lab_yaml_check.h"
 
 namespace vlab::lab {
 
@@ -17,18 +19,60 @@ std::string Describe(const YAML::Node& node) {
   return "nothing";
 }
 
+// a scalar of decimal digits with an optional sign, whatever its size
+bool LooksInteger(const YAML::Node& node) {
+  if (!node.IsScalar()) return false;
+  const std::string& s = node.Scalar();
+  const std::size_t from = !s.empty() && (s[0] == '-' || s[0] == '+') ? 1 : 0;
+  if (from >= s.size()) return false;
+  for (std::size_t i = from; i < s.size(); ++i) {
+    if (s[i] < '0' || s[i] > '9') return false;
+  }
+  return true;
+}
+
 }  // namespace
 
-YAML::Node LoadYamlFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("scenario '" + path + "': cannot open file");
-  std::stringstream text;
-  text << in.rdbuf();
+YAML::Node LoadYamlFile(const std::string& path, const std::string& kind) {
+  return ParseYamlText(path, ReadInputFile(path, kind + " '" + path + "'", kMaxYamlBytes));
+}
+
+YAML::Node ParseYamlText(const std::string& file, const std::string& text) {
+  CheckYamlText(file, text);
   try {
-    return YAML::Load(text.str());
+    return YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(path + ":" + std::to_string(e.mark.line + 1) + ": malformed YAML: " + e.msg);
+    throw InputError(file + ":" + std::to_string(e.mark.line + 1) + ": malformed YAML: " + e.msg);
   }
+}
+
+bool ParseSeed(const std::string& text, unsigned long long* seed) {
+  if (text.empty() || text.size() > 20) return false;
+  for (char c : text) {
+    if (c < '0' || c > '9') return false;
+  }
+  errno = 0;
+  const unsigned long long value = std::strtoull(text.c_str(), nullptr, 10);
+  if (errno == ERANGE || value > kMaxSeed) return false;
+  *seed = value;
+  return true;
+}
+
+std::string CheckSeedText(std::string& text) {
+  unsigned long long seed = 0;
+  if (!ParseSeed(text, &seed)) return std::string("must be ") + kSeedRange + ", got '" + text + "'";
+  text = std::to_string(seed);
+  return "";
+}
+
+unsigned long long YamlSeed(const std::string& file, const YAML::Node& node, const std::string& path) {
+  unsigned long long seed = 0;
+  if (!node.IsScalar() || !ParseSeed(node.Scalar(), &seed)) {
+    throw InputError(YamlError(file, node, path,
+                               "must be a non-negative integer, at most 9007199254740992 (2^53); got " +
+                                   Describe(node)));
+  }
+  return seed;
 }
 
 std::string YamlWhere(const std::string& file, const YAML::Node& node) {
@@ -109,7 +153,9 @@ int MapReader::Integer(const std::string& key, int fallback) {
   long long value = 0;
   if (!n.IsScalar() || !YAML::convert<long long>::decode(n, value) || value < -2147483647LL ||
       value > 2147483647LL) {
-    throw InputError(YamlError(file_, n, Child(key), "expected an integer, got " + Describe(n)));
+    const std::string what = LooksInteger(n) ? "out of range: expected an integer from -2147483647 to 2147483647, got "
+                                             : "expected an integer, got ";
+    throw InputError(YamlError(file_, n, Child(key), what + Describe(n)));
   }
   return static_cast<int>(value);
 }

@@ -15,8 +15,35 @@
 
 namespace vlab::lab {
 
-/// Parses a YAML file; throws InputError naming the file (and line on syntax errors).
-YAML::Node LoadYamlFile(const std::string& path);
+/// Reads and parses a YAML file through ReadInputFile (a regular file of at most
+/// kMaxYamlBytes, UTF-8) and CheckYamlText (one document, no duplicate keys,
+/// aliases bounded); throws InputError naming the file as "KIND 'PATH'", or
+/// "PATH:LINE" for a fault at a line.
+YAML::Node LoadYamlFile(const std::string& path, const std::string& kind = "YAML file");
+
+/// Parses YAML text read from `file` with the checks of LoadYamlFile but the
+/// reading; InputError messages start "FILE:LINE".
+YAML::Node ParseYamlText(const std::string& file, const std::string& text);
+
+/// The largest seed: 2^53, the largest integer below which every integer is
+/// exact in a double (JSON readers, the sweep table), so no two seeds collapse.
+constexpr unsigned long long kMaxSeed = 9007199254740992ULL;
+/// The range of a seed in words, for messages and --help.
+inline constexpr char kSeedRange[] = "an integer from 0 to 9007199254740992 (2^53)";
+
+/// Parses a seed written in decimal digits only, at most kMaxSeed; false when
+/// `text` is not one (a sign, a point, an exponent, or out of range).
+bool ParseSeed(const std::string& text, unsigned long long* seed);
+
+/// A seed typed on the command line: "" when ParseSeed accepts it, and then
+/// `text` is rewritten without leading zeros (CLI11 would read "010" as octal);
+/// otherwise the problem ("must be an integer from 0 to ..., got 'TEXT'").
+/// Used as a CLI11 validator, so that a seed is never clamped to fit.
+std::string CheckSeedText(std::string& text);
+
+/// A seed node: a scalar ParseSeed accepts; InputError "FILE:LINE: PATH: must be
+/// a non-negative integer ..." otherwise.
+unsigned long long YamlSeed(const std::string& file, const YAML::Node& node, const std::string& path);
 
 /// "FILE:LINE" of a node (FILE alone for a node without a line).
 std::string YamlWhere(const std::string& file, const YAML::Node& node);
@@ -36,6 +63,7 @@ class MapReader {
   std::string String(const std::string& key);
   /// Optional values with a default.
   double Number(const std::string& key, double fallback);
+  /// An integer from -2147483647 to 2147483647, never rounded or clamped.
   int Integer(const std::string& key, int fallback);
   bool Bool(const std::string& key, bool fallback);
   std::string String(const std::string& key, const std::string& fallback);

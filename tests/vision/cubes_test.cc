@@ -188,7 +188,7 @@ TEST(CubesCommand, BadOptionsExitTwoAndWriteNothing) {
       {out + " --size 0", "--size 0 m outside"},
       {out + " --seed 3", "--count and --seed need --scene FILE"},
       {out + scene + " --count 7", "--count 7 outside 1..6"},
-      {out + scene + " --seed -2", "--seed must be >= 0"},
+      {out + scene + " --seed -2", "--seed: must be an integer from 0 to 9007199254740992 (2^53), got '-2'"},
       {out + " --scene '" + (tmp / "scene.xml") + "' --pa10 '" + (tmp / "nowhere") + "'", "has no pa10.xml"},
       {out + scene + " --size 0.2", "do not fit the table's free area"},
       {out + " --letters AB --faces AGMSY4", "--letters and --faces exclude each other"},
