@@ -1,6 +1,7 @@
 #include "lab/lab_log.h"
 
 #include <charconv>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -24,7 +25,7 @@ CsvLog::CsvLog(std::FILE* file, std::string path, std::vector<std::string> colum
   std::string header;
   for (std::size_t i = 0; i < columns_.size(); ++i) header += (i ? "," : "") + columns_[i];
   header += "\n";
-  if (std::fwrite(header.data(), 1, header.size(), file_) != header.size()) write_error_ = true;
+  if (std::fwrite(header.data(), 1, header.size(), file_) != header.size()) write_errno_ = errno ? errno : EIO;
   blocks_.resize(kBlocks);
   for (auto& block : blocks_) {
     block.resize(static_cast<std::size_t>(kRowsPerBlock) * columns_.size());
@@ -83,9 +84,13 @@ void CsvLog::WriterLoop() {
       }
       text.push_back('\n');
     }
-    const bool ok = std::fwrite(text.data(), 1, text.size(), file_) == text.size();
+    // after a failed write nothing more is written: the file ends where the failure left it
+    if (write_errno_.load(std::memory_order_relaxed) == 0) {
+      errno = 0;
+      const bool ok = std::fwrite(text.data(), 1, text.size(), file_) == text.size() && std::fflush(file_) == 0;
+      if (!ok) write_errno_.store(errno ? errno : EIO, std::memory_order_release);
+    }
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!ok) write_error_ = true;
     free_.push_back(job.first);
     cv_.notify_all();
   }
@@ -102,11 +107,15 @@ void CsvLog::Close() {
     cv_.notify_all();
   }
   writer_.join();
-  const bool flush_failed = std::fflush(file_) != 0;
-  const bool close_failed = std::fclose(file_) != 0;
-  if (write_error_ || flush_failed || close_failed) {
-    throw std::runtime_error("log '" + path_ + "': write failed");
-  }
+  errno = 0;
+  if (std::fflush(file_) != 0 && write_errno_ == 0) write_errno_ = errno ? errno : EIO;
+  if (std::fclose(file_) != 0 && write_errno_ == 0) write_errno_ = errno ? errno : EIO;
+  if (failed()) throw std::runtime_error(error());
+}
+
+std::string CsvLog::error() const {
+  const int e = write_errno_.load(std::memory_order_acquire);
+  return e == 0 ? "" : "log '" + path_ + "': write failed: " + std::strerror(e);
 }
 
 }  // namespace vlab::lab

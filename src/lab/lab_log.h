@@ -4,9 +4,11 @@
 // writer thread that formats them (shortest round-trip decimal, std::to_chars)
 // and writes the file, so formatting costs the step loop nothing but a copy.
 // The same values always give the same bytes: logs of identical runs are
-// identical files.
+// identical files. The writer flushes each block it writes, so a write that
+// fails (disk full, a file size limit) shows in failed() at once.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -31,8 +33,12 @@ class CsvLog {
   /// Appends one row of columns().size() values. Never allocates after Open.
   void Append(const double* row);
   /// Writes what is pending and closes the file. Throws std::runtime_error on
-  /// a write error. Called by the destructor if not called before.
+  /// a write error (error()). Called by the destructor if not called before.
   void Close();
+  /// True once a write failed (lock-free: the step loop asks every period).
+  bool failed() const { return write_errno_.load(std::memory_order_acquire) != 0; }
+  /// "log 'PATH': write failed: ERRNO TEXT" once failed(), else "".
+  std::string error() const;
 
  private:
   static constexpr int kRowsPerBlock = 256;
@@ -54,7 +60,7 @@ class CsvLog {
   std::deque<std::pair<std::vector<double>*, int>> full_;
   std::vector<std::vector<double>*> free_;
   bool closing_ = false;
-  bool write_error_ = false;
+  std::atomic<int> write_errno_{0};  // the errno of the first failed write (0: none)
   std::thread writer_;
   bool closed_ = false;
 };
