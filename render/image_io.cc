@@ -2,8 +2,10 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
@@ -70,12 +72,15 @@ void WriteFileAtomic(const std::string& path, const std::vector<std::uint8_t>& b
       target.parent_path() / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()));
   std::FILE* f = std::fopen(temp.c_str(), "wbe");  // e: close-on-exec
   if (!f) throw std::runtime_error("file '" + path + "': cannot write (folder missing or not writable)");
+  errno = 0;
   const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  int error = written ? 0 : errno;
   const bool closed = std::fclose(f) == 0;
+  if (!closed && error == 0) error = errno;
   std::error_code ec;
   if (!written || !closed) {
     fs::remove(temp, ec);
-    throw std::runtime_error("file '" + path + "': write failed (disk full?)");
+    throw std::runtime_error("file '" + path + "': write failed: " + std::strerror(error ? error : EIO));
   }
   fs::rename(temp, target, ec);
   if (ec) {

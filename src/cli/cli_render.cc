@@ -101,6 +101,9 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     throw vlab::InputError("--video '" + a.video + "': the file name must end in .mp4");
   }
   vlab::InstallMujocoHandlers();
+  // SIGINT, SIGTERM from here on, before loading: the run ends at its next period and its frames
+  // are kept (a signal before the run starts ends it at t = 0), never with the staging folder left
+  InstallStopSignals();
 
   lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(a.scenario));
   const double period = scenario.control_period_s;
@@ -147,9 +150,6 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   // outputs: a staging folder renamed into place whole; the video staged beside its final name
   const std::string out_dir =
       a.out_dir.empty() ? "out/" + scenario.name + "/render/" + a.camera : a.out_dir;
-  // SIGINT, SIGTERM from here on: the run ends at its next period and its frames are kept (a
-  // signal before the run starts ends it at t = 0), never with the staging folder left behind
-  InstallStopSignals();
   std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
   std::unique_ptr<render::VideoFile> video;
   if (!a.video.empty()) {
@@ -219,12 +219,13 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     if (!csv || !json) throw std::runtime_error("output folder '" + out_dir + "': write failed");
   }
   if (video) video->Finish();
-  out->Commit();
+  const std::string placed = out->Commit();  // out_dir, or a sibling when another run wrote out_dir meanwhile
+  if (!out->note().empty()) std::fprintf(stderr, "vlab: %s\n", out->note().c_str());
 
   const double fps = render_s > 0 ? times.size() / render_s : 0.0;
   std::printf("%s: %zu frames %dx%d of camera '%s' (%s), every %s s, in %s/%s%s; %.1f fps rendered; %s\n",
               scenario.name.c_str(), times.size(), width, height, a.camera.c_str(), render::ProfileName(profile),
-              lab::FormatDouble(every).c_str(), out_dir.c_str(), video ? "; video " : "",
+              lab::FormatDouble(every).c_str(), placed.c_str(), video ? "; video " : "",
               video ? a.video.c_str() : "", fps, renderer->gl_renderer().c_str());
   if (r.interrupted_by) {
     std::fprintf(stderr, "vlab: %s; the %zu frames rendered before it are kept\n", r.failure.c_str(), times.size());

@@ -79,6 +79,9 @@ int WithErrorReport(const std::function<int()>& body) {
 
 int RunCommand(const RunArgs& args) {
   return WithErrorReport([&args] {
+    // SIGINT, SIGTERM: the run stops at the next period and writes what ran (exit 1); installed
+    // before loading, so that one during loading stops the run at t = 0 instead of being lost
+    InstallStopSignals();
     lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario), args.sets);
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
     if (args.seed >= 0) scenario.seed = static_cast<std::uint64_t>(args.seed);
@@ -88,9 +91,6 @@ int RunCommand(const RunArgs& args) {
       return 0;
     }
     const std::string out_dir = args.out_dir.empty() ? "out/" + scenario.name : args.out_dir;
-
-    // SIGINT, SIGTERM: the run stops at the next period and writes what ran (exit 1)
-    InstallStopSignals();
     ProgressBar bar(!args.quiet);
     lab::RunOptions options;
     options.out_dir = out_dir;
@@ -110,8 +110,9 @@ int RunCommand(const RunArgs& args) {
     }
     const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
     std::printf("%s: %s, %.2f s simulated in %.2f s (%.0fx real time); output in %s/\n", scenario.name.c_str(),
-                Verdict(r), r.sim_time_s, r.loop_wall_s, rtf, out_dir.c_str());
-    PrintPlots(scenario, out_dir, r);
+                Verdict(r), r.sim_time_s, r.loop_wall_s, rtf, r.out_dir.c_str());
+    PrintPlots(scenario, r.out_dir, r);
+    if (!r.out_note.empty()) std::fprintf(stderr, "vlab: %s\n", r.out_note.c_str());
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;
   });

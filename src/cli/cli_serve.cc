@@ -44,14 +44,14 @@ std::string Layout(const nlohmann::json& fields) {
 
 int ServeCommand(const ServeArgs& args) {
   return WithErrorReport([&args] {
+    // SIGINT, SIGTERM: the run stops at the next period (a wait for a controller at once) and writes
+    // what ran; installed before loading, so that one during loading is not lost
+    InstallStopSignals();
     lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario));
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
     const lab::BridgeOptions bridge = MakeBridgeOptions(args);
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
     const std::string out_dir = args.out_dir.empty() ? "out/" + scenario.name : args.out_dir;
-
-    // SIGINT, SIGTERM: the run stops at the next period (a wait for a controller at once) and writes what ran
-    InstallStopSignals();
     lab::RunOptions options;
     options.out_dir = out_dir;
     options.interrupt = &g_stop_requested;
@@ -87,8 +87,9 @@ int ServeCommand(const ServeArgs& args) {
                   c.sessions.subscribed, c.sessions.challenges);
     }
     std::printf("%s: %s, %.2f s simulated in %.2f s, clock %s; output in %s/\n", scenario.name.c_str(),
-                Verdict(r), r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), out_dir.c_str());
-    PrintPlots(scenario, out_dir, r);
+                Verdict(r), r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), r.out_dir.c_str());
+    PrintPlots(scenario, r.out_dir, r);
+    if (!r.out_note.empty()) std::fprintf(stderr, "vlab: %s\n", r.out_note.c_str());
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());
     return r.exit_code;
   });

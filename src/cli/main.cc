@@ -21,13 +21,19 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("vlab ") + VLAB_VERSION);
 
+  // --out of vlab run and vlab serve (docs/scenarios.md, "Outputs")
+  const char* kOutHelp =
+      "Output folder (default: out/<scenario name>; a trailing / is dropped). An existing one is replaced only if "
+      "it is empty, or vlab wrote it and it holds nothing vlab did not write (else exit 2, naming those entries). "
+      "Written whole: staged in PARENT/.vlab-PID-N and renamed into place; when another run put its folder there "
+      "meanwhile, this run's goes to DIR.2 (DIR.3, ...) and says so";
   vlab::cli::RunArgs run;
   CLI::App* run_cmd = app.add_subcommand(
       "run", "Run a scenario headless; write out/NAME/log.csv, summary.json and the scenario's outputs "
              "(the plots' paths are printed)");
   run_cmd->add_option("scenario", run.scenario, "Scenario file (YAML); the .yaml extension may be left out")
       ->required();
-  run_cmd->add_option("--out", run.out_dir, "Output folder (default: out/<scenario name>); an existing one is replaced only if vlab wrote it or it is empty");
+  run_cmd->add_option("--out", run.out_dir, kOutHelp);
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress bar and no per-check lines");
   run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   run_cmd->add_option("--seed", run.seed, "Override the scenario's seed: an integer from 0 to 2^53")
@@ -59,7 +65,7 @@ int main(int argc, char** argv) {
     cmd->add_option("--clock", a->clock, "fast | lockstep | realtime (default: the scenario's)")
         ->check(CLI::IsMember({"fast", "lockstep", "realtime"}));
   }
-  serve_cmd->add_option("--out", serve.out_dir, "Output folder (default: out/<scenario name>); an existing one is replaced only if vlab wrote it or it is empty");
+  serve_cmd->add_option("--out", serve.out_dir, kOutHelp);
   serve_cmd->add_flag("-q,--quiet", serve.quiet,
                       "Only the start line and the result line (no line saying whom it waits for, no counters)");
   serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
@@ -108,6 +114,11 @@ int main(int argc, char** argv) {
     }
     if (run_cmd->parsed() && given(run_cmd, "--seed") && run.seed < 0) {
       throw CLI::ValidationError("--seed must be >= 0");
+    }
+    for (auto [cmd, out] : {std::pair{run_cmd, &run.out_dir}, std::pair{serve_cmd, &serve.out_dir}}) {
+      if (cmd->parsed() && given(cmd, "--out") && out->empty()) {
+        throw CLI::ValidationError("--out: an empty name (give a folder, e.g. --out results)");
+      }
     }
     if (serve_cmd->parsed() && given(serve_cmd, "--duration") && !vlab::lab::ValidDuration(serve.duration_s)) {
       throw CLI::ValidationError("--duration must be > 0 s and at most 1e6 s");

@@ -3,6 +3,7 @@
 // and the loop reads it.
 #pragma once
 
+#include <pthread.h>
 #include <signal.h>
 
 #include <csignal>
@@ -19,6 +20,12 @@ inline volatile std::sig_atomic_t g_stop_requested = 0;
 /// call that the kernel does not restart (a sleep, poll) returns EINTR; loops that
 /// retry on EINTR must read g_stop_requested themselves, so waits are sliced
 /// (the clocks of core_clock.h look at it at least every kStopCheck_s).
+/// Installed whatever the program inherited: SIG_IGN (bash gives it to a
+/// script's `&` jobs for SIGINT) is replaced, and both signals are unblocked in
+/// the calling thread, so one that came while they were blocked is taken now.
+/// Call it first thing, before loading, from the main thread before any other
+/// thread starts (threads inherit the mask): a signal during loading then stops
+/// the run before its first period instead of being lost.
 inline void InstallStopSignals() {
   struct sigaction action {};
   // the first signal stays: a compare-and-swap, since two threads may each run the handler
@@ -34,6 +41,11 @@ inline void InstallStopSignals() {
   action.sa_flags = 0;
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_UNBLOCK, &stop_signals, nullptr);
 }
 
 /// "SIGINT", "SIGTERM", or "signal N".

@@ -43,7 +43,7 @@ CsvLog::CsvLog(std::FILE* file, std::string path, std::vector<std::string> colum
   std::string header;
   for (std::size_t i = 0; i < columns_.size(); ++i) header += (i ? "," : "") + columns_[i];
   header += "\n";
-  if (std::fwrite(header.data(), 1, header.size(), file_) != header.size()) write_error_ = true;
+  if (std::fwrite(header.data(), 1, header.size(), file_) != header.size()) write_errno_ = errno ? errno : EIO;
   blocks_.resize(kBlocks);
   rows_.assign(kBlocks, 0);
   for (int b = 0; b < kBlocks; ++b) {
@@ -110,8 +110,11 @@ void CsvLog::WriterLoop() {
       }
       text.push_back('\n');
     }
-    if (std::fwrite(text.data(), 1, text.size(), file_) != text.size()) {
-      write_error_.store(true, std::memory_order_relaxed);
+    // after a failed write nothing more is written: the file ends where the failure left it
+    if (write_errno_.load(std::memory_order_relaxed) == 0) {
+      errno = 0;
+      const bool ok = std::fwrite(text.data(), 1, text.size(), file_) == text.size() && std::fflush(file_) == 0;
+      if (!ok) write_errno_.store(errno ? errno : EIO, std::memory_order_release);
     }
     free_.Push(block);
     sem_post(&freed_);
@@ -130,11 +133,15 @@ void CsvLog::Close() {
   closing_.store(true, std::memory_order_release);
   sem_post(&work_);
   writer_.join();
-  const bool flush_failed = std::fflush(file_) != 0;
-  const bool close_failed = std::fclose(file_) != 0;
-  if (write_error_ || flush_failed || close_failed) {
-    throw std::runtime_error("log '" + path_ + "': write failed");
-  }
+  errno = 0;
+  if (std::fflush(file_) != 0 && write_errno_ == 0) write_errno_ = errno ? errno : EIO;
+  if (std::fclose(file_) != 0 && write_errno_ == 0) write_errno_ = errno ? errno : EIO;
+  if (failed()) throw std::runtime_error(error());
+}
+
+std::string CsvLog::error() const {
+  const int e = write_errno_.load(std::memory_order_acquire);
+  return e == 0 ? "" : "log '" + path_ + "': write failed: " + std::strerror(e);
 }
 
 }  // namespace vlab::lab

@@ -13,6 +13,8 @@
 // for the disk, at any point). It waits only when the writer has fallen
 // kBlocks blocks behind (the disk took nothing for that long: 4 s of a 1 kHz
 // run): a row is never dropped, and the wait is counted (waits(), wait_s()).
+// The writer flushes each block it writes, so a write that fails (disk full, a
+// file size limit) shows in failed() at once.
 #pragma once
 
 #include <semaphore.h>
@@ -40,13 +42,15 @@ class CsvLog {
   /// after Open; waits only when the writer is kBlocks blocks behind.
   void Append(const double* row);
   /// Writes what is pending and closes the file. Throws std::runtime_error on
-  /// a write error. Called by the destructor if not called before.
+  /// a write error (error()). Called by the destructor if not called before.
   void Close();
   /// How often, and how long in all (s), Append waited for the writer.
   long waits() const { return waits_; }
   double wait_s() const { return wait_s_; }
-  /// True once a write failed (the file system refused it, or is full).
-  bool write_failed() const { return write_error_.load(std::memory_order_relaxed); }
+  /// True once a write failed (lock-free: the step loop asks every period).
+  bool failed() const { return write_errno_.load(std::memory_order_acquire) != 0; }
+  /// "log 'PATH': write failed: ERRNO TEXT" once failed(), else "".
+  std::string error() const;
 
   /// Rows a block holds, and blocks in all.
   static constexpr int kRowsPerBlock = 256;
@@ -84,7 +88,7 @@ class CsvLog {
   sem_t work_;   // posted once per full block, and once to close
   sem_t freed_;  // posted once per block given back
   std::atomic<bool> closing_{false};
-  std::atomic<bool> write_error_{false};
+  std::atomic<int> write_errno_{0};  // the errno of the first failed write (0: none)
   std::thread writer_;
   bool closed_ = false;
 };

@@ -1,5 +1,6 @@
 #include "lab/lab_poses.h"
 
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -67,21 +68,26 @@ void PoseRecorder::Open(const OutputDir& out) {
 }
 
 void PoseRecorder::Observe(double t, double k, const mjData& d) {
-  if (!file_ || t + kSameTime_s < next_) return;
+  if (!file_ || write_errno_ != 0 || t + kSameTime_s < next_) return;
   next_ += interval_s_;
   if (next_ < t + kSameTime_s) next_ = t + interval_s_;
   ScenePoses(d, bodies_, poses_.data());
   EncodePoseFrame(t, k, poses_.data(), static_cast<int>(poses_.size()), &frame_);
-  std::fwrite(frame_.data(), 1, frame_.size(), file_);
+  errno = 0;
+  if (std::fwrite(frame_.data(), 1, frame_.size(), file_) != frame_.size()) write_errno_ = errno ? errno : EIO;
   ++frames_;
 }
 
 void PoseRecorder::Finish() {
   if (!file_) return;
-  const bool ok = std::ferror(file_) == 0;
-  const bool closed = std::fclose(file_) == 0;
+  errno = 0;
+  if (std::fclose(file_) != 0 && write_errno_ == 0) write_errno_ = errno ? errno : EIO;
   file_ = nullptr;
-  if (!ok || !closed) throw std::runtime_error("poses: write failed: '" + path_ + "'");
+  if (failed()) throw std::runtime_error(error());
+}
+
+std::string PoseRecorder::error() const {
+  return write_errno_ == 0 ? "" : "poses '" + path_ + "': write failed: " + std::strerror(write_errno_);
 }
 
 }  // namespace vlab::lab

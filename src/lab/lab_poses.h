@@ -38,8 +38,12 @@ class PoseRecorder {
   void Open(const OutputDir& out);
   /// At every period end t (k = period): a frame when one is due.
   void Observe(double t, double k, const mjData& d);
-  /// Closes poses.bin; throws std::runtime_error when the write failed.
+  /// Closes poses.bin; throws std::runtime_error (error()) when a write failed.
   void Finish();
+  /// True once a write to poses.bin failed (Observe goes on writing nothing).
+  bool failed() const { return write_errno_ != 0; }
+  /// "poses 'PATH': write failed: ERRNO TEXT" once failed(), else "".
+  std::string error() const;
   long frames() const { return frames_; }
 
  private:
@@ -51,6 +55,7 @@ class PoseRecorder {
   double interval_s_ = 0, next_ = 0, rate_hz_ = 0;
   std::FILE* file_ = nullptr;
   long frames_ = 0;
+  int write_errno_ = 0;  // the errno of the first failed write (0: none)
 };
 
 }  // namespace vlab::lab

@@ -2,10 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
-
-#include <nlohmann/json.hpp>
 
 #include "core/core_mujoco.h"
 #include "core/core_signals.h"
@@ -154,7 +151,7 @@ void RunSession::Start() {
   for (auto& device : s_.devices) device->BeforeRun(d_);
   for (auto& device : s_.devices) device->Deliver(0.0, d_);
   Publish(0);
-  RenderAfterPublish(0.0);
+  Recorded(0.0);  // (a failed write ends the run before its first period)
   NoteWaiting();
   t_loop_ = t_progress_ = WallClock::now();
 }
@@ -240,7 +237,7 @@ bool RunSession::Period() {
   // period k runs from t_k = k T to t_k+1; times are exact multiples of T
   const double t_k = k_ * period_;
   const double t_next = (k_ + 1) * period_;
-  if (Interrupted()) return false;  // the periods run so far are written
+  if (Interrupted() || output_failed_) return false;  // the periods run so far are written
   if (s_.task && !result_.failure.empty()) return false;  // a task program failed in period 0
   // 0. the sim device: pause, resume, step, reset, pace
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
@@ -277,7 +274,7 @@ bool RunSession::Period() {
   ++k_;
   if (steps_left_ > 0 && --steps_left_ == 0) paused_ = true;
   Publish(k_);
-  RenderAfterPublish(t_next);
+  if (!Recorded(t_next)) return false;  // the first failed write ends the run: what ran is kept
   if (options_.progress && (k_ & 63) == 0 && Seconds(t_progress_, WallClock::now()) > 0.1) {
     options_.progress(static_cast<double>(k_) / periods_);
     t_progress_ = WallClock::now();
@@ -328,46 +325,6 @@ RunResult RunSession::Finish() {
   if (out_) WriteOutputs();
   result_.total_wall_s = Seconds(t_start_, WallClock::now());
   return result_;
-}
-
-void RunSession::WriteOutputs() {
-  if (log_) {
-    log_->Close();
-    result_.log_waits = log_->waits();
-    result_.log_wait_s = log_->wait_s();
-  }
-  EvaluateGoldenChecks();
-  if (images_) images_->Finish();
-  if (poses_) poses_->Finish();
-  // a plot that cannot be drawn fails the run, and the rest is written; a plot of a CSV
-  // that an external controller writes into {out} is skipped where the lab did not start
-  // the controller (vlab serve: one started by hand has no {out}) and the file is not there
-  for (const PlotConfig& plot : s_.scenario.outputs.plots) {
-    if (!controller_ && plot.csv != "log.csv" && !std::filesystem::exists(out_->File(plot.csv))) {
-      result_.plots_skipped.push_back(plot.file + ": no " + plot.csv +
-                                      " (written by an external controller that vlab run starts)");
-      continue;
-    }
-    try {
-      WritePlot(out_->File(""), plot);
-    } catch (const std::runtime_error& e) {
-      // an interrupted run keeps its verdict: a plot of a CSV that was not written yet is skipped
-      if (result_.interrupted_by) {
-        result_.plots_skipped.push_back(plot.file + ": the run was interrupted: " + e.what());
-        continue;
-      }
-      if (result_.failure.empty()) result_.failure = e.what();
-      result_.exit_code = 1;
-    }
-  }
-  result_.total_wall_s = Seconds(t_start_, WallClock::now());
-  nlohmann::json summary_json = SummaryJson(s_.scenario, m_, result_);
-  if (images_) summary_json["images"] = images_->Summary();
-  std::ofstream summary(out_->File("summary.json"));
-  summary << summary_json.dump(2) << "\n";
-  summary.close();
-  if (!summary) throw std::runtime_error("summary '" + out_->File("summary.json") + "': write failed");
-  out_->Commit();
 }
 
 }  // namespace vlab::lab

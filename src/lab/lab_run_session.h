@@ -4,8 +4,9 @@
 // (one control period: the sim device, the clock, commands, physics, samples,
 // log row, publish) and Finish (the controller's verdict, checks, plots,
 // summary, the output folder committed). An interrupt (RunOptions::interrupt)
-// ends the periods at a period boundary; Finish then writes what ran. Not a
-// public header.
+// ends the periods at a period boundary; Finish then writes what ran. So does
+// the first failed write (the log's, the poses', an image's): the run stops in
+// that period, and what was written is kept. Not a public header.
 #pragma once
 
 #include <chrono>
@@ -54,6 +55,13 @@ class RunSession {
   // the camera frames delivered later, the image outputs; after the states went out, so that
   // rendering does not delay them (the state is still that of t: the next period has not begun)
   void RenderAfterPublish(double t);
+  // RenderAfterPublish, then whether every output still writes: false (the run stops, its
+  // failure set) on the first failed write or render (lab_run_outputs.cc)
+  bool Recorded(double t);
+  // the run's failure becomes `why` (a file that could not be written), at the current period
+  void StopOnOutputFailure(const std::string& why);
+  // a failed write while finishing: the run fails with it, the other files are still written
+  void NoteWriteFailure(const std::string& why);
   // the commands of period k: the wire's, the built-in controller's; false on a failure
   bool Commands(long k, double t_k);
   // true once a stop signal came: the run's failure then says which, and when
@@ -67,6 +75,7 @@ class RunSession {
   void RequestPriority();
   // vlab serve in lockstep: why the run had no controller ("" when a command arrived)
   std::string NoController() const;
+  // the files of the run's end, each attempted whatever failed before; the folder committed
   void WriteOutputs();
   /// Compares the written log.csv with each golden check's golden (lab_run_golden.cc).
   void EvaluateGoldenChecks();
@@ -96,6 +105,7 @@ class RunSession {
   bool paused_ = false;
   long steps_left_ = -1;  // periods to run before pausing again (sim "step N"); -1: not stepping
   bool diverged_ = false;
+  bool output_failed_ = false;  // a write failed: the periods stop, the files are kept
   long k_ = 0;
 };
 

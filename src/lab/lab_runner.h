@@ -109,6 +109,11 @@ struct RunResult {
   /// Plots not drawn, each "FILE: why": a CSV an external controller writes, where the lab
   /// did not start the controller (vlab serve) and nobody wrote it.
   std::vector<std::string> plots_skipped;
+  /// The folder that holds the run's files ("" without one): RunOptions::out_dir, or a
+  /// sibling DIR.N when another run put its folder at DIR meanwhile (lab_output.h).
+  std::string out_dir;
+  /// "" when the files are in RunOptions::out_dir as asked; else one line: where and why.
+  std::string out_note;
   /// The external controller `vlab run` started: program and how it ended ("" when none).
   struct {
     std::string program;
@@ -123,8 +128,10 @@ class Lab {
   static std::unique_ptr<Lab> Create(const Scenario& scenario);
   ~Lab();
 
-  /// Runs the scenario once from its initial state. Throws std::runtime_error
-  /// on an output error (nothing is left half-written).
+  /// Runs the scenario once from its initial state. Throws InputError for bad
+  /// input (nothing written). The first failed write (disk full, a file size
+  /// limit) ends the run at once: exit_code 1, failure names the file and the
+  /// error, and what was written is kept in out_dir.
   RunResult Run(const RunOptions& options);
 
   /// Puts `data` (made for model()) into the scenario's initial state: reset,

@@ -68,7 +68,7 @@ TEST(CsvLogHandover, WaitsForAStalledWriterAndLosesNoRow) {
   reader.join();
   EXPECT_EQ(log->waits(), 1);
   EXPECT_GT(log->wait_s(), 0.0);
-  EXPECT_FALSE(log->write_failed());
+  EXPECT_FALSE(log->failed());
   // every row, in order
   const std::vector<std::string> lines = vlab::testing::Lines(received);
   ASSERT_EQ(lines.size(), static_cast<std::size_t>(kRows) + 1);
