@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -12,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
+#include "core/core_input_file.h"
 
 namespace vlab::lab {
 
@@ -36,9 +36,10 @@ std::vector<std::string> SplitLine(const std::string& line) {
 // the x and y columns of the CSV, rows with a non-number in them left out
 Series ReadColumns(const std::string& path, const PlotConfig& plot) {
   const std::string what = "plot '" + plot.file + "': ";
-  std::ifstream in(path);
+  // a regular file of at most kMaxCsvBytes (an external controller may have written it)
+  std::istringstream in(ReadInputFile(path, what + "'" + path + "'", kMaxCsvBytes));
   std::string line;
-  if (!in || !std::getline(in, line)) throw std::runtime_error(what + "cannot read '" + path + "'");
+  if (!std::getline(in, line)) throw std::runtime_error(what + "cannot read '" + path + "': it is empty");
   const std::vector<std::string> header = SplitLine(line);
   auto index = [&](const std::string& name) {
     const auto it = std::find(header.begin(), header.end(), name);
