@@ -96,7 +96,7 @@ std::vector<std::size_t> RunsToDo(const lab::Sweep& sweep, const std::string& ou
   for (std::size_t i = 0; i < sweep.runs.size(); ++i) {
     const lab::SweepRun& run = sweep.runs[i];
     ids.insert(run.id);
-    const lab::RunState state = lab::CheckRun(run, out + "/" + run.id);
+    const lab::RunState state = lab::CheckRun(sweep, run, out + "/" + run.id);
     if (state.current) {
       ++current;
       (state.result == "pass" ? pass : failed) += 1;

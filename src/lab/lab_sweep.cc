@@ -160,6 +160,7 @@ Sweep LoadSweep(const std::string& path) {
     }
     // what `vlab run` makes of the arguments (cli_run.cc): --duration and --seed replace the file's
     if (s.duration_s > 0) scenario.duration_s = s.duration_s;
+    s.records.push_back(RecordOf(scenario));
     std::string label;
     for (const std::string& one : sets[p]) label += (label.empty() ? "" : ", ") + one;
     char index[32];
@@ -170,8 +171,7 @@ Sweep LoadSweep(const std::string& path) {
       run.seed = seed;
       run.sets = all;
       run.label = label;
-      if (seed >= 0) scenario.seed = static_cast<std::uint64_t>(seed);
-      run.record = RecordOf(scenario);
+      run.set = p;
       s.runs.push_back(run);
     }
   }
@@ -201,7 +201,13 @@ std::vector<std::string> RunArguments(const Sweep& sweep, const SweepRun& run, c
   return args;
 }
 
-RunState CheckRun(const SweepRun& run, const std::string& run_dir) {
+RunRecord RecordOfRun(const Sweep& sweep, const SweepRun& run) {
+  RunRecord record = sweep.records.at(run.set);
+  if (run.seed >= 0) record.seed = static_cast<std::uint64_t>(run.seed);
+  return record;
+}
+
+RunState CheckRun(const Sweep& sweep, const SweepRun& run, const std::string& run_dir) {
   RunState state;
   std::ifstream in(run_dir + "/summary.json");
   if (!in) {
@@ -216,7 +222,7 @@ RunState CheckRun(const SweepRun& run, const std::string& run_dir) {
     state.why = state.result.empty() ? "its summary.json is unreadable" : "interrupted";
     return state;
   }
-  state.why = RecordChange(summary, run.record);
+  state.why = RecordChange(summary, RecordOfRun(sweep, run));
   state.stale = !state.why.empty();
   state.current = !state.stale;
   return state;

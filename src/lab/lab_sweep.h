@@ -16,6 +16,7 @@
 // path holding a control character is refused naming its file, line and key.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,7 @@ struct SweepRun {
   long long seed = -1;             ///< -1: the scenario's
   std::vector<std::string> sets;   ///< KEY=VALUE, the sweep's `set` first
   std::string label;               ///< the override set's own KEY=VALUE, for messages ("" when none)
-  RunRecord record;                ///< what the run will be (seed and duration final)
+  std::size_t set = 0;             ///< index of its override set (Sweep::records)
 };
 
 struct Sweep {
@@ -37,6 +38,9 @@ struct Sweep {
   std::string scenario;  ///< path of the scenario file (as the sweep names it, resolved)
   double duration_s = 0; ///< 0: the scenario's
   std::vector<SweepRun> runs;
+  /// per override set: the record of its runs with the scenario's seed (one
+  /// text per set, not per run: a sweep may have 100000 seeds)
+  std::vector<RunRecord> records;
 };
 
 /// Reads a sweep file strictly (InputError naming file, line and key); checks
@@ -54,8 +58,11 @@ struct RunState {
   std::string why;       ///< not current: "not run yet", "interrupted", or how it changed
 };
 
+/// What `run` will be: its set's record with its seed.
+RunRecord RecordOfRun(const Sweep& sweep, const SweepRun& run);
+
 /// Reads run_dir/summary.json (vlab writes output folders whole, lab_output.h)
-/// and compares its record with run.record (RecordChange).
-RunState CheckRun(const SweepRun& run, const std::string& run_dir);
+/// and compares its record with RecordOfRun (RecordChange).
+RunState CheckRun(const Sweep& sweep, const SweepRun& run, const std::string& run_dir);
 
 }  // namespace vlab::lab

@@ -1,6 +1,7 @@
 // lab_sweep.h and lab_collect.h, and vlab sweep / vlab collect on the real binary:
 // a grid expands in order with stable ids, every override is checked before any run,
-// runs already complete are skipped, and the collected table is one row per run.
+// runs already complete with the same record are skipped (the others run again, said why),
+// and the collected table is one row per run.
 #include "lab/lab_collect.h"
 #include "lab/lab_sweep.h"
 
@@ -51,6 +52,11 @@ TEST(SweepTest, GridExpandsLastKeyFastestSeedsInnermost) {
   EXPECT_EQ(s.runs[11].id, "p05_s5");
   EXPECT_EQ(s.runs[2].sets, (std::vector<std::string>{"devices.jr3.filter=2", "controller.gains.position=10",
                                                       "controller.start=0.5"}));
+  // one record per override set; a run's record is its set's with its seed
+  ASSERT_EQ(s.records.size(), 6u);
+  EXPECT_EQ(RecordOfRun(s, s.runs[3]).seed, 5u);
+  EXPECT_EQ(RecordOfRun(s, s.runs[3]).scenario_yaml, s.records[1].scenario_yaml);
+  EXPECT_NE(s.records[1].scenario_yaml, s.records[2].scenario_yaml);
   EXPECT_EQ(RunArguments(s, s.runs[3], "/o"),
             (std::vector<std::string>{"run", kScenario, "--seed", "5", "--set", "devices.jr3.filter=2", "--set",
                                       "controller.gains.position=10", "--set", "controller.start=0.5", "--out",
@@ -157,16 +163,24 @@ TEST(SweepCliTest, RunsResumesCollectsAndPlots) {
   for (const char* id : {"p00_s1", "p00_s2", "p01_s1", "p01_s2"}) {
     EXPECT_TRUE(fs::is_regular_file(dir / ("out/" + std::string(id) + "/summary.json"))) << id;
   }
-  // resume: a missing run and an interrupted one are run again, the complete ones skipped
+  // resume: a missing run, an interrupted one and one without a record (an older
+  // vlab's) are run again, the complete ones skipped
   fs::remove_all(dir / "out/p00_s2");
   std::string summary = ReadFile(dir / "out/p01_s1/summary.json");
   summary.replace(summary.find("\"result\": \"pass\""), 16, "\"result\": \"interrupted\"");
   WriteFile(dir / "out/p01_s1/summary.json", summary);
+  nlohmann::json older = nlohmann::json::parse(ReadFile(dir / "out/p01_s2/summary.json"));
+  older.erase("record");
+  WriteFile(dir / "out/p01_s2/summary.json", older.dump(2));
   const auto resumed = RunVlab("sweep " + (dir / "s.yaml") + " -j 2 --out " + (dir / "out"));
   ASSERT_EQ(resumed.exit_code, 0) << resumed.out << resumed.err;
-  EXPECT_NE(resumed.out.find("4 runs, 2 complete already (skipped), 2 to run"), std::string::npos) << resumed.out;
+  EXPECT_NE(resumed.out.find("4 runs, 1 complete already (skipped), 3 to run"), std::string::npos) << resumed.out;
   EXPECT_NE(resumed.out.find("p00_s2"), std::string::npos);
   EXPECT_NE(resumed.out.find("p01_s1"), std::string::npos);
+  EXPECT_NE(resumed.out.find("  p01_s2 (controller.gains.position=40): runs again: it has no record of what it ran "
+                             "(written by an older vlab)\n"),
+            std::string::npos)
+      << resumed.out;
   EXPECT_EQ(resumed.out.find("p00_s1 "), std::string::npos) << "a complete run is not run again";
 
   const auto collect = RunVlab("collect " + (dir / "out") + " --plot " + (dir / "g.png") +
