@@ -233,9 +233,11 @@ Subcommand AddSweepCommand(CLI::App& app) {
                "skipping runs already complete whose record matches (a run whose scenario, seed, duration or vlab "
                "changed since is run again, and said so)");
   cmd->add_option("sweep", args->file, "Sweep file (YAML)")->required();
-  cmd->add_flag("--list", args->list, "Print one vlab run command per run (absolute paths) and exit");
+  cmd->add_flag("--list", args->list, "Print one vlab run command per run (absolute paths; each value one line of YAML, control characters "
+                "escaped) and exit");
   cmd->add_flag("--pending", args->pending,
-                "--list: only the runs not complete with the record of what the sweep runs now (the others said on stderr)");
+                "--list: only the runs that are not complete and current (stderr names each finished run that changed since it "
+                "ran, and why)");
   cmd->add_option("-j,--jobs", args->jobs, "Runs at a time, 1 to 1024 (default 1)");
   cmd->add_option("--out", args->out_dir, "Sweep folder: one run folder per run, ID = pNN_sSEED (default sweeps/NAME)");
   cmd->add_option("--vlab", args->vlab, "--list: the vlab program to name in each command (default: this one)");
