@@ -220,7 +220,7 @@ std::string TinySweep(const std::string& duration, const std::string& mins) {
 
 bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-// the edit: a changed value and then a changed duration; only what changed
+// an edited sweep: a changed value, then a changed duration; only what changed
 // runs again, says why, and the table shows the values the runs ran with
 TEST(SweepCliTest, AnEditedSweepRunsAgainWhatChangedAndSaysWhy) {
   TempDir dir;
