@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -18,6 +20,7 @@
 #include "core/core_errors.h"
 #include "core/core_signals.h"
 #include "lab/lab_sweep.h"
+#include "lab/lab_sweep_text.h"
 
 namespace vlab::cli {
 
@@ -29,6 +32,7 @@ struct SweepArgs {
   std::string file;
   std::string out_dir;  // "" = sweeps/NAME
   bool list = false;
+  bool pending = false;  // --list: only the runs that are not current
   int jobs = 1;
   std::string vlab;     // program named in --list ("" = this binary)
 };
@@ -82,26 +86,53 @@ std::string Duration(double s) {
   return buf;
 }
 
+// The runs of `sweep` that are not current in `out`; a line in `notes` for each
+// stale one (finished, but not what the sweep runs now), and for each run folder
+// in `out` that is no run of this sweep. Counts the current ones by result.
+std::vector<std::size_t> RunsToDo(const lab::Sweep& sweep, const std::string& out, std::string& notes, int& pass,
+                                  int& failed, int& current) {
+  std::vector<std::size_t> todo;
+  std::set<std::string> ids;
+  for (std::size_t i = 0; i < sweep.runs.size(); ++i) {
+    const lab::SweepRun& run = sweep.runs[i];
+    ids.insert(run.id);
+    const lab::RunState state = lab::CheckRun(sweep, run, out + "/" + run.id);
+    if (state.current) {
+      ++current;
+      (state.result == "pass" ? pass : failed) += 1;
+      continue;
+    }
+    todo.push_back(i);
+    if (state.stale) {
+      const std::string label = run.label.empty() ? "" : " (" + lab::Printable(run.label) + ")";
+      notes += "  " + run.id + label + ": runs again: " + state.why + "\n";
+    }
+  }
+  std::error_code ec;
+  std::vector<std::string> others;
+  for (const auto& e : fs::directory_iterator(out, ec)) {
+    const std::string name = e.path().filename().string();
+    if (!ids.count(name) && fs::is_regular_file(e.path() / "summary.json")) others.push_back(name);
+  }
+  std::sort(others.begin(), others.end());
+  for (const std::string& name : others) {
+    notes += "  " + lab::Printable(name) + ": not a run of this sweep (left as it is; vlab collect lists it)\n";
+  }
+  return todo;
+}
+
 }  // namespace
 
 int RunSweepHere(const lab::Sweep& sweep, const std::string& out, int jobs, bool quiet) {
   fs::create_directories(out + "/logs");
   const std::string self = SelfPath();
   InstallStopSignals();
-  std::vector<std::size_t> todo;
   int pass = 0, failed = 0, skipped = 0;
-  for (std::size_t i = 0; i < sweep.runs.size(); ++i) {
-    const std::string dir = out + "/" + sweep.runs[i].id;
-    if (lab::RunComplete(dir)) {
-      ++skipped;
-      (ResultOf(dir) == "pass" ? pass : failed) += 1;
-    } else {
-      todo.push_back(i);
-    }
-  }
+  std::string notes;
+  const std::vector<std::size_t> todo = RunsToDo(sweep, out, notes, pass, failed, skipped);
   if (!quiet) {
-    std::printf("sweep %s: %zu runs, %d complete already (skipped), %zu to run, %d at a time; output in %s/\n",
-                sweep.name.c_str(), sweep.runs.size(), skipped, todo.size(), jobs, out.c_str());
+    std::printf("sweep %s: %zu runs, %d complete already (skipped), %zu to run, %d at a time; output in %s/\n%s",
+                sweep.name.c_str(), sweep.runs.size(), skipped, todo.size(), jobs, out.c_str(), notes.c_str());
     std::fflush(stdout);
   }
   const bool tty = !quiet && ::isatty(2);
@@ -169,11 +200,24 @@ int SweepMain(const SweepArgs& a) {
     lab::Sweep absolute = sweep;
     absolute.scenario = fs::absolute(sweep.scenario).lexically_normal().string();
     const std::string program = a.vlab.empty() ? SelfPath() : a.vlab;
-    for (const lab::SweepRun& run : absolute.runs) {
-      std::string line = lab::ShellQuote(program);
-      for (const std::string& arg : lab::RunArguments(absolute, run, out)) line += " " + lab::ShellQuote(arg);
-      std::printf("%s\n", line.c_str());
+    std::vector<std::size_t> runs;
+    if (a.pending) {
+      int pass = 0, failed = 0, current = 0;
+      std::string notes;
+      runs = RunsToDo(sweep, out, notes, pass, failed, current);
+      std::fprintf(stderr, "sweep %s: %zu runs, %d complete already (not listed), %zu listed\n%s", sweep.name.c_str(),
+                   sweep.runs.size(), current, runs.size(), notes.c_str());
+    } else {
+      for (std::size_t i = 0; i < sweep.runs.size(); ++i) runs.push_back(i);
     }
+    // every line whole before any is printed: a refused path prints no partial list
+    std::string lines;
+    for (std::size_t i : runs) {
+      std::vector<std::string> words = {program};
+      for (const std::string& arg : lab::RunArguments(absolute, absolute.runs[i], out)) words.push_back(arg);
+      lines += lab::JobLine(words) + "\n";
+    }
+    std::fputs(lines.c_str(), stdout);
     return 0;
   }
   return RunSweepHere(sweep, out, a.jobs, false);
@@ -186,9 +230,14 @@ Subcommand AddSweepCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "sweep", "Run a scenario over seeds and a grid or list of --set overrides (SWEEP.yaml, docs/sweeps.md): "
                "--list prints one vlab run command per run for GNU parallel or Slurm; otherwise runs them here, "
-               "skipping runs already complete");
+               "skipping runs already complete whose record matches (a run whose scenario, seed, duration or vlab "
+               "changed since is run again, and said so)");
   cmd->add_option("sweep", args->file, "Sweep file (YAML)")->required();
-  cmd->add_flag("--list", args->list, "Print one vlab run command per run (absolute paths) and exit");
+  cmd->add_flag("--list", args->list, "Print one vlab run command per run (absolute paths; each value one line of YAML, control characters "
+                "escaped) and exit");
+  cmd->add_flag("--pending", args->pending,
+                "--list: only the runs that are not complete and current (stderr names each finished run that changed since it "
+                "ran, and why)");
   cmd->add_option("-j,--jobs", args->jobs, "Runs at a time, 1 to 1024 (default 1)");
   cmd->add_option("--out", args->out_dir, "Sweep folder: one run folder per run, ID = pNN_sSEED (default sweeps/NAME)");
   cmd->add_option("--vlab", args->vlab, "--list: the vlab program to name in each command (default: this one)");

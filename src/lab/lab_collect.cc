@@ -33,7 +33,7 @@ std::string Text(const nlohmann::json& v) {
 }
 
 std::string CsvField(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
   std::string q = "\"";
   for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
   return q + "\"";
@@ -70,6 +70,7 @@ CollectedTable CollectRuns(const std::string& dir, bool timings) {
     v["id"] = id;
     v["scenario"] = Text(s.value("scenario", nlohmann::json("")));
     v["seed"] = Text(s.value("seed", nlohmann::json(nullptr)));
+    v["duration_s"] = Text(s.value("duration_s", nlohmann::json(nullptr)));
     const std::string result = s.value("result", "");
     v["result"] = result;
     v["exit_code"] = Text(s.value("exit_code", nlohmann::json(nullptr)));
@@ -95,7 +96,7 @@ CollectedTable CollectRuns(const std::string& dir, bool timings) {
     }
     values.push_back(std::move(v));
   }
-  t.columns = {"id", "scenario", "seed", "result", "exit_code"};
+  t.columns = {"id", "scenario", "seed", "duration_s", "result", "exit_code"};
   t.columns.insert(t.columns.end(), sets.begin(), sets.end());
   for (const std::string& c : checks) {
     t.columns.push_back(c);

@@ -1,6 +1,6 @@
 // Collecting a sweep: one table row per run folder (its summary.json).
 //
-// Columns: id (the folder's name), scenario, seed, result, exit_code, one
+// Columns: id (the folder's name), scenario, seed, duration_s, result, exit_code, one
 // `set:KEY` column per override key any run has, for each check `NAME` (its
 // value) and `NAME.verdict` (pass, fail, skip), then the timings (sim_time_s,
 // loop_wall_s, total_wall_s, steps_per_s) unless left out. Rows sorted by id;

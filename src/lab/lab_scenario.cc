@@ -346,9 +346,12 @@ Scenario LoadScenario(const std::string& path, const std::vector<std::string>& s
   std::vector<Override> overrides;
   for (const std::string& set : sets) overrides.push_back(ParseOverride(set));
   const std::vector<std::string> paths = ApplyOverrides(path, root, overrides);
+  YAML::Emitter resolved;
+  resolved << root;
   try {
     Scenario s = ParseScenario(path, root);
     for (const Override& o : overrides) s.overrides.emplace_back(o.key, o.value);
+    s.resolved_yaml = resolved.c_str();
     return s;
   } catch (const InputError& e) {
     // name the --set behind a bad value (the last one that touched its key)

@@ -170,6 +170,8 @@ struct Scenario {
   std::vector<CheckConfig> checks;
   /// `--set KEY=VALUE` overrides applied to the file, in order (as given)
   std::vector<std::pair<std::string, std::string>> overrides;
+  /// the file's YAML after the overrides, re-emitted (a run's record, lab_run_record.h)
+  std::string resolved_yaml;
 };
 
 /// Resolves a scenario argument: PATH, or PATH.yaml when PATH does not exist.

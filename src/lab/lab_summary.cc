@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/core_signals.h"
+#include "lab/lab_run_record.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_stats.h"
 
@@ -128,6 +129,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"failure", r.failure},
       {"seed", sc.seed},
       {"overrides", overrides},
+      {"record", RecordJson(RecordOf(sc))},
       {"clock", ClockModeName(r.clock)},
       {"duration_s", sc.duration_s},
       {"control_period_s", sc.control_period_s},
