@@ -21,7 +21,9 @@
 //     as a second click and undo the toggle).
 // Live panels (a served scenario with a webcam: `vlab view --scene --camera
 // --plot`, the scene device sending the signals): the camera panel's image decodes to the camera's size
-// and is not blank, and the plot canvas shows its signals' colours.
+// and is not blank, and the plot canvas shows its signals' colours; with
+// room for two WebSockets (--max-connections 2), the page shows the server's
+// "server full" reason for its third.
 // Both fail, never skip, without Chromium (tools/setup.sh installs it for tests).
 // With $VLAB_VIEW_PANELS_SCREENSHOT set, the live test also writes its page's
 // screenshot there (docs/view_panels.png is one).
@@ -338,6 +340,18 @@ TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
   std::printf("live panels: %d camera pictures (frame %.0f), %d plot samples\n", s["cameraFrames"].get<int>(),
               s["cameraId"].get<double>(), s["plotSamples"].get<int>());
   view.Stop();
+
+  // a view with room for two WebSockets: the page's third (poses, camera, plot) is refused, and the page says why
+  TestProcess full({VLAB_BINARY_DIR "/vlab", "view", "--scene", address("scene (scene)"), "--camera",
+                    address("webcam (camera)"), "--plot", "pa10.q.S1", "--http", "0", "--max-connections", "2", "-q"});
+  const int full_port = PortOf(full.start_line(), "http://127.0.0.1");
+  ASSERT_GT(full_port, 0) << full.start_line();
+  chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(full_port) + "/"}});
+  WaitFor(chromium, "window.vlabView && vlabView.refused && document.getElementById('status').textContent.indexOf("
+                "'server full: 2 sessions open') >= 0");
+  std::printf("refused: the page shows '%s'\n",
+              chromium.Evaluate("document.getElementById('status').textContent").get<std::string>().c_str());
+  full.Stop();
   serve.Stop();  // 20 s are room for a slow start: the test is done
 }
 

@@ -197,15 +197,25 @@
 
   // a WebSocket that reconnects; a refusal's reason (close code 1013: the server is full) is shown,
   // and retried less often than a lost connection
+  var refusals = {};  // path -> the server's reason, while that WebSocket is refused
+  function showRefusals() {
+    state.refused = Object.keys(refusals).map(function (p) { return refusals[p]; }).join('; ');
+    setStatus(state.refused ? state.refused + '; retrying in 5 s' : '');
+  }
   function connect(path, onData) {
     var ws = new WebSocket((window.location.protocol === 'https:' ? 'wss://' : 'ws://') + window.location.host + path);
     ws.binaryType = 'arraybuffer';
-    ws.onopen = function () { state.refused = ''; setStatus(''); };
+    ws.onopen = function () { delete refusals[path]; showRefusals(); };
     ws.onmessage = function (event) { onData(event.data); };
     ws.onclose = function (event) {
-      var refused = event.code === 1013 || event.reason;
-      state.refused = refused ? (event.reason || 'server full') : '';
-      setStatus(refused ? state.refused + '; retrying in 5 s' : 'disconnected, retrying');
+      var refused = event.code === 1013;
+      if (refused) {
+        refusals[path] = event.reason || 'server full';
+        showRefusals();
+      } else {
+        delete refusals[path];
+        setStatus('disconnected, retrying');
+      }
       setTimeout(function () { connect(path, onData); }, refused ? 5000 : 1000);
     };
   }
