@@ -287,7 +287,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     std::fprintf(stderr,
                  "vlab view: warning: bound to %s, beyond loopback: anyone who can reach port %d of this machine can "
                  "watch the lab (poses, plots, camera pictures); bind 127.0.0.1 (the default) and use ssh -L to watch "
-                 "from elsewhere\n",
+                 "from elsewhere (a browser that opens it by a host name needs --allow-host NAME)\n",
                  server->address().c_str(), server->port());
   }
 

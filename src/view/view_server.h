@@ -37,6 +37,8 @@
 //   - request header and body sizes (431, 413), WebSocket message size (the
 //     session is closed), an HTTP response's write (response_timeout_s).
 // A bad request is answered with an HTTP error, never a crash.
+// Threading: one thread of its own runs every session; Publish, counters,
+// clients and http_connections may be called from any thread.
 #pragma once
 
 #include <atomic>

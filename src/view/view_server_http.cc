@@ -96,11 +96,14 @@ class HttpSession : public std::enable_shared_from_this<HttpSession>, public Imp
     const auto host = request.find(http::field::host), origin = request.find(http::field::origin);
     if (host != request.end() && !HostAllowed(server_.access, std::string(host->value()))) {
       ++server_.bad_host;
-      return Reply(http::status::misdirected_request, "", "", false, version);
+      return Reply(http::status::misdirected_request,
+                   "this view answers to localhost, 127.0.0.1, [::1] and its --bind address; start it with "
+                   "--allow-host NAME to be opened by another name",
+                   "", false, version);
     }
     if (origin != request.end() && !OriginAllowed(server_.access, std::string(origin->value()))) {
       ++server_.bad_host;
-      return Reply(http::status::forbidden, "", "", false, version);
+      return Reply(http::status::forbidden, "a page of another site may not read this view", "", false, version);
     }
     const std::string target(request.target());
     const std::string path = target.substr(0, target.find('?'));
@@ -158,8 +161,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession>, public Imp
     response->set(http::field::content_type, error ? "text/plain" : type);
     response->set(http::field::cache_control, "no-store");
     response->set("X-Content-Type-Options", "nosniff");
+    // an error's body: its status line, and why when there is more to say
+    const std::string why = status == http::status::service_unavailable ? "server full" : body;
     response->body() = error ? std::to_string(static_cast<int>(status)) + " " + std::string(http::obsolete_reason(status)) +
-                                   (status == http::status::service_unavailable ? ": server full" : "") + "\n"
+                                   (why.empty() ? "" : ": " + why) + "\n"
                              : body;
     response->prepare_payload();
     if (head) response->body().clear();  // Content-Length stays the GET's

@@ -197,6 +197,9 @@ TEST(ViewServerTest, ForeignOriginAndRebindingHostAreRefused) {
     EXPECT_EQ(get("Host: " + host + "\r\n"), 421) << "'" << host << "'";
   }
   EXPECT_EQ(get("Host: 127.0.0.1\r\nHost: evil.example\r\n"), 400) << "two Hosts";
+  EXPECT_NE(Raw(port).Send("GET / HTTP/1.1\r\nHost: labhost:" + p + "\r\n\r\n").ReadAll().find("--allow-host NAME"),
+            std::string::npos)
+      << "a 421 says how to allow a name";
   // an Origin, where a request carries one: ours (any port: an ssh -L forward) or refused with 403
   const std::string host = "Host: 127.0.0.1:" + p + "\r\n";
   for (const std::string& origin : std::vector<std::string>{"http://127.0.0.1:" + p, "http://localhost:9000", "https://[::1]:" + p}) {
