@@ -95,7 +95,7 @@ class Publisher {
   std::thread thread_;
 };
 
-constexpr int kSlow = 200, kSilent = 16, kFrames = 30;  // the attack; 1 s of poses at 30 Hz
+constexpr int kSlow = 200, kSilent = 16, kFrames = 30;  // the attack to withstand; 1 s of poses at 30 Hz
 constexpr double kHangLimit_s = 20;                    // a guard against a hang, not a bound
 
 // polls `done` until it holds or kHangLimit_s pass; whether it held
