@@ -39,10 +39,20 @@ Subcommand AddViewCommand(CLI::App& app) {
                   "ARM.q.JOINT, ARM.qd.JOINT, ARM.tau.JOINT; --replay: any column of the run's log.csv");
   cmd->add_option("--http", o->server.port, "TCP port of the page (default 8080; 0: any free port)");
   cmd->add_option("--bind", o->server.bind,
-                  "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see README)");
+                  "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see README; beyond "
+                  "loopback anyone who can reach the port can watch, and vlab view says so on stderr)");
+  cmd->add_option("--allow-host", o->server.allowed_hosts,
+                  "A name the page may be opened by (Host and Origin), beside localhost, 127.0.0.0/8, [::1] and the "
+                  "--bind address; repeatable. Any other name is refused (421, 403): a web page elsewhere cannot read "
+                  "the view, by a cross-origin WebSocket or by DNS rebinding");
   cmd->add_option("--max-connections", o->server.max_connections,
-                  "Connections served at once, HTTP and WebSocket (poses, camera and plot panels) together (default 16; more "
-                  "are answered 503)");
+                  "WebSocket sessions served at once (a tab takes one, two or three: poses, camera, plot) (default 64; "
+                  "more are closed at once with 'server full', which the page shows)");
+  cmd->add_option("--max-per-address", o->server.max_per_address,
+                  "WebSocket sessions, and HTTP connections, from one address at once (default 32). HTTP connections: "
+                  "128 at once; a request head must come whole within 5 s; when full, a new connection closes the one "
+                  "that has waited longest for its request. A WebSocket that does not read is closed (no pong in 10 s, "
+                  "or a frame not taken in 5 s)");
   cmd->add_option("--web", o->web, "Folder of the page's files (default: view_web beside the vlab binary)");
   cmd->add_option("--connect-timeout", o->connect_timeout_s, "Wait this long for the device, s (default 10)");
   cmd->add_option("--duration", o->duration_s, "Stop after this many seconds (default: run until interrupted)");

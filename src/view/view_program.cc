@@ -19,6 +19,7 @@
 #include "bridge/bridge_client_device.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_scene.h"
+#include "view/view_access.h"
 #include "view/view_model.h"
 #include "view/view_panels.h"
 
@@ -149,6 +150,14 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   if (!(o.rate_hz > 0 && o.rate_hz <= 1000)) throw InputError("vlab view: --rate must be > 0 and <= 1000 Hz");
   if (o.server.port < 0 || o.server.port > 65535) throw InputError("vlab view: --http must be 0 to 65535");
   if (o.server.max_connections < 1) throw InputError("vlab view: --max-connections must be >= 1");
+  if (o.server.max_per_address < 1) throw InputError("vlab view: --max-per-address must be >= 1");
+  for (const std::string& h : o.server.allowed_hosts) {
+    if (h.empty() || h.find_first_of(" /:@?#") != std::string::npos || h == "*") {
+      if (!(h.size() > 2 && h.front() == '[' && h.back() == ']')) {
+        throw InputError("vlab view: --allow-host '" + h + "': expected a host name or address, without port or scheme");
+      }
+    }
+  }
   if (!o.replay.empty() && !o.camera.empty()) throw InputError("vlab view: --camera is for live views, not --replay");
   const std::vector<std::string> plots = o.plot.empty() ? std::vector<std::string>() : ParsePlotSignals(o.plot);
   std::map<std::string, StaticFile> page = PageFiles(o.web.empty() ? DefaultWebDir() : o.web);
@@ -271,9 +280,16 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   ViewServerConfig server_config = o.server;
   server_config.channels = {"/ws", "/camera", "/plot"};  // kPoseChannel, kCameraChannel, kPlotChannel
   std::unique_ptr<ViewServer> server = ViewServer::Create(server_config, std::move(page), resources);
-  std::printf("vlab view: http://%s:%d/ (%s; %zu bodies)\n", server->address().c_str(), server->port(),
+  std::printf("vlab view: http://%s:%d/ (%s; %zu bodies)\n", UrlHost(server->address()).c_str(), server->port(),
               source.c_str(), info["bodies"].size());
   std::fflush(stdout);
+  if (!IsLoopbackAddress(server->address())) {
+    std::fprintf(stderr,
+                 "vlab view: warning: bound to %s, beyond loopback: anyone who can reach port %d of this machine can "
+                 "watch the lab (poses, plots, camera pictures); bind 127.0.0.1 (the default) and use ssh -L to watch "
+                 "from elsewhere (a browser that opens it by a host name needs --allow-host NAME)\n",
+                 server->address().c_str(), server->port());
+  }
 
   // the panels' feeds, each on its own thread
   std::unique_ptr<Feeder> camera_feed;
@@ -336,9 +352,11 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   if (!plots.empty() && o.replay.empty() && !o.quiet) std::printf("vlab view: plots: %ld samples sent\n", plot_samples);
   const ViewServerCounters c = server->counters();
   std::printf(
-      "vlab view: %ld frames in, %ld sent, %ld skipped by slow clients; %ld requests (%ld errors), %ld connections "
-      "refused, %ld WebSocket sessions (%ld closed for bad messages)\n",
-      frames, c.frames_sent, c.frames_skipped, c.requests, c.errors, c.refused, c.ws_sessions, c.ws_closed_bad);
+      "vlab view: %ld frames in, %ld sent, %ld skipped by slow clients; %ld requests (%ld errors, %ld refused for "
+      "their Host or Origin), %ld connections refused, %ld closed for a newer one, %ld without a request in time; %ld "
+      "WebSocket sessions (%ld closed for bad messages, %ld for not reading)\n",
+      frames, c.frames_sent, c.frames_skipped, c.requests, c.errors, c.bad_host, c.refused, c.evicted,
+      c.header_timeouts, c.ws_sessions, c.ws_closed_bad, c.ws_closed_slow);
   return 0;
 }
 

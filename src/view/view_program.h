@@ -26,7 +26,8 @@ struct ViewOptions {
 };
 
 /// Runs the view until *stop is set or the duration ends; prints a start line
-/// ("vlab view: http://ADDRESS:PORT/ ...") and a counter line. Throws
+/// ("vlab view: http://ADDRESS:PORT/ ...", an IPv6 address in brackets), a
+/// warning on stderr when bound beyond loopback, and a counter line. Throws
 /// InputError (exit 2) for bad options, a missing page file or model, an
 /// unreadable recording; bridge errors when the device does not answer.
 int RunView(const ViewOptions& options, volatile std::sig_atomic_t* stop);

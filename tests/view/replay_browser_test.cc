@@ -12,10 +12,18 @@
 //     and the frame shown then is that recorded frame; measured at 0.5x, 1x
 //     and 5x;
 //   - the plot panel: plots.bin holds log.csv's time and pa10.q.S1 exactly,
-//     and its canvas shows the signal's colour.
+//     and its canvas shows the signal's colour;
+//   - `vlab view --bind`: an IPv6 address printed in brackets, a warning on
+//     stderr when bound beyond loopback (0.0.0.0), none on loopback;
+//   - paused, the plot still follows the slider (its window ends at the
+//     slider's time), and Space pauses and resumes after a click on the pause
+//     button, and with the button focused (a focused button would take Space
+//     as a second click and undo the toggle).
 // Live panels (a served scenario with a webcam: `vlab view --scene --camera
 // --plot`, the scene device sending the signals): the camera panel's image decodes to the camera's size
-// and is not blank, and the plot canvas shows its signals' colours.
+// and is not blank, and the plot canvas shows its signals' colours; with
+// room for two WebSockets (--max-connections 2), the page shows the server's
+// "server full" reason for its third.
 // Both fail, never skip, without Chromium (tools/setup.sh installs it for tests).
 // With $VLAB_VIEW_PANELS_SCREENSHOT set, the live test also writes its page's
 // screenshot there (docs/view_panels.png is one).
@@ -219,6 +227,77 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
   view.Stop();
 }
 
+// a key press as Chromium's input pipeline delivers a user's (keydown, keypress, keyup)
+void PressSpace(testing::Chromium& chromium) {
+  for (const char* type : {"keyDown", "keyUp"}) {
+    nlohmann::json key = {{"type", type}, {"key", " "}, {"code", "Space"}, {"windowsVirtualKeyCode", 32},
+                          {"nativeVirtualKeyCode", 32}};
+    if (std::string(type) == "keyDown") key["text"] = " ";
+    chromium.Call("Input.dispatchKeyEvent", key);
+  }
+}
+
+TEST(ViewReplayBrowserTest, PausedPlotFollowsTheSliderAndSpaceTogglesAfterTheButton) {
+  TempDir dir;
+  testing::WriteFile(dir / "replay.yaml", Scenario(false));
+  const testing::ProcessResult run =
+      testing::RunVlab("run " + (dir / "replay.yaml") + " --out " + (dir / "run") + " -q");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // the address it prints: IPv6 in brackets; beyond loopback, a warning that anyone can watch
+  for (const std::string bind : {"::1", "127.0.0.1", "0.0.0.0"}) {
+    const testing::ProcessResult v =
+        testing::RunVlab("view --replay " + (dir / "run") + " --bind " + bind + " --http 0 --duration 0.1 -q");
+    EXPECT_EQ(v.exit_code, 0) << v.err;
+    EXPECT_NE(v.out.find(bind == "::1" ? "http://[::1]:" : "http://" + bind + ":"), std::string::npos) << v.out;
+    EXPECT_EQ(v.err.find("beyond loopback: anyone who can reach port") != std::string::npos, bind == "0.0.0.0")
+        << bind << ": " << v.err;
+  }
+  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--replay", dir / "run", "--plot", "pa10.q.S1", "--http", "0",
+                    "-q"});
+  const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
+  ASSERT_GT(http_port, 0) << view.start_line();
+  testing::Chromium chromium(dir / "profile", kWidth, kHeight);
+  chromium.Call("Page.enable");
+  chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(http_port) + "/?clock=manual"}});
+  WaitFor(chromium, "window.vlabView && vlabView.replayFrames && vlabView.plotSamples");
+  auto paused = [&] { return chromium.Evaluate("vlabView.paused").get<bool>(); };
+
+  // a mouse click on the pause button (it takes the focus, as a user's click does)
+  const nlohmann::json at = nlohmann::json::parse(
+      chromium
+          .Evaluate("(function () { var r = document.getElementById('pause').getBoundingClientRect();"
+                    " return JSON.stringify({x: r.left + r.width / 2, y: r.top + r.height / 2}); })()")
+          .get<std::string>());
+  for (const char* type : {"mousePressed", "mouseReleased"}) {
+    chromium.Call("Input.dispatchMouseEvent",
+                  {{"type", type}, {"x", at["x"]}, {"y", at["y"]}, {"button", "left"}, {"clickCount", 1}});
+  }
+  ASSERT_TRUE(paused()) << "the click paused";
+  PressSpace(chromium);
+  EXPECT_FALSE(paused()) << "Space after the click resumes";
+  PressSpace(chromium);
+  EXPECT_TRUE(paused()) << "and pauses again";
+  chromium.Evaluate("document.getElementById('pause').focus()");  // keyboard users reach the button by Tab
+  PressSpace(chromium);
+  EXPECT_FALSE(paused()) << "Space with the button focused resumes, once";
+  PressSpace(chromium);
+  ASSERT_TRUE(paused());
+
+  // paused: each slider position moves the plot's window to end there, as it moves the arm and the clock
+  for (const double t : {1.0, 2.5, 0.4}) {
+    chromium.Evaluate("(function () { var s = document.getElementById('slider'); s.value = '" + Exact(t) +
+                      "'; s.dispatchEvent(new Event('input')); })()");
+    TwoFrames(chromium);
+    const nlohmann::json shown = nlohmann::json::parse(
+        chromium.Evaluate("JSON.stringify({end: vlabView.plotEnd, replay: vlabView.replayTime})").get<std::string>());
+    EXPECT_EQ(shown["replay"].get<double>(), t);
+    ASSERT_TRUE(shown["end"].is_number()) << shown.dump();
+    EXPECT_EQ(shown["end"].get<double>(), t) << "the plot did not follow the slider while paused";
+  }
+  EXPECT_TRUE(paused());
+  view.Stop();
+}
+
 TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
   TempDir dir;
   testing::WriteFile(dir / "served.yaml", Scenario(true));
@@ -261,6 +340,18 @@ TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
   std::printf("live panels: %d camera pictures (frame %.0f), %d plot samples\n", s["cameraFrames"].get<int>(),
               s["cameraId"].get<double>(), s["plotSamples"].get<int>());
   view.Stop();
+
+  // a view with room for two WebSockets: the page's third (poses, camera, plot) is refused, and the page says why
+  TestProcess full({VLAB_BINARY_DIR "/vlab", "view", "--scene", address("scene (scene)"), "--camera",
+                    address("webcam (camera)"), "--plot", "pa10.q.S1", "--http", "0", "--max-connections", "2", "-q"});
+  const int full_port = PortOf(full.start_line(), "http://127.0.0.1");
+  ASSERT_GT(full_port, 0) << full.start_line();
+  chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(full_port) + "/"}});
+  WaitFor(chromium, "window.vlabView && vlabView.refused && document.getElementById('status').textContent.indexOf("
+                "'server full: 2 sessions open') >= 0");
+  std::printf("refused: the page shows '%s'\n",
+              chromium.Evaluate("document.getElementById('status').textContent").get<std::string>().c_str());
+  full.Stop();
   serve.Stop();  // 20 s are room for a slow start: the test is done
 }
 

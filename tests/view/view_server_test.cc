@@ -5,87 +5,36 @@
 // HTTP error and malformed WebSocket frames by closing that session, and
 // keeps serving afterwards; a WebSocket client gets the newest frame, not a
 // queue of old ones. The panels' channels (/camera, /plot) are each their own
-// newest-wins slot, and their clients count toward the same connection and
-// message bounds.
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
+// newest-wins slot, and their clients count toward the same WebSocket table
+// and message bounds. Host and Origin (view_access.h): a foreign Origin and a
+// rebinding Host are refused (403, 421) on pages and WebSocket upgrades, the
+// loopback names, the bound address and the names allowed are served.
+// The limits that keep an attacker from locking a viewer out are tested in
+// view_server_limits_test.cc.
 #include <chrono>
 #include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include <boost/asio.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 #include <gtest/gtest.h>
 
+#include "view/view_access.h"
 #include "view/view_server.h"
+#include "view_clients.h"
 
 namespace vlab::view {
 namespace {
 
-namespace asio = boost::asio;
-namespace beast = boost::beast;
-using tcp = asio::ip::tcp;
+using namespace view_test;  // NOLINT: the clients of view_clients.h
 
-constexpr const char* kPage = "<html>vlab view test page</html>";
-
-std::unique_ptr<ViewServer> Start(int max_connections = 16, std::vector<std::string> channels = {"/ws"}) {
+std::unique_ptr<ViewServer> Start(int max_connections = 16, std::vector<std::string> channels = {"/ws"},
+                                  std::vector<std::string> allowed_hosts = {}) {
   ViewServerConfig config;
-  config.port = 0;
   config.max_connections = max_connections;
   config.channels = std::move(channels);
-  config.idle_timeout_s = 5;
-  std::map<std::string, StaticFile> files{{"/index.html", {"text/html", kPage}}, {"/view.js", {"text/javascript", "//"}}};
-  auto resources = [](const std::string& path, std::string* type, std::string* body) {
-    if (path != "/scene.json") return false;
-    *type = "application/json";
-    *body = "{}";
-    return true;
-  };
-  return ViewServer::Create(config, std::move(files), resources);
-}
-
-// a raw TCP client: sends bytes, reads until the server closes or 3 s pass
-class Raw {
- public:
-  explicit Raw(int port) : socket_(io_) { socket_.connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)}); }
-  Raw& Send(const std::string& bytes) {
-    boost::system::error_code ec;
-    asio::write(socket_, asio::buffer(bytes), ec);  // the server may close before all is sent
-    return *this;
-  }
-  std::string ReadAll(double timeout_s = 3) {
-    std::string out;
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    char buffer[4096];
-    while (std::chrono::steady_clock::now() < end) {
-      pollfd p{socket_.native_handle(), POLLIN, 0};
-      if (::poll(&p, 1, 50) <= 0) continue;
-      const ssize_t n = ::recv(socket_.native_handle(), buffer, sizeof(buffer), 0);
-      if (n <= 0) break;
-      out.append(buffer, static_cast<std::size_t>(n));
-    }
-    return out;
-  }
-
- private:
-  asio::io_context io_;
-  tcp::socket socket_;
-};
-
-// the status code of a raw response ("HTTP/1.1 404 Not Found" -> 404; 0: none)
-int Status(const std::string& response) {
-  if (response.compare(0, 5, "HTTP/") != 0) return 0;
-  const std::size_t space = response.find(' ');
-  return space == std::string::npos ? 0 : std::atoi(response.c_str() + space + 1);
-}
-
-std::string Get(int port, const std::string& target) {
-  return Raw(port).Send("GET " + target + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").ReadAll();
+  config.allowed_hosts = std::move(allowed_hosts);
+  return StartServer(config);
 }
 
 TEST(ViewServerTest, ServesItsTableAndNothingElse) {
@@ -108,10 +57,10 @@ TEST(ViewServerTest, ServesItsTableAndNothingElse) {
     EXPECT_EQ(r.find("root:"), std::string::npos) << target;
   }
   // read-only: no other method
-  EXPECT_EQ(Status(Raw(port).Send("DELETE /index.html HTTP/1.1\r\nHost: x\r\n\r\n").ReadAll(1)), 405);
-  EXPECT_EQ(Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\n\r\nhi").ReadAll(1)), 405);
+  EXPECT_EQ(Status(Raw(port).Send("DELETE /index.html HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n").ReadAll(1)), 405);
+  EXPECT_EQ(Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 2\r\n\r\nhi").ReadAll(1)), 405);
   // HEAD: the headers of a GET, no body
-  r = Raw(port).Send("HEAD / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").ReadAll();
+  r = Raw(port).Send("HEAD / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n").ReadAll();
   EXPECT_EQ(Status(r), 200);
   EXPECT_EQ(r.find(kPage), std::string::npos);
 }
@@ -121,9 +70,9 @@ TEST(ViewServerTest, OversizedAndMalformedRequestsGetAnHttpError) {
   const int port = server->port();
   // headers beyond 8 KiB: 431; a body beyond 1 KiB: 413 (ViewServerConfig's bounds)
   const std::string big(20000, 'a');
-  EXPECT_EQ(Status(Raw(port).Send("GET / HTTP/1.1\r\nHost: x\r\nX-Big: " + big + "\r\n\r\n").ReadAll()), 431);
-  EXPECT_EQ(Status(Raw(port).Send("GET /" + big + " HTTP/1.1\r\nHost: x\r\n\r\n").ReadAll()), 431);
-  EXPECT_EQ(Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 100000\r\n\r\n" + big).ReadAll()), 413);
+  EXPECT_EQ(Status(Raw(port).Send("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: " + big + "\r\n\r\n").ReadAll()), 431);
+  EXPECT_EQ(Status(Raw(port).Send("GET /" + big + " HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n").ReadAll()), 431);
+  EXPECT_EQ(Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 100000\r\n\r\n" + big).ReadAll()), 413);
   // not HTTP
   EXPECT_EQ(Status(Raw(port).Send("HELLO\r\n\r\n").ReadAll()), 400);
   EXPECT_EQ(Status(Raw(port).Send("GET / HTTP/1.1\r\nHost x\r\n\r\n").ReadAll()), 400);
@@ -137,7 +86,7 @@ TEST(ViewServerTest, OversizedAndMalformedRequestsGetAnHttpError) {
   { Raw half(port); half.Send("GET / HT"); }
   // a WebSocket upgrade elsewhere than /ws: 404
   EXPECT_EQ(Status(Raw(port)
-                       .Send("GET /index.html HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                       .Send("GET /index.html HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
                              "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
                        .ReadAll()),
             404);
@@ -145,39 +94,6 @@ TEST(ViewServerTest, OversizedAndMalformedRequestsGetAnHttpError) {
   EXPECT_EQ(Status(Get(port, "/")), 200);
   EXPECT_GE(server->counters().errors, 9);
 }
-
-TEST(ViewServerTest, ConnectionsAreBounded) {
-  auto server = Start(3);
-  const int port = server->port();
-  std::vector<std::unique_ptr<Raw>> idle;
-  for (int i = 0; i < 3; ++i) idle.push_back(std::make_unique<Raw>(port));
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the server accept them
-  EXPECT_EQ(Status(Get(port, "/")), 503);
-  EXPECT_EQ(server->counters().refused, 1);
-  idle.clear();  // they leave: room again
-  std::string r;
-  for (int attempt = 0; attempt < 50 && Status(r) != 200; ++attempt) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    r = Get(port, "/");
-  }
-  EXPECT_EQ(Status(r), 200);
-}
-
-// a WebSocket client of /ws (or another channel)
-struct WsClient {
-  explicit WsClient(int port, const std::string& path = "/ws") : ws(io) {
-    ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-    ws.handshake("127.0.0.1", path);
-    ws.binary(true);
-  }
-  std::string Read() {
-    beast::flat_buffer b;
-    ws.read(b);
-    return beast::buffers_to_string(b.data());
-  }
-  asio::io_context io;
-  beast::websocket::stream<tcp::socket> ws;
-};
 
 TEST(ViewServerTest, WebSocketGetsTheNewestFrameAndSurvivesBadFrames) {
   auto server = Start();
@@ -238,10 +154,14 @@ TEST(ViewServerTest, PanelChannelsAreSeparateAndShareTheBounds) {
   EXPECT_EQ(plot.Read(), "sample 1");
   server->Publish("sample 2", 2);
   EXPECT_EQ(plot.Read(), "sample 2");
-  // three WebSocket clients fill the three connections: a fourth is refused
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  EXPECT_EQ(Status(Get(port, "/")), 503);
-  EXPECT_THROW(WsClient(port, "/plot"), boost::system::system_error);
+  // three WebSocket clients fill the three places: a fourth is told so and closed; pages are still served
+  {
+    WsClient fourth(port, "/plot");
+    EXPECT_THROW(fourth.Read(), boost::system::system_error);
+    EXPECT_EQ(fourth.ws.reason().code, beast::websocket::close_code::try_again_later);
+    EXPECT_NE(std::string(fourth.ws.reason().reason.c_str()).find("server full"), std::string::npos);
+  }
+  EXPECT_EQ(Status(Get(port, "/")), 200);
   // an oversized message on a panel's channel closes that session, as on /ws
   beast::flat_buffer b;
   beast::error_code ec;
@@ -253,10 +173,78 @@ TEST(ViewServerTest, PanelChannelsAreSeparateAndShareTheBounds) {
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_GE(server->counters().ws_closed_bad, 1);
   // its slot is free again; a path that is no channel is 404
-  std::string r = Raw(port).Send("GET /other HTTP/1.1\r\nHost: x\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n"
-                                 "Sec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n")
-                      .ReadAll(1);
+  std::string r = Raw(port).Send(Upgrade("/other", "127.0.0.1")).ReadAll(1);
   EXPECT_EQ(Status(r), 404) << r;
+}
+
+TEST(ViewServerTest, ForeignOriginAndRebindingHostAreRefused) {
+  auto server = Start(16, {"/ws"}, {"Lab-PC.example"});
+  const int port = server->port();
+  const std::string p = std::to_string(port);
+  auto get = [&](const std::string& headers) {
+    return Status(Raw(port).Send("GET / HTTP/1.1\r\n" + headers + "Connection: close\r\n\r\n").ReadAll());
+  };
+  // loopback names and addresses, with and without the port; a name given; no Host at all (not a browser)
+  for (const std::string& host : std::vector<std::string>{"127.0.0.1:" + p, "127.0.0.1", "localhost:" + p, "LOCALHOST", "localhost.",
+                                 "[::1]:" + p, "[::1]", "127.9.8.7:" + p, "lab-pc.example:" + p, "Lab-PC.example"}) {
+    EXPECT_EQ(get("Host: " + host + "\r\n"), 200) << host;
+  }
+  EXPECT_EQ(get(""), 200) << "no Host";
+  // a rebinding page's name (it resolves here, but it is not ours), other addresses, malformed values: 421
+  for (const std::string& host : std::vector<std::string>{"evil.example", "evil.example:" + p, "127.0.0.1.nip.io:" + p, "localhost.evil.example",
+                                 "10.1.2.3:" + p, "::1", "127.0.0.1:80:80", "[::1", "[127.0.0.1]", "", "127.1",
+                                 "localhost:http", "lab-pc.example.evil"}) {
+    EXPECT_EQ(get("Host: " + host + "\r\n"), 421) << "'" << host << "'";
+  }
+  EXPECT_EQ(get("Host: 127.0.0.1\r\nHost: evil.example\r\n"), 400) << "two Hosts";
+  EXPECT_NE(Raw(port).Send("GET / HTTP/1.1\r\nHost: labhost:" + p + "\r\n\r\n").ReadAll().find("--allow-host NAME"),
+            std::string::npos)
+      << "a 421 says how to allow a name";
+  // an Origin, where a request carries one: ours (any port: an ssh -L forward) or refused with 403
+  const std::string host = "Host: 127.0.0.1:" + p + "\r\n";
+  for (const std::string& origin : std::vector<std::string>{"http://127.0.0.1:" + p, "http://localhost:9000", "https://[::1]:" + p}) {
+    EXPECT_EQ(get(host + "Origin: " + origin + "\r\n"), 200) << origin;
+  }
+  for (const std::string& origin : std::vector<std::string>{"http://evil.example", "https://evil.example:" + p, "null", "file://",
+                                   "http://127.0.0.1.evil.example", "http://127.0.0.1:" + p + "/x",
+                                   "ftp://127.0.0.1", "http://user@127.0.0.1"}) {
+    EXPECT_EQ(get(host + "Origin: " + origin + "\r\n"), 403) << origin;
+  }
+  // the WebSocket upgrade, as a page elsewhere would try it: refused before any frame
+  server->Publish("pose");
+  EXPECT_EQ(Status(Raw(port).Send(Upgrade("/ws", "127.0.0.1:" + p, "Origin: http://evil.example\r\n")).ReadAll(1)), 403);
+  EXPECT_EQ(Status(Raw(port).Send(Upgrade("/ws", "evil.example:" + p, "Origin: http://evil.example:" + p + "\r\n"))
+                       .ReadAll(1)),
+            421);
+  EXPECT_THROW(WsClient(port, "/ws", "http://attacker.example"), boost::system::system_error);
+  EXPECT_EQ(server->clients(), 0);
+  // and accepted from the page's own origin, and from a client that sends none
+  WsClient page(port, "/ws", "http://localhost:" + p);
+  EXPECT_EQ(page.Read(), "pose");
+  WsClient tool(port);
+  EXPECT_EQ(tool.Read(), "pose");
+  EXPECT_GE(server->counters().bad_host, 13 + 8 + 3);
+}
+
+// the rules themselves, for addresses a test on loopback cannot bind
+TEST(ViewAccessTest, BoundAddressAndAnyAddress) {
+  const AccessPolicy specific{"192.168.7.20", {}}, any{"0.0.0.0", {"labhost"}}, any6{"::", {}};
+  EXPECT_TRUE(HostAllowed(specific, "192.168.7.20:8080"));
+  EXPECT_TRUE(HostAllowed(specific, "localhost:8080"));
+  EXPECT_FALSE(HostAllowed(specific, "192.168.7.21:8080"));
+  EXPECT_FALSE(HostAllowed(specific, "labhost:8080"));
+  // bound to every address: any address literal (a rebinding page sends a name), names only when given
+  EXPECT_TRUE(HostAllowed(any, "192.168.7.21:8080"));
+  EXPECT_TRUE(HostAllowed(any, "LABHOST:8080"));
+  EXPECT_FALSE(HostAllowed(any, "evil.example:8080"));
+  EXPECT_TRUE(HostAllowed(any6, "[fe80::1]:8080"));
+  EXPECT_TRUE(OriginAllowed(any, "http://labhost:8080"));
+  EXPECT_FALSE(OriginAllowed(any, "http://evil.example:8080"));
+  EXPECT_TRUE(IsLoopbackAddress("::ffff:127.0.0.1"));
+  EXPECT_FALSE(IsLoopbackAddress("0.0.0.0"));
+  EXPECT_FALSE(IsLoopbackAddress("::"));
+  EXPECT_EQ(UrlHost("::1"), "[::1]");
+  EXPECT_EQ(UrlHost("127.0.0.1"), "127.0.0.1");
 }
 
 }  // namespace

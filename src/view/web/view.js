@@ -10,7 +10,9 @@
 // URL options: camera=NAME (an MJCF world camera's pose and field of view),
 // silhouette (bodies white, world geoms black, no lights: for tests),
 // bare (no overlay), clock=manual (a replay advances only by vlabView.tick(ms):
-// for tests).
+// for tests). Space pauses and resumes, wherever the focus is.
+// When the server refuses a WebSocket (its table full), it closes it with a
+// reason: the page shows that reason, not only that it is retrying.
 (function () {
   'use strict';
   var params = new URLSearchParams(window.location.search);
@@ -19,7 +21,7 @@
   // for tests and for the curious: what has been drawn
   var state = window.vlabView = { ready: false, frames: 0, time: 0, seq: -1, paused: false, error: '',
                                   replayTime: 0, cameraFrames: 0, cameraId: -1, cameraTime: 0, plotSamples: 0,
-                                  plotLast: null, plotDrawn: 0 };
+                                  plotLast: null, plotDrawn: 0, plotEnd: null, refused: '' };
   var renderer, scene, camera, controls, groups = [], latest = null, info = null;
   var recording = null, replayTime = 0, lastWall = 0, manualClock = params.get('clock') === 'manual';
   var plot = null;  // { names, times: [], values: [[]...], dirty }
@@ -30,6 +32,7 @@
   function fail(text) { state.error = text; setStatus(text); }
 
   fetch('scene.json').then(function (r) {
+    if (r.status === 503) throw new Error('server full (HTTP 503): reload later');
     if (!r.ok) throw new Error('scene.json: HTTP ' + r.status);
     return r.json();
   }).then(build).catch(function (e) { fail('error: ' + e.message); });
@@ -84,8 +87,16 @@
       camera.updateProjectionMatrix();
       renderer.setSize(window.innerWidth, window.innerHeight);
     });
-    document.getElementById('pause').onclick = togglePause;
-    window.addEventListener('keydown', function (e) { if (e.code === 'Space') togglePause(); });
+    // Space toggles wherever the focus is: a focused button (the pause button, once clicked) would
+    // otherwise also take the key as a click and undo the toggle, a focused select open its list
+    var pause = document.getElementById('pause');
+    pause.onclick = function () { togglePause(); pause.blur(); };
+    window.addEventListener('keydown', function (e) {
+      if (e.code !== 'Space') return;
+      e.preventDefault();
+      if (!e.repeat) togglePause();
+    }, true);
+    window.addEventListener('keyup', function (e) { if (e.code === 'Space') e.preventDefault(); }, true);
     if (info.camera) startCamera();
     if (info.plots && info.plots.length) startPlots();
     if (info.mode === 'replay') startReplay(); else connect('/ws', function (data) { latest = data; });  // the newest wins
@@ -184,14 +195,28 @@
     }).catch(function (e) { fail('error: ' + e.message); });
   }
 
+  // a WebSocket that reconnects; a refusal's reason (close code 1013: the server is full) is shown,
+  // and retried less often than a lost connection
+  var refusals = {};  // path -> the server's reason, while that WebSocket is refused
+  function showRefusals() {
+    state.refused = Object.keys(refusals).map(function (p) { return refusals[p]; }).join('; ');
+    setStatus(state.refused ? state.refused + '; retrying in 5 s' : '');
+  }
   function connect(path, onData) {
     var ws = new WebSocket((window.location.protocol === 'https:' ? 'wss://' : 'ws://') + window.location.host + path);
     ws.binaryType = 'arraybuffer';
-    ws.onopen = function () { setStatus(''); };
+    ws.onopen = function () { delete refusals[path]; showRefusals(); };
     ws.onmessage = function (event) { onData(event.data); };
-    ws.onclose = function () {
-      setStatus('disconnected, retrying');
-      setTimeout(function () { connect(path, onData); }, 1000);
+    ws.onclose = function (event) {
+      var refused = event.code === 1013;
+      if (refused) {
+        refusals[path] = event.reason || 'server full';
+        showRefusals();
+      } else {
+        delete refusals[path];
+        setStatus('disconnected, retrying');
+      }
+      setTimeout(function () { connect(path, onData); }, refused ? 5000 : 1000);
     };
   }
 
@@ -284,6 +309,7 @@
     g.font = '11px sans-serif';
     g.fillStyle = '#ccc';
     g.fillText('t = ' + start.toFixed(1) + ' .. ' + end.toFixed(1) + ' s', left, h - 4);
+    state.plotEnd = end;
     if (first < 0) return;
     if (hi - lo < 1e-9) { hi += 0.5; lo -= 0.5; }
     g.fillText(hi.toPrecision(3), 2, top + 8);
@@ -366,7 +392,8 @@
     requestAnimationFrame(animate);
     if (recording && !state.paused && !manualClock && lastWall) advance(wall - lastWall);
     lastWall = wall;
-    if (plot && plot.dirty && !state.paused) { plot.dirty = false; drawPlot(); }
+    // a paused replay still follows its slider; a paused live view holds its plot
+    if (plot && plot.dirty && (!state.paused || recording)) { plot.dirty = false; drawPlot(); }
     if (latest && !state.paused) {
       apply(latest, 0);
       latest = null;

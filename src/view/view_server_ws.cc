@@ -1,0 +1,141 @@
+// The view's WebSocket sessions (view_server_impl.h): the newest frame of a
+// channel to one client, a one-message send queue with a write deadline,
+// pings on silence; and the refusal of a full table as a close reason.
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include <boost/beast/websocket.hpp>
+
+#include "view/view_server_impl.h"
+
+namespace vlab::view {
+
+namespace websocket = beast::websocket;
+
+namespace {
+
+using Impl = ViewServer::Impl;
+
+// ---- WebSocket: the newest frame to one client, what it sends dropped; or,
+// when the table is full, a session that only says so and closes
+class WsSession : public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(Impl& server, tcp::socket socket, int channel, std::string address, std::string refusal)
+      : server_(server), ws_(std::move(socket)), timer_(ws_.get_executor()), channel_(channel),
+        address_(std::move(address)), refusal_(std::move(refusal)) {
+    if (refusal_.empty()) {
+      ++server_.ws_open;
+      ++server_.peers[address_].ws;
+    } else {
+      ++server_.refusing;
+    }
+  }
+  ~WsSession() {
+    if (refusal_.empty()) {
+      --server_.ws_open;
+      server_.Release(address_, true);
+    } else {
+      --server_.refusing;
+    }
+    if (counted_) --server_.ws_clients;
+  }
+
+  void Start(http::request<http::string_body> request) {
+    ws_.read_message_max(server_.config.max_ws_message_bytes);
+    ws_.binary(true);
+    websocket::stream_base::timeout timeout;
+    timeout.handshake_timeout = Seconds(server_.config.header_timeout_s);  // the handshake and a close
+    timeout.idle_timeout = Seconds(server_.config.ws_idle_timeout_s);
+    timeout.keep_alive_pings = true;  // a ping at half of it; no pong (a client that does not read): closed
+    ws_.set_option(timeout);
+    if (!refusal_.empty()) {
+      // the browser cannot read an HTTP status of a failed upgrade, only a close's code and reason
+      ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
+        if (ec) return;
+        self->ws_.async_close({websocket::close_code::try_again_later, self->refusal_},
+                              [self](beast::error_code) {});
+      });
+      return;
+    }
+    ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
+      if (ec) return;
+      ++self->server_.ws_sessions;
+      ++self->server_.ws_clients;
+      self->counted_ = true;
+      self->Read();
+      self->Poll();
+    });
+  }
+
+ private:
+  void Read() {
+    ws_.async_read(in_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
+      if (ec) {
+        // a protocol violation or an oversized message (not a close, a reset or a timeout)
+        const bool websocket_error = ec.category() == websocket::make_error_code(websocket::error::closed).category();
+        if (websocket_error && ec != websocket::error::closed) ++self->server_.ws_closed_bad;
+        if (ec == beast::error::timeout && !self->done_) ++self->server_.ws_closed_slow;  // no pong
+        self->done_ = true;
+        self->timer_.cancel();
+        return;
+      }
+      self->in_.consume(self->in_.size());  // read-only: dropped
+      self->Read();
+    });
+  }
+  void Poll() {
+    if (done_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (writing_ && now - write_start_ > Seconds(server_.config.send_timeout_s)) {
+      // the one message of its queue is still not taken: a client that does not read
+      ++server_.ws_closed_slow;
+      done_ = true;
+      beast::get_lowest_layer(ws_).close();
+      return;
+    }
+    if (!writing_) {
+      std::uint64_t version = 0;
+      std::shared_ptr<const std::string> frame = server_.Newest(channel_, &version);
+      if (frame && version != sent_) {
+        if (sent_ != 0 && version > sent_ + 1) server_.frames_skipped += static_cast<long>(version - sent_ - 1);
+        sent_ = version;
+        writing_ = true;
+        write_start_ = now;
+        ws_.async_write(asio::buffer(*frame), [self = shared_from_this(), frame](beast::error_code ec, std::size_t) {
+          self->writing_ = false;
+          if (ec) {
+            self->done_ = true;
+            self->timer_.cancel();
+            return;
+          }
+          ++self->server_.frames_sent;
+        });
+      }
+    }
+    timer_.expires_after(Seconds(server_.config.frame_poll_s));
+    timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+      if (!ec) self->Poll();
+    });
+  }
+
+  Impl& server_;
+  websocket::stream<beast::tcp_stream> ws_;
+  asio::steady_timer timer_;
+  beast::flat_buffer in_;
+  int channel_;
+  std::string address_, refusal_;
+  std::uint64_t sent_ = 0;
+  std::chrono::steady_clock::time_point write_start_;
+  bool writing_ = false, done_ = false, counted_ = false;
+};
+
+}  // namespace
+
+void StartWebSocket(ViewServer::Impl& server, tcp::socket socket, int channel, std::string address,
+                    std::string refusal, http::request<http::string_body> request) {
+  std::make_shared<WsSession>(server, std::move(socket), channel, std::move(address), std::move(refusal))
+      ->Start(std::move(request));
+}
+
+}  // namespace vlab::view
