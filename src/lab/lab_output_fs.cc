@@ -50,6 +50,15 @@ std::vector<fs::directory_entry> Children(const fs::path& dir, std::error_code& 
   return children;
 }
 
+// true when `dir` holds nothing, or only the marker's temporary file
+bool OnlyMarkerTemp(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    if (it->path().filename() != kMarkerTemp) return false;
+  }
+  return !ec;
+}
+
 bool IsFolder(const fs::directory_entry& entry) {
   std::error_code ec;
   return entry.symlink_status(ec).type() == fs::file_type::directory;
@@ -214,8 +223,11 @@ std::vector<std::string> RemoveStaleStaging(const std::string& parent) {
     const fs::path path = fs::path(parent) / name;
     std::error_code ec;
     if (fs::symlink_status(path, ec).type() != fs::file_type::directory) continue;
-    if (!fs::exists(path / kOutputMarker, ec)) continue;  // not a folder vlab staged
-    if (ReadManifest(path.string())) continue;  // a finished run's files kept there: never removed
+    // a run killed between making its folder and writing the marker left it empty (or with the
+    // marker's temporary file alone); any other folder without a marker is not one vlab staged
+    const bool marked = fs::exists(path / kOutputMarker, ec);
+    if (!marked && !OnlyMarkerTemp(path)) continue;
+    if (marked && ReadManifest(path.string())) continue;  // a finished run's files kept there: never removed
     const FolderLock lock(path.string(), FolderLock::Wait::kTry);
     if (!lock.held()) continue;  // its run lives (or this file system has no locks: then left alone)
     fs::remove_all(path, ec);

@@ -71,9 +71,9 @@ std::string StagingName(long pid, unsigned n);
 bool IsStagingName(std::string_view name);
 
 /// Removes the staging folders in `parent` whose run is dead: a name of
-/// StagingName(), a marker without a list (a finished run's list is never
-/// removed) and no lock held on it (a live run holds one while it lives).
-/// Call with `parent` locked. Returns their paths.
+/// StagingName(), a marker without a list, or nothing in it yet (a finished
+/// run's list is never removed), and no lock held on it (a live run holds one
+/// while it lives). Call with `parent` locked. Returns their paths.
 std::vector<std::string> RemoveStaleStaging(const std::string& parent);
 
 }  // namespace vlab::lab::output_fs

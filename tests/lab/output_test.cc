@@ -263,9 +263,12 @@ TEST(OutputDirTest, StagingFoldersOfDeadRunsAreRemoved) {
   const std::string live_staging = fs::path(live->staging_dir()).filename().string();
   fs::create_directory(tmp / ".vlab-notes");
   WriteFile(tmp / ".vlab-notes/.vlab-output", "");
-  auto other = OutputDir::Create(tmp / "c");  // removes the dead run's folder, not the live one's
+  fs::create_directory(tmp / ".vlab-1-99");  // killed between its mkdir and its marker: empty
+  fs::create_directory(tmp / ".vlab-2-5");   // the name, but no marker and a file: not vlab's
+  WriteFile(tmp / ".vlab-2-5/x", "x");
+  auto other = OutputDir::Create(tmp / "c");  // removes the dead runs' folders, not the live one's
   EXPECT_EQ(Entries(tmp.path()), (std::set<std::string>{live_staging, fs::path(other->staging_dir()).filename().string(),
-                                                         ".vlab-notes"}));
+                                                         ".vlab-notes", ".vlab-2-5"}));
   EXPECT_EQ(output_fs::RemoveStaleStaging(tmp.path()), std::vector<std::string>{});
 }
 
