@@ -179,6 +179,18 @@ TEST(OutputDirTest, NestedOutputFolderIsVlabs) {
   EXPECT_TRUE(Has(InputErrorOf(run), "holds entries vlab did not write: render/overview/extra.png"));
 }
 
+// a file vlab writes into a finished folder after the run (vlab golden --keep's golden_log.csv)
+TEST(OutputDirTest, AFileAddedToTheListIsVlabs) {
+  TempDir tmp;
+  const std::string run = tmp / "run";
+  Committed(run, {"log.csv"});
+  WriteFile(run + "/golden_log.csv", "thinned");
+  EXPECT_TRUE(Has(InputErrorOf(run), "holds entries vlab did not write: golden_log.csv"));
+  EXPECT_EQ(AddToOutputList(run, "golden_log.csv"), "");
+  EXPECT_EQ(InputErrorOf(run), "(no error)");
+  EXPECT_TRUE(Has(AddToOutputList(tmp.path(), "x"), "has no list of what vlab wrote"));
+}
+
 // two runs into one folder: the second to finish keeps the first's folder and takes DIR.2
 // (DIR.3 when DIR.2 is taken); a foreign folder that appeared meanwhile is kept likewise
 TEST(OutputDirTest, AFolderPutThereDuringTheRunIsKept) {
