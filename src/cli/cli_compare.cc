@@ -10,6 +10,7 @@
 #include "core/core_signals.h"
 #include "lab/lab_compare.h"
 #include "lab/lab_golden.h"
+#include "lab/lab_output.h"
 #include "lab/lab_log.h"
 #include "lab/lab_runner.h"
 #include "lab/lab_scenario.h"
@@ -105,6 +106,7 @@ int OneGolden(const GoldenArgs& a, const std::string& dir, const std::string& wo
   // the run's log, thinned as the golden keeps it, so both hold the same rows
   const std::string thinned = out + "/golden_log.csv";
   lab::WriteDecimatedLog(out + "/log.csv", thinned, g.every);
+  lab::AddToOutputList(out, "golden_log.csv");  // vlab's too: a later --keep run into DIR replaces it
   if (!a.update) {
     if (!fs::is_regular_file(g.log())) throw InputError(g.log() + ": no golden log yet (write it: vlab golden --update " + dir + ")");
     lab::CompareReport report = lab::CompareLogs(lab::ReadCsvTable(thinned), lab::ReadCsvTable(g.log()), g.compare);

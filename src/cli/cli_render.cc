@@ -93,6 +93,7 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   if (given("--fps") && given("--every")) throw vlab::InputError("--fps and --every: give one of them, not both");
   if (given("--fps") && !(a.fps > 0 && std::isfinite(a.fps))) throw vlab::InputError("--fps must be > 0");
   if (given("--every") && !(a.every_s > 0 && std::isfinite(a.every_s))) throw vlab::InputError("--every must be > 0 s");
+  if (given("--out") && a.out_dir.empty()) throw vlab::InputError("--out: an empty name (give a folder, e.g. --out frames)");
   if (given("--frames") && a.frames < 1) throw vlab::InputError("--frames must be >= 1");
   if (given("--width") && a.width < 1) throw vlab::InputError("--width must be >= 1 pixel");
   if (given("--height") && a.height < 1) throw vlab::InputError("--height must be >= 1 pixel");

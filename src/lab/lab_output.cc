@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <optional>
+#include <set>
 #include <system_error>
 #include <vector>
 
@@ -75,6 +77,15 @@ void Refuse(const fs::path& target) {
 }
 
 }  // namespace
+
+std::string AddToOutputList(const std::string& folder, const std::string& name) {
+  std::optional<std::set<std::string>> list = output_fs::ReadManifest(folder);
+  if (!list) return "'" + folder + "' has no list of what vlab wrote in its " + kOutputMarker;
+  list->insert(name);
+  const std::vector<std::string> entries(list->begin(), list->end());
+  const std::string error = output_fs::WriteMarker(folder, output_fs::ReadRunId(folder), &entries);
+  return error.empty() ? "" : "'" + folder + "/" + kOutputMarker + "': " + error;
+}
 
 std::unique_ptr<OutputDir> OutputDir::Create(const std::string& final_dir) {
   const fs::path target = Target(final_dir);

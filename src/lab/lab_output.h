@@ -40,6 +40,12 @@ class FolderLock;
 /// The file that marks a folder as an output folder vlab wrote, and lists what it wrote.
 inline constexpr const char* kOutputMarker = ".vlab-output";
 
+/// Adds `name` (a path relative to `folder`) to the list of a finished output
+/// folder, for a file vlab writes into it after the run (vlab golden's
+/// golden_log.csv), so that the next run into it may replace it. "" on success,
+/// else why not (no list there; the marker could not be written).
+std::string AddToOutputList(const std::string& folder, const std::string& name);
+
 class OutputDir {
  public:
   /// Creates the staging folder (and the parent of final_dir) with the marker

@@ -1,5 +1,6 @@
 #include "lab/lab_output_fs.h"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
@@ -31,10 +32,10 @@ constexpr const char* kMarkerNote =
     "This folder was written by vlab. vlab replaces it (vlab run --out) only while this file is here and "
     "lists every entry in the folder: a file added to the folder makes vlab refuse to replace it.";
 
-bool AllDigits(const std::string& text, std::size_t from, std::size_t to) {
-  if (from >= to) return false;
-  for (std::size_t i = from; i < to; ++i) {
-    if (text[i] < '0' || text[i] > '9') return false;
+bool AllDigits(std::string_view text) {
+  if (text.empty()) return false;
+  for (char c : text) {
+    if (c < '0' || c > '9') return false;
   }
   return true;
 }
@@ -47,6 +48,15 @@ std::vector<fs::directory_entry> Children(const fs::path& dir, std::error_code& 
   std::sort(children.begin(), children.end(),
             [](const fs::directory_entry& a, const fs::directory_entry& b) { return a.path() < b.path(); });
   return children;
+}
+
+// true when `dir` holds nothing, or only the marker's temporary file
+bool OnlyMarkerTemp(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    if (it->path().filename() != kMarkerTemp) return false;
+  }
+  return !ec;
 }
 
 bool IsFolder(const fs::directory_entry& entry) {
@@ -191,24 +201,37 @@ std::string StagingName(long pid, unsigned n) {
   return kStagingPrefix + std::to_string(pid) + "-" + std::to_string(n);
 }
 
-bool IsStagingName(const std::string& name) {
-  const std::size_t prefix = std::strlen(kStagingPrefix);
-  if (name.compare(0, prefix, kStagingPrefix) != 0) return false;
-  const std::size_t dash = name.find('-', prefix);
-  return dash != std::string::npos && AllDigits(name, prefix, dash) && AllDigits(name, dash + 1, name.size());
+bool IsStagingName(std::string_view name) {
+  const std::string_view prefix(kStagingPrefix);
+  if (name.substr(0, prefix.size()) != prefix) return false;
+  const std::size_t dash = name.find('-', prefix.size());
+  return dash != std::string_view::npos && AllDigits(name.substr(prefix.size(), dash - prefix.size())) &&
+         AllDigits(name.substr(dash + 1));
 }
 
 std::vector<std::string> RemoveStaleStaging(const std::string& parent) {
+  // the names first, without a path made for every entry (a sweep's folder holds many)
+  std::vector<std::string> candidates;
+  if (DIR* dir = ::opendir(parent.c_str())) {
+    while (const dirent* entry = ::readdir(dir)) {
+      if (IsStagingName(entry->d_name)) candidates.emplace_back(entry->d_name);
+    }
+    ::closedir(dir);
+  }
   std::vector<std::string> removed;
-  std::error_code ec;
-  for (const fs::directory_entry& entry : Children(parent, ec)) {
-    if (!IsStagingName(entry.path().filename().string()) || !IsFolder(entry)) continue;
-    if (!fs::exists(entry.path() / kOutputMarker, ec)) continue;  // not a folder vlab staged
-    if (ReadManifest(entry.path().string())) continue;  // a finished run's files kept there: never removed
-    const FolderLock lock(entry.path().string(), FolderLock::Wait::kTry);
+  for (const std::string& name : candidates) {
+    const fs::path path = fs::path(parent) / name;
+    std::error_code ec;
+    if (fs::symlink_status(path, ec).type() != fs::file_type::directory) continue;
+    // a run killed between making its folder and writing the marker left it empty (or with the
+    // marker's temporary file alone); any other folder without a marker is not one vlab staged
+    const bool marked = fs::exists(path / kOutputMarker, ec);
+    if (!marked && !OnlyMarkerTemp(path)) continue;
+    if (marked && ReadManifest(path.string())) continue;  // a finished run's files kept there: never removed
+    const FolderLock lock(path.string(), FolderLock::Wait::kTry);
     if (!lock.held()) continue;  // its run lives (or this file system has no locks: then left alone)
-    fs::remove_all(entry.path(), ec);
-    if (!ec) removed.push_back(entry.path().string());
+    fs::remove_all(path, ec);
+    if (!ec) removed.push_back(path.string());
   }
   return removed;
 }

@@ -7,6 +7,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace vlab::lab::output_fs {
@@ -67,12 +68,12 @@ int RenameNoReplace(const std::string& from, const std::string& to);
 /// A staging folder's name: ".vlab-PID-N".
 std::string StagingName(long pid, unsigned n);
 /// True for a name StagingName() makes.
-bool IsStagingName(const std::string& name);
+bool IsStagingName(std::string_view name);
 
 /// Removes the staging folders in `parent` whose run is dead: a name of
-/// StagingName(), a marker without a list (a finished run's list is never
-/// removed) and no lock held on it (a live run holds one while it lives).
-/// Call with `parent` locked. Returns their paths.
+/// StagingName(), a marker without a list, or nothing in it yet (a finished
+/// run's list is never removed), and no lock held on it (a live run holds one
+/// while it lives). Call with `parent` locked. Returns their paths.
 std::vector<std::string> RemoveStaleStaging(const std::string& parent);
 
 }  // namespace vlab::lab::output_fs

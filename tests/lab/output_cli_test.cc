@@ -147,6 +147,9 @@ TEST(OutputCliTest, OutNames) {
     EXPECT_EQ(empty.exit_code, 2) << command;
     EXPECT_EQ(empty.err, "vlab: error: --out: an empty name (give a folder, e.g. --out results) (see vlab --help)\n");
   }
+  const auto render = RunVlab("render scenes/pa10_reach --camera overview --out ''");
+  EXPECT_EQ(render.exit_code, 2);
+  EXPECT_EQ(render.err, "vlab: error: --out: an empty name (give a folder, e.g. --out frames)\n");
 }
 
 // 20 pairs of runs into one --out, each pair's two runs under way at once (both staging folders

@@ -179,6 +179,18 @@ TEST(OutputDirTest, NestedOutputFolderIsVlabs) {
   EXPECT_TRUE(Has(InputErrorOf(run), "holds entries vlab did not write: render/overview/extra.png"));
 }
 
+// a file vlab writes into a finished folder after the run (vlab golden --keep's golden_log.csv)
+TEST(OutputDirTest, AFileAddedToTheListIsVlabs) {
+  TempDir tmp;
+  const std::string run = tmp / "run";
+  Committed(run, {"log.csv"});
+  WriteFile(run + "/golden_log.csv", "thinned");
+  EXPECT_TRUE(Has(InputErrorOf(run), "holds entries vlab did not write: golden_log.csv"));
+  EXPECT_EQ(AddToOutputList(run, "golden_log.csv"), "");
+  EXPECT_EQ(InputErrorOf(run), "(no error)");
+  EXPECT_TRUE(Has(AddToOutputList(tmp.path(), "x"), "has no list of what vlab wrote"));
+}
+
 // two runs into one folder: the second to finish keeps the first's folder and takes DIR.2
 // (DIR.3 when DIR.2 is taken); a foreign folder that appeared meanwhile is kept likewise
 TEST(OutputDirTest, AFolderPutThereDuringTheRunIsKept) {
@@ -263,9 +275,12 @@ TEST(OutputDirTest, StagingFoldersOfDeadRunsAreRemoved) {
   const std::string live_staging = fs::path(live->staging_dir()).filename().string();
   fs::create_directory(tmp / ".vlab-notes");
   WriteFile(tmp / ".vlab-notes/.vlab-output", "");
-  auto other = OutputDir::Create(tmp / "c");  // removes the dead run's folder, not the live one's
+  fs::create_directory(tmp / ".vlab-1-99");  // killed between its mkdir and its marker: empty
+  fs::create_directory(tmp / ".vlab-2-5");   // the name, but no marker and a file: not vlab's
+  WriteFile(tmp / ".vlab-2-5/x", "x");
+  auto other = OutputDir::Create(tmp / "c");  // removes the dead runs' folders, not the live one's
   EXPECT_EQ(Entries(tmp.path()), (std::set<std::string>{live_staging, fs::path(other->staging_dir()).filename().string(),
-                                                         ".vlab-notes"}));
+                                                         ".vlab-notes", ".vlab-2-5"}));
   EXPECT_EQ(output_fs::RemoveStaleStaging(tmp.path()), std::vector<std::string>{});
 }
 
