@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
+#include "core/core_mujoco.h"
 #include "lab/devices/device_scene.h"
 #include "lab/lab_poses.h"
 
@@ -26,9 +27,13 @@ std::string EncodeFrame(double time, double seq, const double* poses, int values
 }
 
 std::unique_ptr<ViewModel> ViewModel::Load(const std::string& path) {
-  char error[1000] = "";
-  mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
-  if (!m) throw InputError("vlab view: model '" + path + "': " + error);
+  // the shared loader: a regular UTF-8 file of bounded size, includes checked, before MuJoCo opens it
+  mjModel* m = nullptr;
+  try {
+    m = LoadModel(path).release();
+  } catch (const InputError& e) {
+    throw InputError(std::string("vlab view: ") + e.what());
+  }
   std::unique_ptr<ViewModel> v(new ViewModel());
   v->m_ = m;
   v->d_ = mj_makeData(m);
