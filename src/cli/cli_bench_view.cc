@@ -115,7 +115,7 @@ double PeriodTime(const lab::Scenario& scenario, bool viewer, long* frames, long
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
   lab::BridgeOptions options;
   for (const auto& d : scenario.devices) {
-    if (d.port > 0) options.ports[d.name] = 0;  // any free port
+    if (d.port != 0) options.ports[d.name] = 0;  // any free port
   }
   std::unique_ptr<Viewer> view;
   lab::RunOptions run;

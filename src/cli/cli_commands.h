@@ -33,6 +33,7 @@ struct ServeArgs {
   std::string scenario;
   std::string bind = "127.0.0.1";
   std::vector<std::string> ports;  ///< DEVICE=PORT overrides
+  std::string ports_mode;          ///< "auto": every served device on a free port
   std::string clock;               ///< "" = the scenario's
   std::string out_dir;
   double duration_s = 0;

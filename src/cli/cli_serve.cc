@@ -15,26 +15,36 @@ namespace vlab::cli {
 
 namespace {
 
-lab::BridgeOptions MakeBridgeOptions(const ServeArgs& args) {
+// --bind, --port DEVICE=PORT|auto (0: any free port) and --ports auto (every served device on
+// a free port); a device the scenario gives `port: auto` is bound to port 0 by the bridge
+lab::BridgeOptions MakeBridgeOptions(const ServeArgs& args, const lab::Scenario& scenario) {
   lab::BridgeOptions options;
   options.bind = args.bind;
+  if (args.ports_mode == "auto") {
+    for (const lab::DeviceConfig& d : scenario.devices) {
+      if (d.port != 0) options.ports[d.name] = 0;
+    }
+  }
   for (const std::string& p : args.ports) {
     const auto eq = p.find('=');
+    const std::string value = eq == std::string::npos ? "" : p.substr(eq + 1);
     int port = -1;
     try {
-      port = eq == std::string::npos ? -1 : std::stoi(p.substr(eq + 1));
+      std::size_t used = 0;
+      port = value == "auto" ? 0 : std::stoi(value, &used);
+      if (value != "auto" && used != value.size()) port = -1;
     } catch (const std::exception&) {
       port = -1;
     }
     if (eq == std::string::npos || eq == 0 || port < 0 || port > 65535) {
-      throw vlab::InputError("--port '" + p + "': expected DEVICE=PORT with PORT 0..65535");
+      throw vlab::InputError("--port '" + p + "': expected DEVICE=PORT with PORT 0..65535 or auto");
     }
     options.ports[p.substr(0, eq)] = port;
   }
   return options;
 }
 
-std::string Layout(const nlohmann::json& fields) {
+std::string Layout(const nlohmann::ordered_json& fields) {
   std::string text;
   for (const auto& f : fields) text += (text.empty() ? "" : ", ") + f.get<std::string>();
   return text.empty() ? "-" : text;
@@ -49,7 +59,7 @@ int ServeCommand(const ServeArgs& args) {
     InstallStopSignals();
     lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario));
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
-    const lab::BridgeOptions bridge = MakeBridgeOptions(args);
+    const lab::BridgeOptions bridge = MakeBridgeOptions(args, scenario);
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
     const std::string out_dir = args.out_dir.empty() ? "out/" + scenario.name : args.out_dir;
     lab::RunOptions options;
@@ -98,13 +108,16 @@ int ServeCommand(const ServeArgs& args) {
 int DevicesCommand(const ServeArgs& args) {
   return WithErrorReport([&args] {
     const lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario));
-    lab::BridgeOptions bridge = MakeBridgeOptions(args);
-    // describe without taking the ports (a server may be running): bind any free port
+    const lab::BridgeOptions asked = MakeBridgeOptions(args, scenario);
+    // the port `vlab serve` with these options would bind (0: a free one, chosen then); to
+    // describe, any free port is bound instead (a server may be running on the real ones)
     std::map<std::string, int> ports;
+    lab::BridgeOptions bridge = asked;
     for (const auto& d : scenario.devices) {
-      const auto o = bridge.ports.find(d.name);
-      ports[d.name] = o != bridge.ports.end() ? o->second : d.port;
-      if (ports[d.name] > 0 || o != bridge.ports.end()) bridge.ports[d.name] = 0;
+      const auto o = asked.ports.find(d.name);
+      if (o == asked.ports.end() && d.port == 0) continue;
+      ports[d.name] = o != asked.ports.end() ? o->second : d.port == lab::kAutoPort ? 0 : d.port;
+      bridge.ports[d.name] = 0;
     }
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
     std::optional<ClockMode> clock;
@@ -112,14 +125,24 @@ int DevicesCommand(const ServeArgs& args) {
     const std::vector<lab::ServedDevice> devices = lab->Describe(bridge, clock);
     std::printf("%s: clock %s\n", scenario.name.c_str(), ClockModeName(clock.value_or(scenario.clock)));
     for (const auto& d : devices) {
-      const nlohmann::json j = nlohmann::json::parse(d.describe_json);
-      std::printf("  %-8s %-6s udp %s:%d\n", d.name.c_str(), d.kind.c_str(), bridge.bind.c_str(), ports[d.name]);
+      const int port = ports.at(d.name);
+      nlohmann::ordered_json j = nlohmann::ordered_json::parse(d.describe_json);
+      const std::string endpoint = port > 0 ? std::to_string(port) : "auto (a free port, chosen when served)";
+      std::printf("  %-8s %-6s udp %s:%s\n", d.name.c_str(), d.kind.c_str(), bridge.bind.c_str(), endpoint.c_str());
       std::printf("           state:   %s\n", Layout(j["layout"]["state"]).c_str());
       std::printf("           command: %s\n", Layout(j["layout"]["command"]).c_str());
-      if (args.json) std::printf("           describe: %s\n", d.describe_json.c_str());
+      if (!args.json) continue;
+      // the reply the served device would give: its port, not the one bound to describe it
+      // (null where it is chosen when served)
+      if (j.contains("endpoint")) {
+        j["endpoint"]["port"] = port > 0 ? nlohmann::ordered_json(port) : nlohmann::ordered_json(nullptr);
+      }
+      std::printf("           describe: %s\n", j.dump().c_str());
     }
     for (const auto& d : scenario.devices) {
-      if (ports[d.name] == 0) std::printf("  %-8s %-6s not served (no port)\n", d.name.c_str(), bridge::KindName(static_cast<int>(d.kind)));
+      if (ports.count(d.name) == 0) {
+        std::printf("  %-8s %-6s not served (no port)\n", d.name.c_str(), bridge::KindName(static_cast<int>(d.kind)));
+      }
     }
     return 0;
   });

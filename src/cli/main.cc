@@ -61,7 +61,12 @@ int main(int argc, char** argv) {
     cmd->add_option("scenario", a->scenario, "Scenario file (YAML); the .yaml extension may be left out")
         ->required();
     cmd->add_option("--bind", a->bind, "Address the device sockets bind to (default 127.0.0.1)");
-    cmd->add_option("--port", a->ports, "DEVICE=PORT: serve DEVICE on PORT (0: any free port); repeatable");
+    cmd->add_option("--port", a->ports, "DEVICE=PORT: serve DEVICE on PORT (0 or auto: any free port); repeatable");
+    cmd->add_option("--ports", a->ports_mode,
+                    "auto: every device that has a port on a free port instead (vlab serve prints the ports it "
+                    "took on its first line and keeps them in summary.json), so that runs of one scenario can go "
+                    "side by side")
+        ->check(CLI::IsMember({"auto"}));
     cmd->add_option("--clock", a->clock, "fast | lockstep | realtime (default: the scenario's)")
         ->check(CLI::IsMember({"fast", "lockstep", "realtime"}));
   }

@@ -52,7 +52,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     const DeviceConfig& c = scenario.devices[i];
     const auto override_port = options.ports.find(device->name());
     if (override_port == options.ports.end() && c.port == 0) continue;
-    const int port = override_port != options.ports.end() ? override_port->second : c.port;
+    const int port = override_port != options.ports.end() ? override_port->second : c.port == kAutoPort ? 0 : c.port;
     Served d;
     d.device = device;
     if (OwnTransport* t = device->own_transport()) {  // unserved again by ~LabBridge

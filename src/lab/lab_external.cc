@@ -18,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <string_view>
 #include <thread>
 
 #include "core/core_errors.h"
@@ -72,38 +73,6 @@ pid_t WaitFor(pid_t pid, int* status, int options) {
 
 }  // namespace
 
-std::vector<std::string> ExpandCommand(const std::vector<std::string>& command,
-                                       const std::map<std::string, std::string>& values, const std::string& where) {
-  std::vector<std::string> out;
-  for (const std::string& arg : command) {
-    std::string expanded;
-    std::size_t at = 0;
-    while (at < arg.size()) {
-      const std::size_t open = arg.find('{', at);
-      if (open == std::string::npos) {
-        expanded += arg.substr(at);
-        break;
-      }
-      const std::size_t close = arg.find('}', open);
-      if (close == std::string::npos) {
-        throw InputError(where + ": controller.command: '" + arg + "': a '{' without its '}'");
-      }
-      const std::string name = arg.substr(open + 1, close - open - 1);
-      const auto it = values.find(name);
-      if (it == values.end()) {
-        std::string known;
-        for (const auto& [k, v] : values) known += (known.empty() ? "" : ", ") + ("{" + k + "}");
-        throw InputError(where + ": controller.command: unknown placeholder {" + name + "} (known: " + known +
-                         "; a device needs a port to be named)");
-      }
-      expanded += arg.substr(at, open - at) + it->second;
-      at = close + 1;
-    }
-    out.push_back(expanded);
-  }
-  return out;
-}
-
 bool StartsExternalController(const Scenario& scenario, bool serving) {
   return scenario.controller.type == ControllerType::kExternal && !serving;
 }
@@ -112,7 +81,7 @@ BridgeOptions ExternalBridgeOptions(const Scenario& scenario) {
   BridgeOptions options;
   options.bind = "127.0.0.1";
   for (const DeviceConfig& d : scenario.devices) {
-    if (d.port > 0) options.ports[d.name] = 0;
+    if (d.port != 0) options.ports[d.name] = 0;  // a fixed port, or auto
   }
   return options;
 }
@@ -122,33 +91,9 @@ ClockMode ExternalClock(const Scenario& scenario, std::optional<ClockMode> reque
   return clock == ClockMode::kFast ? ClockMode::kLockstep : clock;
 }
 
-std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served,
-                                                 const std::string& out_dir) {
-  std::map<std::string, std::string> values;
-  for (const DeviceConfig& d : scenario.devices) {
-    if (d.port > 0) values[d.name] = "127.0.0.1:0";
-  }
-  for (const ServedDevice& d : served) values[d.name] = d.address + ":" + std::to_string(d.port);
-  values["bin"] = ExecutableDir();
-  const std::string dir = std::filesystem::path(scenario.file).parent_path().string();
-  values["scenario_dir"] = dir.empty() ? "." : dir;
-  char duration[32];
-  std::snprintf(duration, sizeof(duration), "%.17g", scenario.duration_s);
-  values["duration"] = duration;
-  std::string out = out_dir.empty() ? std::filesystem::temp_directory_path().string() : out_dir;
-  while (out.size() > 1 && out.back() == '/') out.pop_back();
-  values["out"] = out;
-  return values;
-}
-
-std::string ExecutableDir() {
-  std::error_code ec;
-  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  return ec ? std::string() : self.parent_path().string();
-}
-
 std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<std::string>& argv,
-                                                              const std::string& log_path, int realtime_priority) {
+                                                              const std::string& log_path, int realtime_priority,
+                                                              const std::vector<std::string>& environment) {
   if (argv.empty() || argv[0].empty()) throw InputError("controller.command: no program named");
   std::unique_ptr<ExternalController> c(new ExternalController());
   c->program_ = argv[0];
@@ -164,6 +109,19 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  // the environment, made before the fork (the child may not allocate): vlab's own, less
+  // the names `environment` sets, then those
+  std::vector<char*> env;
+  for (char** e = environ; *e; ++e) {
+    const std::string_view entry(*e);
+    const bool replaced = std::any_of(environment.begin(), environment.end(), [&entry](const std::string& add) {
+      const std::size_t eq = add.find('=');
+      return entry.size() > eq && entry.compare(0, eq + 1, add, 0, eq + 1) == 0;
+    });
+    if (!replaced) env.push_back(*e);
+  }
+  for (const std::string& add : environment) env.push_back(const_cast<char*>(add.c_str()));
+  env.push_back(nullptr);
 
   const int log = ::open(c->log_path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   const int null = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
@@ -215,7 +173,7 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
         (void)!::write(kExecErrorFd, &refused, sizeof(refused));
       }
     }
-    ::execvp(args[0], args.data());
+    ::execvpe(args[0], args.data(), env.data());
     const int error = errno;
     (void)!::write(kExecErrorFd, &error, sizeof(error));
     ::_exit(127);

@@ -3,12 +3,14 @@
 // exactly as it would under `vlab serve` or against real hardware.
 //
 // Ports
-//   input   the program's command line, with placeholders expanded:
-//           {DEVICE} -> ADDRESS:PORT of a served device, {bin} -> the folder
-//           of the running vlab executable, {scenario_dir} -> the folder of
-//           the scenario file, {duration} -> the run's duration in seconds,
-//           {out} -> the run's output folder (files written there move into
-//           place with log.csv: the program is stopped before that)
+//   input   the program's command line, with placeholders expanded, and its
+//           environment (lab_command.h): {DEVICE} -> ADDRESS:PORT of a served
+//           device, {port:NAME} -> a device's port or a free port for a
+//           program it starts, {bin} -> the folder of the running vlab
+//           executable, {scenario_dir} -> the folder of the scenario file,
+//           {duration} -> the run's duration in seconds, {out} -> the run's
+//           output folder (files written there move into place with log.csv:
+//           the program is stopped before that)
 //   output  the program's stdout and stderr, into a log file
 //   exit    exit_fd() becomes readable (end of file) once the program and
 //           every process it started have closed their copy of it: the lab
@@ -32,6 +34,7 @@
 
 #include "core/core_realtime.h"
 #include "lab/lab_bridge.h"
+#include "lab/lab_command.h"
 #include "lab/lab_scenario.h"
 
 namespace vlab::lab {
@@ -39,27 +42,12 @@ namespace vlab::lab {
 /// True when a run of `scenario` starts its own external controller: the
 /// scenario names one and the run serves nothing by itself (not `vlab serve`).
 bool StartsExternalController(const Scenario& scenario, bool serving);
-/// How such a run serves its devices: every device with a port, on a free
-/// port of the loopback address.
+/// How such a run serves its devices: every device with a port (or `port:
+/// auto`), on a free port of the loopback address.
 BridgeOptions ExternalBridgeOptions(const Scenario& scenario);
 /// Its clock: the one asked for, else the scenario's; `fast` becomes
 /// `lockstep` (an external controller is never in process).
 ClockMode ExternalClock(const Scenario& scenario, std::optional<ClockMode> requested);
-/// The placeholder values of the scenario's controller command: every served
-/// device (ADDRESS:PORT; port 0 before binding), bin, scenario_dir, duration,
-/// and out: the folder the program may write its own files into (the run's
-/// output folder while it is written; "" gives the system's temporary folder).
-std::map<std::string, std::string> CommandValues(const Scenario& scenario, const std::vector<ServedDevice>& served,
-                                                 const std::string& out_dir = "");
-
-/// Expands {NAME} placeholders of a command line from `values`. Throws
-/// InputError ("WHERE: controller.command: unknown placeholder {x} (known: ...)")
-/// for a name `values` lacks or an unclosed brace.
-std::vector<std::string> ExpandCommand(const std::vector<std::string>& command,
-                                       const std::map<std::string, std::string>& values, const std::string& where);
-
-/// The folder holding the running executable ("" when unknown).
-std::string ExecutableDir();
 
 class ExternalController {
  public:
@@ -70,8 +58,10 @@ class ExternalController {
   /// realtime_priority > 0: the program (and every process it starts) runs
   /// SCHED_FIFO at that priority when the user may have it (core_realtime.h);
   /// refused, it runs at normal priority and realtime() says why.
+  /// environment: "NAME=VALUE" entries added to (or replacing in) vlab's own.
   static std::unique_ptr<ExternalController> Start(const std::vector<std::string>& argv,
-                                                   const std::string& log_path, int realtime_priority = 0);
+                                                   const std::string& log_path, int realtime_priority = 0,
+                                                   const std::vector<std::string>& environment = {});
   ~ExternalController();
   ExternalController(const ExternalController&) = delete;
   ExternalController& operator=(const ExternalController&) = delete;

@@ -106,10 +106,16 @@ void RunSession::Prepare() {
   }
   if (external_) {
     const std::string log_path = out_ ? out_->File("controller.log") : "";
-    controller_ = ExternalController::Start(
-        ExpandCommand(sc.controller.command, CommandValues(sc, bridge_->Devices(), out_ ? out_->File("") : ""),
-                      sc.controller.where),
-        log_path, sc.controller.realtime_priority);
+    // free ports for the programs it starts ({port:NAME}), held until just before it starts
+    const std::vector<ServedDevice> served = bridge_->Devices();
+    PortReservations ports = PortReservations::Reserve(CommandPortNames(sc, sc.controller.where), "127.0.0.1");
+    const std::string out_dir = out_ ? out_->File("") : "";
+    const std::vector<std::string> argv =
+        ExpandCommand(sc.controller.command, CommandValues(sc, served, out_dir, ports.ports()), sc.controller.where);
+    result_.controller.ports = ports.ports();
+    ports.Release();
+    controller_ = ExternalController::Start(argv, log_path, sc.controller.realtime_priority,
+                                            CommandEnvironment(served, ports.ports()));
     result_.controller.realtime = controller_->realtime();
     bridge_->WatchPeerExit(controller_->exit_fd());
   }

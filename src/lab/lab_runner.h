@@ -12,6 +12,7 @@
 
 #include <csignal>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -119,6 +120,7 @@ struct RunResult {
     std::string program;
     std::string outcome;
     RealtimeGrant realtime;  ///< its controller.realtime_priority, read off the program
+    std::map<std::string, int> ports;  ///< the free ports its {port:NAME} placeholders got
   } controller;
 };
 

@@ -158,7 +158,7 @@ TEST(ExternalController, PlotsOfItsCsv) {
   EXPECT_TRUE(std::filesystem::exists(dir / "b/log.csv"));
   EXPECT_FALSE(std::filesystem::exists(dir / "b/c.png"));
 
-  r = RunVlab("serve " + (dir / "silent.yaml") + " --clock fast --out " + (dir / "c"));
+  r = RunVlab("serve " + (dir / "silent.yaml") + " --ports auto --clock fast --out " + (dir / "c"));  // free ports
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("plot skipped: c.png: no c.csv"), std::string::npos) << r.out;
   EXPECT_EQ(nlohmann::json::parse(ReadFile(dir / "c/summary.json"))["plots_skipped"].size(), 1u);

@@ -29,11 +29,15 @@ struct CommandInputConfig {
 /// the defaults). Throws InputError naming the file, line and key.
 void ReadCommandInput(MapReader& r, CommandInputConfig* input);
 
+/// DeviceConfig::port of `port: auto`: served on a free port the kernel
+/// chooses when the device is bound (its ServedDevice says which).
+constexpr int kAutoPort = -1;
+
 struct DeviceConfig {
   std::string name;
   bridge::DeviceKind kind = bridge::DeviceKind::kArm;
   std::string where;  ///< "FILE:LINE" for messages about binding
-  int port = 0;       ///< UDP port under `vlab serve` (0: not served)
+  int port = 0;       ///< UDP port under `vlab serve` (0: not served; kAutoPort: any free port)
   /// The kind's own parameters (null: the kind's defaults).
   std::shared_ptr<const DeviceParams> params;
 

@@ -74,8 +74,15 @@ DeviceConfig ReadDevice(const std::string& file, const YAML::Node& node, const s
   device.where = YamlWhere(file, node);
   device.name = r.String("name");
   const std::string kind = r.String("kind");
-  device.port = r.Integer("port", 0);
-  if (device.port < 0 || device.port > 65535) r.Fail("port", "must be 0 (not served) to 65535");
+  const YAML::Node port = r.Raw("port");
+  if (port.IsScalar() && port.Scalar() == "auto") {
+    device.port = kAutoPort;
+  } else {
+    device.port = r.Integer("port", 0);
+    if (device.port < 0 || device.port > 65535) {
+      r.Fail("port", "must be 0 (not served) to 65535, or auto (any free port)");
+    }
+  }
   const DeviceKindSpec* spec = FindDeviceKind(kind);
   if (!spec) r.Fail("kind", "unknown device kind '" + kind + "' (known: " + KnownDeviceKinds() + ")");
   device.kind = spec->kind;
