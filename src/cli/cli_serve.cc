@@ -18,6 +18,7 @@ namespace {
 lab::BridgeOptions MakeBridgeOptions(const ServeArgs& args) {
   lab::BridgeOptions options;
   options.bind = args.bind;
+  options.max_subscribers = args.max_subscribers;
   for (const std::string& p : args.ports) {
     const auto eq = p.find('=');
     int port = -1;
