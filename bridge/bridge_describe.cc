@@ -64,6 +64,7 @@ std::string DescribeJson(const SimDescription& d) {
   j["devices"] = d.devices;
   j["owner_timeout_s"] = d.owner_timeout_s;
   j["on_owner_lost"] = d.on_owner_lost;
+  j["ops_from"] = d.ops_from;
   return j.dump();
 }
 

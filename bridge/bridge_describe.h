@@ -41,6 +41,7 @@ struct SimDescription : DeviceDescription {
   std::vector<std::string> devices;  ///< the other devices of the scene
   double owner_timeout_s = 1.0;
   std::string on_owner_lost = "resume";  ///< resume | stay_paused
+  std::string ops_from = "driver";       ///< who may operate it: driver | anyone
 };
 
 std::string DescribeJson(const ArmDescription& d);

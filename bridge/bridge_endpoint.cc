@@ -12,6 +12,7 @@ SessionConfig Sessions(const EndpointConfig& c) {
   s.kind = c.kind;
   s.max_subscribers = c.max_subscribers;
   s.subscriber_timeout_s = c.subscriber_timeout_s;
+  s.evict = true;  // a controller is never locked out by sockets that only subscribe
   s.clock = c.clock;
   return s;
 }
@@ -90,7 +91,8 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   if (e != DecodeError::kNone) return refuse(&counters_.refused_malformed);
 
   if (describe || header_.type == static_cast<int>(MessageType::kSubscribe)) {
-    const SessionTable::Outcome outcome = sessions_.HandleRequest(header_, payload_, from, socket);
+    const SessionTable::Outcome outcome =
+        sessions_.HandleRequest(header_, payload_, from, socket, owner_ ? &*owner_ : nullptr);
     if (outcome != SessionTable::Outcome::kMalformed) ++counters_.requests;
     switch (outcome) {
       case SessionTable::Outcome::kMalformed:
@@ -118,16 +120,22 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   // commands come from subscribers only: a proven address, which states reach
   if (!sessions_.Touch(from)) return refuse(&counters_.refused_not_subscribed);
 
+  // the gate first (the sim in a driven run): it may refuse anyone, or let a driver take over
+  const CommandGate gate = config_.gate ? config_.gate(from) : CommandGate::kOpen;
+  const bool sim = config_.kind == DeviceKind::kSim;
+  if (gate == CommandGate::kRefuse || (owner_ && !from_owner && gate != CommandGate::kTakeOver)) {
+    if (sim) sessions_.Answer(from, SessionResult::kRefused, socket);  // an op: say so
+    return refuse(&counters_.refused_not_owner);
+  }
   // one owner at a time; an owner silent for too long gave the input up (above).
   // A new owner takes over with its first ACCEPTED command only.
-  if (owner_ && !from_owner) return refuse(&counters_.refused_not_owner);
   if (from_owner) owner_heard_s_ = sessions_.Now();  // any datagram shows the owner is alive
   // the seq answers a state this device published, newer than the last accepted
   if (header_.seq > newest_seq_) {
     ++counters_.future;
     return Received::kOther;
   }
-  const double last_seq = owner_ ? last_seq_ : -1;
+  const double last_seq = from_owner ? last_seq_ : -1;
   if (header_.seq < last_seq || header_.seq < newest_seq_ - kSeqWindow) {
     ++counters_.stale;
     return Received::kOther;
@@ -155,9 +163,13 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
     }
     sim_command_ = parsed;
   }
-  if (!from_owner) owner_ = from;
+  if (!from_owner) {
+    if (owner_) ++counters_.owners_released;  // taken over (a gate's kTakeOver)
+    owner_ = from;
+  }
   owner_heard_s_ = sessions_.Now();
   last_seq_ = header_.seq;
+  watch_seq_ = header_.seq;
   last_command_period_ = period;
   ever_commanded_ = true;
   has_command_ = true;
@@ -167,11 +179,20 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   return Received::kCommand;
 }
 
-bool DeviceEndpoint::BeginPeriod(long period) {
+bool DeviceEndpoint::UnansweredLongEnough(double pace_s) const {
+  if (pace_s <= 0) return true;
+  const double first = watch_seq_ + 1;  // the oldest state the owner left unanswered
+  if (first > newest_seq_) return false;
+  if (newest_seq_ - first >= kPublishedRing) return true;  // long gone
+  const double published = published_s_[static_cast<std::size_t>(first) % kPublishedRing];
+  return sessions_.Now() - published >= (config_.watchdog_periods - 1) * pace_s;
+}
+
+bool DeviceEndpoint::BeginPeriod(long period, double pace_s) {
   // (whether or not the silent owner still owns the input: a released arm holds too)
   const bool watched = config_.kind == DeviceKind::kArm || config_.command_length > 0;
   if (watched && config_.watchdog_periods > 0 && ever_commanded_ && !watchdog_hold_ &&
-      period - last_command_period_ > config_.watchdog_periods) {
+      period - last_command_period_ > config_.watchdog_periods && UnansweredLongEnough(pace_s)) {
     watchdog_hold_ = true;
     ++counters_.watchdog_holds;
   }
@@ -207,19 +228,35 @@ std::uint32_t DeviceEndpoint::status_bits() const {
   return bits;
 }
 
+bool DeviceEndpoint::MarkNotOwner(const std::vector<unsigned char>& packet) {
+  if (!config_.status_first || !owner_ || packet.size() <= kHeaderBytes) return false;
+  // the same state with kStatusNotOwner, for everyone but the owner
+  not_owner_packet_ = packet;
+  unsigned char* status = not_owner_packet_.data() + kHeaderBytes;
+  const double value = GetDouble(status);
+  const std::uint32_t bits = value >= 0 && value <= 4294967295.0 ? static_cast<std::uint32_t>(value) : 0;
+  PutDouble(static_cast<double>(bits | kStatusNotOwner), status);
+  return true;
+}
+
+void DeviceEndpoint::SendLatest(const std::vector<unsigned char>& packet, const Endpoint& to, UdpSocket& socket) {
+  if (packet.empty()) return;
+  const bool mark = !(owner_ && *owner_ == to) && MarkNotOwner(packet);
+  const std::vector<unsigned char>& p = mark ? not_owner_packet_ : packet;
+  socket.SendTo(p.data(), p.size(), to);
+}
+
 void DeviceEndpoint::Publish(const std::vector<unsigned char>& packet, UdpSocket& socket) {
-  if (packet.size() >= kHeaderBytes) newest_seq_ = std::max(newest_seq_, GetDouble(packet.data() + 4 * sizeof(double)));
+  if (packet.size() >= kHeaderBytes) {
+    const double seq = GetDouble(packet.data() + 4 * sizeof(double));
+    if (seq > newest_seq_) {  // (a state sent again after a sim op keeps its first time)
+      newest_seq_ = seq;
+      published_s_[static_cast<std::size_t>(seq) % kPublishedRing] = sessions_.Now();
+    }
+  }
   ReleaseSilentOwner();
   sessions_.Expire(owner_ ? &*owner_ : nullptr);
-  const bool mark = config_.status_first && owner_ && packet.size() > kHeaderBytes;
-  if (mark) {
-    // the same state with kStatusNotOwner, for everyone but the owner
-    not_owner_packet_ = packet;
-    unsigned char* status = not_owner_packet_.data() + kHeaderBytes;
-    const double value = GetDouble(status);
-    const std::uint32_t bits = value >= 0 && value <= 4294967295.0 ? static_cast<std::uint32_t>(value) : 0;
-    PutDouble(static_cast<double>(bits | kStatusNotOwner), status);
-  }
+  const bool mark = MarkNotOwner(packet);
   for (const SessionTable::Session& s : sessions_.sessions()) {
     const bool to_owner = owner_ && s.endpoint == *owner_;
     const std::vector<unsigned char>& p = mark && !to_owner ? not_owner_packet_ : packet;

@@ -14,8 +14,10 @@
 //     subscribes with a subscribe request after proving its address (the
 //     cookie handshake), and a describe request is answered with the JSON only
 //     when it carries the cookie; a subscriber silent for
-//     subscriber_timeout_s (wall clock) is dropped; a full table refuses
-//     newcomers and never evicts anyone;
+//     subscriber_timeout_s (wall clock) is dropped; a full table makes room
+//     for a newcomer by dropping the subscriber heard from least recently
+//     that is not the owner (so sockets that only subscribe cannot lock a
+//     controller out); only a table that holds nothing but the owner refuses;
 //   - a malformed datagram is refused and counted by reason; nothing else changes;
 //   - commands (arm, sim and the other commanded kinds) are taken from
 //     subscribers only (others: refused_not_subscribed); the subscriber of
@@ -25,6 +27,10 @@
 //     the lab (paused too): then the owner is released (ReleaseSilentOwner)
 //     and the next accepted command takes over; an owner that unsubscribes
 //     gives its input up at once;
+//   - a gate (EndpointConfig::gate; the lab's sim device) may refuse a
+//     subscriber's commands whoever owns the input, or let one take the input
+//     over from its owner; a refused sim op is answered with a session reply
+//     kRefused;
 //   - a command's seq must be one of the newest kSeqWindow + 1 states the
 //     device published (Publish) and higher than the owner's last accepted
 //     one: lower is stale, equal a duplicate, not yet published is from the
@@ -37,12 +43,17 @@
 //   - watchdog: an arm (or other commanded device) that received no accepted command for more than
 //     watchdog_periods consecutive periods (3: hold at the start of the 4th,
 //     like the PA10's servo link after 3 missed cycles) holds its position
-//     (kStatusWatchdog) until the next accepted command;
+//     (kStatusWatchdog) until the next accepted command. Paced (BeginPeriod's
+//     pace_s > 0: a realtime lab), it also takes the oldest state the owner
+//     left unanswered to have been out for watchdog_periods - 1 periods of
+//     wall time: periods the lab runs back to back to catch up count once;
 //   - every subscriber gets the same state; the owner's status bits (refused,
-//     watchdog) are in it, and non-owners also get kStatusNotOwner.
+//     watchdog) are in it, and non-owners also get kStatusNotOwner (in the
+//     state sent at once to a new subscriber too: SendLatest).
 // Never throws and never blocks in Handle, BeginPeriod or Publish.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -74,6 +85,13 @@ struct EndpointCounters {
   SessionCounters sessions;  ///< handshakes, subscriptions, rate limits
 };
 
+/// What a gate says about a subscriber's command (EndpointConfig::gate).
+enum class CommandGate {
+  kOpen,      ///< the usual owner rules
+  kRefuse,    ///< refused (counted as not owner), whoever owns the input
+  kTakeOver,  ///< accepted checks permitting, and it takes the input over from any owner
+};
+
 /// Verdict of a kind's command check.
 enum class CommandCheck {
   kAccept,
@@ -91,7 +109,10 @@ struct EndpointConfig {
   // arm only: one entry per joint (empty: no limit of that kind)
   int joints = 0;
   std::vector<double> position_min, position_max, velocity_max, torque_max;
-  int max_subscribers = 16;
+  int max_subscribers = kDefaultMaxSubscribers;
+  /// Who may command besides the owner rules (null: anyone, by those rules).
+  /// Called in Handle: must not block, throw or allocate.
+  std::function<CommandGate(const Endpoint& from)> gate;
   /// Other kinds that take commands (base, gripper, point): the command
   /// payload's length (0: the kind takes no commands, like wrench or feet) ...
   int command_length = 0;
@@ -118,7 +139,9 @@ class DeviceEndpoint {
   Received Handle(const unsigned char* data, std::size_t size, const Endpoint& from, long period, UdpSocket& socket);
 
   /// Starts period k: runs the arm watchdog. True when the arm must hold.
-  bool BeginPeriod(long period);
+  /// pace_s: wall seconds per period of a paced (realtime) clock, 0 for
+  /// none: then only periods are counted.
+  bool BeginPeriod(long period, double pace_s = 0);
   /// Releases an owner silent for owner_timeout_s; true when it did. Call
   /// it now and then in every state (the lab: every period and while paused).
   bool ReleaseSilentOwner();
@@ -131,6 +154,8 @@ class DeviceEndpoint {
   /// seq of the last accepted command (-1 if none since the owner took over).
   double last_accepted_seq() const { return last_seq_; }
   bool has_owner() const { return owner_.has_value(); }
+  /// The owner's address and port (empty when none).
+  const std::optional<Endpoint>& owner() const { return owner_; }
   /// Frees the command input now (the lab does this when a lockstep owner
   /// stopped answering): the next sender becomes the owner.
   void ReleaseOwner();
@@ -143,6 +168,9 @@ class DeviceEndpoint {
   /// kStatusNotOwner set when an owner exists. Its seq is the newest a
   /// command may answer.
   void Publish(const std::vector<unsigned char>& state_packet, UdpSocket& socket);
+  /// Sends the latest encoded state to one (new) subscriber, with
+  /// kStatusNotOwner when another owns the input.
+  void SendLatest(const std::vector<unsigned char>& state_packet, const Endpoint& to, UdpSocket& socket);
 
   const EndpointCounters& counters() const;
   int subscribers() const { return static_cast<int>(sessions_.sessions().size()); }
@@ -152,6 +180,11 @@ class DeviceEndpoint {
 
  private:
   bool CheckArmLimits(const ArmCommandMsg& command) const;
+  // the state for a non-owner (kStatusNotOwner set) in not_owner_packet_; false when it is the same
+  bool MarkNotOwner(const std::vector<unsigned char>& packet);
+  // whether the oldest state the owner left unanswered has been out for the watchdog's wall time
+  bool UnansweredLongEnough(double pace_s) const;
+  static constexpr int kPublishedRing = 128;  // publication times kept, by seq
 
   EndpointConfig config_;
   mutable EndpointCounters counters_;  // (its sessions part is copied in by counters())
@@ -161,6 +194,8 @@ class DeviceEndpoint {
   double last_seq_ = -1;
   double newest_seq_ = -1;  // seq of the newest state published
   long last_command_period_ = 0;
+  double watch_seq_ = -1;  // seq of the last accepted command (kept when the owner is released)
+  std::array<double, kPublishedRing> published_s_{};  // wall time each recent seq was first published
   bool ever_commanded_ = false;
   bool refused_flag_ = false;
   bool watchdog_hold_ = false;

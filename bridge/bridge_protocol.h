@@ -6,7 +6,7 @@
 //   index  field         value
 //   0      magic         1447838018 (the ASCII bytes "VLAB" read as a big-endian uint32)
 //   1      version       2
-//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-15: see DeviceKind)
+//   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-17: see DeviceKind)
 //   3      type          1 state (device -> client), 2 command (client -> device),
 //                        3 describe request, 4 subscribe request (client -> device),
 //                        5 session reply (device -> client): bridge_session.h

@@ -108,8 +108,28 @@ void SessionTable::Reply(double cookie, SessionResult result, const Endpoint& to
   socket.SendTo(reply_.data(), reply_.size(), to);
 }
 
+void SessionTable::Answer(const Endpoint& to, SessionResult result, UdpSocket& socket) {
+  Reply(Cookie(to), result, to, socket);
+}
+
+bool SessionTable::MakeRoom(const Endpoint* keep) {
+  Expire(keep);
+  if (static_cast<int>(sessions_.size()) < config_.max_subscribers) return true;
+  if (!config_.evict) return false;
+  // the subscriber heard from least recently goes, never the one kept (the owner)
+  auto oldest = sessions_.end();
+  for (auto it = sessions_.begin(); it != sessions_.end(); ++it) {
+    if (keep != nullptr && it->endpoint == *keep) continue;
+    if (oldest == sessions_.end() || it->last_heard_s < oldest->last_heard_s) oldest = it;
+  }
+  if (oldest == sessions_.end()) return false;
+  sessions_.erase(oldest);
+  ++counters_.evicted;
+  return true;
+}
+
 SessionTable::Outcome SessionTable::HandleRequest(const Header& header, const std::vector<double>& payload,
-                                                  const Endpoint& from, UdpSocket& socket) {
+                                                  const Endpoint& from, UdpSocket& socket, const Endpoint* keep) {
   double cookie = 0, arg = 0;
   const bool subscribe = header.type == static_cast<int>(MessageType::kSubscribe);
   if (!RequestPayload(payload, &cookie, &arg)) return Outcome::kMalformed;
@@ -137,8 +157,7 @@ SessionTable::Outcome SessionTable::HandleRequest(const Header& header, const st
     Reply(expected, SessionResult::kSubscribed, from, socket);
     return Outcome::kRenewed;
   }
-  Expire();
-  if (static_cast<int>(sessions_.size()) >= config_.max_subscribers) {
+  if (!MakeRoom(keep)) {
     ++counters_.refused_full;
     Reply(expected, SessionResult::kFull, from, socket);
     return Outcome::kFull;
@@ -305,7 +324,7 @@ bool ParseSessionReply(const Header& header, const std::vector<double>& payload,
   if (header.type != static_cast<int>(MessageType::kSession) || payload.size() != 2) return false;
   double c = 0, r = 0;
   if (!RequestPayload(payload, &c, &r) || c < 1 || std::floor(r) != r || r < 0 ||
-      r > static_cast<double>(SessionResult::kLimited)) {
+      r > static_cast<double>(kMaxSessionResult)) {
     return false;
   }
   *cookie = c;

@@ -20,7 +20,10 @@
 //     own bytes back, and nothing is remembered about it (stateless);
 //   - a subscribe request with the right cookie subscribes (or renews) its
 //     source; action 0 unsubscribes it. A full table refuses a newcomer
-//     (counted, reply "full"): nobody is evicted by a newcomer;
+//     (counted, reply "full"), unless the table evicts (SessionConfig::evict):
+//     then the subscriber heard from least recently that is not `keep` (a
+//     device's owner) makes room (counted), and only a table that holds
+//     nothing but `keep` refuses;
 //   - a subscriber silent (no request, no Touch) for subscriber_timeout_s of
 //     the wall clock is dropped (Expire);
 //   - a describe request with the right cookie is answered with the device's
@@ -47,7 +50,10 @@ enum class SessionResult : int {
   kFull = 2,          ///< refused: the device has as many subscribers as it takes
   kUnsubscribed = 3,  ///< no longer subscribed
   kLimited = 4,       ///< describe refused: too many requests from this source; retry later
+  kRefused = 5,       ///< a command refused: another client controls the device (the sim's ops)
 };
+/// The highest result value a session reply carries.
+inline constexpr int kMaxSessionResult = static_cast<int>(SessionResult::kRefused);
 
 /// Counters of the sessions of one device (part of EndpointCounters).
 struct SessionCounters {
@@ -56,12 +62,19 @@ struct SessionCounters {
   long unsubscribed = 0;     ///< subscriptions ended by the subscriber
   long expired = 0;          ///< subscribers dropped after falling silent
   long refused_full = 0;     ///< subscriptions refused: table full
+  long evicted = 0;          ///< subscribers dropped to make room for a newcomer (SessionConfig::evict)
   long describes_limited = 0;  ///< describe requests refused by the rate limit
 };
 
+/// Subscribers a device keeps by default (`vlab serve --subscribers` changes it).
+inline constexpr int kDefaultMaxSubscribers = 16;
+
 struct SessionConfig {
   DeviceKind kind = DeviceKind::kArm;  ///< the kind in the session replies
-  int max_subscribers = 16;
+  int max_subscribers = kDefaultMaxSubscribers;
+  /// A full table makes room for a newcomer: the subscriber heard from least
+  /// recently, other than the one HandleRequest is told to keep, is dropped.
+  bool evict = false;
   double subscriber_timeout_s = 10;  ///< wall clock
   double describe_rate_hz = 10;      ///< describe replies per source, on average
   int describe_burst = 10;           ///< ... and at once
@@ -88,9 +101,13 @@ class SessionTable {
   /// Handles a subscribe or describe request (`header.type` 4 or 3, its
   /// payload [cookie, arg]) from `from`, and sends the session reply through
   /// `socket` (none for kDescribe: the caller answers with the JSON;
-  /// kMalformed: a payload that breaks the layout, nothing sent).
+  /// kMalformed: a payload that breaks the layout, nothing sent). `keep` (a
+  /// device's owner, may be null) is never evicted nor expired to make room.
   Outcome HandleRequest(const Header& header, const std::vector<double>& payload, const Endpoint& from,
-                        UdpSocket& socket);
+                        UdpSocket& socket, const Endpoint* keep = nullptr);
+  /// Sends `to` a session reply with its cookie and `result` (a refused
+  /// command: kRefused). As large as the command it answers, or smaller.
+  void Answer(const Endpoint& to, SessionResult result, UdpSocket& socket);
 
   bool IsSubscriber(const Endpoint& from) const;
   /// A subscriber showed it is alive (a command): renews it. False if it is none.
@@ -115,6 +132,7 @@ class SessionTable {
   };
   bool TakeDescribeToken(const Endpoint& from, double now);
   void Reply(double cookie, SessionResult result, const Endpoint& to, UdpSocket& socket);
+  bool MakeRoom(const Endpoint* keep);
 
   SessionConfig config_;
   SessionCounters counters_;

@@ -83,6 +83,7 @@ SESSION_SUBSCRIBED = 1    # subscribed (or renewed): states follow
 SESSION_FULL = 2          # refused: the device has as many subscribers as it takes
 SESSION_UNSUBSCRIBED = 3  # no longer subscribed
 SESSION_LIMITED = 4       # describe refused by the per-source rate limit: retry later
+SESSION_REFUSED = 5       # a command (a sim op) refused: another client controls the device
 REQUEST_BYTES = 8 * (HEADER_VALUES + 2)  # describe and subscribe requests, session replies: 72
 
 # arm command modes
@@ -185,7 +186,7 @@ def parse_session_reply(data):
     except ProtocolError:
         return None
     cookie, result = payload
-    if not _whole(cookie, 1, MAX_SEQ - 1) or not _whole(result, SESSION_CHALLENGE, SESSION_LIMITED):
+    if not _whole(cookie, 1, MAX_SEQ - 1) or not _whole(result, SESSION_CHALLENGE, SESSION_REFUSED):
         return None
     return kind, int(cookie), int(result)
 

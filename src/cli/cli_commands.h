@@ -40,6 +40,7 @@ struct ServeArgs {
   bool json = false;               ///< devices: print the describe JSON too
   bool quiet = false;              ///< serve: no per-device counter lines
   int rt_priority = -1;            ///< >= 0 overrides the scenario's realtime.priority
+  int max_subscribers = 16;        ///< serve: subscribers each device endpoint keeps
 };
 int ServeCommand(const ServeArgs& args);
 int DevicesCommand(const ServeArgs& args);

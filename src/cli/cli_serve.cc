@@ -20,6 +20,7 @@ namespace {
 lab::BridgeOptions MakeBridgeOptions(const ServeArgs& args, const lab::Scenario& scenario) {
   lab::BridgeOptions options;
   options.bind = args.bind;
+  options.max_subscribers = args.max_subscribers;
   if (args.ports_mode == "auto") {
     for (const lab::DeviceConfig& d : scenario.devices) {
       if (d.port != 0) options.ports[d.name] = 0;

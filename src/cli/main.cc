@@ -75,6 +75,10 @@ int main(int argc, char** argv) {
                       "Only the start line and the result line (no line saying whom it waits for, no counters)");
   serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   serve_cmd->add_option("--rt-priority", serve.rt_priority, rt_help)->check(CLI::Range(0, 99));
+  serve_cmd->add_option("--subscribers", serve.max_subscribers,
+                        "Subscribers each device keeps (default 16; cameras keep 16); a full table drops the one "
+                        "heard from least recently, never a device's owner")
+      ->check(CLI::Range(1, 4096));
   devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
 
   vlab::cli::BenchArgs bench;

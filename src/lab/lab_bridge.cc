@@ -11,6 +11,7 @@
 #include "bridge/bridge_errors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "lab/devices/device_sim.h"
 
 namespace vlab::lab {
 
@@ -40,6 +41,9 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
                                              const std::vector<Device*>& devices, const std::string& clock_name) {
   std::unique_ptr<LabBridge> b(new LabBridge());
   const double control_hz = 1.0 / scenario.control_period_s;
+  if (options.max_subscribers < 1) {
+    throw InputError("--subscribers " + std::to_string(options.max_subscribers) + ": must be at least 1");
+  }
   for (const auto& [name, port] : options.ports) {
     const bool known = std::any_of(devices.begin(), devices.end(), [&](const Device* d) { return d->name() == name; });
     if (!known) throw InputError("--port " + name + "=" + std::to_string(port) + ": the scenario has no device '" + name + "'");
@@ -71,6 +75,11 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     bridge::EndpointConfig ec;
     ec.name = device->name();
     device->ConfigureEndpoint(control_hz, &ec);
+    ec.max_subscribers = options.max_subscribers;
+    const auto* sim = dynamic_cast<const SimControl*>(device);
+    if (sim && sim->ops() == SimOps::kDriver) {
+      ec.gate = [self = b.get()](const bridge::Endpoint& from) { return self->SimGate(from); };
+    }
     const bridge::DeviceDescription common{device->name(), server, clock_name, options.bind, d.socket->local_port(),
                                            control_hz};
     ec.describe_json = device->DescribeJson(common);
@@ -101,9 +110,7 @@ void LabBridge::Receive(Served& d) {
     const Received what = d.endpoint->Handle(buffer_.data(), static_cast<std::size_t>(n), from, period_, *d.socket);
     if (what == Received::kCommand) d.command_arrival = WallNow();
     // a new subscriber gets the latest state at once (it may be what lockstep waits on)
-    if (what == Received::kSubscribed && !d.last_state.empty()) {
-      d.socket->SendTo(d.last_state.data(), d.last_state.size(), from);
-    }
+    if (what == Received::kSubscribed) d.endpoint->SendLatest(d.last_state, from, *d.socket);
   }
 }
 
@@ -121,6 +128,31 @@ LabBridge::Served* LabBridge::Find(const Device& device) {
     if (d.device == &device) return &d;
   }
   return nullptr;
+}
+
+const LabBridge::Served* LabBridge::Find(const Device& device) const {
+  for (const Served& d : devices_) {
+    if (d.device == &device) return &d;
+  }
+  return nullptr;
+}
+
+bridge::CommandGate LabBridge::SimGate(const bridge::Endpoint& from) const {
+  // driven: a commanded device (other than the sim) has an owner; then only such owners operate the sim
+  bool driven = false;
+  for (const Served& d : devices_) {
+    if (!d.endpoint || !Applied(d.device->command_role())) continue;
+    const std::optional<bridge::Endpoint>& owner = d.endpoint->owner();
+    if (!owner) continue;
+    if (*owner == from) return bridge::CommandGate::kTakeOver;
+    driven = true;
+  }
+  return driven ? bridge::CommandGate::kRefuse : bridge::CommandGate::kOpen;
+}
+
+bool LabBridge::HasOwner(const Device& device) const {
+  const Served* d = Find(device);
+  return d && d->endpoint && d->endpoint->has_owner();
 }
 
 void LabBridge::WatchPeerExit(int fd) {
@@ -175,7 +207,7 @@ bool LabBridge::Answered(std::int64_t k) const {
   return !(k == 0 && !any_from_start && any_waited && !any_owner);
 }
 
-void LabBridge::ApplyCommands(std::int64_t k) {
+void LabBridge::ApplyCommands(std::int64_t k, double pace_s) {
   period_ = k;
   ReceiveAll();  // what came since the clock's last poll
   const double now = WallNow();
@@ -185,7 +217,7 @@ void LabBridge::ApplyCommands(std::int64_t k) {
     if (d.endpoint->has_owner() && d.command_arrival >= 0 && command_ages_.size() < command_ages_.capacity()) {
       command_ages_.push_back(now - d.command_arrival);
     }
-    if (d.endpoint->BeginPeriod(k)) d.device->Hold();
+    if (d.endpoint->BeginPeriod(k, pace_s)) d.device->Hold();
     if (d.device->TakeCommand(*d.endpoint, &payload_) && d.command_arrival >= 0 &&
         latencies_.size() < latencies_.capacity()) {
       latencies_.push_back(now - d.command_arrival);
@@ -200,7 +232,14 @@ bool LabBridge::TakeCommand(Device& device) {
 
 bool LabBridge::ReleaseSilentOwner(const Device& device) {
   Served* d = Find(device);
-  return d && d->endpoint && d->endpoint->ReleaseSilentOwner();
+  if (!d || !d->endpoint) return false;
+  if (d->endpoint->ReleaseSilentOwner()) return true;
+  // an owner the gate now refuses (a controller drives, and it is none of the drivers) is owner no more
+  const std::optional<bridge::Endpoint>& owner = d->endpoint->owner();
+  const auto& gate = d->endpoint->config().gate;
+  if (!owner || !gate || gate(*owner) != bridge::CommandGate::kRefuse) return false;
+  d->endpoint->ReleaseOwner();
+  return true;
 }
 
 void LabBridge::NoteTimeout(int release_after) {

@@ -34,6 +34,8 @@ struct BridgeOptions {
   std::string bind = "127.0.0.1";    ///< address every device socket binds to
   std::map<std::string, int> ports;  ///< per-device port overrides (0: any free port)
   std::string server = "vlab serve";  ///< server name in describe replies
+  /// Subscribers each device endpoint keeps (`vlab serve --subscribers`), ≥ 1.
+  int max_subscribers = bridge::kDefaultMaxSubscribers;
 };
 
 /// A served device's endpoint and counters, for summaries and `vlab devices`.
@@ -67,15 +69,20 @@ class LabBridge final : public CommandSource {
 
   /// Start of period k: the watchdog, then the newest accepted command of every
   /// served commanded device goes to it (latency from arrival to now recorded).
-  /// Devices of role kRun (sim) are left to TakeCommand.
-  void ApplyCommands(std::int64_t k);
+  /// Devices of role kRun (sim) are left to TakeCommand. pace_s: wall seconds
+  /// per period of a realtime clock (0 otherwise), for the watchdog.
+  void ApplyCommands(std::int64_t k, double pace_s = 0);
   /// The newest accepted command of `device` (a served device), applied to it.
   /// False when none came.
   bool TakeCommand(Device& device);
   /// Releases the owner of `device` when it has been silent for its owner
   /// timeout (wall clock); true when it did. Publish does it for every
   /// device; the lab calls this while paused, when nothing is published.
+  /// Also releases the sim's owner once the sim's gate refuses it (a
+  /// controller drives now, and it is none of the drivers).
   bool ReleaseSilentOwner(const Device& device);
+  /// True when a served `device` has an owner.
+  bool HasOwner(const Device& device) const;
   /// Also wait on fd, which becomes readable when the controller process
   /// that `vlab run` started has exited: from then on no period waits.
   void WatchPeerExit(int fd);
@@ -112,6 +119,9 @@ class LabBridge final : public CommandSource {
   void Receive(Served& d);
   void ReceiveAll();
   Served* Find(const Device& device);
+  const Served* Find(const Device& device) const;
+  // the sim's ops in a driven run: only a peer that owns a commanded device (docs/protocol.md)
+  bridge::CommandGate SimGate(const bridge::Endpoint& from) const;
 
   std::vector<Served> devices_;
   std::vector<int> fds_;

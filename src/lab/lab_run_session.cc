@@ -224,7 +224,10 @@ bool RunSession::Commands(long k, double t_k) {
     } else {
       bridge_->NoteAnswered();
     }
-    bridge_->ApplyCommands(k);
+    // realtime: the watchdog also counts wall time, so the periods the lab runs back to back
+    // to catch up on its own lateness earn a prompt controller no hold
+    const bool paced = clock_->mode() == ClockMode::kRealtime && clock_->factor() > 0;
+    bridge_->ApplyCommands(k, paced ? period_ / clock_->factor() : 0.0);
   }
   if (s_.controller) {
     if (k > 0) s_.RunController(t_k, options_, &replay_at_, &result_, controller_columns_);
@@ -249,8 +252,10 @@ bool RunSession::Period() {
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
   if (paused_) {
     bridge_->Poll(0.02, PollWait::kSpin);
-    // an owner that paused and fell silent loses the sim: nobody else could resume
-    if (bridge_->ReleaseSilentOwner(*s_.sim) && s_.sim->on_owner_lost() == OnOwnerLost::kResume) {
+    // the pauser owner no more (silent, unsubscribed, or no driver while a controller drives):
+    // nobody else may resume, so the lab resumes itself, or stays paused if the scenario says so
+    bridge_->ReleaseSilentOwner(*s_.sim);
+    if (!bridge_->HasOwner(*s_.sim) && s_.sim->on_owner_lost() == OnOwnerLost::kResume) {
       paused_ = false;
       steps_left_ = -1;
       clock_->set_factor(clock_->factor());  // realtime: pace from now

@@ -105,7 +105,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                       {"sessions",
                        {{"challenges", c.sessions.challenges}, {"subscribed", c.sessions.subscribed},
                         {"unsubscribed", c.sessions.unsubscribed}, {"expired", c.sessions.expired},
-                        {"refused_full", c.sessions.refused_full},
+                        {"refused_full", c.sessions.refused_full}, {"evicted", c.sessions.evicted},
                         {"describes_limited", c.sessions.describes_limited}}}});
     if (d.kind == "camera") {
       served.back()["frames"] = {{"sent", d.frames.sent}, {"late", d.frames.late}, {"dropped", d.frames.dropped}};

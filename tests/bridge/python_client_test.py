@@ -107,11 +107,21 @@ class Yoyosim:
 
 class Lab:
     """vlab serve scenes/pa10_serve in realtime on free ports, writing into a temporary folder;
-    its start line names the ports."""
+    its start line names the ports. sim_ops_from: the sim's `ops_from` key, in a copy of the
+    scenario (None: the scenario's own)."""
 
-    def __init__(self, duration_s=60):
+    def __init__(self, duration_s=60, sim_ops_from=None):
         self.out = tempfile.TemporaryDirectory()
-        command = [VLAB, "serve", "scenes/pa10_serve", "--clock", "realtime", "-q", "--port", "pa10=0", "--port",
+        scenario = "scenes/pa10_serve"
+        if sim_ops_from:
+            with open(os.path.join(SOURCE, "scenes", "pa10_serve.yaml")) as f:
+                text = f.read()
+            text = text.replace("scene: pa10.xml", "scene: " + os.path.join(SOURCE, "scenes", "pa10.xml"), 1)
+            text = text.replace("    kind: sim\n", "    kind: sim\n    ops_from: %s\n" % sim_ops_from, 1)
+            scenario = os.path.join(self.out.name, "pa10_serve.yaml")
+            with open(scenario, "w") as f:
+                f.write(text)
+        command = [VLAB, "serve", scenario, "--clock", "realtime", "-q", "--port", "pa10=0", "--port",
                    "jr3=0", "--port", "sim=0", "--duration", str(duration_s), "--out",
                    os.path.join(self.out.name, "run")]
         # (its stderr too: "interrupted" when the test ends it)
@@ -318,10 +328,11 @@ class CodecTest(unittest.TestCase):
         self.assertEqual(vc.parse_session_reply(reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 99, 0)), (1, 99, 0))
         self.assertEqual(vc.parse_session_reply(reply(vc.MAGIC, 2, 4, 5, 0, 0, 2, 2 ** 53 - 1, 4)),
                          (4, 2 ** 53 - 1, vc.SESSION_LIMITED))
+        self.assertEqual(vc.parse_session_reply(reply(vc.MAGIC, 2, 3, 5, 0, 0, 2, 9, 5)), (3, 9, vc.SESSION_REFUSED))
         for bad in (reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 0, 1),        # cookie 0
                     reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 2 ** 53, 1),  # cookie too large
                     reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 2.5, 1),      # not whole
-                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 5),        # no such result
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 6),        # no such result
                     reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 1.5),
                     reply(vc.MAGIC, 2, 1, 1, 0, 0, 2, 9, 1),        # a state
                     reply(vc.MAGIC, 1, 1, 5, 0, 0, 2, 9, 1),        # version 1
@@ -757,7 +768,8 @@ class SimTest(unittest.TestCase):
     def test_pause_step_resume_and_a_silent_owner(self):
         if not VLAB:
             self.skipTest("no --vlab given")
-        lab = Lab()
+        # the test's arm and sim are two sockets, like a person who pauses a run a controller drives
+        lab = Lab(sim_ops_from="anyone")
         try:
             with vc.Sim("127.0.0.1", lab.sim_port, timeout=PATIENCE_S) as sim, \
                     vc.Arm("127.0.0.1", lab.arm_port, timeout=PATIENCE_S) as arm:

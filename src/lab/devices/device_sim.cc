@@ -15,6 +15,14 @@ std::shared_ptr<const DeviceParams> ReadSimParams(MapReader& r) {
   } else {
     r.Fail("on_owner_lost", "must be resume or stay_paused, not '" + lost + "'");
   }
+  const std::string ops = r.String("ops_from", "driver");
+  if (ops == "driver") {
+    p->ops = SimOps::kDriver;
+  } else if (ops == "anyone") {
+    p->ops = SimOps::kAnyone;
+  } else {
+    r.Fail("ops_from", "must be driver or anyone, not '" + ops + "'");
+  }
   p->owner_timeout_s = r.Number("owner_timeout", p->owner_timeout_s);
   if (!(p->owner_timeout_s > 0) || p->owner_timeout_s > 3600) r.Fail("owner_timeout", "must be > 0 and <= 3600 s");
   return p;
@@ -28,6 +36,7 @@ SimControl::SimControl(const DeviceConfig& config) : Device(config) {
   const SimParams& p = config.ParamsAs<SimParams>();
   on_owner_lost_ = p.on_owner_lost;
   owner_timeout_s_ = p.owner_timeout_s;
+  ops_ = p.ops;
 }
 
 void SimControl::Bind(const std::vector<Device*>& devices) {
@@ -53,6 +62,7 @@ std::string SimControl::DescribeJson(const bridge::DeviceDescription& common) co
   desc.devices = devices_;
   desc.owner_timeout_s = owner_timeout_s_;
   desc.on_owner_lost = on_owner_lost_ == OnOwnerLost::kResume ? "resume" : "stay_paused";
+  desc.ops_from = ops_ == SimOps::kDriver ? "driver" : "anyone";
   return bridge::DescribeJson(desc);
 }
 

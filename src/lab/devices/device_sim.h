@@ -10,8 +10,15 @@
 //           before every publish. Its seq counts the states it sent (the
 //           state re-sent after an op while paused gets a seq of its own, so
 //           that the next op can answer it); `periods` is the period.
+// Who may operate it (`ops_from`): `driver` (the default): while a controller
+// drives the run (a commanded device other than the sim has an owner), only
+// the owner of such a device (its address and port) may, and it takes the
+// sim over; while nobody drives, the first accepted op claims the sim.
+// `anyone`: the first accepted op claims it, whoever drives. Refused ops are
+// answered with a session reply (result 5) and counted as not owner.
 // Its owner is released after owner_timeout of silence (wall clock), paused
-// or not; a pause then ends or stays as `on_owner_lost` says.
+// or not, when it unsubscribes, or when a driver appears; a pause then ends
+// or stays as `on_owner_lost` says.
 // It has no physics: the lab's loop reads its commands and writes its state.
 #pragma once
 
@@ -24,12 +31,15 @@
 
 namespace vlab::lab {
 
-/// What the lab does when the sim device's owner falls silent while paused.
+/// What the lab does when the sim device's owner is lost while paused.
 enum class OnOwnerLost { kResume, kStayPaused };
+/// Who may operate the sim (scenario key `ops_from`).
+enum class SimOps { kDriver, kAnyone };
 
 struct SimParams : DeviceParams {
   OnOwnerLost on_owner_lost = OnOwnerLost::kResume;  ///< on_owner_lost: resume | stay_paused
   double owner_timeout_s = 1.0;                      ///< owner_timeout, s (wall clock)
+  SimOps ops = SimOps::kDriver;                      ///< ops_from: driver | anyone
 };
 
 std::shared_ptr<const DeviceParams> ReadSimParams(MapReader& r);
@@ -45,6 +55,7 @@ class SimControl final : public Device {
     ++states_;
   }
   OnOwnerLost on_owner_lost() const { return on_owner_lost_; }
+  SimOps ops() const { return ops_; }
   /// The newest command the bridge took since the last call, if any.
   bool TakeOp(bridge::SimCommandMsg* command);
 
@@ -60,6 +71,7 @@ class SimControl final : public Device {
  private:
   OnOwnerLost on_owner_lost_ = OnOwnerLost::kResume;
   double owner_timeout_s_ = 1.0;
+  SimOps ops_ = SimOps::kDriver;
   long states_ = 0;  // states set, i.e. published
   std::vector<std::string> devices_;  // every device of the scenario, in its order
   bridge::SimStateMsg state_;
