@@ -1,6 +1,7 @@
 // Who controls a run served by `vlab serve`, over real loopback sockets on
 // ports the lab picks itself (--port NAME=0, read back from its start line):
-// a pause ends when its pauser unsubscribes; a bystander's pause, step and
+// a pause ends when its pauser unsubscribes (or, stay_paused, waits for the
+// next owner's op); a bystander's pause, step and
 // reset are refused (answered with result 5) and counted while a controller
 // drives, and the driver's own op is taken; the state a new subscriber gets at
 // once carries not_owner; a table full of subscribers that never command does
@@ -141,6 +142,41 @@ TEST(SimOwnership, APauseEndsWhenItsPauserUnsubscribes) {
   ASSERT_TRUE(ReadState(*observer, sim, DeviceKind::kSim, &h, &p)) << "still paused";
   EXPECT_EQ(Mode(p), 0);
   EXPECT_EQ(p[bridge::StateIndex(DeviceKind::kSim, "periods")], paused_periods);  // no period ran while paused
+}
+
+// on_owner_lost: stay_paused: the pauser's unsubscription frees the sim but no period runs
+// until the next owner's op: a step of 3 then runs exactly 3 periods from where it paused
+TEST(SimOwnership, StayPausedWaitsForTheNextOwnersOp) {
+  TempDir tmp;
+  Served lab(tmp, Scenario("realtime", 600, ", owner_timeout: 3600, on_owner_lost: stay_paused"));
+  ASSERT_TRUE(lab.Start()) << lab.process.Output() << lab.process.Errors();
+  const bridge::Endpoint arm = lab.ports["pa10"], sim = lab.ports["sim"];
+  auto ctl = Socket();
+  ASSERT_NE(WireSubscribe(*ctl, sim, DeviceKind::kSim), 0);
+  ASSERT_NE(WireSubscribe(*ctl, arm, DeviceKind::kArm), 0);
+  bridge::Header h;
+  std::vector<double> p;
+  ASSERT_TRUE(ReadState(*ctl, arm, DeviceKind::kArm, &h, &p));
+  SendHold(*ctl, arm, h.seq);
+  ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p));
+  SendOp(*ctl, sim, h.seq, bridge::SimOp::kPause, 0);
+  int states = 0;
+  do {
+    ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p)) << "no sim state";
+    ASSERT_LT(++states, 100000) << "never paused";
+  } while (Mode(p) != 1);
+  const int periods = bridge::StateIndex(DeviceKind::kSim, "periods");
+  const double paused_periods = p[periods];
+  ASSERT_NE(WireSubscribe(*ctl, sim, DeviceKind::kSim, 0), 0);  // the pauser leaves: no owner now
+  ASSERT_NE(WireSubscribe(*ctl, sim, DeviceKind::kSim), 0);     // and comes back
+  ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p));  // the latest, sent at once
+  EXPECT_EQ(Mode(p), 1);
+  EXPECT_EQ(p[periods], paused_periods);
+  SendOp(*ctl, sim, h.seq, bridge::SimOp::kStep, 3);
+  do {
+    ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p)) << "the step did not end";
+  } while (Mode(p) != 1 || p[periods] == paused_periods);
+  EXPECT_EQ(p[periods], paused_periods + 3) << "periods ran before the step";
 }
 
 TEST(SimOwnership, ABystandersOpsAreRefusedWhileAControllerDrives) {
