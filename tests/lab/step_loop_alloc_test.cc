@@ -12,6 +12,7 @@
 #include <malloc.h>
 
 #include <cstdint>
+#include <functional>
 #include <future>
 #include <thread>
 #include <cstdlib>
@@ -79,6 +80,41 @@ void free(void* p) { __libc_free(p); }
 namespace vlab::lab {
 namespace {
 
+// the allocations of the thread that runs the lab, read at each observe call (one a period)
+class PeriodCounts {
+ public:
+  PeriodCounts() { counts_.reserve(100000); }
+  /// An observe callback for RunOptions.
+  std::function<void(double, const mjModel*, mjData*)> Observer() {
+    return [this](double, const mjModel*, mjData*) {
+      t_counting = false;
+      counts_.push_back(t_allocations);
+      t_counting = true;
+    };
+  }
+  /// Runs `run` on this thread with the counters on.
+  template <typename F>
+  void Count(F run) {
+    t_allocations = 0;
+    t_counting = true;
+    run();
+    t_counting = false;
+  }
+  /// No period after the first kWarmUp (buffers may still take their size) allocated.
+  void ExpectNone(const std::string& what, std::size_t min_periods) const {
+    constexpr std::size_t kWarmUp = 5;
+    ASSERT_GT(counts_.size(), min_periods) << what;
+    ASSERT_GT(counts_.front(), 100u) << what << ": the counters see the run's thread (its set-up allocates)";
+    for (std::size_t k = kWarmUp + 1; k < counts_.size(); ++k) {
+      ASSERT_EQ(counts_[k] - counts_[k - 1], 0u)
+          << what << ": period " << k << " allocated " << counts_[k] - counts_[k - 1] << " times";
+    }
+  }
+
+ private:
+  std::vector<std::uint64_t> counts_;
+};
+
 struct Case {
   const char* scenario;  // under the source tree
   double duration_s;     // enough periods to cover the controller's phases, short for the suite
@@ -96,26 +132,12 @@ TEST_P(PeriodAllocation, NoPeriodAllocatesAfterTheFirstFew) {
   RunOptions options;
   if (c.outputs) options.out_dir = dir.path() + "/out";
   options.clock = ClockMode::kFast;
-  constexpr int kWarmUp = 5;  // periods whose buffers may still take their size
-  std::vector<std::uint64_t> counts;
-  counts.reserve(100000);
-  options.observe = [&](double, const mjModel*, mjData*) {
-    t_counting = false;
-    counts.push_back(t_allocations);
-    t_counting = true;
-  };
-  t_allocations = 0;
-  t_counting = true;
-  const RunResult result = lab->Run(options);
-  t_counting = false;
-  ASSERT_GT(counts.size(), static_cast<std::size_t>(kWarmUp + 10)) << result.failure;
+  PeriodCounts counts;
+  options.observe = counts.Observer();
+  RunResult result;
+  counts.Count([&] { result = lab->Run(options); });
   EXPECT_TRUE(result.failure.find("diverged") == std::string::npos) << result.failure;
-  // the counters see this thread's allocations: the run's set-up made many
-  ASSERT_GT(counts.front(), 100u);
-  for (std::size_t k = kWarmUp + 1; k < counts.size(); ++k) {
-    ASSERT_EQ(counts[k] - counts[k - 1], 0u) << c.scenario << ": period " << k << " allocated "
-                                             << counts[k] - counts[k - 1] << " times";
-  }
+  counts.ExpectNone(c.scenario, 15);
 }
 
 // the served path too: pa10_serve with a controller on another thread (its
@@ -140,21 +162,11 @@ TEST_P(ServedPeriodAllocation, NoPeriodAllocatesAfterTheFirstFew) {
       if (d.name == "pa10") arm_port.set_value(d.port);
     }
   };
-  std::vector<std::uint64_t> counts;
-  counts.reserve(100000);
-  options.observe = [&](double, const mjModel*, mjData*) {
-    t_counting = false;
-    counts.push_back(t_allocations);
-    t_counting = true;
-  };
+  PeriodCounts counts;
+  options.observe = counts.Observer();
   std::future<int> port = arm_port.get_future();
   RunResult result;
-  std::thread run([&] {
-    t_allocations = 0;
-    t_counting = true;
-    result = lab->Run(options);
-    t_counting = false;
-  });
+  std::thread run([&] { counts.Count([&] { result = lab->Run(options); }); });
   // the controller: answers every state with the position it reads, until the lab stops publishing
   auto arm = bridge::Arm::Connect("127.0.0.1", port.get(), 5.0);
   bridge::Arm::State state;
@@ -168,13 +180,7 @@ TEST_P(ServedPeriodAllocation, NoPeriodAllocatesAfterTheFirstFew) {
   }
   run.join();
   ASSERT_EQ(result.exit_code, 0) << result.failure;
-  ASSERT_GT(counts.size(), 200u);
-  ASSERT_GT(counts.front(), 100u);  // the counters see the run's thread
-  constexpr std::size_t kWarmUp = 5;
-  for (std::size_t k = kWarmUp + 1; k < counts.size(); ++k) {
-    ASSERT_EQ(counts[k] - counts[k - 1], 0u) << ClockModeName(GetParam()) << ": period " << k << " allocated "
-                                             << counts[k] - counts[k - 1] << " times";
-  }
+  counts.ExpectNone(ClockModeName(GetParam()), 200);
 }
 
 INSTANTIATE_TEST_SUITE_P(Clocks, ServedPeriodAllocation, ::testing::Values(ClockMode::kLockstep, ClockMode::kRealtime),
