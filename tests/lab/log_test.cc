@@ -162,9 +162,9 @@ TEST(CsvLogTest, WriteErrorShowsBeforeClose) {
   if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
   auto log = CsvLog::Open("/dev/full", {"time", "x"});
   const double row[2] = {1.0, 2.0};
-  // back-pressure: 8 blocks of 256 rows, one being filled; the 8th full block waits for the
-  // writer to hand one back, which it does after writing it: after 10 blocks one has failed
-  for (int r = 0; r < 10 * 256; ++r) log->Append(row);
+  // back-pressure: kBlocks blocks of kRowsPerBlock rows, one being filled; the kBlocks-th full
+  // block waits for the writer to hand one back, which it does after writing (and failing) it
+  for (int r = 0; r < (CsvLog::kBlocks + 2) * CsvLog::kRowsPerBlock; ++r) log->Append(row);
   EXPECT_TRUE(log->failed());
   EXPECT_NE(log->error().find(std::strerror(ENOSPC)), std::string::npos) << log->error();
   EXPECT_THROW(log->Close(), std::runtime_error);

@@ -17,6 +17,7 @@
 #include <thread>
 #include <cstdlib>
 #include <new>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -104,7 +105,7 @@ class PeriodCounts {
   void ExpectNone(const std::string& what, std::size_t min_periods) const {
     constexpr std::size_t kWarmUp = 5;
     ASSERT_GT(counts_.size(), min_periods) << what;
-    ASSERT_GT(counts_.front(), 100u) << what << ": the counters see the run's thread (its set-up allocates)";
+    ASSERT_GT(counts_.front(), 0u) << what << ": the counters see the run's thread (its set-up allocates)";
     for (std::size_t k = kWarmUp + 1; k < counts_.size(); ++k) {
       ASSERT_EQ(counts_[k] - counts_[k - 1], 0u)
           << what << ": period " << k << " allocated " << counts_[k] - counts_[k - 1] << " times";
@@ -120,6 +121,9 @@ struct Case {
   double duration_s;     // enough periods to cover the controller's phases, short for the suite
   bool outputs;          // with the log and the other files written
 };
+
+// the case as gtest (and ctest's test name) shows it
+void PrintTo(const Case& c, std::ostream* os) { *os << c.scenario << (c.outputs ? "+outputs" : ""); }
 
 class PeriodAllocation : public ::testing::TestWithParam<Case> {};
 
