@@ -77,6 +77,11 @@ std::string StallRecord::Cause() const {
            " around it (the hypervisor ran another guest)";
   }
   if (cpu_wait >= lateness_s / 3) {
+    // runnable but not running: taken off its CPU, or woken and kept waiting for one
+    if (involuntary_switches == 0) {
+      return "waited " + Milliseconds(cpu_wait) +
+             " for a CPU after its wake-up (the kernel, an interrupt or a higher-priority thread held it)";
+    }
     return "waited " + Milliseconds(cpu_wait) + " for a CPU (" + std::to_string(involuntary_switches) +
            " involuntary switches: another thread or process ran on its CPU)";
   }

@@ -54,7 +54,8 @@ struct StallRecord {
   double steal_s = -1;      ///< the machine's steal (all CPUs) in the window that holds the stall; -1: unknown
   double steal_window_s = 0;  ///< that window's wall time (since the read of /proc/stat before it), s
   /// One line: the largest of the causes the counters show, e.g.
-  /// "waited 4.1 ms for a CPU (3 involuntary switches)", "steal 9.8 ms (the
+  /// "waited 4.1 ms for a CPU (3 involuntary switches)" (or "... after its
+  /// wake-up" where it was never preempted), "steal 9.8 ms (the
   /// hypervisor ran another guest)", "2 major page faults", or "blocked in the
   /// lab (5 voluntary waits)" when none of the measured times explains it.
   std::string Cause() const;

@@ -125,6 +125,9 @@ TEST(StallProbe, NamesTheLargestCause) {
   r.run_delay_s = 0.009;
   r.involuntary_switches = 3;
   EXPECT_NE(r.Cause().find("waited 9.0 ms for a CPU (3 involuntary"), std::string::npos) << r.Cause();
+  r.involuntary_switches = 0;  // woken, then kept off the CPU
+  EXPECT_NE(r.Cause().find("waited 9.0 ms for a CPU after its wake-up"), std::string::npos) << r.Cause();
+  r.involuntary_switches = 3;
   r.run_delay_s = 0.001;
   r.voluntary_switches = 4;
   EXPECT_NE(r.Cause().find("not explained by a CPU wait or steal"), std::string::npos) << r.Cause();
