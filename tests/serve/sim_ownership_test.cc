@@ -104,6 +104,24 @@ int Mode(const std::vector<double>& payload) {
   return static_cast<int>(payload[bridge::StateIndex(DeviceKind::kSim, "mode")]);
 }
 
+// the controller, on one socket for its arm and for the sim (so that it may operate the sim):
+// answers period 0, pauses the run and reads sim states until one shows it paused (in h, p)
+void DriveAndPause(bridge::UdpSocket& ctl, const bridge::Endpoint& arm, const bridge::Endpoint& sim,
+                   bridge::Header* h, std::vector<double>* p) {
+  // (the sim first: a handshake drops the other datagrams, and the arm's latest state is awaited)
+  ASSERT_NE(WireSubscribe(ctl, sim, DeviceKind::kSim), 0);
+  ASSERT_NE(WireSubscribe(ctl, arm, DeviceKind::kArm), 0);
+  ASSERT_TRUE(ReadState(ctl, arm, DeviceKind::kArm, h, p));
+  SendHold(ctl, arm, h->seq);  // period 0 waits for it
+  ASSERT_TRUE(ReadState(ctl, sim, DeviceKind::kSim, h, p));
+  SendOp(ctl, sim, h->seq, bridge::SimOp::kPause, 0);
+  int states = 0;
+  do {
+    ASSERT_TRUE(ReadState(ctl, sim, DeviceKind::kSim, h, p)) << "no sim state";
+    ASSERT_LT(++states, 100000) << "never paused";
+  } while (Mode(*p) != 1);
+}
+
 const nlohmann::json& DeviceCounters(const nlohmann::json& summary, const std::string& name) {
   for (const nlohmann::json& d : summary.at("bridge").at("devices")) {
     if (d.at("name") == name) return d;
@@ -117,22 +135,10 @@ TEST(SimOwnership, APauseEndsWhenItsPauserUnsubscribes) {
   Served lab(tmp, Scenario("realtime", 600, ", owner_timeout: 3600, on_owner_lost: resume"));
   ASSERT_TRUE(lab.Start()) << lab.process.Output() << lab.process.Errors();
   const bridge::Endpoint arm = lab.ports["pa10"], sim = lab.ports["sim"];
-  // the controller: one socket for its arm and for the sim, so that it may operate the sim
   auto ctl = Socket();
-  // (the sim first: a handshake drops the other datagrams, and the arm's latest state is awaited)
-  ASSERT_NE(WireSubscribe(*ctl, sim, DeviceKind::kSim), 0);
-  ASSERT_NE(WireSubscribe(*ctl, arm, DeviceKind::kArm), 0);
   bridge::Header h;
   std::vector<double> p;
-  ASSERT_TRUE(ReadState(*ctl, arm, DeviceKind::kArm, &h, &p));
-  SendHold(*ctl, arm, h.seq);  // period 0 waits for it
-  ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p));
-  SendOp(*ctl, sim, h.seq, bridge::SimOp::kPause, 0);
-  int states = 0;
-  do {
-    ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p)) << "no sim state";
-    ASSERT_LT(++states, 100000) << "never paused";
-  } while (Mode(p) != 1);
+  ASSERT_NO_FATAL_FAILURE(DriveAndPause(*ctl, arm, sim, &h, &p));
   const double paused_periods = p[bridge::StateIndex(DeviceKind::kSim, "periods")];
   auto observer = Socket();
   ASSERT_NE(WireSubscribe(*observer, sim, DeviceKind::kSim), 0);
@@ -152,19 +158,9 @@ TEST(SimOwnership, StayPausedWaitsForTheNextOwnersOp) {
   ASSERT_TRUE(lab.Start()) << lab.process.Output() << lab.process.Errors();
   const bridge::Endpoint arm = lab.ports["pa10"], sim = lab.ports["sim"];
   auto ctl = Socket();
-  ASSERT_NE(WireSubscribe(*ctl, sim, DeviceKind::kSim), 0);
-  ASSERT_NE(WireSubscribe(*ctl, arm, DeviceKind::kArm), 0);
   bridge::Header h;
   std::vector<double> p;
-  ASSERT_TRUE(ReadState(*ctl, arm, DeviceKind::kArm, &h, &p));
-  SendHold(*ctl, arm, h.seq);
-  ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p));
-  SendOp(*ctl, sim, h.seq, bridge::SimOp::kPause, 0);
-  int states = 0;
-  do {
-    ASSERT_TRUE(ReadState(*ctl, sim, DeviceKind::kSim, &h, &p)) << "no sim state";
-    ASSERT_LT(++states, 100000) << "never paused";
-  } while (Mode(p) != 1);
+  ASSERT_NO_FATAL_FAILURE(DriveAndPause(*ctl, arm, sim, &h, &p));
   const int periods = bridge::StateIndex(DeviceKind::kSim, "periods");
   const double paused_periods = p[periods];
   ASSERT_NE(WireSubscribe(*ctl, sim, DeviceKind::kSim, 0), 0);  // the pauser leaves: no owner now
