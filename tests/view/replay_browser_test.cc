@@ -132,6 +132,23 @@ int ColourPixels(testing::Chromium& chromium, const std::string& canvas, int r, 
       .get<int>();
 }
 
+// `vlab view --replay DIR/run` plotting pa10.q.S1, and a Chromium to load its page (manual clock)
+struct ReplayPage {
+  explicit ReplayPage(const testing::TempDir& dir)
+      : view({VLAB_BINARY_DIR "/vlab", "view", "--replay", dir / "run", "--plot", "pa10.q.S1", "--http", "0", "-q"}),
+        http_port(PortOf(view.start_line(), "http://127.0.0.1")),
+        chromium(dir / "profile", kWidth, kHeight) {}
+  /// Opens the page and waits until its replay and plot data are in.
+  void Load() {
+    chromium.Call("Page.enable");
+    chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(http_port) + "/?clock=manual"}});
+    WaitFor(chromium, "window.vlabView && vlabView.replayFrames && vlabView.plotSamples");
+  }
+  TestProcess view;
+  int http_port;
+  testing::Chromium chromium;
+};
+
 TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback) {
   TempDir dir;
   testing::WriteFile(dir / "replay.yaml", Scenario(false));
@@ -143,14 +160,10 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
   const Recording rec = ReadPoses(dir / "run/poses.bin", bodies);
   ASSERT_GE(rec.times.size(), 85u) << "3 s at 30 Hz";
 
-  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--replay", dir / "run", "--plot", "pa10.q.S1", "--http", "0",
-                    "-q"});
-  const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
-  ASSERT_GT(http_port, 0) << view.start_line();
-  testing::Chromium chromium(dir / "profile", kWidth, kHeight);
-  chromium.Call("Page.enable");
-  chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(http_port) + "/?clock=manual"}});
-  WaitFor(chromium, "window.vlabView && vlabView.replayFrames && vlabView.plotSamples");
+  ReplayPage page(dir);
+  ASSERT_GT(page.http_port, 0) << page.view.start_line();
+  testing::Chromium& chromium = page.chromium;
+  page.Load();
 
   // the slider: times between frames, at a frame, at the ends
   auto seek = [&](double t) {
@@ -224,7 +237,7 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
   seek(rec.times[n - 1]);
   TwoFrames(chromium);
   EXPECT_GT(ColourPixels(chromium, "plot", 0xff, 0x6b, 0x6b), 50) << "the first signal's line (#ff6b6b)";
-  view.Stop();
+  page.view.Stop();
 }
 
 // a key press as Chromium's input pipeline delivers a user's (keydown, keypress, keyup)
@@ -252,14 +265,10 @@ TEST(ViewReplayBrowserTest, PausedPlotFollowsTheSliderAndSpaceTogglesAfterTheBut
     EXPECT_EQ(v.err.find("beyond loopback: anyone who can reach port") != std::string::npos, bind == "0.0.0.0")
         << bind << ": " << v.err;
   }
-  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--replay", dir / "run", "--plot", "pa10.q.S1", "--http", "0",
-                    "-q"});
-  const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
-  ASSERT_GT(http_port, 0) << view.start_line();
-  testing::Chromium chromium(dir / "profile", kWidth, kHeight);
-  chromium.Call("Page.enable");
-  chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(http_port) + "/?clock=manual"}});
-  WaitFor(chromium, "window.vlabView && vlabView.replayFrames && vlabView.plotSamples");
+  ReplayPage page(dir);
+  ASSERT_GT(page.http_port, 0) << page.view.start_line();
+  testing::Chromium& chromium = page.chromium;
+  page.Load();
   auto paused = [&] { return chromium.Evaluate("vlabView.paused").get<bool>(); };
 
   // a mouse click on the pause button (it takes the focus, as a user's click does)
@@ -295,7 +304,7 @@ TEST(ViewReplayBrowserTest, PausedPlotFollowsTheSliderAndSpaceTogglesAfterTheBut
     EXPECT_EQ(shown["end"].get<double>(), t) << "the plot did not follow the slider while paused";
   }
   EXPECT_TRUE(paused());
-  view.Stop();
+  page.view.Stop();
 }
 
 TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
