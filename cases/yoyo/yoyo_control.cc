@@ -40,6 +40,8 @@
 // learnt from the bottoms measured: extrapolated back to d = L, on the climb's deceleration,
 // from the second rising sample in a row (a camera's rate is a difference of two frames, and
 // the first rising frame's pair may straddle the bottom).
+// Top: the highest sighting of the climb; the swing ends at the first sighting below it by
+// 5 mm and falling (a camera's: the second such in a row, one low frame being no top).
 // Stroke: deadbeat on the model towards a_n + kDamp (level - a_n), S = (target - e^2 a_n) / G^,
 // within [0, kMaxStroke]; G^ from (a_n, S_n, a_{n+1}) by a scalar recursive least squares with
 // forgetting kForget, clamped to [kGainMin, kGainMax]. Deterministic: only state times count.
@@ -183,7 +185,7 @@ int Run(const Options& o) {
   const double z_ref = z0 - o.string;
   double offset[3] = {0, 0, 0}, fz0 = 0;  // mirror start - hand start; static load
   std::FILE* log = o.log.empty() ? nullptr : std::fopen(o.log.c_str(), "w");
-  if (log) std::fprintf(log, "time,hand_z,yoyo_z,string_force,swing_top_z,level_z,stroke\n");
+  if (log) std::fprintf(log, "time,hand_z,yoyo_z,string_force,swing_top_z,level_z,stroke,yoyo_time\n");
 
   // per swing n: a_{n+1} = e2 a_n + G S_n (a: amplitude, S: the stroke); deadbeat on the
   // model with G estimated by a scalar recursive least squares (forgetting kForget)
@@ -191,6 +193,10 @@ int Run(const Options& o) {
   double gain = kGain0, p_rls = kP0, stroke = 0, amp_prev = NAN, stroke_prev = 0;
   double bias = 0, t_pred = 1e9, t_pulse = 0, z_from = z0, z_cmd = z0, t_top = 0, top = -1e9, z_low = z0;
   double s_t = -1, s_d = 0, s_rate = 0, rate_before = 0, last_top = NAN;  // the last sighting; its predecessor's rate
+  // sightings in a row below the top and falling that end a swing: a camera's sighting can be
+  // a misreading (one low frame while the yo-yo still climbs), a period's ground truth cannot
+  const int end_sightings = per_period ? 1 : 2;
+  int falling = 0;
   double next_keepalive = 1.0, t = 0;
   std::vector<Swing> swings;
   std::deque<HandAt> past;  // the hand over the last kPast periods
@@ -232,12 +238,13 @@ int Run(const Options& o) {
       const double v = -s_rate, rest = std::max(0.0, o.string - s_d);
       const double t_bottom = s_t - (-v + std::sqrt(v * v + 2 * kDescent * rest)) / kDescent;
       bias = std::clamp(bias + 0.5 * (t_bottom - t_pred), -0.1, 0.1);
-      phase = kClimbing, top = -1e9;
+      phase = kClimbing, top = -1e9, falling = 0;
     } else if (phase == kPulse && t > t_pulse + kUp_s + 0.3) {
-      phase = kClimbing, top = -1e9;
+      phase = kClimbing, top = -1e9, falling = 0;
     } else if (phase == kClimbing && fresh) {
       if (yvz > 0 || top > -1e8) top = std::max(top, yz);
-      if (top > -1e8 && yz < top - 0.005 && yvz < 0) {  // past the top: the swing is done
+      falling = top > -1e8 && yz < top - 0.005 && yvz < 0 ? falling + 1 : 0;
+      if (falling >= end_sightings) {  // past the top: the swing is done
         swings.push_back({static_cast<int>(swings.size()) + 1, t, top});
         last_top = top;
         const double amp = top - z_ref;
@@ -273,7 +280,10 @@ int Run(const Options& o) {
       if (force) force->KeepAlive();
       next_keepalive = t + 1.0;
     }
-    if (log) std::fprintf(log, "%.3f,%.6f,%.6f,%.5f,%.6f,%.6f,%.5f\n", t, hz, yz, f, last_top, z_ref + o.level, stroke);
+    if (log) {
+      std::fprintf(log, "%.3f,%.6f,%.6f,%.5f,%.6f,%.6f,%.5f,%.3f\n", t, hz, yz, f, last_top, z_ref + o.level, stroke,
+                   s_t >= 0 ? s_t : NAN);
+    }
   } while (ReadUntil(hand, h.seq + 1, o.timeout_s, &h));
   if (log) std::fclose(log);
 

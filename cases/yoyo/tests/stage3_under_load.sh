@@ -6,8 +6,12 @@
 # got). Prints per run the verdict, the priority granted, missed deadlines, the worst
 # period-start lateness and the swing check, then the steal time, the worst period's cause and the
 # newest command's age (summary.json's clock_stats.stall, bridge.command_age_s); then "passed K of N". Exit 0 when all passed.
-#   cases/yoyo/tests/stage3_under_load.sh [N] [VLAB] [OUT]
+# --io adds a third process doing file I/O in OUT/io (each round: 200 MB written and fsynced, read
+# back, 200 small files written and fsynced, then removed).
+#   cases/yoyo/tests/stage3_under_load.sh [--io] [N] [VLAB] [OUT]
 set -euo pipefail
+io=0
+if [ "${1:-}" = "--io" ]; then io=1; shift; fi
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 top="$(cd "$here/../../.." && pwd)"
 runs="${1:-10}"
@@ -23,6 +27,19 @@ for _ in 1 2; do
   ( while :; do :; done ) &
   hogs+=("$!")
 done
+if [ "$io" -eq 1 ]; then
+  mkdir -p "$out/io"
+  (
+    while :; do
+      dd if=/dev/zero of="$out/io/big" bs=1M count=200 conv=fsync status=none
+      cat "$out/io/big" >/dev/null
+      for k in $(seq 1 200); do dd if=/dev/zero of="$out/io/small$k" bs=4k count=4 conv=fsync status=none; done
+      rm -f "$out/io/big" "$out/io"/small*
+    done
+  ) &
+  hogs+=("$!")
+fi
+load="two CPU-bound processes$([ "$io" -eq 1 ] && echo " and a file-I/O process")"
 
 passed=0
 for i in $(seq 1 "$runs"); do
@@ -58,5 +75,5 @@ if ages and ages.get("count"):
     print(f"  newest command's age at a period start: p99 {ages['p99'] * 1e3:.2f} ms, max {ages['max'] * 1e3:.2f} ms")
 EOF
 done
-echo "passed $passed of $runs (two CPU-bound processes beside every run; output in $out)"
+echo "passed $passed of $runs ($load beside every run; output in $out)"
 [ "$passed" -eq "$runs" ]
