@@ -1,5 +1,6 @@
 #include "core/core_realtime.h"
 
+#include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
@@ -70,6 +71,11 @@ bool SetThreadDeadline(std::uint64_t runtime_ns, std::uint64_t period_ns) {
   a.sched_period = period_ns;
   return ::syscall(SYS_sched_setattr, 0, &a, 0) == 0;
 }
+
+// the PM QoS request on the CPUs' wake-up latency: its file, open while held
+std::mutex g_wake_mutex;
+int g_wake_fd = -1;
+int g_wake_holders = 0;
 
 std::string Millis(std::uint64_t ns) {
   char text[32];
@@ -150,6 +156,29 @@ std::uint64_t SetThreadSlice(std::uint64_t ns) {
   return ThreadSlice();
 }
 
+bool HoldWakeLatency(std::string* error) {
+  std::lock_guard<std::mutex> lock(g_wake_mutex);
+  if (g_wake_holders == 0) {
+    const int fd = ::open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
+    const std::int32_t us = 0;  // (the kernel reads a binary s32)
+    if (fd < 0 || ::write(fd, &us, sizeof(us)) != static_cast<ssize_t>(sizeof(us))) {
+      *error = std::string("/dev/cpu_dma_latency: ") + std::strerror(errno) + (errno == EACCES ? " (root only)" : "");
+      if (fd >= 0) ::close(fd);
+      return false;
+    }
+    g_wake_fd = fd;
+  }
+  ++g_wake_holders;
+  return true;
+}
+
+void ReleaseWakeLatency() {
+  std::lock_guard<std::mutex> lock(g_wake_mutex);
+  if (g_wake_holders == 0 || --g_wake_holders > 0) return;
+  ::close(g_wake_fd);  // (closing withdraws the request)
+  g_wake_fd = -1;
+}
+
 std::string RealtimeGrant::Line() const {
   std::string slice = SliceText(slice_ns);
   if (loop_cpu >= 0) {
@@ -165,6 +194,8 @@ std::string RealtimeGrant::Line() const {
   } else if (!deadline_refused.empty()) {
     how += "; SCHED_DEADLINE refused: " + deadline_refused;
   }
+  if (wake_latency_held) how += ", CPUs kept out of deep idle";
+  if (!wake_latency_refused.empty()) how += "; CPUs may idle deeply: " + wake_latency_refused;
   if (memory_locked) return p + " granted (" + how + ", memory locked)";
   if (reason.empty()) return p + " granted (" + how + ")";
   return p + " granted (" + how + ", memory not locked: " + reason + ")";
@@ -224,6 +255,7 @@ RealtimeGrant RequestRealtime(int priority, bool keep_cpu, double period_s) {
     } else {
       g.deadline_refused = std::strerror(errno);  // (still SCHED_FIFO)
     }
+    g.wake_latency_held = HoldWakeLatency(&g.wake_latency_refused);
   }
   if (::mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
     g.memory_locked = true;
@@ -241,6 +273,7 @@ void DropRealtime(const RealtimeGrant& grant) {
     if (g_device_cpus.device == grant.device_cpus) g_device_cpus = {};
   }
   if (!grant.granted) return;
+  if (grant.wake_latency_held) ReleaseWakeLatency();
   if (grant.deadline_period_ns > 0) {
     int expected = grant.requested;
     g_deadline_priority.compare_exchange_strong(expected, 0);

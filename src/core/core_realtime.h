@@ -51,6 +51,19 @@
 // kernel grants SCHED_DEADLINE to root or CAP_SYS_NICE (not to an rtprio
 // limit), to a thread allowed on every CPU, and while its admission test
 // leaves room; refused, the loop stays at SCHED_FIFO and the grant says why.
+//
+// A periodic loop granted SCHED_FIFO also keeps the CPUs out of deep idle states
+// for as long as it holds its grant: it writes 0 us to /dev/cpu_dma_latency (the
+// kernel's PM QoS request, as cyclictest does) and keeps the file open. A CPU
+// that went idle between two periods otherwise takes its wake-up latency on the
+// next one: on a virtual machine (cpuidle-haltpoll) an idle vCPU halts and is
+// handed back to the host, and the loop, its camera worker or the controller it
+// serves then woke 1-20 ms late, on a quiet machine more often than on a busy
+// one (whose CPUs never idle). Yo-yo stage 3 on 2 vCPUs, quiet: 11-26 of 4600
+// periods without the controller's command and 3-14 late webcam frames per run
+// without the hold; 0-1 and 0 with it. Idle CPUs then poll instead of sleeping
+// (they draw power, and on a VM keep their host CPU busy) until the loop ends.
+// Only root may open the file; refused, the grant says why and the loop goes on.
 #pragma once
 
 #include <cstdint>
@@ -87,6 +100,11 @@ struct RealtimeGrant {
   std::uint64_t deadline_period_ns = 0;
   /// Why SCHED_DEADLINE was refused when asked (the thread is at SCHED_FIFO).
   std::string deadline_refused;
+  /// The CPUs are kept out of deep idle states (/dev/cpu_dma_latency held at 0 us,
+  /// above) until DropRealtime; asked for by a periodic loop granted SCHED_FIFO.
+  bool wake_latency_held = false;
+  /// Why that was refused when asked ("" otherwise).
+  std::string wake_latency_refused;
   /// One line: "realtime priority 50 granted (SCHED_FIFO, memory locked)",
   /// "realtime priority 50 not granted: ...; running at normal priority", or
   /// "realtime priority not requested".
@@ -106,7 +124,8 @@ inline constexpr double kDeadlineShare = 0.9;
 /// and with `keep_cpu` keeps the CPU it runs on for itself when two or more are
 /// allowed: later BindDeviceThread calls put device threads on the others.
 /// With SCHED_FIFO granted and `period_s` > 0 (a loop with that period), it
-/// then asks for SCHED_DEADLINE (above), and stays at SCHED_FIFO if refused.
+/// then asks for SCHED_DEADLINE (above), and stays at SCHED_FIFO if refused,
+/// and holds the CPUs' wake-up latency at 0 (above).
 /// Throws std::invalid_argument for a priority outside 0..99.
 RealtimeGrant RequestRealtime(int priority, bool keep_cpu = false, double period_s = 0);
 
@@ -126,6 +145,12 @@ struct DeviceCpus {
 /// empty lists, when no CPU is kept.
 DeviceCpus BindDeviceThread();
 
+/// Holds /dev/cpu_dma_latency at 0 us (above) while any holder of this process
+/// holds it: true when held (the first holder opens the file), false with
+/// *error set when refused. Each true is paired with one ReleaseWakeLatency.
+bool HoldWakeLatency(std::string* error);
+void ReleaseWakeLatency();
+
 /// The CPUs the calling thread may run on, ascending.
 std::vector<int> ThreadCpus();
 
@@ -143,7 +168,8 @@ bool SetThreadRealtime(int priority);
 /// Back to SCHED_OTHER with the default slice for the calling thread, and
 /// unlocks memory if `grant` locked it; a kept CPU is given back (the thread
 /// may run on its allowed CPUs again, and device threads bound later stay
-/// where they are). Nothing when nothing was granted.
+/// where they are); the CPUs' wake-up latency is let go when no other grant of
+/// the process holds it. Nothing when nothing was granted.
 void DropRealtime(const RealtimeGrant& grant);
 
 /// Asks the fair scheduler for a slice of `ns` (0: the default) for the calling

@@ -115,7 +115,8 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
     return json{{"requested", g.requested}, {"granted", g.granted}, {"memory_locked", g.memory_locked},
                 {"reason", g.reason}, {"slice_ns", g.slice_ns}, {"loop_cpu", g.loop_cpu},
                 {"device_cpus", g.device_cpus}, {"deadline_runtime_ns", g.deadline_runtime_ns},
-                {"deadline_period_ns", g.deadline_period_ns}, {"deadline_refused", g.deadline_refused}};
+                {"deadline_period_ns", g.deadline_period_ns}, {"deadline_refused", g.deadline_refused},
+                {"wake_latency_held", g.wake_latency_held}, {"wake_latency_refused", g.wake_latency_refused}};
   };
   json overrides = json::object();
   for (const auto& [key, value] : sc.overrides) overrides[key] = value;

@@ -12,6 +12,9 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <dirent.h>
+#include <fcntl.h>
+
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -211,6 +214,74 @@ TEST(Realtime, APeriodicLoopGetsDeadlineSchedulingWhenTheKernelAdmitsIt) {
     EXPECT_EQ(g.deadline_period_ns, 0u);
     EXPECT_TRUE(g.deadline_refused.empty());
     EXPECT_EQ(Policy(), fifo ? SCHED_FIFO : SCHED_OTHER);
+    DropRealtime(g);
+  });
+  plain.join();
+}
+
+// the kernel's current wake-up latency target (us), read from /dev/cpu_dma_latency;
+// -1 when it cannot be read
+long CpuLatencyTarget() {
+  const int fd = ::open("/dev/cpu_dma_latency", O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return -1;
+  std::int32_t us = -1;
+  const bool ok = ::read(fd, &us, sizeof(us)) == static_cast<ssize_t>(sizeof(us));
+  ::close(fd);
+  return ok ? us : -1;
+}
+
+// how many of this process's open files are /dev/cpu_dma_latency
+int OpenLatencyFiles() {
+  int n = 0;
+  DIR* dir = ::opendir("/proc/self/fd");
+  if (!dir) return -1;
+  while (const dirent* e = ::readdir(dir)) {
+    char target[256] = {};
+    const std::string link = std::string("/proc/self/fd/") + e->d_name;
+    const ssize_t len = ::readlink(link.c_str(), target, sizeof(target) - 1);
+    if (len > 0 && std::string(target, len) == "/dev/cpu_dma_latency") ++n;
+  }
+  ::closedir(dir);
+  return n;
+}
+
+// a periodic loop granted SCHED_FIFO holds the CPUs' wake-up latency at 0 us while any
+// grant holds it (core_realtime.h), and lets it go with the last; where the file may
+// not be written (not root) the grant says so and the loop goes on
+TEST(Realtime, APeriodicLoopKeepsTheCpusOutOfDeepIdleWhileItsGrantHolds) {
+  const bool fifo = FifoPermitted(20);
+  const bool writable = ::access("/dev/cpu_dma_latency", W_OK) == 0;
+  ASSERT_EQ(OpenLatencyFiles(), 0);
+  std::thread loop([&] {
+    const RealtimeGrant g = RequestRealtime(20, false, 0.001);
+    if (fifo && writable) {
+      EXPECT_TRUE(g.wake_latency_held) << g.wake_latency_refused;
+      EXPECT_NE(g.Line().find("CPUs kept out of deep idle"), std::string::npos) << g.Line();
+      EXPECT_EQ(CpuLatencyTarget(), 0);
+      EXPECT_EQ(OpenLatencyFiles(), 1);
+      const RealtimeGrant second = RequestRealtime(20, false, 0.001);  // (a second loop of the process)
+      EXPECT_TRUE(second.wake_latency_held);
+      EXPECT_EQ(OpenLatencyFiles(), 1);
+      DropRealtime(second);
+      EXPECT_EQ(OpenLatencyFiles(), 1);  // the first still holds it
+      EXPECT_EQ(CpuLatencyTarget(), 0);
+    } else if (fifo) {
+      EXPECT_FALSE(g.wake_latency_held);
+      EXPECT_NE(g.wake_latency_refused.find("/dev/cpu_dma_latency: "), std::string::npos) << g.Line();
+      EXPECT_NE(g.Line().find("CPUs may idle deeply"), std::string::npos) << g.Line();
+    } else {
+      EXPECT_FALSE(g.wake_latency_held);  // (not asked: no SCHED_FIFO)
+      EXPECT_TRUE(g.wake_latency_refused.empty());
+    }
+    DropRealtime(g);
+    EXPECT_EQ(OpenLatencyFiles(), 0);
+  });
+  loop.join();
+  // without a period (not a periodic loop): not held
+  std::thread plain([] {
+    const RealtimeGrant g = RequestRealtime(20);
+    EXPECT_FALSE(g.wake_latency_held);
+    EXPECT_EQ(OpenLatencyFiles(), 0);
     DropRealtime(g);
   });
   plain.join();
