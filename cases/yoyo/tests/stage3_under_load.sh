@@ -39,7 +39,8 @@ if [ "$io" -eq 1 ]; then
   ) &
   hogs+=("$!")
 fi
-load="two CPU-bound processes$([ "$io" -eq 1 ] && echo " and a file-I/O process")"
+load="two CPU-bound processes"
+[ "$io" -eq 0 ] || load="$load and a file-I/O process"
 
 passed=0
 for i in $(seq 1 "$runs"); do
