@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 
 namespace vlab {
 
@@ -37,6 +38,9 @@ ThreadCounters ReadThreadCounters(int schedstat_fd) {
     c.minor_faults = u.ru_minflt;
     c.major_faults = u.ru_majflt;
   }
+  // (schedstat's on-CPU time lags by up to a tick for the running thread; this clock does not)
+  timespec cpu{};
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu) == 0) c.on_cpu_s = static_cast<double>(cpu.tv_sec) + cpu.tv_nsec * 1e-9;
   // schedstat: "cpu_ns run_delay_ns timeslices"
   char buf[128];
   if (ReadSmall(schedstat_fd, buf, sizeof buf)) {
@@ -85,11 +89,18 @@ std::string StallRecord::Cause() const {
     return "waited " + Milliseconds(cpu_wait) + " for a CPU (" + std::to_string(involuntary_switches) +
            " involuntary switches: another thread or process ran on its CPU)";
   }
-  std::string line = "not explained by a CPU wait or steal: blocked or busy in the lab (" +
-                     std::to_string(voluntary_switches) + " voluntary waits, " + std::to_string(minor_faults) +
-                     " minor page faults";
+  // neither: where was the thread at its deadline? Running or runnable for all of the window
+  // but the lateness means it was still at work then (busy); less means it had gone to sleep
+  // and woke late (a halted vCPU is neither waiting nor stolen from: core_realtime.h)
+  const std::string counts = " (" + std::to_string(voluntary_switches) + " voluntary waits, " +
+                             std::to_string(minor_faults) + " minor page faults)";
+  if (on_cpu_s < 0) return "not explained by a CPU wait or steal; on-CPU time unknown" + counts;
+  const std::string ran = "ran " + Milliseconds(on_cpu_s) + " of the " + Milliseconds(window_s) + " window";
+  if (on_cpu_s + cpu_wait >= window_s - lateness_s) return "busy in the lab: it " + ran + counts;
+  std::string line = "a late wake-up: it slept past its deadline (" + ran + "; a CPU leaving deep idle, or a timer or "
+                     "interrupt delivered late)" + counts;
   if (run_delay_s < 0) line += "; run delay unknown";
-  return line + ")";
+  return line;
 }
 
 StallProbe::~StallProbe() {
@@ -103,7 +114,7 @@ void StallProbe::Sample(std::int64_t k, double lateness_s, double late_s, double
     schedstat_fd_ = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
     stat_fd_ = open("/proc/stat", O_RDONLY | O_CLOEXEC);
     first_ = last_ = ReadThreadCounters(schedstat_fd_);
-    first_wall_s_ = window_wall_s_ = wall_s;
+    first_wall_s_ = window_wall_s_ = last_wall_s_ = wall_s;
     first_steal_s_ = window_steal_s_ = ReadStealSeconds(stat_fd_);
     return;
   }
@@ -130,10 +141,13 @@ void StallProbe::Sample(std::int64_t k, double lateness_s, double late_s, double
     w.minor_faults = now.minor_faults - last_.minor_faults;
     w.major_faults = now.major_faults - last_.major_faults;
     w.run_delay_s = now.run_delay_s >= 0 && last_.run_delay_s >= 0 ? now.run_delay_s - last_.run_delay_s : -1;
+    w.on_cpu_s = now.on_cpu_s >= 0 && last_.on_cpu_s >= 0 ? now.on_cpu_s - last_.on_cpu_s : -1;
+    w.window_s = wall_s - last_wall_s_;
     w.steal_s = steal_window;
     w.steal_window_s = steal_window_s;
   }
   report_.wall_s = wall_s - first_wall_s_;
+  last_wall_s_ = wall_s;
   report_.voluntary_switches = now.voluntary_switches - first_.voluntary_switches;
   report_.involuntary_switches = now.involuntary_switches - first_.involuntary_switches;
   report_.minor_faults = now.minor_faults - first_.minor_faults;

@@ -14,6 +14,7 @@
 //   /proc/thread-self/schedstat  time the thread spent runnable but waiting for a
 //                                CPU (run delay), ns; needs schedstats in the kernel
 //                                (present since Linux 2.6; -1 where unreadable)
+//   CLOCK_THREAD_CPUTIME_ID      the thread's time on a CPU
 //   /proc/stat, first line       the machine's steal time (8th value, USER_HZ ticks),
 //                                read every kStealEvery periods and after a late one
 // Threading: one probe per control thread; Sample is called only from that thread.
@@ -31,6 +32,7 @@ struct ThreadCounters {
   long minor_faults = 0;          ///< page faults served without I/O
   long major_faults = 0;          ///< page faults that waited for I/O
   double run_delay_s = -1;        ///< total time runnable but not running, s; -1: unknown
+  double on_cpu_s = -1;           ///< total time running on a CPU, s; -1: unknown
 };
 
 /// Reads the calling thread's counters; `schedstat_fd` is an open
@@ -51,13 +53,18 @@ struct StallRecord {
   long minor_faults = 0;
   long major_faults = 0;
   double run_delay_s = -1;  ///< -1: unknown
+  double on_cpu_s = -1;     ///< the control thread's time on a CPU across the window; -1: unknown
+  double window_s = 0;      ///< the window's wall time (the previous period's start to this one's), s
   double steal_s = -1;      ///< the machine's steal (all CPUs) in the window that holds the stall; -1: unknown
   double steal_window_s = 0;  ///< that window's wall time (since the read of /proc/stat before it), s
   /// One line: the largest of the causes the counters show, e.g.
   /// "waited 4.1 ms for a CPU (3 involuntary switches)" (or "... after its
   /// wake-up" where it was never preempted), "steal 9.8 ms (the
-  /// hypervisor ran another guest)", "2 major page faults", or "blocked in the
-  /// lab (5 voluntary waits)" when none of the measured times explains it.
+  /// hypervisor ran another guest)", "2 major page faults"; when none of those
+  /// explains it, by the thread's time on a CPU: "busy in the lab" when it ran
+  /// or waited for a CPU past its deadline, else "a late wake-up" (it slept past
+  /// its deadline: a CPU leaving deep idle, a timer or interrupt delivered late),
+  /// or "not explained" where the kernel gives no on-CPU time.
   std::string Cause() const;
 };
 
@@ -99,6 +106,7 @@ class StallProbe {
   int stat_fd_ = -1;
   ThreadCounters first_, last_;
   double first_wall_s_ = 0;
+  double last_wall_s_ = 0;    // the previous sample's wall time, s
   double first_steal_s_ = -1;
   double window_steal_s_ = -1;  // steal at the last /proc/stat read
   double window_wall_s_ = 0;    // and its wall time

@@ -41,6 +41,8 @@ nlohmann::json StallJson(const StallReport& r) {
                           {"lateness_s", w.lateness_s},
                           {"cause", w.Cause()},
                           {"run_delay_s", Known(w.run_delay_s)},
+                          {"on_cpu_s", Known(w.on_cpu_s)},
+                          {"window_s", w.window_s},
                           {"steal_s", Known(w.steal_s)},
                           {"steal_window_s", w.steal_window_s},
                           {"involuntary_switches", w.involuntary_switches},

@@ -130,7 +130,18 @@ TEST(StallProbe, NamesTheLargestCause) {
   r.involuntary_switches = 3;
   r.run_delay_s = 0.001;
   r.voluntary_switches = 4;
-  EXPECT_NE(r.Cause().find("not explained by a CPU wait or steal"), std::string::npos) << r.Cause();
+  EXPECT_NE(r.Cause().find("not explained by a CPU wait or steal; on-CPU time unknown"), std::string::npos)
+      << r.Cause();
+  // neither: 12 ms late in a 22 ms window; the deadline fell 10 ms into it
+  r.window_s = 0.022;
+  r.on_cpu_s = 0.003;  // ran 3 ms, waited 1: asleep at the deadline
+  EXPECT_NE(r.Cause().find("a late wake-up: it slept past its deadline (ran 3.0 ms of the 22.0 ms window"),
+            std::string::npos)
+      << r.Cause();
+  r.on_cpu_s = 0.0095;  // ran 9.5 ms and waited 1: still at work at the deadline
+  EXPECT_NE(r.Cause().find("busy in the lab: it ran 9.5 ms of the 22.0 ms window (4 voluntary waits"),
+            std::string::npos)
+      << r.Cause();
   r.major_faults = 2;
   EXPECT_NE(r.Cause().find("2 major page faults"), std::string::npos) << r.Cause();
 }
@@ -155,6 +166,8 @@ TEST(StallProbe, KeepsTheLatestPeriodWithItsCounters) {
   EXPECT_GE(r.worst.minor_faults, 256);
   EXPECT_GE(r.minor_faults, 256);
   EXPECT_NEAR(r.wall_s, 0.008, 1e-12);  // first sample to last
+  EXPECT_NEAR(r.worst.window_s, 0.006, 1e-12);  // period 1's start to period 2's
+  EXPECT_GT(r.worst.on_cpu_s, 0.0);  // (touching 256 pages took CPU time)
   // a late period reads the steal at once: known wherever /proc/stat is
   const int stat = open("/proc/stat", O_RDONLY | O_CLOEXEC);
   if (ReadStealSeconds(stat) >= 0) {
