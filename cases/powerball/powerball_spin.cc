@@ -51,6 +51,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <stdexcept>
 #include <string>
 
 #include <Eigen/Core>
@@ -59,6 +61,7 @@
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
 #include "bridge/bridge_program.h"
+#include "bridge/bridge_row_log.h"
 
 namespace {
 
@@ -163,8 +166,13 @@ int Run(const Options& o) {
   if (!ReadUntil(arm, 0, o.timeout_s + kConnect_s, &a)) return Stopped() ? 0 : 2;
   const Eigen::VectorXd q0 = a.q;
   const double t0 = a.time;
-  std::FILE* log = o.log.empty() ? nullptr : std::fopen(o.log.c_str(), "w");
-  if (log) std::fprintf(log, "time,counter_rpm,nu_ff,alpha_deg,alpha_measured_deg,phi_hat,psi,couple\n");
+  // (written by its own thread: the loop never waits for the disk)
+  std::unique_ptr<vlab::bridge::program::RowLog> log;
+  if (!o.log.empty()) {
+    log = vlab::bridge::program::RowLog::Open(o.log, {{"time", 4}, {"counter_rpm", 1}, {"nu_ff", 4}, {"alpha_deg", 4},
+                                                      {"alpha_measured_deg", 4}, {"phi_hat", 4}, {"psi", 4},
+                                                      {"couple", 5}});
+  }
 
   const double delta = o.delta_deg * kDeg, alpha_max = o.alpha_max_deg * kDeg;
   double phi_hat = 0, alpha = 0, t_prev = 0, next_keepalive = 1.0, t = 0;
@@ -240,11 +248,15 @@ int Run(const Options& o) {
     if (log) {
       // the cone the wrist made: the tilt of e3 from the measured W1, W2
       const double alpha_measured = std::hypot(a.q(kW1) - q0(kW1), a.q(kW2) - q0(kW2));
-      std::fprintf(log, "%.4f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f\n", t, c.values[kCounterRpm], nu_ff, alpha / kDeg,
-                   alpha_measured / kDeg, phi_hat, Wrap(psi), couple);
+      const double row[] = {t, c.values[kCounterRpm], nu_ff, alpha / kDeg, alpha_measured / kDeg, phi_hat, Wrap(psi),
+                            couple};
+      log->Add(row);
     }
   } while (NextArmState(arm, per_period, o.timeout_s, &a));
-  if (log) std::fclose(log);
+  if (log && !log->Finish()) throw std::runtime_error(log->error());
+  if (log && log->dropped() > 0) {
+    std::printf("powerball_spin: %ld log rows lost (the disk kept the writer waiting)\n", log->dropped());
+  }
   return 0;
 }
 

@@ -54,6 +54,7 @@
 #include <deque>
 #include <fstream>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,7 @@
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
 #include "bridge/bridge_program.h"
+#include "bridge/bridge_row_log.h"
 #include "bridge/bridge_yoyo.h"
 
 namespace {
@@ -74,6 +76,7 @@ using vlab::bridge::Wrench;
 using vlab::bridge::program::Address;
 using vlab::bridge::program::ParseAddress;
 using vlab::bridge::program::ReadUntil;
+using vlab::bridge::program::RowLog;
 using vlab::bridge::program::Stopped;
 
 constexpr double kConnect_s = 5.0;
@@ -184,8 +187,12 @@ int Run(const Options& o) {
   const double t0 = h.time, x0 = h.values[kHandX], y0 = h.values[kHandY], z0 = h.values[kHandZ];
   const double z_ref = z0 - o.string;
   double offset[3] = {0, 0, 0}, fz0 = 0;  // mirror start - hand start; static load
-  std::FILE* log = o.log.empty() ? nullptr : std::fopen(o.log.c_str(), "w");
-  if (log) std::fprintf(log, "time,hand_z,yoyo_z,string_force,swing_top_z,level_z,stroke,yoyo_time\n");
+  // (written by its own thread: the loop never waits for the disk)
+  std::unique_ptr<RowLog> log;
+  if (!o.log.empty()) {
+    log = RowLog::Open(o.log, {{"time", 3}, {"hand_z", 6}, {"yoyo_z", 6}, {"string_force", 5}, {"swing_top_z", 6},
+                               {"level_z", 6}, {"stroke", 5}, {"yoyo_time", 3}});
+  }
 
   // per swing n: a_{n+1} = e2 a_n + G S_n (a: amplitude, S: the stroke); deadbeat on the
   // model with G estimated by a scalar recursive least squares (forgetting kForget)
@@ -281,11 +288,14 @@ int Run(const Options& o) {
       next_keepalive = t + 1.0;
     }
     if (log) {
-      std::fprintf(log, "%.3f,%.6f,%.6f,%.5f,%.6f,%.6f,%.5f,%.3f\n", t, hz, yz, f, last_top, z_ref + o.level, stroke,
-                   s_t >= 0 ? s_t : NAN);
+      const double row[] = {t, hz, yz, f, last_top, z_ref + o.level, stroke, s_t >= 0 ? s_t : NAN};
+      log->Add(row);
     }
   } while (ReadUntil(hand, h.seq + 1, o.timeout_s, &h));
-  if (log) std::fclose(log);
+  if (log && !log->Finish()) throw std::runtime_error(log->error());
+  if (log && log->dropped() > 0) {
+    std::printf("yoyo_control: %ld log rows lost (the disk kept the writer waiting)\n", log->dropped());
+  }
 
   if (o.check_from < 0) return 0;
   double worst = 0;
