@@ -39,8 +39,8 @@ Subcommand AddViewCommand(CLI::App& app) {
                   "ARM.q.JOINT, ARM.qd.JOINT, ARM.tau.JOINT; --replay: any column of the run's log.csv");
   cmd->add_option("--http", o->server.port, "TCP port of the page (default 8080; 0: any free port)");
   cmd->add_option("--bind", o->server.bind,
-                  "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see README; beyond "
-                  "loopback anyone who can reach the port can watch, and vlab view says so on stderr)");
+                  "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see docs/view.md; "
+                  "beyond loopback anyone who can reach the port can watch, and vlab view says so on stderr)");
   cmd->add_option("--allow-host", o->server.allowed_hosts,
                   "A name the page may be opened by (Host and Origin), beside localhost, 127.0.0.0/8, [::1] and the "
                   "--bind address; repeatable. Any other name is refused (421, 403): a web page elsewhere cannot read "
