@@ -1,21 +1,14 @@
 // vlab view: a live 3-D view of the lab in the browser (src/view/), from a
 // scene device, from an arm device's joint states, or from a recorded run.
-#include <csignal>
 #include <cstdio>
 #include <memory>
 
 #include "cli/cli_commands.h"
+#include "core/core_signals.h"
 #include "view/view_gltf.h"
 #include "view/view_program.h"
 
 namespace vlab::cli {
-
-namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
-
-}  // namespace
 
 Subcommand AddViewCommand(CLI::App& app) {
   auto o = std::make_shared<view::ViewOptions>();
@@ -59,10 +52,10 @@ Subcommand AddViewCommand(CLI::App& app) {
   cmd->add_flag("-q,--quiet", o->quiet, "Only the start line and the final counter line");
   return {cmd, [o] {
             return WithErrorReport([&] {
-              g_stop = 0;
-              std::signal(SIGINT, OnSignal);
-              std::signal(SIGTERM, OnSignal);
-              return view::RunView(*o, &g_stop);
+              // SIGINT, SIGTERM: the view stops serving and prints its counters; installed before it
+              // connects to its device, so that one during the wait is not lost
+              InstallStopSignals();
+              return view::RunView(*o, &g_stop_requested);
             });
           }};
 }
