@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <sstream>
@@ -17,6 +16,7 @@
 #include "bridge/bridge_errors.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "core/core_signals.h"
 
 namespace vlab::cli {
 
@@ -24,9 +24,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kEstimatedHfovDeg = 60.0;  // a typical USB webcam, when nothing better is known
-
-volatile std::sig_atomic_t g_camera_stop = 0;
-void OnCameraSignal(int) { g_camera_stop = 1; }
 
 struct CameraArgs {
   std::string source;
@@ -129,6 +126,9 @@ void SetIntrinsics(const CameraArgs& a, bridge::CameraDescription* d) {
 }
 
 int RunCamera(const CameraArgs& a) {
+  // SIGINT, SIGTERM: the loop stops before its next frame and prints its counters; installed
+  // first, so that one while the source opens stops the camera before its first frame
+  InstallStopSignals();
   Validate(a);
   bridge::CameraDescription d;
   if (!bridge::EncodingFromName(a.encoding, &d.encoding)) throw vlab::InputError("--encoding must be jpeg or raw");
@@ -178,9 +178,6 @@ int RunCamera(const CameraArgs& a) {
               server->port());
   std::fflush(stdout);
 
-  g_camera_stop = 0;
-  std::signal(SIGINT, OnCameraSignal);
-  std::signal(SIGTERM, OnCameraSignal);
   using Clock = std::chrono::steady_clock;
   const Clock::time_point start = Clock::now();
   const auto since_start = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
@@ -188,13 +185,15 @@ int RunCamera(const CameraArgs& a) {
   std::string why = "end of file";
   std::int64_t id = 0;
   for (;;) {
-    if (g_camera_stop) {
-      why = "interrupted";
+    if (g_stop_requested != 0) {
+      why = "interrupted by " + StopSignalName(g_stop_requested);
       break;
     }
     if (!source->Read(rgb.data())) {
       if (a.loop && source->Rewind() && source->Read(rgb.data())) {
         // next pass of the file
+      } else if (g_stop_requested != 0) {
+        continue;  // a read the signal cut short: the top of the loop stops
       } else if (source->is_device()) {
         std::fprintf(stderr, "vlab: error: video source '%s' stopped delivering frames\n", a.source.c_str());
         return 1;
@@ -205,7 +204,7 @@ int RunCamera(const CameraArgs& a) {
     // a file plays at its rate (frame i at i / fps); a device delivers at its own
     if (!source->is_device()) {
       const double due = static_cast<double>(id) / fps;
-      for (double left = due - since_start(); left > 0 && !g_camera_stop; left = due - since_start()) {
+      for (double left = due - since_start(); left > 0 && g_stop_requested == 0; left = due - since_start()) {
         server->Poll(std::min(left, 0.05));
       }
     }

@@ -1,21 +1,14 @@
 // vlab view: a live 3-D view of the lab in the browser (src/view/), from a
 // scene device, from an arm device's joint states, or from a recorded run.
-#include <csignal>
 #include <cstdio>
 #include <memory>
 
 #include "cli/cli_commands.h"
+#include "core/core_signals.h"
 #include "view/view_gltf.h"
 #include "view/view_program.h"
 
 namespace vlab::cli {
-
-namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
-
-}  // namespace
 
 Subcommand AddViewCommand(CLI::App& app) {
   auto o = std::make_shared<view::ViewOptions>();
@@ -39,8 +32,8 @@ Subcommand AddViewCommand(CLI::App& app) {
                   "ARM.q.JOINT, ARM.qd.JOINT, ARM.tau.JOINT; --replay: any column of the run's log.csv");
   cmd->add_option("--http", o->server.port, "TCP port of the page (default 8080; 0: any free port)");
   cmd->add_option("--bind", o->server.bind,
-                  "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see README; beyond "
-                  "loopback anyone who can reach the port can watch, and vlab view says so on stderr)");
+                  "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see docs/view.md; "
+                  "beyond loopback anyone who can reach the port can watch, and vlab view says so on stderr)");
   cmd->add_option("--allow-host", o->server.allowed_hosts,
                   "A name the page may be opened by (Host and Origin), beside localhost, 127.0.0.0/8, [::1] and the "
                   "--bind address; repeatable. Any other name is refused (421, 403): a web page elsewhere cannot read "
@@ -59,10 +52,10 @@ Subcommand AddViewCommand(CLI::App& app) {
   cmd->add_flag("-q,--quiet", o->quiet, "Only the start line and the final counter line");
   return {cmd, [o] {
             return WithErrorReport([&] {
-              g_stop = 0;
-              std::signal(SIGINT, OnSignal);
-              std::signal(SIGTERM, OnSignal);
-              return view::RunView(*o, &g_stop);
+              // SIGINT, SIGTERM: the view stops serving and prints its counters; installed before it
+              // connects to its device, so that one during the wait is not lost
+              InstallStopSignals();
+              return view::RunView(*o, &g_stop_requested);
             });
           }};
 }

@@ -4,8 +4,8 @@
 // markers device. With --yoyo-port it tracks the yo-yo's colour blob instead
 // and serves it as a yoyo device (vision_yoyo_program.h). Runs until
 // SIGINT/SIGTERM, --frames or --duration.
+#include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -14,6 +14,7 @@
 #include "bridge/bridge_errors.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "core/core_signals.h"
 #include "vision/vision_program.h"
 #include "vision/vision_yoyo_program.h"
 
@@ -37,9 +38,6 @@ struct VisionArgs {
   double ambiguity_margin_px = 0.1;
   bool quiet = false;
 };
-
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
 
 // "HOST:PORT", "[v6]:PORT"
 void SplitHostPort(const std::string& text, std::string* host, int* port) {
@@ -98,8 +96,8 @@ void ReportYoyo(const vision::YoyoVisionProgram& p, double elapsed_s) {
   std::fflush(stdout);
 }
 
-// makes the program (it connects to its camera and binds its device) and takes SIGINT and
-// SIGTERM over; a bad address or a port in use is the options' fault (exit 2)
+// makes the program (it connects to its camera and binds its device); a bad address or a port
+// in use is the options' fault (exit 2)
 template <typename Program, typename Config>
 std::unique_ptr<Program> StartProgram(const Config& config) {
   std::unique_ptr<Program> program;
@@ -108,8 +106,6 @@ std::unique_ptr<Program> StartProgram(const Config& config) {
   } catch (const bridge::NetworkError& e) {
     throw vlab::InputError(e.what());
   }
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
   return program;
 }
 
@@ -130,7 +126,7 @@ int RunUntilDone(Program& program, const VisionArgs& a, void (*report)(const Pro
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   double next_report_s = 5;
-  while (!g_stop) {
+  while (g_stop_requested == 0) {
     program.Step(0.05);
     if (a.frames > 0 && program.counters().frames >= a.frames) break;
     if (a.duration_s > 0 && elapsed() >= a.duration_s) break;
@@ -163,6 +159,9 @@ int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
 }
 
 int Vision(const VisionArgs& a) {
+  // SIGINT, SIGTERM: the loop stops after the frame at hand and prints its counters; installed
+  // first, so that one while the program waits for its camera is not lost
+  InstallStopSignals();
   vision::VisionConfig config;
   SplitHostPort(a.camera, &config.camera_address, &config.camera_port);
   if (a.port < 0 || a.port > 65535) throw vlab::InputError("--port " + std::to_string(a.port) + " outside 0..65535");

@@ -1,6 +1,8 @@
-// SIGINT and SIGTERM as a stop request for a program's loop (vlab run, serve and
-// render; vlab-kinsim, vlab-yoyosim): the handler only records which signal came,
-// and the loop reads it.
+// SIGINT and SIGTERM as a stop request for a program's loop: the one stop handler of the
+// lab's commands (vlab run, serve, render, compare, sweep, task, camera, vision and view;
+// vlab-kinsim, vlab-yoyosim). The handler only records which signal came, and the loop
+// reads it. (Controller programs and vlab follow, clients of the bridge library, stop by
+// bridge/bridge_program.h.)
 #pragma once
 
 #include <pthread.h>
