@@ -16,6 +16,7 @@
 #include "bridge/bridge_session.h"
 #include "bridge/bridge_protocol.h"
 #include "camera_test_util.h"
+#include "wait_until.h"
 
 namespace vlab::bridge {
 namespace {
@@ -143,7 +144,7 @@ TEST(CameraServerTest, DescribeReplyHasTheCameraFacts) {
 
 TEST(CameraServerTest, OnlyAProvenSubscribeRequestSubscribes) {
   CameraServerConfig config = SmallConfig();
-  config.subscriber_timeout_s = 0.4;
+  config.subscriber_timeout_s = 1.0;
   auto server = CameraServer::Create(config);
   const auto poll = [&server] { server->Poll(0.2); };
   Peer describer(server->port()), commander(server->port()), garbage(server->port());
@@ -179,6 +180,7 @@ TEST(CameraServerTest, OnlyAProvenSubscribeRequestSubscribes) {
   EXPECT_EQ(json[0], '{');
   EXPECT_EQ(server->subscribers(), 0);  // a describe does not subscribe
   EXPECT_EQ(Peer::Result(describer.Session(*server)), static_cast<int>(SessionResult::kSubscribed));
+  const auto commander_heard = std::chrono::steady_clock::now();  // at the latest: its last request
   EXPECT_EQ(Peer::Result(commander.Session(*server)), static_cast<int>(SessionResult::kSubscribed));
   EXPECT_EQ(server->subscribers(), 2);
   ASSERT_TRUE(server->Send(PatternFrame(1, 64, 48)));
@@ -187,13 +189,28 @@ TEST(CameraServerTest, OnlyAProvenSubscribeRequestSubscribes) {
   EXPECT_EQ(Chunks(garbage.Drain(0.05)), 0);
   EXPECT_EQ(server->counters().chunks_sent, 20);
 
-  // silent subscribers are dropped after subscriber_timeout_s of the wall clock; a renewal keeps one
-  std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  // silent subscribers are dropped after subscriber_timeout_s of the wall clock; a renewal keeps
+  // one. The describer renews every 20 ms while the test waits for the silent commander's drop,
+  // which cannot come before the timeout (it can come later on a busy machine).
   Bytes renew;
   EncodeSubscribeRequest(DeviceKind::kCamera, describer.cookie, 1, &renew);
-  EXPECT_EQ(Peer::Result(describer.Ask(renew, poll)), static_cast<int>(SessionResult::kSubscribed));
-  std::this_thread::sleep_for(std::chrono::milliseconds(250));
-  server->Send(PatternFrame(2, 64, 48));
+  std::int64_t id = 2;
+  const bool dropped = vlab::testing::WaitUntil([&] {
+    describer.Drain(0.0);  // the frames before: the reply must come first
+    EXPECT_EQ(Peer::Result(describer.Ask(renew, poll)), static_cast<int>(SessionResult::kSubscribed));
+    server->Send(PatternFrame(id++, 64, 48));  // a send drops the silent ones
+    if (server->subscribers() == 1) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // pacing the renewals
+    return false;
+  });
+  const double silent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - commander_heard).count();
+  ASSERT_TRUE(dropped) << "the silent commander was not dropped within 20 s";
+  EXPECT_GE(silent_s, config.subscriber_timeout_s) << "dropped before its timeout";
+  EXPECT_EQ(server->counters().subscribers_dropped, 1);
+  // the renewed describer gets the next frame whole, the dropped commander nothing
+  describer.Drain(0.0);
+  commander.Drain(0.0);
+  server->Send(PatternFrame(id, 64, 48));
   EXPECT_EQ(server->subscribers(), 1);
   EXPECT_EQ(server->counters().subscribers_dropped, 1);
   EXPECT_EQ(Chunks(describer.Drain()), 10);

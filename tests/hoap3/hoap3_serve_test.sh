@@ -64,10 +64,12 @@ PY
 # 2. SIGTERM: the controller ends cleanly (exit 0) while the run goes on (realtime:
 # lockstep would be over before the signal)
 if start_server term realtime 30; then
-  "$build/examples/hoap3_stand" --arm "$arm" >"$out/term.controller.log" 2>&1 &
+  "$build/examples/hoap3_stand" --arm "$arm" --stand 1 >"$out/term.controller.log" 2>&1 &
   controller_pid=$!
-  for _ in $(seq 200); do grep -q "connected" "$out/term.controller.log" && break; sleep 0.05; done
-  sleep 1
+  # the signal comes inside its control loop: once it has printed its first phase (the squat,
+  # 1 s into the run; 30 s at most)
+  for _ in $(seq 600); do grep -q ": squat;" "$out/term.controller.log" && break; sleep 0.05; done
+  grep -q ": squat;" "$out/term.controller.log" || { echo "SIGTERM: the controller never reached its squat"; fail=1; }
   kill -TERM "$controller_pid"
   if wait "$controller_pid"; then
     echo "SIGTERM: controller exit 0: $(tail -1 "$out/term.controller.log")"

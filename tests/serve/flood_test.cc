@@ -49,14 +49,28 @@ long KernelDrops(int port) {
 struct Flood {
   long sent = 0, sent_bytes = 0, commands = 0, requests = 0;
   long received = 0, received_bytes = 0, not_challenges = 0;
+  std::vector<std::unique_ptr<bridge::UdpSocket>> ports;  // the 64 source ports, read once the lab has ended
 };
+
+// reads what has come back to the flood's ports (without waiting): a port's queue holds only
+// about 256 datagrams, so the flood reads its replies every round and once the lab has ended
+void ReadFloodReplies(Flood* out) {
+  std::vector<unsigned char> buffer(65536);
+  for (auto& p : out->ports) {
+    for (long n; (n = p->Receive(buffer.data(), buffer.size(), nullptr, 0.0)) >= 0;) {
+      ++out->received;
+      out->received_bytes += n;
+      if (!bridge::IsSessionReply(buffer.data(), static_cast<std::size_t>(n))) ++out->not_challenges;
+    }
+  }
+}
 
 // what the flood's 64 ports send, round after round, until `stop`
 void RunFlood(int arm_port, const std::atomic<bool>& stop, Flood* out) {
   const bridge::Endpoint arm = bridge::UdpSocket::MakeEndpoint("127.0.0.1", arm_port);
-  std::vector<std::unique_ptr<bridge::UdpSocket>> ports;
+  std::vector<std::unique_ptr<bridge::UdpSocket>>& ports = out->ports;
   for (int i = 0; i < kFloodPorts; ++i) ports.push_back(bridge::UdpSocket::Bind("127.0.0.1", 0));
-  std::vector<unsigned char> packet, buffer(65536);
+  std::vector<unsigned char> packet;
   bridge::ArmCommandMsg command{2, std::vector<double>(7, 0.1)};
   for (long round = 0; !stop; ++round) {
     for (int i = 0; i < kFloodPorts; ++i) {
@@ -70,15 +84,8 @@ void RunFlood(int arm_port, const std::atomic<bool>& stop, Flood* out) {
       out->sent_bytes += static_cast<long>(packet.size());
       ports[static_cast<std::size_t>(i)]->SendTo(packet.data(), packet.size(), arm);
     }
-    std::this_thread::sleep_for(std::chrono::duration<double>(kFloodRound_s));
-  }
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the last replies
-  for (auto& p : ports) {
-    for (long n; (n = p->Receive(buffer.data(), buffer.size(), nullptr, 0.0)) >= 0;) {
-      ++out->received;
-      out->received_bytes += n;
-      if (!bridge::IsSessionReply(buffer.data(), static_cast<std::size_t>(n))) ++out->not_challenges;
-    }
+    ReadFloodReplies(out);
+    std::this_thread::sleep_for(std::chrono::duration<double>(kFloodRound_s));  // pacing the sender
   }
 }
 
@@ -123,6 +130,9 @@ LabRun RunLab(bool flooded) {
     }
     EXPECT_EQ(serve.Wait(), 0) << serve.Output() << serve.Errors();
   }
+  // the last replies: once the lab has exited, every one it sent is queued on the flood's ports
+  // (loopback delivers a datagram as it is sent)
+  if (flooded) ReadFloodReplies(&run.flood);
   run.log = ReadFile(tmp / "out/log.csv");
   run.summary = nlohmann::json::parse(ReadFile(tmp / "out/summary.json"));
   for (const auto& d : run.summary.at("bridge").at("devices")) {

@@ -10,7 +10,6 @@
 
 #include <chrono>
 #include <string>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -19,6 +18,7 @@
 #include "test_process.h"
 #include "test_run_output.h"
 #include "test_util.h"
+#include "wait_until.h"
 
 namespace vlab::testing {
 namespace {
@@ -49,7 +49,13 @@ TEST(ServeLifecycle, SigintKeepsEveryPeriodThatRan) {
   TestProcess controller({VLAB_BINARY_DIR "/examples/joint_control", "--arm", "127.0.0.1:" + Port(arm),
                           "--duration", "100000", "--quiet"},
                          0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // lockstep periods go by
+  // lockstep periods go by: 250 of them (0.5 s), read from the sim device by a bystander that
+  // sends no op (lockstep does not wait for it)
+  bridge::Sim watch = bridge::Sim::Connect("127.0.0.1", sim, 10.0);
+  bridge::Sim::State state = watch.Read(10.0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (state.periods < 250 && std::chrono::steady_clock::now() < deadline) state = watch.Read(10.0);
+  ASSERT_GE(state.periods, 250) << serve.Output() << serve.Errors();
   serve.Signal(SIGINT);
   // and a signal every 10 ms until it has exited: the files are still written whole
   ASSERT_EQ(serve.Wait(60, SIGTERM), 1) << serve.Output() << serve.Errors();
@@ -73,7 +79,9 @@ TEST(ServeLifecycle, SignalEndsTheWaitForAController) {
                          " --out '" + (tmp / "out") + "'",
                      tmp.path());
   ASSERT_TRUE(serve.WaitStarted()) << serve.Output() << serve.Errors();
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // it waits for a controller once it says so
+  ASSERT_TRUE(WaitUntil([&] { return serve.Errors().find("vlab serve: waiting for a controller") != std::string::npos; }))
+      << serve.Errors();
   serve.Signal(SIGINT);
   ASSERT_EQ(serve.Wait(30), 1) << serve.Output() << serve.Errors();  // -1: still waiting after 30 s
   EXPECT_NE(serve.Errors().find("vlab serve: waiting for a controller on pa10 127.0.0.1:" + Port(arm) +

@@ -16,7 +16,6 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "bridge/bridge_udp.h"
 #include "test_util.h"
 #include "vision/vision_cubes.h"
 
@@ -25,18 +24,6 @@ namespace {
 
 constexpr double kPositionBound_m = 0.003;  // docs/vision.md: the cube scene's webcam, world frame
 constexpr double kRotationBound_deg = 1.0;
-
-int FreeUdpPort() { return bridge::UdpSocket::Bind("127.0.0.1", 0)->local_port(); }
-
-// the scenario's command with the vision program on `port`
-std::string CommandOverride(int port) {
-  const std::string p = std::to_string(port);
-  return "--set 'controller.command=[\"{scenario_dir}/../../../examples/with_helper.sh\", \"{bin}/vlab\", \"vision\", "
-         "\"--camera\", \"{webcam}\", \"--port\", \"" + p + "\", \"--marker\", \"4X4_50:0-35:0.025\", \"--connect-timeout\", \"30\", \"--quiet\", "
-         "\"--\", \"{bin}/vlab\", \"task\", \"{scenario_dir}/markers.lua\", \"--arm\", \"{pa10}\", \"--device\", "
-         "\"markers=127.0.0.1:" + p + "\", \"--scene\", \"{scenario_dir}/../../../scenes/pa10_cubes.xml\", "
-         "\"--tip\", \"tool\", \"--timeout\", \"40\", \"--hold\"]'";
-}
 
 struct Pose {
   Eigen::Vector3d p;
@@ -74,9 +61,8 @@ std::string ScriptLines(const std::string& text) {
 }
 
 TEST(TaskMarkers, ScriptReadsCubeMarkersWithinVisionAccuracyAndRunsRepeat) {
-  const int port = FreeUdpPort();
-  TempDir a, b;
-  const ProcessResult ra = RunVlab("run tests/data/task/markers.yaml " + CommandOverride(port) + " --out '" + a.path() + "'", 300);
+  TempDir a, b;  // the vision program on a free port of each run ({port:vision})
+  const ProcessResult ra = RunVlab("run tests/data/task/markers.yaml --out '" + a.path() + "'", 300);
   ASSERT_EQ(ra.exit_code, 0) << ra.out << ra.err << ReadFile(a / "controller.log");
   const std::string output = ReadFile(a / "controller.log");
 
@@ -128,7 +114,7 @@ TEST(TaskMarkers, ScriptReadsCubeMarkersWithinVisionAccuracyAndRunsRepeat) {
   std::printf("%d valid markers checked: worst %.3f mm, %.3f deg\n", checked, worst_mm, worst_deg);
 
   // a second run, the same bytes
-  const ProcessResult rb = RunVlab("run tests/data/task/markers.yaml " + CommandOverride(port) + " --out '" + b.path() + "'", 300);
+  const ProcessResult rb = RunVlab("run tests/data/task/markers.yaml --out '" + b.path() + "'", 300);
   ASSERT_EQ(rb.exit_code, 0) << rb.out << rb.err << ReadFile(b / "controller.log");
   EXPECT_EQ(ReadFile(a / "log.csv"), ReadFile(b / "log.csv"));
   EXPECT_EQ(ScriptLines(output), ScriptLines(ReadFile(b / "controller.log")));
