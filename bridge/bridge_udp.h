@@ -16,14 +16,14 @@
 namespace vlab::bridge {
 
 /// A UDP peer: an IPv4 or IPv6 address and a port, kept as the kernel's
-/// socket address. A small value type; the default is 0.0.0.0 port 0.
-/// Two endpoints are equal when family, address (with the IPv6 scope) and
-/// port are.
+/// socket address: a small value type, copied freely, and what sendto and
+/// recvfrom take, so the hot path converts nothing.
 class Endpoint {
  public:
   /// An endpoint's address alone: its family and numeric text.
   class Address {
    public:
+    /// The family: IPv4 or IPv6.
     bool is_v4() const { return !v6_; }
     bool is_v6() const { return v6_; }
     /// "127.0.0.1", "::1", "fe80::1%eth0" (without brackets or port).
@@ -36,11 +36,13 @@ class Endpoint {
     std::string text_;
   };
 
+  /// 0.0.0.0 port 0: what Receive overwrites.
   Endpoint();
   /// The endpoint of a kernel socket address (AF_INET or AF_INET6, `size`
   /// bytes); any other family gives the default endpoint.
   static Endpoint FromSockaddr(const sockaddr* address, socklen_t size);
 
+  /// The address without the port ("127.0.0.1" through to_string()).
   Address address() const;
   /// The port, host byte order (0..65535).
   int port() const;
@@ -51,6 +53,7 @@ class Endpoint {
   const sockaddr* data() const { return &storage_.any; }
   socklen_t size() const;
 
+  /// Same family, address (with the IPv6 scope) and port.
   friend bool operator==(const Endpoint& a, const Endpoint& b);
   friend bool operator!=(const Endpoint& a, const Endpoint& b) { return !(a == b); }
 
