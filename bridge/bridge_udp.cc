@@ -47,7 +47,8 @@ Endpoint::Address Endpoint::address() const {
   // a scoped address names its interface (link-local) or its scope number, as Asio writes it
   if (const unsigned scope = storage_.v6.sin6_scope_id; scope != 0) {
     char name[IF_NAMESIZE + 1] = {};
-    const bool link_local = IN6_IS_ADDR_LINKLOCAL(&storage_.v6.sin6_addr) || IN6_IS_ADDR_MC_LINKLOCAL(&storage_.v6.sin6_addr);
+    const in6_addr* a = &storage_.v6.sin6_addr;
+    const bool link_local = IN6_IS_ADDR_LINKLOCAL(a) || IN6_IS_ADDR_MC_LINKLOCAL(a);
     out += "%" + (link_local && ::if_indextoname(scope, name) != nullptr ? std::string(name) : std::to_string(scope));
   }
   return Address(true, out);
@@ -213,8 +214,8 @@ int UdpSocket::local_port() const { return local_.port(); }
 int UdpSocket::fd() { return impl_->socket.native_handle(); }
 
 bool UdpSocket::SendTo(const unsigned char* data, std::size_t size, const Endpoint& to) {
-  // the socket is non-blocking: one try, as Asio's send_to on it
-  return ::sendto(impl_->socket.native_handle(), data, size, 0, to.data(), to.size()) >= 0;
+  // the socket is non-blocking: one try, with the flags Asio's send_to used on Linux
+  return ::sendto(impl_->socket.native_handle(), data, size, MSG_NOSIGNAL, to.data(), to.size()) >= 0;
 }
 
 long UdpSocket::Receive(unsigned char* buffer, std::size_t capacity, Endpoint* from, double timeout_s,
