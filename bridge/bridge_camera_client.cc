@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <sstream>
 
-#include <boost/asio/ip/udp.hpp>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -37,6 +37,8 @@ std::chrono::steady_clock::time_point After(std::chrono::steady_clock::time_poin
 }
 
 }  // namespace
+
+const nlohmann::json& CameraClient::describe() const { return *describe_; }
 
 CameraClient::CameraClient(CameraClient&&) noexcept = default;
 CameraClient& CameraClient::operator=(CameraClient&&) noexcept = default;
@@ -71,22 +73,22 @@ CameraClient::CameraClient(const std::string& address, int port, const CameraCli
 
 void CameraClient::CheckDescribe(const unsigned char* data, long size) {
   try {
-    describe_ = nlohmann::json::parse(data, data + size);
+    describe_ = std::make_unique<nlohmann::json>(nlohmann::json::parse(data, data + size));
   } catch (const nlohmann::json::exception& e) {
     throw ProtocolError(Label() + ": describe reply is not valid JSON: " + e.what());
   }
-  if (!describe_.is_object()) throw ProtocolError(Label() + ": describe reply is not a JSON object");
-  const nlohmann::json version = describe_.value("protocol", nlohmann::json());
+  if (!describe_->is_object()) throw ProtocolError(Label() + ": describe reply is not a JSON object");
+  const nlohmann::json version = describe_->value("protocol", nlohmann::json());
   if (!version.is_number()) throw ProtocolError(Label() + ": describe reply has no numeric \"protocol\"");
   if (version.get<double>() != kProtocolVersion) {
     throw VersionMismatch(Label() + ": the device speaks protocol version " + version.dump() +
                           ", this client speaks version " + std::to_string(kProtocolVersion));
   }
-  const nlohmann::json kind = describe_.value("kind", nlohmann::json());
+  const nlohmann::json kind = describe_->value("kind", nlohmann::json());
   if (!kind.is_string() || kind.get<std::string>() != "camera") {
     throw ProtocolError(Label() + ": the device is of kind " + kind.dump() + ", not \"camera\"");
   }
-  const nlohmann::json name = describe_.value("name", nlohmann::json());
+  const nlohmann::json name = describe_->value("name", nlohmann::json());
   if (name.is_string()) name_ = name.get<std::string>();
 
   // the facts a client relies on
@@ -96,21 +98,21 @@ void CameraClient::CheckDescribe(const unsigned char* data, long size) {
     }
     return object[field].get<double>();
   };
-  calibration_.width = static_cast<int>(number(describe_, "width", "width"));
-  calibration_.height = static_cast<int>(number(describe_, "height", "height"));
-  fps_ = number(describe_, "fps", "fps");
-  const nlohmann::json encoding = describe_.value("encoding", nlohmann::json());
+  calibration_.width = static_cast<int>(number(*describe_, "width", "width"));
+  calibration_.height = static_cast<int>(number(*describe_, "height", "height"));
+  fps_ = number(*describe_, "fps", "fps");
+  const nlohmann::json encoding = describe_->value("encoding", nlohmann::json());
   if (!encoding.is_string() || !EncodingFromName(encoding.get<std::string>(), &encoding_)) {
     throw ProtocolError(Label() + ": describe reply's \"encoding\" is " + encoding.dump() +
                         ", not \"raw\" or \"jpeg\"");
   }
-  const nlohmann::json intrinsics = describe_.value("intrinsics", nlohmann::json());
+  const nlohmann::json intrinsics = describe_->value("intrinsics", nlohmann::json());
   calibration_.fx = number(intrinsics, "fx", "intrinsics.fx");
   calibration_.fy = number(intrinsics, "fy", "intrinsics.fy");
   calibration_.cx = number(intrinsics, "cx", "intrinsics.cx");
   calibration_.cy = number(intrinsics, "cy", "intrinsics.cy");
   calibration_.source = intrinsics.value("source", "");
-  const nlohmann::json distortion = describe_.value("distortion", nlohmann::json());
+  const nlohmann::json distortion = describe_->value("distortion", nlohmann::json());
   if (distortion.is_object()) {
     const char* fields[4] = {"k1", "k2", "p1", "p2"};
     for (int i = 0; i < 4; ++i) {

@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "bridge/bridge_camera.h"
 #include "bridge/bridge_camera_assembler.h"
@@ -82,7 +82,7 @@ class CameraClient {
   /// Renews the subscription now (Receive does it every keepalive_s).
   bool KeepAlive();
 
-  const nlohmann::json& describe() const { return describe_; }
+  const nlohmann::json& describe() const;
   const std::string& name() const { return name_; }
   int width() const { return calibration_.width; }
   int height() const { return calibration_.height; }
@@ -118,7 +118,7 @@ class CameraClient {
   Endpoint device_;
   std::unique_ptr<UdpSocket> socket_;
   std::unique_ptr<Impl> impl_;
-  nlohmann::json describe_;
+  std::unique_ptr<nlohmann::json> describe_;  // the full JSON type stays in the .cc
   std::string name_;
   double fps_ = 0;
   CameraEncoding encoding_ = CameraEncoding::kRaw;

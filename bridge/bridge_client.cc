@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include <boost/asio/ip/udp.hpp>
+#include <nlohmann/json.hpp>
 
 namespace vlab::bridge {
 
@@ -49,6 +49,8 @@ std::vector<double> Limits(const nlohmann::json& limits, const char* field, std:
 
 // ---- DeviceClient ---------------------------------------------------------------
 
+const nlohmann::json& DeviceClient::describe() const { return *describe_; }
+
 DeviceClient::DeviceClient(DeviceClient&&) noexcept = default;
 DeviceClient& DeviceClient::operator=(DeviceClient&&) noexcept = default;
 
@@ -73,23 +75,23 @@ DeviceClient::~DeviceClient() {
 
 void DeviceClient::CheckDescribe(const unsigned char* json, long size) {
   try {
-    describe_ = nlohmann::json::parse(json, json + size);
+    describe_ = std::make_unique<nlohmann::json>(nlohmann::json::parse(json, json + size));
   } catch (const nlohmann::json::exception& e) {
     throw ProtocolError(Label() + ": describe reply is not valid JSON: " + e.what());
   }
-  if (!describe_.is_object()) throw ProtocolError(Label() + ": describe reply is not a JSON object");
-  const nlohmann::json version = describe_.value("protocol", nlohmann::json());
+  if (!describe_->is_object()) throw ProtocolError(Label() + ": describe reply is not a JSON object");
+  const nlohmann::json version = describe_->value("protocol", nlohmann::json());
   if (!version.is_number()) throw ProtocolError(Label() + ": describe reply has no numeric \"protocol\"");
   if (version.get<double>() != kProtocolVersion) {
     throw VersionMismatch(Label() + ": the device speaks protocol version " + version.dump() +
                           ", this client speaks version " + std::to_string(kProtocolVersion));
   }
   const std::string want = KindName(static_cast<int>(kind_));
-  const nlohmann::json kind = describe_.value("kind", nlohmann::json());
+  const nlohmann::json kind = describe_->value("kind", nlohmann::json());
   if (!kind.is_string() || kind.get<std::string>() != want) {
     throw ProtocolError(Label() + ": the device is of kind " + kind.dump() + ", not \"" + want + "\"");
   }
-  const nlohmann::json name = describe_.value("name", nlohmann::json());
+  const nlohmann::json name = describe_->value("name", nlohmann::json());
   if (name.is_string()) name_ = name.get<std::string>();
 }
 

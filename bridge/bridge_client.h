@@ -30,7 +30,7 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 namespace vlab::bridge {
 /// How long a client's Read polls before it sleeps, s (the lab spins as long).
@@ -55,7 +55,7 @@ class DeviceClient {
   virtual ~DeviceClient();
 
   /// The device's describe reply (JSON object), as received at connect.
-  const nlohmann::json& describe() const { return describe_; }
+  const nlohmann::json& describe() const;
   /// The device's name from its describe reply ("pa10"), or "" if it has none.
   const std::string& name() const { return name_; }
   DeviceKind kind() const { return kind_; }
@@ -115,7 +115,7 @@ class DeviceClient {
   Endpoint device_;
   std::unique_ptr<UdpSocket> socket_;
   std::unique_ptr<ClientSession> session_;
-  nlohmann::json describe_;
+  std::unique_ptr<nlohmann::json> describe_;  // the full JSON type stays in the .cc
   std::string name_;
   std::chrono::steady_clock::time_point start_;
   std::vector<unsigned char> buffer_;

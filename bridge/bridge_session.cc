@@ -83,16 +83,7 @@ double SessionTable::Now() const {
 
 double SessionTable::Cookie(const Endpoint& from) const {
   unsigned char bytes[18] = {};
-  std::size_t n = 0;
-  if (from.address().is_v4()) {
-    const auto a = from.address().to_v4().to_bytes();
-    std::copy(a.begin(), a.end(), bytes);
-    n = a.size();
-  } else {
-    const auto a = from.address().to_v6().to_bytes();
-    std::copy(a.begin(), a.end(), bytes);
-    n = a.size();
-  }
+  std::size_t n = from.AddressBytes(bytes);
   bytes[n++] = static_cast<unsigned char>(from.port() & 0xff);
   bytes[n++] = static_cast<unsigned char>(from.port() >> 8);
   const std::uint64_t h = SipHash(key_, bytes, n) & ((1ULL << 53) - 1);

@@ -1,18 +1,70 @@
-// A UDP socket for the bridge (Boost.Asio underneath), with the two calls the
-// bridge needs: send a datagram to an endpoint, and receive one datagram with a
-// time limit. Receive and send never throw: they return a status.
+// A UDP socket for the bridge, with the two calls the bridge needs: send a
+// datagram to an endpoint, and receive one datagram with a time limit. Receive
+// and send never throw: they return a status. Boost.Asio (address parsing,
+// name lookup) stays inside bridge_udp.cc: an Endpoint is the socket API's own
+// address, so a header that names one does not pull Asio into its includers.
 #pragma once
+
+#include <netinet/in.h>
+#include <sys/socket.h>
 
 #include <cstddef>
 #include <memory>
 #include <string>
-
-#include <boost/asio/io_context.hpp>
-#include <boost/asio/ip/udp.hpp>
+#include <utility>
 
 namespace vlab::bridge {
 
-using Endpoint = boost::asio::ip::udp::endpoint;
+/// A UDP peer: an IPv4 or IPv6 address and a port, kept as the kernel's
+/// socket address: a small value type, copied freely, and what sendto and
+/// recvfrom take, so the hot path converts nothing.
+class Endpoint {
+ public:
+  /// An endpoint's address alone: its family and numeric text.
+  class Address {
+   public:
+    /// The family: IPv4 or IPv6.
+    bool is_v4() const { return !v6_; }
+    bool is_v6() const { return v6_; }
+    /// "127.0.0.1", "::1", "fe80::1%eth0" (without brackets or port).
+    std::string to_string() const { return text_; }
+
+   private:
+    friend class Endpoint;
+    Address(bool v6, std::string text) : v6_(v6), text_(std::move(text)) {}
+    bool v6_;
+    std::string text_;
+  };
+
+  /// 0.0.0.0 port 0: what Receive overwrites.
+  Endpoint();
+  /// The endpoint of a kernel socket address (AF_INET or AF_INET6, `size`
+  /// bytes); any other family gives the default endpoint.
+  static Endpoint FromSockaddr(const sockaddr* address, socklen_t size);
+
+  /// The address without the port ("127.0.0.1" through to_string()).
+  Address address() const;
+  /// The port, host byte order (0..65535).
+  int port() const;
+  /// Copies the address's bytes, network order, into out (room for 16):
+  /// 4 for IPv4, 16 for IPv6; returns how many.
+  std::size_t AddressBytes(unsigned char* out) const;
+  /// The kernel socket address, for sendto and bind, and its size in bytes.
+  const sockaddr* data() const { return &storage_.any; }
+  socklen_t size() const;
+
+  /// Same family, address (with the IPv6 scope) and port.
+  friend bool operator==(const Endpoint& a, const Endpoint& b);
+  friend bool operator!=(const Endpoint& a, const Endpoint& b) { return !(a == b); }
+
+ private:
+  union Storage {
+    sockaddr any;
+    sockaddr_in v4;
+    sockaddr_in6 v6;
+  };
+  Storage storage_;
+};
 
 /// Most file descriptors WaitReadable watches (the rest are ignored).
 inline constexpr int kMaxWaitFds = 64;
@@ -60,9 +112,9 @@ class UdpSocket {
                bool* truncated = nullptr);
 
  private:
+  struct Impl;  // the Asio socket
   UdpSocket();
-  boost::asio::io_context io_;
-  boost::asio::ip::udp::socket socket_;
+  std::unique_ptr<Impl> impl_;
   Endpoint local_;
 };
 

@@ -31,6 +31,7 @@
 #include <future>
 #include <string>
 #include <vector>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <vector>
+#include <nlohmann/json.hpp>
 
 #include "lab/lab_log.h"
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <thread>
+#include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
 #include "task/task_udp.h"

@@ -1,5 +1,7 @@
 #include "task/task_udp.h"
 
+#include <nlohmann/json.hpp>
+
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"

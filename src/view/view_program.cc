@@ -13,6 +13,7 @@
 #include <fstream>
 #include <sstream>
 #include <thread>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"

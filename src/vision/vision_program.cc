@@ -5,6 +5,7 @@
 #include <optional>
 
 #include <opencv2/imgproc.hpp>
+#include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include <opencv2/core/version.hpp>
+#include <nlohmann/json.hpp>
 
 namespace vlab::vision {
 

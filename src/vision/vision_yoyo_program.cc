@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <optional>
+#include <nlohmann/json.hpp>
 
 #include "vision/vision_program.h"
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_layouts.h"

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_endpoint.h"

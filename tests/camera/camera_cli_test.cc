@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "test_util.h"

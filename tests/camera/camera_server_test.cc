@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_camera_server.h"

@@ -26,6 +26,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 #include <opencv2/imgcodecs.hpp>
+#include <nlohmann/json.hpp>
 
 #include "cdp_client.h"
 #include "render/renderer.h"

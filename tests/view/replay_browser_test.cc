@@ -35,6 +35,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "cdp_client.h"
 #include "lab/lab_compare.h"

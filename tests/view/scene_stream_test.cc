@@ -28,6 +28,7 @@
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_client_device.h"
 #include "test_process.h"

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_server.h"
 #include "bridge/bridge_client_device.h"

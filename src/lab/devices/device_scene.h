@@ -8,7 +8,7 @@
 #include <vector>
 
 #include <mujoco/mujoco.h>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "lab/devices/device.h"
 
