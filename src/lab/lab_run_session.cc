@@ -45,6 +45,15 @@ bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, 
 
 }  // namespace
 
+RunResult Lab::Run(const RunOptions& options) {
+  RunSession run(*impl_, options);
+  run.Prepare();
+  run.Start();
+  while (run.period_index() < run.periods() && run.Period()) {
+  }
+  return run.Finish();
+}
+
 RunSession::RunSession(Lab::Impl& lab, const RunOptions& options)
     : s_(lab), options_(options), m_(lab.model.get()), d_(lab.data.get()),
       period_(lab.scenario.control_period_s), periods_(std::lround(lab.scenario.duration_s / period_)),
@@ -92,7 +101,9 @@ void RunSession::Prepare() {
     // a task program waiting in wall time (markers) lets the lab serve meanwhile
     if (s_.task) s_.task->SetIdle([b = bridge_.get()] { b->Poll(0.0, PollWait::kSleep); });
     if (options_.on_serving && !external_) options_.on_serving(bridge_->Devices());
+    writers_.push_back(bridge_.get());  // the wire writes first
   }
+  writers_.insert(writers_.end(), s_.writers.begin(), s_.writers.end());
   // outputs: staging folder (removed on a MuJoCo error too), log
   if (!options_.out_dir.empty()) {
     out_ = OutputDir::Create(options_.out_dir);
@@ -148,10 +159,11 @@ void RunSession::RenderAfterPublish(double t) {
 void RunSession::Start() {
   // first: the threads started from here on (a camera's render worker) inherit it
   RequestPriority();
-  // row 0: the initial state, with the controller's view of it
-  if (s_.controller) s_.RunController(0.0, options_, &replay_at_, &result_, controller_columns_);
-  if (s_.task) s_.task->Restart();  // a lab run again starts its programs anew
-  if (s_.task && !s_.task->Update(0.0, controller_columns_)) result_.failure = s_.task->error();
+  // row 0: the initial state, with the controllers' view of it (a task program may fail already)
+  const CommandPeriod period0 = CommandPeriodAt(0, 0.0);
+  for (CommandWriter* writer : writers_) {
+    if (!restart_failed_ && !writer->Restart(period0, &result_.failure)) restart_failed_ = true;
+  }
   EmitRow(0.0);
   if (options_.observe) options_.observe(0.0, m_, d_);
   for (auto& device : s_.devices) device->BeforeRun(d_);
@@ -224,21 +236,13 @@ bool RunSession::Commands(long k, double t_k) {
     } else {
       bridge_->NoteAnswered();
     }
-    // realtime: the watchdog also counts wall time, so the periods the lab runs back to back
-    // to catch up on its own lateness earn a prompt controller no hold
-    const bool paced = clock_->mode() == ClockMode::kRealtime && clock_->factor() > 0;
-    bridge_->ApplyCommands(k, paced ? period_ / clock_->factor() : 0.0);
   }
-  if (s_.controller) {
-    if (k > 0) s_.RunController(t_k, options_, &replay_at_, &result_, controller_columns_);
-    s_.controller_arm->Command(s_.controller_command);
+  // the command sources, in order (the wire, the lab's controller, the devices that drive another);
+  // a failure ends the run (a task program's script error: the log keeps the periods before)
+  const CommandPeriod period = CommandPeriodAt(k, t_k);
+  for (CommandWriter* writer : writers_) {
+    if (!writer->Write(period, &result_.failure)) return false;
   }
-  // the task programs: a script error ends the run (the log keeps the periods before)
-  if (s_.task && k > 0 && !s_.task->Update(t_k, controller_columns_)) {
-    result_.failure = s_.task->error();
-    return false;
-  }
-  for (auto& dev : s_.devices) dev->BeginPeriod(*d_, t_k);  // point devices command their arms
   return true;
 }
 
@@ -247,7 +251,7 @@ bool RunSession::Period() {
   const double t_k = k_ * period_;
   const double t_next = (k_ + 1) * period_;
   if (Interrupted() || output_failed_) return false;  // the periods run so far are written
-  if (s_.task && !result_.failure.empty()) return false;  // a task program failed in period 0
+  if (restart_failed_) return false;  // a command source failed at row 0 (a task program's script error)
   // 0. the sim device: pause, resume, step, reset, pace
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
   if (paused_) {
@@ -291,6 +295,21 @@ bool RunSession::Period() {
     t_progress_ = WallClock::now();
   }
   return true;
+}
+
+CommandPeriod RunSession::CommandPeriodAt(long k, double t_k) {
+  CommandPeriod period;
+  period.k = k;
+  period.t_s = t_k;
+  period.columns = controller_columns_;
+  period.data = d_;
+  // realtime: the watchdog also counts wall time, so the periods the lab runs back to back
+  // to catch up on its own lateness earn a prompt controller no hold
+  const bool paced = clock_->mode() == ClockMode::kRealtime && clock_->factor() > 0;
+  period.pace_s = paced ? period_ / clock_->factor() : 0.0;
+  period.options = &options_;
+  period.result = &result_;
+  return period;
 }
 
 void RunSession::AwaitFinalAnswer() {

@@ -12,6 +12,7 @@
 #include "bridge/bridge_layouts.h"
 #include "control/task_space.h"
 #include "lab/devices/device_point.h"
+#include "lab/lab_command_writer.h"
 #include "mujoco_fixture.h"
 
 namespace vlab::lab {
@@ -153,14 +154,88 @@ TEST(PointScenarioTest, ScenarioRules) {
   vlab::testing::TempDir dir;
   auto error_of = [&](const std::string& rest) { return Pa10ScenarioError(dir, rest); };
   EXPECT_NE(error_of("  - {name: hand, kind: point, arm: nope}\n").find("no arm device 'nope'"), std::string::npos);
-  EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10}\n  - {name: hand2, kind: point, arm: pa10}\n")
-                .find("driven by point device"),
-            std::string::npos);
+  // a second driver: the claim table names both claimants, the second at its own line
+  const std::string two = error_of("  - {name: hand, kind: point, arm: pa10}\n  - {name: hand2, kind: point, arm: pa10}\n");
+  EXPECT_NE(two.find("s.yaml:7: point device 'hand2': device 'pa10' is driven by point device 'hand' ("), std::string::npos)
+      << two;
+  EXPECT_NE(two.find("s.yaml:6) already: one owner at a time"), std::string::npos) << two;
   EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10, site: nope}\n").find("nope"), std::string::npos);
   EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10, workspace: {min: [0, 0, 1], max: [1, 1, 0]}}\n")
                 .find("must be > min"),
             std::string::npos);
   EXPECT_EQ(error_of("  - {name: hand, kind: point, arm: pa10, port: 0}\n"), "");
+}
+
+// One claimant per device's command input, whoever the two are (lab_command_writer.h).
+TEST(PointScenarioTest, OneClaimantPerArmWhateverTheSources) {
+  vlab::testing::TempDir dir;
+  auto error_of = [&](const std::string& rest) { return Pa10ScenarioError(dir, rest); };
+  const std::string hand = "  - {name: hand, kind: point, arm: pa10}\n";
+  const std::string builtin = "controller: {type: joint_pd, arm: pa10, tip_site: tool, waypoints: [{q: [0, 0, 0, 0, 0, 0, 0], "
+                              "duration: 1}]}\n";
+  const std::string task = std::string("controller: {type: task, programs: [{robot: pa10, script: ") + VLAB_SOURCE_DIR +
+                           "/scenes/tasks/square.lua, tip_site: tool}]}\n";
+  // each alone is fine
+  EXPECT_EQ(error_of(builtin), "");
+  EXPECT_EQ(error_of(task), "");
+  // with a point device on the same arm, the lab's controller is refused, naming both
+  const std::string with_builtin = error_of(hand + builtin);
+  EXPECT_NE(with_builtin.find(": the built-in controller: device 'pa10' is driven by point device 'hand' (" +
+                              dir.path() + "/s.yaml:6) already: one owner at a time"),
+            std::string::npos)
+      << with_builtin;
+  const std::string with_task = error_of(hand + task);
+  EXPECT_NE(with_task.find(": task program '"), std::string::npos) << with_task;
+  EXPECT_NE(with_task.find("square.lua': device 'pa10' is driven by point device 'hand'"), std::string::npos) << with_task;
+  // two programs on one robot: the same rule, the same message
+  const std::string square = std::string(VLAB_SOURCE_DIR) + "/scenes/tasks/square.lua";
+  const std::string two = error_of("controller: {type: task, programs: [{robot: pa10, script: " + square +
+                                   ", tip_site: tool}, {robot: pa10, script: " + square + ", tip_site: tool}]}\n");
+  EXPECT_NE(two.find("square.lua': device 'pa10' is driven by task program '" + square + "' ("), std::string::npos)
+      << two;
+}
+
+// The wire claims a served device's command input when its sockets are bound: a served arm that the
+// built-in controller commands is refused then (a served arm under a point device is not: the point
+// device holds its claim, and its own clients only read it).
+TEST(PointScenarioTest, TheWireClaimsServedDevicesWhenItBinds) {
+  vlab::testing::TempDir dir;
+  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\nduration: 0.1\n"
+                           "control_period: 0.01\ndevices:\n"
+                           "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2], port: auto}\n";
+  vlab::testing::WriteFile(dir.path() + "/builtin.yaml",
+                           head + "controller: {type: joint_pd, arm: pa10, tip_site: tool, waypoints: [{q: [0, 0, 0, 0, "
+                                  "0, 0, 0], duration: 1}]}\n");
+  std::unique_ptr<Lab> lab = Lab::Create(LoadScenario(dir.path() + "/builtin.yaml"));  // nothing served yet
+  try {
+    lab->Describe(BridgeOptions{}, std::nullopt);
+    ADD_FAILURE() << "a served arm commanded by the built-in controller was bound";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("builtin.yaml:5: the UDP clients of its port: device 'pa10' is driven by "
+                                         "the built-in controller ("),
+              std::string::npos)
+        << e.what();
+  }
+  vlab::testing::WriteFile(dir.path() + "/point.yaml", head + "  - {name: hand, kind: point, arm: pa10, port: auto}\n");
+  lab = Lab::Create(LoadScenario(dir.path() + "/point.yaml"));
+  EXPECT_EQ(lab->Describe(BridgeOptions{}, std::nullopt).size(), 2u);
+}
+
+TEST(ClaimTableTest, RefusesASecondClaimantByName) {
+  ClaimTable table;
+  table.Add(Claim{"pa10", "point device 'hand'", "a.yaml:6"});
+  table.Add(Claim{"gripper", "task program 'x.lua'", "a.yaml:9"});
+  ASSERT_NE(table.Holder("pa10"), nullptr);
+  EXPECT_EQ(table.Holder("pa10")->who, "point device 'hand'");
+  EXPECT_EQ(table.Holder("nope"), nullptr);
+  try {
+    table.Add(Claim{"pa10", "the built-in controller", "a.yaml:12"});
+    ADD_FAILURE() << "a second claim was taken";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "a.yaml:12: the built-in controller: device 'pa10' is driven by point device "
+                                     "'hand' (a.yaml:6) already: one owner at a time");
+  }
+  EXPECT_EQ(table.Holder("pa10")->who, "point device 'hand'");  // the first claim stays
 }
 
 }  // namespace

@@ -1,16 +1,19 @@
-// The lab's device seam: one interface for every simulated device (arm,
-// wrench, camera, base, gripper, feet, imu, gaze, pose, point, yoyo, sim), so
-// that the step loop, the log and the bridge treat them alike. A kind is one
-// file pair under src/lab/devices/ and one row of the kinds table
-// (device_kinds.cc).
+// The lab's device seam: one interface for every simulated device, so that
+// the step loop, the log and the bridge treat them alike. The kinds (the rows
+// of device_kinds.cc): arm, wrench, sim, camera, base, gripper, feet, imu,
+// gaze, pose, point, yoyo, counter, scene, word, tool. A kind is one file pair
+// under src/lab/devices/ and one row of the kinds table.
 //
-// Order of calls (src/lab/lab_runner.cc):
-//   creation  the kind's factory with the DeviceContext; then Bind() once
-//             every device exists (a device that drives another finds it)
-//   reset     SetInitialState() before the first mj_forward; Start() after
-//             it; after a second mj_forward, Reset()
-//   period    TakeCommand()/Hold() from the bridge (or commands of the lab's
-//             own controller); BeginPeriod(); every physics step Actuate()
+// Order of calls
+//   creation  (lab_runner.cc) the kind's factory with the DeviceContext; then
+//             Bind() once every device exists (a device that drives another
+//             finds it); the claims of the command sources (command_writer())
+//   reset     (lab_runner_impl.cc) SetInitialState() before the first
+//             mj_forward; Start() after it; after a second mj_forward, Reset()
+//   period    (lab_run_session.cc) the command sources write, in order: the
+//             wire (TakeCommand()/Hold() of the served devices), the built-in
+//             controller or the task programs, then the devices that drive
+//             another (CommandWriter::Write); every physics step Actuate()
 //             between mj_step1 and mj_step2 and AfterStep() after mj_step2;
 //             Sample() at the period's end; Row() for the log; Deliver()
 //             before the period's states go out, AfterPublish() after
@@ -31,6 +34,10 @@
 
 namespace vlab::lab {
 
+class CommandWriter;  // lab/lab_command_writer.h
+class SimArm;         // lab/devices/device_arm.h
+class SimControl;     // lab/devices/device_sim.h
+
 /// What every factory gets, the same way for every kind.
 struct DeviceContext {
   const mjModel* model = nullptr;
@@ -45,10 +52,9 @@ enum class CommandRole {
   kRun,              ///< the run's own control (sim): taken by the lab's loop, never waited for
   kWaited,           ///< lockstep waits for its owner's command once it has an owner
   kWaitedFromStart,  ///< ... and period 0 waits for an owner (arms: the controllers must be there)
-  kDriven,           ///< commands taken, but another device drives it (an arm under a point device)
+  kDriven,           ///< commands taken, but another source holds its claim (an arm under a point device)
 };
 
-/// A device that serves itself on its own socket (a camera's chunked frames).
 /// Frames of a device that streams them (a camera).
 struct FrameCounters {
   long sent = 0;     ///< frames sent to at least one subscriber
@@ -56,6 +62,7 @@ struct FrameCounters {
   long dropped = 0;  ///< not rendered: the ring of frames in flight was full
 };
 
+/// A device that serves itself on its own socket (a camera's chunked frames).
 class OwnTransport {
  public:
   virtual ~OwnTransport() = default;
@@ -90,8 +97,6 @@ class Device {
   // ---- creation and reset
   /// Once every device of the scenario exists. Throws InputError.
   virtual void Bind(const std::vector<Device*>& devices) { (void)devices; }
-  /// The device it commands ("": none), e.g. a point device's arm.
-  virtual std::string drives() const { return ""; }
   /// Before the first mj_forward of a reset: initial joint positions.
   virtual void SetInitialState(mjData& d) const { (void)d; }
   /// After mj_forward: start servos, write the controls of the first instant.
@@ -100,11 +105,6 @@ class Device {
   virtual void Reset(const mjData& d) { (void)d; }
 
   // ---- the control period
-  /// Start of a period at time t, after the period's commands (and holds).
-  virtual void BeginPeriod(const mjData& d, double t) {
-    (void)d;
-    (void)t;
-  }
   /// Every physics step, between mj_step1 and mj_step2: write own controls.
   virtual void Actuate(mjData& d, double dt) {
     (void)d;
@@ -168,8 +168,16 @@ class Device {
   /// The kind's facts for the default describe reply: a JSON object with
   /// "layout", "units" and the kind's own fields.
   virtual std::string DescribeFacts() const { return "{}"; }
+
+  // ---- capabilities: what a kind has, null where it has none (asked once, at load)
   /// A device with its own transport (cameras), or null.
   virtual OwnTransport* own_transport() { return nullptr; }
+  /// A device that writes another device's command input (point, tool), or null.
+  virtual CommandWriter* command_writer() { return nullptr; }
+  /// A joint servo input that other sources command in process (an arm), or null.
+  virtual SimArm* arm() { return nullptr; }
+  /// The run's own control (the sim device), or null.
+  virtual SimControl* sim_control() { return nullptr; }
 
   // ---- commands
   /// Default: waited for once owned when it takes commands, else output only.

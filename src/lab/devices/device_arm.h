@@ -22,8 +22,9 @@
 //   - a command with the wrong size, a non-finite value, a position outside the
 //     joint range, a velocity beyond max_velocity or a torque outside the motor
 //     range is refused and counted; the arm keeps its previous command.
-// An arm may be driven by another device (a point device): its commands then
-// come from that device, and lockstep does not wait for its own.
+// An arm may be driven by another device (a point device, which holds the
+// arm's claim: lab_command_writer.h): its commands then come from that device,
+// and lockstep does not wait for its own.
 #pragma once
 
 #include <memory>
@@ -83,9 +84,10 @@ class SimArm final : public Device {
   const bridge::ArmState& state() const { return state_; }
   /// Samples the device output into `state`.
   void Sample(const mjData& data, double time_s, bridge::ArmState* state) const;
-  /// Marks the arm as driven by the device `driver` (one driver at most).
-  /// Throws InputError naming `where` when another device drives it already.
-  void SetDriver(const std::string& driver, const std::string& where);
+  /// Marks the arm as driven by the device `driver` (the lab does, once the
+  /// claim table gave that device the arm's command input): lockstep then does
+  /// not wait for the arm's own clients.
+  void set_driver(const std::string& driver) { driver_ = driver; }
   const std::string& driver() const { return driver_; }
 
   long refused_commands() const { return refused_; }
@@ -115,6 +117,7 @@ class SimArm final : public Device {
   void Hold() override;
   int watchdog_periods() const override { return watchdog_periods_; }
   double owner_timeout_s() const override { return owner_timeout_s_; }
+  SimArm* arm() override { return this; }
 
  private:
   explicit SimArm(const DeviceConfig& config) : Device(config) {}

@@ -67,6 +67,7 @@ class SimControl final : public Device {
   CommandRole command_role() const override { return CommandRole::kRun; }
   bool TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) override;
   double owner_timeout_s() const override { return owner_timeout_s_; }
+  SimControl* sim_control() override { return this; }
 
  private:
   OnOwnerLost on_owner_lost_ = OnOwnerLost::kResume;
