@@ -217,8 +217,9 @@ void LabBridge::ApplyCommands(std::int64_t k, double pace_s) {
     if (d.endpoint->has_owner() && d.command_arrival >= 0 && command_ages_.size() < command_ages_.capacity()) {
       command_ages_.push_back(now - d.command_arrival);
     }
-    if (d.endpoint->BeginPeriod(k, pace_s)) d.device->Hold();
-    if (d.device->TakeCommand(*d.endpoint, &payload_) && d.command_arrival >= 0 &&
+    CommandInput& input = *d.device->command_input();  // (a role that is applied has one)
+    if (d.endpoint->BeginPeriod(k, pace_s)) input.Hold();
+    if (input.TakeCommand(*d.endpoint, &payload_) && d.command_arrival >= 0 &&
         latencies_.size() < latencies_.capacity()) {
       latencies_.push_back(now - d.command_arrival);
     }
@@ -244,7 +245,7 @@ bool LabBridge::Write(const CommandPeriod& period, std::string* failure) {
 
 bool LabBridge::TakeCommand(Device& device) {
   Served* d = Find(device);
-  return d && d->endpoint && device.TakeCommand(*d->endpoint, &payload_);
+  return d && d->endpoint && device.command_input() && device.command_input()->TakeCommand(*d->endpoint, &payload_);
 }
 
 bool LabBridge::ReleaseSilentOwner(const Device& device) {

@@ -139,7 +139,7 @@ void RunSession::Prepare() {
 
 void RunSession::EmitRow(double t) {
   s_.WriteRow(t, row_);
-  for (auto& dev : s_.devices) dev->LogRow(row_.data());
+  for (LogReader* reader : s_.log_readers) reader->LogRow(row_.data());
   if (log_) log_->Append(row_.data());
   checks_->Add(t, row_.data());
 }
@@ -151,7 +151,7 @@ void RunSession::Publish(long k) {
 }
 
 void RunSession::RenderAfterPublish(double t) {
-  for (auto& device : s_.devices) device->AfterPublish(d_);
+  for (RenderedOutput* output : s_.rendered) output->AfterPublish(d_);
   if (images_) images_->Observe(t, d_);
   if (poses_) poses_->Observe(t, std::round(t / period_), *d_);
 }
@@ -166,8 +166,8 @@ void RunSession::Start() {
   }
   EmitRow(0.0);
   if (options_.observe) options_.observe(0.0, m_, d_);
-  for (auto& device : s_.devices) device->BeforeRun(d_);
-  for (auto& device : s_.devices) device->Deliver(0.0, d_);
+  for (RenderedOutput* output : s_.rendered) output->BeforeRun(d_);
+  for (RenderedOutput* output : s_.rendered) output->Deliver(0.0, d_);
   Publish(0);
   Recorded(0.0);  // (a failed write ends the run before its first period)
   NoteWaiting();
@@ -273,10 +273,10 @@ bool RunSession::Period() {
   for (int i = 0; i < s_.steps_per_period && !diverged_; ++i) {
     const double t_step = d_->time;
     mj_step1(m_, d_);
-    for (auto& dev : s_.devices) dev->Actuate(*d_, m_->opt.timestep);
+    for (StepHooks* hooks : s_.step_hooks) hooks->Actuate(*d_, m_->opt.timestep);
     if (options_.record) result_.recording.controls.insert(result_.recording.controls.end(), d_->ctrl, d_->ctrl + m_->nu);
     mj_step2(m_, d_);
-    for (auto& dev : s_.devices) dev->AfterStep(*d_, m_->opt.timestep);
+    for (StepHooks* hooks : s_.step_hooks) hooks->AfterStep(*d_, m_->opt.timestep);
     ++result_.steps;
     diverged_ = warnings_.Update(*d_, t_step);
   }
@@ -285,7 +285,7 @@ bool RunSession::Period() {
   for (auto& dev : s_.devices) dev->Sample(*d_, t_next);
   EmitRow(t_next);
   if (options_.observe) options_.observe(t_next, m_, d_);
-  for (auto& dev : s_.devices) dev->Deliver(t_next, d_);
+  for (RenderedOutput* output : s_.rendered) output->Deliver(t_next, d_);
   ++k_;
   if (steps_left_ > 0 && --steps_left_ == 0) paused_ = true;
   Publish(k_);

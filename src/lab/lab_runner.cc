@@ -118,7 +118,13 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
   for (Device* device : impl->device_ptrs) {
     if (CommandWriter* writer = device->command_writer()) impl->writers.push_back(writer);
   }
-  for (Device* device : impl->device_ptrs) device->BindLog(impl->columns);
+  // the capability lists, asked once (device_capabilities.h)
+  for (Device* device : impl->device_ptrs) {
+    if (StepHooks* hooks = device->step_hooks()) impl->step_hooks.push_back(hooks);
+    if (RenderedOutput* output = device->rendered_output()) impl->rendered.push_back(output);
+    if (LogReader* reader = device->log_reader()) impl->log_readers.push_back(reader);
+  }
+  for (LogReader* reader : impl->log_readers) reader->BindLog(impl->columns);
   return std::unique_ptr<Lab>(new Lab(std::move(impl)));
 }
 

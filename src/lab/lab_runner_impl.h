@@ -29,6 +29,10 @@ struct Lab::Impl {
   std::vector<std::unique_ptr<Device>> devices;  // every device, in scenario order
   std::vector<Device*> device_ptrs;               // the same, as the bridge and Bind take them
   std::vector<Device*> log_order;                 // by log rank, then scenario order
+  // the devices with each capability (device_capabilities.h), in scenario order, asked once at load
+  std::vector<StepHooks*> step_hooks;       // every physics step: Actuate, AfterStep
+  std::vector<RenderedOutput*> rendered;    // BeforeRun, Deliver, AfterPublish
+  std::vector<LogReader*> log_readers;      // BindLog, LogRow
   SimControl* sim = nullptr;                      // the sim device, if the scenario has one
   std::unique_ptr<ControllerWriter> controller;  // the built-in controller (joint_pd and its kin), or null
   int keyframe = -1;  // scene keyframe of every reset (-1: qpos0)

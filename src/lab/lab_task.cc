@@ -19,7 +19,7 @@ namespace {
 // a lab device as the task runtime sees it: its wire payloads, in process
 class LabChannel final : public task::Channel {
  public:
-  explicit LabChannel(Device* d) : device_(d) {
+  explicit LabChannel(Device* d) : device_(d), input_(d->command_input()) {
     nlohmann::json layout;
     if (SimArm* arm = d->arm()) {
       layout = bridge::LayoutJson(bridge::DeviceKind::kArm, arm->dof());
@@ -37,7 +37,7 @@ class LabChannel final : public task::Channel {
       state_names_ = bridge::ExpandLayoutFields(layout.value("state", nlohmann::json::array()), device_->name());
       command_names_ = bridge::ExpandLayoutFields(layout.value("command", nlohmann::json::array()), device_->name());
     }
-    if (!d->arm() && static_cast<int>(command_names_.size()) != d->command_length()) {
+    if (!d->arm() && static_cast<int>(command_names_.size()) != command_length()) {
       command_names_.clear();
     }
   }
@@ -70,8 +70,8 @@ class LabChannel final : public task::Channel {
       }
       return true;
     }
-    if (static_cast<int>(values.size()) != device_->command_length()) {
-      *why = "expected " + std::to_string(device_->command_length()) + " values, got " + std::to_string(values.size());
+    if (static_cast<int>(values.size()) != command_length()) {
+      *why = "expected " + std::to_string(command_length()) + " values, got " + std::to_string(values.size());
       return false;
     }
     for (double v : values) {
@@ -80,17 +80,21 @@ class LabChannel final : public task::Channel {
         return false;
       }
     }
-    const bridge::CommandCheck check = device_->CheckCommand(values);
+    const bridge::CommandCheck check = input_->CheckCommand(values);  // (command_length() > 0: it has an input)
     if (check != bridge::CommandCheck::kAccept) {
       *why = "refused by the device's command check (code " + std::to_string(static_cast<int>(check)) + ")";
       return false;
     }
-    device_->Command(values);
+    input_->Command(values);
     return true;
   }
 
  private:
+  // payload length of its command input (0: none, or a typed one)
+  int command_length() const { return input_ ? input_->command_length() : 0; }
+
   Device* device_;
+  CommandInput* input_;  // null for an output-only device
   bridge::ArmCommand arm_command_;
   std::vector<double> scratch_;
   std::vector<unsigned char> bytes_;

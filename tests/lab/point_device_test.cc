@@ -86,7 +86,7 @@ TEST_F(PointDeviceTest, MovesTheToolToTheCommandKeepingItsOrientation) {
   const Eigen::Vector3d start = rig.Tool();
   const Eigen::Matrix3d R_start = rig.ToolR();
   const Eigen::Vector3d goal = start + Eigen::Vector3d(0.06, -0.03, 0.08);  // 0.1044 m away
-  rig.point->Command({goal.x(), goal.y(), goal.z()});
+  rig.point->command_input()->Command({goal.x(), goal.y(), goal.z()});
   // the set-point ramps at 0.2 m/s: after 0.25 s it is 0.05 m along the line (closed form)
   std::vector<double> row(rig.point->ColumnCount());
   for (int k = 0; k < 25; ++k) rig.Period();
@@ -108,21 +108,21 @@ TEST_F(PointDeviceTest, MovesTheToolToTheCommandKeepingItsOrientation) {
 
 TEST_F(PointDeviceTest, RefusesNonFiniteAndOutOfWorkspaceCommands) {
   Rig rig = NewRig();
-  EXPECT_EQ(rig.point->command_length(), 3);
-  EXPECT_EQ(rig.point->CheckCommand({0.7, 0.0, 0.5}), bridge::CommandCheck::kAccept);
-  EXPECT_EQ(rig.point->CheckCommand({NAN, 0.0, 0.5}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.point->CheckCommand({0.7, INFINITY, 0.5}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.point->CheckCommand({0.7, 0.0, 0.81}), bridge::CommandCheck::kLimits);
-  EXPECT_EQ(rig.point->CheckCommand({0.49, 0.0, 0.5}), bridge::CommandCheck::kLimits);
-  EXPECT_EQ(rig.point->CheckCommand({0.9, 0.3, 0.8}), bridge::CommandCheck::kAccept);  // the box's corner
+  EXPECT_EQ(rig.point->command_input()->command_length(), 3);
+  EXPECT_EQ(rig.point->command_input()->CheckCommand({0.7, 0.0, 0.5}), bridge::CommandCheck::kAccept);
+  EXPECT_EQ(rig.point->command_input()->CheckCommand({NAN, 0.0, 0.5}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.point->command_input()->CheckCommand({0.7, INFINITY, 0.5}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.point->command_input()->CheckCommand({0.7, 0.0, 0.81}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(rig.point->command_input()->CheckCommand({0.49, 0.0, 0.5}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(rig.point->command_input()->CheckCommand({0.9, 0.3, 0.8}), bridge::CommandCheck::kAccept);  // the box's corner
 }
 
 TEST_F(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
   Rig rig = NewRig(1.0);
   const Eigen::Vector3d start = rig.Tool();
-  rig.point->Command({start.x(), start.y(), start.z() + 0.2});
+  rig.point->command_input()->Command({start.x(), start.y(), start.z() + 0.2});
   for (int k = 0; k < 10; ++k) rig.Period();  // 0.1 s of 0.2: moving up at 1 m/s
-  rig.point->Hold();
+  rig.point->command_input()->Hold();
   for (int k = 0; k < 50; ++k) rig.Period();
   const Eigen::Vector3d held = rig.Tool();
   EXPECT_EQ(rig.State()[kStatus], static_cast<double>(bridge::kStatusHolding));
@@ -131,7 +131,7 @@ TEST_F(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
   for (int k = 0; k < 50; ++k) rig.Period();
   EXPECT_LT((rig.Tool() - held).norm(), 1e-6);  // stopped where it was
   // the next command starts from there: no jump to the old set-point
-  rig.point->Command({held.x(), held.y(), held.z()});
+  rig.point->command_input()->Command({held.x(), held.y(), held.z()});
   rig.Period();
   EXPECT_LT((rig.Setpoint() - held).norm(), 1e-6);
 }

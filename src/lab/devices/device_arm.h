@@ -62,7 +62,7 @@ std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r);
 /// Makes a SimArm.
 std::unique_ptr<Device> MakeArm(const DeviceContext& context, const DeviceConfig& config);
 
-class SimArm final : public Device {
+class SimArm final : public Device, public CommandInput, public StepHooks {
  public:
   /// Binds the device to the model's joints and motors. Throws InputError
   /// naming the device, its scenario line and the missing or unsuitable element.
@@ -94,7 +94,7 @@ class SimArm final : public Device {
   const Eigen::VectorXd& kp() const { return kp_; }
   const Eigen::VectorXd& kd() const { return kd_; }
 
-  // Device
+  // Device; CommandInput (a typed command: TakeCommand); StepHooks (the servo)
   void SetInitialState(mjData& d) const override;
   void Start(mjData& d) override;
   void Reset(const mjData& d) override;
@@ -117,10 +117,13 @@ class SimArm final : public Device {
   void Hold() override;
   int watchdog_periods() const override { return watchdog_periods_; }
   double owner_timeout_s() const override { return owner_timeout_s_; }
-  SimArm* arm() override { return this; }
 
  private:
-  explicit SimArm(const DeviceConfig& config) : Device(config) {}
+  explicit SimArm(const DeviceConfig& config) : Device(config) {
+    capabilities_.command_input = this;
+    capabilities_.step_hooks = this;
+    capabilities_.arm = this;
+  }
 
   const mjModel* model_ = nullptr;
   std::vector<std::string> joint_names_;

@@ -39,15 +39,17 @@ namespace vlab::lab {
 
 namespace {
 
-class SimPoint final : public Device, public CommandWriter {
+class SimPoint final : public Device, public CommandInput, public CommandWriter {
  public:
   SimPoint(const DeviceContext& context, const DeviceConfig& c)
       : Device(c), model_(context.model), config_(c.ParamsAs<PointParams>()), period_s_(context.control_period_s),
-        chain_(MakeArmChain(model_, config_, who())) {}
+        chain_(MakeArmChain(model_, config_, who())) {
+    capabilities_.command_input = this;
+    capabilities_.command_writer = this;
+  }
 
   // its arm: an arm device of the scenario, driven by this device alone
   void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, who()); }
-  CommandWriter* command_writer() override { return this; }
   std::vector<Claim> Claims() const override { return {{config_.arm, "point device '" + name() + "'", where()}}; }
   int log_rank() const override { return 3; }  // after the other devices, as in every log written so far
 

@@ -45,7 +45,7 @@ struct SimParams : DeviceParams {
 std::shared_ptr<const DeviceParams> ReadSimParams(MapReader& r);
 std::unique_ptr<Device> MakeSim(const DeviceContext& context, const DeviceConfig& config);
 
-class SimControl final : public Device {
+class SimControl final : public Device, public CommandInput {
  public:
   explicit SimControl(const DeviceConfig& config);
 
@@ -67,7 +67,6 @@ class SimControl final : public Device {
   CommandRole command_role() const override { return CommandRole::kRun; }
   bool TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) override;
   double owner_timeout_s() const override { return owner_timeout_s_; }
-  SimControl* sim_control() override { return this; }
 
  private:
   OnOwnerLost on_owner_lost_ = OnOwnerLost::kResume;

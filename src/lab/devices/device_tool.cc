@@ -53,11 +53,13 @@ namespace {
 constexpr double kQuaternionNormTolerance = 1e-3;
 constexpr int kCommandValues = 7;
 
-class SimTool final : public Device, public CommandWriter {
+class SimTool final : public Device, public CommandInput, public CommandWriter {
  public:
   SimTool(const DeviceContext& context, const DeviceConfig& c)
       : Device(c), model_(context.model), config_(c.ParamsAs<ToolParams>()), period_s_(context.control_period_s),
         chain_(MakeArmChain(model_, config_, who())) {
+    capabilities_.command_input = this;
+    capabilities_.command_writer = this;
     reach_centre_ = Eigen::Vector3d(config_.reach_centre[0], config_.reach_centre[1], config_.reach_centre[2]);
     reach_radius_ = config_.reach == ToolParams::Reach::kFixed ? config_.reach_radius : INFINITY;
     if (config_.reach == ToolParams::Reach::kAuto) ChainLength();
@@ -67,7 +69,6 @@ class SimTool final : public Device, public CommandWriter {
 
   // its arm: an arm device of the scenario, driven by this device alone
   void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, who()); }
-  CommandWriter* command_writer() override { return this; }
   std::vector<Claim> Claims() const override { return {{config_.arm, "tool device '" + name() + "'", where()}}; }
   int log_rank() const override { return 3; }  // after the other devices, as the point device
 
