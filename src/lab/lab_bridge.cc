@@ -76,7 +76,7 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     ec.name = device->name();
     device->ConfigureEndpoint(control_hz, &ec);
     ec.max_subscribers = options.max_subscribers;
-    const auto* sim = dynamic_cast<const SimControl*>(device);
+    const SimControl* sim = device->sim_control();
     if (sim && sim->ops() == SimOps::kDriver) {
       ec.gate = [self = b.get()](const bridge::Endpoint& from) { return self->SimGate(from); };
     }
@@ -217,17 +217,35 @@ void LabBridge::ApplyCommands(std::int64_t k, double pace_s) {
     if (d.endpoint->has_owner() && d.command_arrival >= 0 && command_ages_.size() < command_ages_.capacity()) {
       command_ages_.push_back(now - d.command_arrival);
     }
-    if (d.endpoint->BeginPeriod(k, pace_s)) d.device->Hold();
-    if (d.device->TakeCommand(*d.endpoint, &payload_) && d.command_arrival >= 0 &&
+    CommandInput& input = *d.device->command_input();  // (a role that is applied has one)
+    if (d.endpoint->BeginPeriod(k, pace_s)) input.Hold();
+    if (input.TakeCommand(*d.endpoint, &payload_) && d.command_arrival >= 0 &&
         latencies_.size() < latencies_.capacity()) {
       latencies_.push_back(now - d.command_arrival);
     }
   }
 }
 
+std::vector<Claim> LabBridge::Claims() const {
+  // every served device that takes commands, but one whose claim another source holds (kDriven)
+  std::vector<Claim> claims;
+  for (const Served& d : devices_) {
+    const CommandRole role = d.device->command_role();
+    if (!d.endpoint || role == CommandRole::kNone || role == CommandRole::kDriven) continue;
+    claims.push_back({d.device->name(), "the UDP clients of its port", d.device->where()});
+  }
+  return claims;
+}
+
+bool LabBridge::Write(const CommandPeriod& period, std::string* failure) {
+  (void)failure;
+  ApplyCommands(period.k, period.pace_s);
+  return true;
+}
+
 bool LabBridge::TakeCommand(Device& device) {
   Served* d = Find(device);
-  return d && d->endpoint && device.TakeCommand(*d->endpoint, &payload_);
+  return d && d->endpoint && device.command_input() && device.command_input()->TakeCommand(*d->endpoint, &payload_);
 }
 
 bool LabBridge::ReleaseSilentOwner(const Device& device) {

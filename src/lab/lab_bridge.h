@@ -26,6 +26,7 @@
 #include "bridge/bridge_udp.h"
 #include "core/core_clock.h"
 #include "lab/devices/device.h"
+#include "lab/lab_command_writer.h"
 #include "lab/lab_scenario.h"
 
 namespace vlab::lab {
@@ -49,7 +50,10 @@ struct ServedDevice {
   FrameCounters frames;  ///< a camera's frames (zeros for other kinds)
 };
 
-class LabBridge final : public CommandSource {
+/// The wire: the lab's UDP endpoints, what the clock polls while it waits
+/// (vlab::CommandSource) and the command source of the served devices
+/// (lab::CommandWriter).
+class LabBridge final : public vlab::CommandSource, public CommandWriter {
  public:
   /// Binds a socket for every device with a port (or a port override), in
   /// scenario order, and makes each one's endpoint from the device's own rules
@@ -66,6 +70,14 @@ class LabBridge final : public CommandSource {
   /// an owner, has a command answering k (for k = 0, every served arm has an
   /// owner: the run waits for its controllers).
   bool Answered(std::int64_t k) const override;
+
+  // CommandWriter
+  /// Every served device that takes commands, unless another source holds
+  /// its claim (an arm under a point device: CommandRole::kDriven), claimed by
+  /// "the UDP clients of its port".
+  std::vector<Claim> Claims() const override;
+  /// ApplyCommands(period.k, period.pace_s).
+  bool Write(const CommandPeriod& period, std::string* failure) override;
 
   /// Start of period k: the watchdog, then the newest accepted command of every
   /// served commanded device goes to it (latency from arrival to now recorded).

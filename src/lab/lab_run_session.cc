@@ -45,6 +45,15 @@ bridge::SimStateMsg SimState(double t, bool paused, const Clock& clock, long k, 
 
 }  // namespace
 
+RunResult Lab::Run(const RunOptions& options) {
+  RunSession run(*impl_, options);
+  run.Prepare();
+  run.Start();
+  while (run.period_index() < run.periods() && run.Period()) {
+  }
+  return run.Finish();
+}
+
 RunSession::RunSession(Lab::Impl& lab, const RunOptions& options)
     : s_(lab), options_(options), m_(lab.model.get()), d_(lab.data.get()),
       period_(lab.scenario.control_period_s), periods_(std::lround(lab.scenario.duration_s / period_)),
@@ -92,7 +101,9 @@ void RunSession::Prepare() {
     // a task program waiting in wall time (markers) lets the lab serve meanwhile
     if (s_.task) s_.task->SetIdle([b = bridge_.get()] { b->Poll(0.0, PollWait::kSleep); });
     if (options_.on_serving && !external_) options_.on_serving(bridge_->Devices());
+    writers_.push_back(bridge_.get());  // the wire writes first
   }
+  writers_.insert(writers_.end(), s_.writers.begin(), s_.writers.end());
   // outputs: staging folder (removed on a MuJoCo error too), log
   if (!options_.out_dir.empty()) {
     out_ = OutputDir::Create(options_.out_dir);
@@ -128,7 +139,7 @@ void RunSession::Prepare() {
 
 void RunSession::EmitRow(double t) {
   s_.WriteRow(t, row_);
-  for (auto& dev : s_.devices) dev->LogRow(row_.data());
+  for (LogReader* reader : s_.log_readers) reader->LogRow(row_.data());
   if (log_) log_->Append(row_.data());
   checks_->Add(t, row_.data());
 }
@@ -140,7 +151,7 @@ void RunSession::Publish(long k) {
 }
 
 void RunSession::RenderAfterPublish(double t) {
-  for (auto& device : s_.devices) device->AfterPublish(d_);
+  for (RenderedOutput* output : s_.rendered) output->AfterPublish(d_);
   if (images_) images_->Observe(t, d_);
   if (poses_) poses_->Observe(t, std::round(t / period_), *d_);
 }
@@ -148,14 +159,15 @@ void RunSession::RenderAfterPublish(double t) {
 void RunSession::Start() {
   // first: the threads started from here on (a camera's render worker) inherit it
   RequestPriority();
-  // row 0: the initial state, with the controller's view of it
-  if (s_.controller) s_.RunController(0.0, options_, &replay_at_, &result_, controller_columns_);
-  if (s_.task) s_.task->Restart();  // a lab run again starts its programs anew
-  if (s_.task && !s_.task->Update(0.0, controller_columns_)) result_.failure = s_.task->error();
+  // row 0: the initial state, with the controllers' view of it (a task program may fail already)
+  const CommandPeriod period0 = CommandPeriodAt(0, 0.0);
+  for (CommandWriter* writer : writers_) {
+    if (!restart_failed_ && !writer->Restart(period0, &result_.failure)) restart_failed_ = true;
+  }
   EmitRow(0.0);
   if (options_.observe) options_.observe(0.0, m_, d_);
-  for (auto& device : s_.devices) device->BeforeRun(d_);
-  for (auto& device : s_.devices) device->Deliver(0.0, d_);
+  for (RenderedOutput* output : s_.rendered) output->BeforeRun(d_);
+  for (RenderedOutput* output : s_.rendered) output->Deliver(0.0, d_);
   Publish(0);
   Recorded(0.0);  // (a failed write ends the run before its first period)
   NoteWaiting();
@@ -224,21 +236,13 @@ bool RunSession::Commands(long k, double t_k) {
     } else {
       bridge_->NoteAnswered();
     }
-    // realtime: the watchdog also counts wall time, so the periods the lab runs back to back
-    // to catch up on its own lateness earn a prompt controller no hold
-    const bool paced = clock_->mode() == ClockMode::kRealtime && clock_->factor() > 0;
-    bridge_->ApplyCommands(k, paced ? period_ / clock_->factor() : 0.0);
   }
-  if (s_.controller) {
-    if (k > 0) s_.RunController(t_k, options_, &replay_at_, &result_, controller_columns_);
-    s_.controller_arm->Command(s_.controller_command);
+  // the command sources, in order (the wire, the lab's controller, the devices that drive another);
+  // a failure ends the run (a task program's script error: the log keeps the periods before)
+  const CommandPeriod period = CommandPeriodAt(k, t_k);
+  for (CommandWriter* writer : writers_) {
+    if (!writer->Write(period, &result_.failure)) return false;
   }
-  // the task programs: a script error ends the run (the log keeps the periods before)
-  if (s_.task && k > 0 && !s_.task->Update(t_k, controller_columns_)) {
-    result_.failure = s_.task->error();
-    return false;
-  }
-  for (auto& dev : s_.devices) dev->BeginPeriod(*d_, t_k);  // point devices command their arms
   return true;
 }
 
@@ -247,7 +251,7 @@ bool RunSession::Period() {
   const double t_k = k_ * period_;
   const double t_next = (k_ + 1) * period_;
   if (Interrupted() || output_failed_) return false;  // the periods run so far are written
-  if (s_.task && !result_.failure.empty()) return false;  // a task program failed in period 0
+  if (restart_failed_) return false;  // a command source failed at row 0 (a task program's script error)
   // 0. the sim device: pause, resume, step, reset, pace
   if (bridge_ && s_.HandleSimCommands(*bridge_, *clock_, &paused_, &steps_left_)) Publish(k_);
   if (paused_) {
@@ -269,10 +273,10 @@ bool RunSession::Period() {
   for (int i = 0; i < s_.steps_per_period && !diverged_; ++i) {
     const double t_step = d_->time;
     mj_step1(m_, d_);
-    for (auto& dev : s_.devices) dev->Actuate(*d_, m_->opt.timestep);
+    for (StepHooks* hooks : s_.step_hooks) hooks->Actuate(*d_, m_->opt.timestep);
     if (options_.record) result_.recording.controls.insert(result_.recording.controls.end(), d_->ctrl, d_->ctrl + m_->nu);
     mj_step2(m_, d_);
-    for (auto& dev : s_.devices) dev->AfterStep(*d_, m_->opt.timestep);
+    for (StepHooks* hooks : s_.step_hooks) hooks->AfterStep(*d_, m_->opt.timestep);
     ++result_.steps;
     diverged_ = warnings_.Update(*d_, t_step);
   }
@@ -281,7 +285,7 @@ bool RunSession::Period() {
   for (auto& dev : s_.devices) dev->Sample(*d_, t_next);
   EmitRow(t_next);
   if (options_.observe) options_.observe(t_next, m_, d_);
-  for (auto& dev : s_.devices) dev->Deliver(t_next, d_);
+  for (RenderedOutput* output : s_.rendered) output->Deliver(t_next, d_);
   ++k_;
   if (steps_left_ > 0 && --steps_left_ == 0) paused_ = true;
   Publish(k_);
@@ -291,6 +295,21 @@ bool RunSession::Period() {
     t_progress_ = WallClock::now();
   }
   return true;
+}
+
+CommandPeriod RunSession::CommandPeriodAt(long k, double t_k) {
+  CommandPeriod period;
+  period.k = k;
+  period.t_s = t_k;
+  period.columns = controller_columns_;
+  period.data = d_;
+  // realtime: the watchdog also counts wall time, so the periods the lab runs back to back
+  // to catch up on its own lateness earn a prompt controller no hold
+  const bool paced = clock_->mode() == ClockMode::kRealtime && clock_->factor() > 0;
+  period.pace_s = paced ? period_ / clock_->factor() : 0.0;
+  period.options = &options_;
+  period.result = &result_;
+  return period;
 }
 
 void RunSession::AwaitFinalAnswer() {

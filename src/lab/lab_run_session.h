@@ -17,6 +17,7 @@
 #include "core/core_clock.h"
 #include "lab/lab_bridge.h"
 #include "lab/lab_checks.h"
+#include "lab/lab_command_writer.h"
 #include "lab/lab_external.h"
 #include "lab/lab_images.h"
 #include "lab/lab_log.h"
@@ -62,8 +63,10 @@ class RunSession {
   void StopOnOutputFailure(const std::string& why);
   // a failed write while finishing: the run fails with it, the other files are still written
   void NoteWriteFailure(const std::string& why);
-  // the commands of period k: the wire's, the built-in controller's; false on a failure
+  // the commands of period k: the clock lets it begin, then every command source writes; false on a failure
   bool Commands(long k, double t_k);
+  // what every command source gets for period k
+  CommandPeriod CommandPeriodAt(long k, double t_k);
   // true once a stop signal came: the run's failure then says which, and when
   bool Interrupted();
   // vlab serve: says once which devices period 0 waits for
@@ -100,7 +103,8 @@ class RunSession {
   std::unique_ptr<ExternalController> controller_;
   std::vector<double> row_;
   double* controller_columns_ = nullptr;
-  std::size_t replay_at_ = 0;
+  std::vector<CommandWriter*> writers_;  // the command sources in the order they write: the wire's first
+  bool restart_failed_ = false;          // a command source failed at row 0: no period runs
   WarningWatch warnings_;
   bool paused_ = false;
   long steps_left_ = -1;  // periods to run before pausing again (sim "step N"); -1: not stepping

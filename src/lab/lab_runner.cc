@@ -4,9 +4,10 @@
 #include <cmath>
 
 #include "core/core_errors.h"
+#include "lab/devices/device_arm.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/lab_external.h"
-#include "lab/lab_run_session.h"
+#include "lab/lab_log.h"
 #include "lab/lab_runner_impl.h"
 
 namespace vlab::lab {
@@ -78,9 +79,10 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
     const DeviceContext context{m, scenario.control_period_s, DeviceSeed(scenario.seed, device.name), scenario.scene};
     impl->devices.push_back(MakeDevice(context, device));
     impl->device_ptrs.push_back(impl->devices.back().get());
-    if (auto* sim = dynamic_cast<SimControl*>(impl->devices.back().get())) impl->sim = sim;
+    if (SimControl* sim = impl->devices.back()->sim_control()) impl->sim = sim;
   }
   for (Device* device : impl->device_ptrs) device->Bind(impl->device_ptrs);
+  impl->ClaimDriven();
   impl->log_order = impl->device_ptrs;
   std::stable_sort(impl->log_order.begin(), impl->log_order.end(),
                    [](const Device* a, const Device* b) { return a->log_rank() < b->log_rank(); });
@@ -95,37 +97,34 @@ std::unique_ptr<Lab> Lab::Create(const Scenario& scenario) {
   if (cc.type == ControllerType::kExternal) {
     ExpandCommand(cc.command, CommandValues(scenario, {}), cc.where);  // placeholders checked now
   } else if (cc.type == ControllerType::kTask) {
-    for (const TaskProgramEntry& e : cc.programs) {
-      for (const Device* device : impl->device_ptrs) {
-        const auto* arm = dynamic_cast<const SimArm*>(device);
-        if (arm && arm->name() == e.robot && !arm->driver().empty()) {
-          throw InputError(e.where + ": robot: arm '" + e.robot + "' is driven by device '" + arm->driver() +
-                           "': one owner at a time");
-        }
-      }
-    }
+    for (const Claim& claim : TaskController::ClaimsOf(scenario)) impl->claims.Add(claim);  // before the scripts load
     impl->task = TaskController::Create(m, scenario, impl->device_ptrs);
     impl->controller_columns = impl->task->Columns().size();
     for (auto& c : impl->task->Columns()) impl->columns.push_back(c);
   } else if (cc.type != ControllerType::kNone) {
+    SimArm* arm = nullptr;
     for (Device* device : impl->device_ptrs) {
-      if (device->name() == cc.arm) impl->controller_arm = dynamic_cast<SimArm*>(device);
+      if (device->name() == cc.arm) arm = device->arm();
     }
-    if (!impl->controller_arm) {
-      throw InputError(cc.where + ": controller.arm: no arm device named '" + cc.arm + "'");
-    }
-    SimArm& arm = *impl->controller_arm;
-    if (!arm.driver().empty()) {
-      const Device& driver = **std::find_if(impl->device_ptrs.begin(), impl->device_ptrs.end(),
-                                           [&arm](const Device* d) { return d->name() == arm.driver(); });
-      throw InputError(driver.where() + ": device '" + driver.name() + "': arm: arm '" + arm.name() +
-                       "' is commanded by the built-in controller: one owner at a time");
-    }
-    impl->controller = MakeController(m, cc, arm.joint_names(), arm.state());
+    if (!arm) throw InputError(cc.where + ": controller.arm: no arm device named '" + cc.arm + "'");
+    impl->claims.Add(ControllerWriter::ClaimOf(cc));
+    impl->controller = std::make_unique<ControllerWriter>(m, cc, *arm);
     impl->controller_columns = impl->controller->Columns().size();
     for (auto& c : impl->controller->Columns()) impl->columns.push_back(c);
   }
-  for (Device* device : impl->device_ptrs) device->BindLog(impl->columns);
+  // the command sources in the order they write each period (the wire's bridge comes first, per run)
+  if (impl->controller) impl->writers.push_back(impl->controller.get());
+  if (impl->task) impl->writers.push_back(impl->task.get());
+  for (Device* device : impl->device_ptrs) {
+    if (CommandWriter* writer = device->command_writer()) impl->writers.push_back(writer);
+  }
+  // the capability lists, asked once (device_capabilities.h)
+  for (Device* device : impl->device_ptrs) {
+    if (StepHooks* hooks = device->step_hooks()) impl->step_hooks.push_back(hooks);
+    if (RenderedOutput* output = device->rendered_output()) impl->rendered.push_back(output);
+    if (LogReader* reader = device->log_reader()) impl->log_readers.push_back(reader);
+  }
+  for (LogReader* reader : impl->log_readers) reader->BindLog(impl->columns);
   return std::unique_ptr<Lab>(new Lab(std::move(impl)));
 }
 
@@ -133,15 +132,6 @@ void Lab::InitialState(mjData* d) const {
   impl_->ResetData(d);
   for (const auto& device : impl_->devices) device->SetInitialState(*d);
   mj_forward(impl_->model.get(), d);
-}
-
-RunResult Lab::Run(const RunOptions& options) {
-  RunSession run(*impl_, options);
-  run.Prepare();
-  run.Start();
-  while (run.period_index() < run.periods() && run.Period()) {
-  }
-  return run.Finish();
 }
 
 std::vector<ServedDevice> Lab::Describe(const BridgeOptions& options, std::optional<ClockMode> clock) const {

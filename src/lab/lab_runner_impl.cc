@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/core_errors.h"
+#include "lab/devices/device_arm.h"
 
 namespace vlab::lab {
 
@@ -37,55 +38,25 @@ void Lab::Impl::WriteRow(double time_s, std::vector<double>& row) const {
   }
 }
 
-void Lab::Impl::RunController(double t, const RunOptions& options, std::size_t* replay_at, RunResult* result,
-                              double* columns) {
-  const int n = controller_arm->dof();
-  const std::size_t width = 1 + n + controller_columns;
-  bridge::ArmCommand& cmd = controller_command;
-  if (options.replay) {
-    // the recorded command and columns instead of the controller's work
-    if (*replay_at + width > options.replay->controller.size()) {
-      throw std::runtime_error("replay: the recording is shorter than this run");
-    }
-    const double* r = options.replay->controller.data() + *replay_at;
-    cmd.mode = static_cast<bridge::ArmMode>(static_cast<int>(r[0]));
-    cmd.value = Eigen::Map<const Eigen::VectorXd>(r + 1, n);
-    std::copy(r + 1 + n, r + width, columns);
-    *replay_at += width;
-    return;
-  }
-  controller->Update(t, controller_arm->state(), &cmd, columns);
-  if (options.record) {
-    std::vector<double>& rec = result->recording.controller;
-    rec.push_back(static_cast<double>(static_cast<int>(cmd.mode)));
-    for (int i = 0; i < n; ++i) rec.push_back(i < cmd.value.size() ? cmd.value[i] : 0.0);
-    rec.insert(rec.end(), columns, columns + (width - 1 - n));
-  }
-}
-
 std::unique_ptr<LabBridge> Lab::Impl::MakeBridge(const BridgeOptions& options, const std::string& clock_name) {
   std::unique_ptr<LabBridge> bridge = LabBridge::Create(scenario, options, device_ptrs, clock_name);
-  if (task) {
-    for (const ServedDevice& sd : bridge->Devices()) {
-      for (const std::string& arm : task->arms()) {
-        if (sd.name == arm) {
-          throw InputError(scenario.controller.where + ": controller: arm '" + sd.name +
-                           "' is served over UDP and commanded by a task program: one owner at a time "
-                           "(remove the device's port)");
-        }
-      }
-    }
-  }
-  if (controller) {
-    for (const ServedDevice& sd : bridge->Devices()) {
-      if (sd.name == scenario.controller.arm) {
-        throw InputError(scenario.controller.where + ": controller: arm '" + sd.name +
-                         "' is served over UDP and commanded by the built-in controller: one owner at a time "
-                         "(remove the controller, or the device's port)");
-      }
-    }
-  }
+  ClaimTable with_wire = claims;  // the lab's own claims stay as they are for the next bridge
+  with_wire.Add(*bridge);
   return bridge;
+}
+
+void Lab::Impl::ClaimDriven() {
+  for (Device* device : device_ptrs) {
+    CommandWriter* writer = device->command_writer();
+    if (!writer) continue;
+    claims.Add(*writer);
+    // an arm another device drives: lockstep does not wait for the arm's own clients
+    for (const Claim& claim : writer->Claims()) {
+      for (Device* driven : device_ptrs) {
+        if (driven->name() == claim.device && driven->arm()) driven->arm()->set_driver(device->name());
+      }
+    }
+  }
 }
 
 bool Lab::Impl::HandleSimCommands(LabBridge& bridge, Clock& clock, bool* paused, long* steps_left) {

@@ -19,9 +19,9 @@ namespace {
 // a lab device as the task runtime sees it: its wire payloads, in process
 class LabChannel final : public task::Channel {
  public:
-  explicit LabChannel(Device* d) : device_(d) {
+  explicit LabChannel(Device* d) : device_(d), input_(d->command_input()) {
     nlohmann::json layout;
-    if (auto* arm = dynamic_cast<SimArm*>(d)) {
+    if (SimArm* arm = d->arm()) {
       layout = bridge::LayoutJson(bridge::DeviceKind::kArm, arm->dof());
       joints_ = arm->joint_names();
     } else {
@@ -37,7 +37,7 @@ class LabChannel final : public task::Channel {
       state_names_ = bridge::ExpandLayoutFields(layout.value("state", nlohmann::json::array()), device_->name());
       command_names_ = bridge::ExpandLayoutFields(layout.value("command", nlohmann::json::array()), device_->name());
     }
-    if (!dynamic_cast<SimArm*>(d) && static_cast<int>(command_names_.size()) != d->command_length()) {
+    if (!d->arm() && static_cast<int>(command_names_.size()) != command_length()) {
       command_names_.clear();
     }
   }
@@ -56,7 +56,7 @@ class LabChannel final : public task::Channel {
     return !values->empty();
   }
   bool Write(const std::vector<double>& values, std::string* why) override {
-    if (auto* arm = dynamic_cast<SimArm*>(device_)) {
+    if (SimArm* arm = device_->arm()) {
       // an arm takes its typed command: [mode, one value per joint]
       if (static_cast<int>(values.size()) != 1 + arm->dof()) {
         *why = "expected " + std::to_string(1 + arm->dof()) + " values, got " + std::to_string(values.size());
@@ -70,8 +70,8 @@ class LabChannel final : public task::Channel {
       }
       return true;
     }
-    if (static_cast<int>(values.size()) != device_->command_length()) {
-      *why = "expected " + std::to_string(device_->command_length()) + " values, got " + std::to_string(values.size());
+    if (static_cast<int>(values.size()) != command_length()) {
+      *why = "expected " + std::to_string(command_length()) + " values, got " + std::to_string(values.size());
       return false;
     }
     for (double v : values) {
@@ -80,17 +80,21 @@ class LabChannel final : public task::Channel {
         return false;
       }
     }
-    const bridge::CommandCheck check = device_->CheckCommand(values);
+    const bridge::CommandCheck check = input_->CheckCommand(values);  // (command_length() > 0: it has an input)
     if (check != bridge::CommandCheck::kAccept) {
       *why = "refused by the device's command check (code " + std::to_string(static_cast<int>(check)) + ")";
       return false;
     }
-    device_->Command(values);
+    input_->Command(values);
     return true;
   }
 
  private:
+  // payload length of its command input (0: none, or a typed one)
+  int command_length() const { return input_ ? input_->command_length() : 0; }
+
   Device* device_;
+  CommandInput* input_;  // null for an output-only device
   bridge::ArmCommand arm_command_;
   std::vector<double> scratch_;
   std::vector<unsigned char> bytes_;
@@ -136,7 +140,7 @@ struct TaskController::Impl {
   task::RuntimeConfig config;
   std::unique_ptr<LabDevices> devices;
   std::unique_ptr<task::Runtime> runtime;
-  std::vector<std::string> arms;
+  std::vector<Claim> claims;  // each program's robot arm
   bool used = false;  // Update ran since the runtime was made
 };
 
@@ -167,8 +171,8 @@ std::unique_ptr<TaskController> TaskController::Create(const mjModel* model, con
     p.where = e.where;
     p.params = e.params;
     rc.programs.push_back(p);
-    if (!e.robot.empty()) impl->arms.push_back(e.robot);
   }
+  impl->claims = ClaimsOf(scenario);
   impl->model = model;
   impl->config = rc;
   impl->runtime = task::Runtime::Create(rc, model, impl->devices.get());
@@ -176,17 +180,32 @@ std::unique_ptr<TaskController> TaskController::Create(const mjModel* model, con
 }
 
 std::vector<std::string> TaskController::Columns() const { return impl_->runtime->Columns(); }
-std::vector<std::string> TaskController::arms() const { return impl_->arms; }
+std::vector<Claim> TaskController::ClaimsOf(const Scenario& scenario) {
+  std::vector<Claim> claims;
+  for (const TaskProgramEntry& e : scenario.controller.programs) {
+    if (!e.robot.empty()) claims.push_back({e.robot, "task program '" + e.script + "'", e.where});
+  }
+  return claims;
+}
+std::vector<Claim> TaskController::Claims() const { return impl_->claims; }
 void TaskController::Restart() {
   if (!impl_->used) return;
   impl_->runtime = task::Runtime::Create(impl_->config, impl_->model, impl_->devices.get());
   impl_->used = false;
 }
-bool TaskController::Update(double t_s, double* columns) {
+bool TaskController::Restart(const CommandPeriod& period, std::string* failure) {
+  Restart();  // a lab run again starts its programs anew
+  return Step(period, failure);
+}
+bool TaskController::Write(const CommandPeriod& period, std::string* failure) {
+  return period.k == 0 || Step(period, failure);  // period 0 ran with row 0 (Restart)
+}
+bool TaskController::Step(const CommandPeriod& period, std::string* failure) {
   impl_->used = true;
-  return impl_->runtime->Step(t_s, columns);
+  if (impl_->runtime->Step(period.t_s, period.columns)) return true;
+  *failure = impl_->runtime->error();  // a script error ends the run (the log keeps the periods before)
+  return false;
 }
 void TaskController::SetIdle(std::function<void()> idle) { impl_->devices->SetIdle(idle); }
-const std::string& TaskController::error() const { return impl_->runtime->error(); }
 
 }  // namespace vlab::lab

@@ -17,6 +17,7 @@
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_kinds.h"
+#include "lab/lab_command_writer.h"
 #include "lab/lab_runner.h"
 #include "test_util.h"
 
@@ -65,7 +66,11 @@ struct ArmDriverRig {
     driver->Reset(*data);
   }
   void Period() {
-    driver->BeginPeriod(*data, data->time);
+    CommandPeriod period;  // the driver writes its arm's command as a command source of the lab's run does
+    period.t_s = data->time;
+    period.data = data;
+    std::string failure;
+    driver->command_writer()->Write(period, &failure);
     for (int i = 0; i < 10; ++i) {
       mj_step1(model, data);
       arm->Actuate(*data, 0.001);

@@ -104,7 +104,7 @@ struct Rig {
   void Period() {
     for (int i = 0; i < 10; ++i) {
       mj_step1(model, data);
-      base->Actuate(*data, 0.001);
+      base->step_hooks()->Actuate(*data, 0.001);
       mj_step2(model, data);
     }
     base->Sample(*data, data->time);
@@ -136,7 +136,7 @@ int SensorValueIndex(const Device& device, const std::string& name) {
 TEST_F(BaseDeviceTest, TracksABaseFrameCommandWithinTheAccelerationLimit) {
   Rig rig = NewRig();
   EXPECT_EQ(rig.State()[kStatus], static_cast<double>(bridge::kStatusHolding));
-  rig.base->Command({0, 0.5, 0, 0});
+  rig.base->command_input()->Command({0, 0.5, 0, 0});
   rig.Period();  // 10 ms at 1 m/s^2: at most 0.01 m/s
   EXPECT_LE(rig.State()[kVx], 0.0101);
   EXPECT_GT(rig.State()[kVx], 0.002);  // moving, behind the reference by the servo lag (10 ms)
@@ -154,11 +154,11 @@ TEST_F(BaseDeviceTest, BaseFrameFollowsTheYawWorldFrameDoesNot) {
   rig.data->qpos[2] = M_PI / 2;  // facing +y
   mj_forward(rig.model, rig.data);
   rig.base->Reset(*rig.data);
-  rig.base->Command({0, 0.3, 0, 0});  // forward = world +y
+  rig.base->command_input()->Command({0, 0.3, 0, 0});  // forward = world +y
   for (int k = 0; k < 150; ++k) rig.Period();
   EXPECT_NEAR(rig.data->qvel[0], 0.0, 2e-3);
   EXPECT_NEAR(rig.data->qvel[1], 0.3, 3e-3);
-  rig.base->Command({1, 0.3, 0, 0});  // world +x, whatever the yaw
+  rig.base->command_input()->Command({1, 0.3, 0, 0});  // world +x, whatever the yaw
   for (int k = 0; k < 150; ++k) rig.Period();
   EXPECT_NEAR(rig.data->qvel[0], 0.3, 3e-3);
   EXPECT_NEAR(rig.data->qvel[1], 0.0, 2e-3);
@@ -167,9 +167,9 @@ TEST_F(BaseDeviceTest, BaseFrameFollowsTheYawWorldFrameDoesNot) {
 
 TEST_F(BaseDeviceTest, HoldBrakesAtTheAccelerationLimit) {
   Rig rig = NewRig();
-  rig.base->Command({0, 0.8, 0, 1.0});
+  rig.base->command_input()->Command({0, 0.8, 0, 1.0});
   for (int k = 0; k < 120; ++k) rig.Period();
-  rig.base->Hold();
+  rig.base->command_input()->Hold();
   for (int k = 0; k < 40; ++k) rig.Period();  // 0.4 s of 0.8 s needed to stop
   EXPECT_NEAR(std::hypot(rig.State()[kVx], rig.State()[kVy]), 0.4, 0.02);
   for (int k = 0; k < 60; ++k) rig.Period();
@@ -180,7 +180,7 @@ TEST_F(BaseDeviceTest, HoldBrakesAtTheAccelerationLimit) {
 TEST_F(BaseDeviceTest, OdometryIsExactWithoutDriftAndSeededWithIt) {
   Rig exact = NewRig(), drift_a = NewRig(true, 7), drift_b = NewRig(true, 7), drift_c = NewRig(true, 8);
   for (Rig* r : {&exact, &drift_a, &drift_b, &drift_c}) {
-    r->base->Command({0, 0.4, 0.1, 0.5});
+    r->base->command_input()->Command({0, 0.4, 0.1, 0.5});
     for (int k = 0; k < 300; ++k) r->Period();
   }
   const std::vector<double> e = exact.State();
@@ -197,12 +197,12 @@ TEST_F(BaseDeviceTest, OdometryIsExactWithoutDriftAndSeededWithIt) {
 
 TEST_F(BaseDeviceTest, ChecksCommands) {
   Rig rig = NewRig();
-  EXPECT_EQ(rig.base->command_length(), 4);
-  EXPECT_EQ(rig.base->CheckCommand({0, 1.0, -1.0, 2.0}), bridge::CommandCheck::kAccept);
-  EXPECT_EQ(rig.base->CheckCommand({2, 0, 0, 0}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.base->CheckCommand({0.5, 0, 0, 0}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.base->CheckCommand({1, 1.01, 0, 0}), bridge::CommandCheck::kLimits);
-  EXPECT_EQ(rig.base->CheckCommand({1, 0, 0, -2.5}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(rig.base->command_input()->command_length(), 4);
+  EXPECT_EQ(rig.base->command_input()->CheckCommand({0, 1.0, -1.0, 2.0}), bridge::CommandCheck::kAccept);
+  EXPECT_EQ(rig.base->command_input()->CheckCommand({2, 0, 0, 0}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.base->command_input()->CheckCommand({0.5, 0, 0, 0}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.base->command_input()->CheckCommand({1, 1.01, 0, 0}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(rig.base->command_input()->CheckCommand({1, 0, 0, -2.5}), bridge::CommandCheck::kLimits);
 }
 
 TEST_F(BaseDeviceTest, BadBindingsNameTheElement) {

@@ -186,7 +186,7 @@ TEST_F(GazeDeviceTest, ResetSamplesTheInitialStateAndDescribeGivesTheLayout) {
   mj_forward(rig.model, rig.data);
   auto device = MakeDevice({rig.model, 0.002, 1, ""}, Gaze("eye", "ball"));
   EXPECT_EQ(device->kind(), bridge::DeviceKind::kGaze);
-  EXPECT_EQ(device->command_length(), 0);
+  EXPECT_EQ(device->command_input(), nullptr);  // output only: no command input
   EXPECT_EQ(device->Columns(), (std::vector<std::string>{"gaze.error_deg", "gaze.u", "gaze.v", "gaze.visible"}));
   device->Reset(*rig.data);
   std::vector<double> row(4);

@@ -100,7 +100,7 @@ class GripperDeviceTest : public test::MujocoTest {
     const int steps = static_cast<int>(std::lround(seconds / m_->opt.timestep));
     for (int i = 0; i < steps; ++i) {
       mj_step1(m_, d_);
-      gripper_->Actuate(*d_, m_->opt.timestep);
+      gripper_->step_hooks()->Actuate(*d_, m_->opt.timestep);
       mj_step2(m_, d_);
     }
     gripper_->Sample(*d_, d_->time);
@@ -124,14 +124,14 @@ class GripperDeviceTest : public test::MujocoTest {
 };
 
 TEST_F(GripperDeviceTest, OpensAtItsSpeedAndRefusesWhatItCannotDo) {
-  EXPECT_EQ(gripper_->CheckCommand({0, 0.069}), bridge::CommandCheck::kLimits);  // beyond the stroke
-  EXPECT_EQ(gripper_->CheckCommand({1, 201}), bridge::CommandCheck::kLimits);    // beyond the drive
-  EXPECT_EQ(gripper_->CheckCommand({1, -1}), bridge::CommandCheck::kLimits);
-  EXPECT_EQ(gripper_->CheckCommand({2, 0}), bridge::CommandCheck::kMalformed);
-  ASSERT_EQ(gripper_->CheckCommand({0, 0.052}), bridge::CommandCheck::kAccept);
+  EXPECT_EQ(gripper_->command_input()->CheckCommand({0, 0.069}), bridge::CommandCheck::kLimits);  // beyond the stroke
+  EXPECT_EQ(gripper_->command_input()->CheckCommand({1, 201}), bridge::CommandCheck::kLimits);    // beyond the drive
+  EXPECT_EQ(gripper_->command_input()->CheckCommand({1, -1}), bridge::CommandCheck::kLimits);
+  EXPECT_EQ(gripper_->command_input()->CheckCommand({2, 0}), bridge::CommandCheck::kMalformed);
+  ASSERT_EQ(gripper_->command_input()->CheckCommand({0, 0.052}), bridge::CommandCheck::kAccept);
   const double start = State()[kOpening];
   EXPECT_NEAR(start, 0.068, 1e-6);  // wide open, as set up
-  gripper_->Command({0, 0.052});    // close to 1 mm from the cube on each side
+  gripper_->command_input()->Command({0, 0.052});    // close to 1 mm from the cube on each side
   Run(0.1);                         // 0.1 s at 83 mm/s: 8.3 mm of set-point travel
   std::vector<double> row(gripper_->ColumnCount());
   gripper_->Row(*d_, row.data());
@@ -151,7 +151,7 @@ TEST_F(GripperDeviceTest, GripsWithTheCommandedForceAndHoldsTheCube) {
   Run(0.1);  // the cube settles on its pedestal between the open jaws
   const double z0 = PoseRow()[2];
   EXPECT_EQ(State()[kGrasped], 0.0);
-  gripper_->Command({1, grip_N});
+  gripper_->command_input()->Command({1, grip_N});
   Run(2.5);  // the jaws close against their damping (4800 N s/m each: about 8 mm/s at 40 N)
   std::vector<double> s = State();
   EXPECT_NEAR(s[kOpening], 0.05, 0.001);          // the jaws stopped at the cube's width
@@ -169,13 +169,13 @@ TEST_F(GripperDeviceTest, GripsWithTheCommandedForceAndHoldsTheCube) {
   EXPECT_LT(std::abs(z2 - z1), 1e-3);
   EXPECT_EQ(State()[kGrasped], 1.0);
   // the watchdog's hold keeps the grip
-  gripper_->Hold();
+  gripper_->command_input()->Hold();
   Run(0.5);
   EXPECT_EQ(State()[kGrasped], 1.0);
   EXPECT_EQ(State()[kStatus], static_cast<double>(bridge::kStatusHolding));
   EXPECT_LT(std::abs(PoseRow()[2] - z1), 1e-3);
   // open: the cube falls out, nothing is grasped
-  gripper_->Command({0, 0.068});
+  gripper_->command_input()->Command({0, 0.068});
   Run(0.5);
   EXPECT_EQ(State()[kGrasped], 0.0);
   EXPECT_LT(State()[kForce], 0.5);

@@ -68,7 +68,7 @@ struct Rig : ArmDriverRig {
     tool = driver.get();
   }
   void Command(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
-    tool->Command({p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()});
+    tool->command_input()->Command({p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()});
   }
 };
 
@@ -149,14 +149,14 @@ TEST_F(ToolDeviceTest, RefusesMalformedAndOutOfLimitCommands) {
   // tool pointing down: its z axis along -z, inside the 60 deg cone about (0, 0, -1)
   const Eigen::Quaterniond down(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
   auto check = [&](const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
-    return rig.tool->CheckCommand({p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()});
+    return rig.tool->command_input()->CheckCommand({p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()});
   };
   const Eigen::Vector3d p(0.7, 0.0, 0.5);
-  EXPECT_EQ(rig.tool->command_length(), 7);
+  EXPECT_EQ(rig.tool->command_input()->command_length(), 7);
   EXPECT_EQ(check(p, down), bridge::CommandCheck::kAccept);
-  EXPECT_EQ(rig.tool->CheckCommand({NAN, 0, 0.5, 1, 0, 0, 0}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.tool->CheckCommand({0.7, 0, 0.5, 0, INFINITY, 0, 0}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.tool->CheckCommand({0.7, 0, 0.5, 0, 1}), bridge::CommandCheck::kMalformed);  // 5 values
+  EXPECT_EQ(rig.tool->command_input()->CheckCommand({NAN, 0, 0.5, 1, 0, 0, 0}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.tool->command_input()->CheckCommand({0.7, 0, 0.5, 0, INFINITY, 0, 0}), bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.tool->command_input()->CheckCommand({0.7, 0, 0.5, 0, 1}), bridge::CommandCheck::kMalformed);  // 5 values
   // |q| within 1 +- 0.001
   EXPECT_EQ(check(p, Eigen::Quaterniond(down.coeffs() * 1.0009)), bridge::CommandCheck::kAccept);
   EXPECT_EQ(check(p, Eigen::Quaterniond(down.coeffs() * 1.0011)), bridge::CommandCheck::kMalformed);
@@ -206,7 +206,7 @@ TEST_F(ToolDeviceTest, ByDefaultRefusesWhatNoPostureReaches) {
   const Eigen::Vector3d out = Eigen::Vector3d(0.6, -0.3, 0.2).normalized();
   auto check = [&](double r) {
     const Eigen::Vector3d p = anchor + r * out;
-    return tool->CheckCommand({p.x(), p.y(), p.z(), 1, 0, 0, 0});
+    return tool->command_input()->CheckCommand({p.x(), p.y(), p.z(), 1, 0, 0, 0});
   };
   EXPECT_EQ(check(length - 0.001), bridge::CommandCheck::kAccept);
   EXPECT_EQ(check(length + 0.001), bridge::CommandCheck::kLimits);
@@ -219,7 +219,7 @@ TEST_F(ToolDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
   const Eigen::Quaterniond q_start(rig.ToolR());
   rig.Command(start + Eigen::Vector3d(0, 0, 0.2), Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()) * q_start);
   for (int k = 0; k < 20; ++k) rig.Period();  // 0.2 s: 4 cm up, 0.2 rad turned
-  rig.tool->Hold();
+  rig.tool->command_input()->Hold();
   for (int k = 0; k < 50; ++k) rig.Period();
   const Eigen::Vector3d held = rig.Tool();
   const Eigen::Matrix3d R_held = rig.ToolR();

@@ -248,7 +248,7 @@ TEST_F(WordDeviceTest, SpelledNeedsEveryLetter) {
 TEST_F(WordDeviceTest, ColumnsAndDescribeNameEveryLetter) {
   auto device = MakeDevice({m_, 0.002, 1, "word.xml"}, Word("FE", {"slot_1", "slot_2"}, {"cube_F", "block"}));
   EXPECT_EQ(device->kind(), bridge::DeviceKind::kWord);
-  EXPECT_EQ(device->command_length(), 0);
+  EXPECT_EQ(device->command_input(), nullptr);  // output only: no command input
   const std::vector<std::string> columns = device->Columns();
   ASSERT_EQ(columns.size(), 11u);
   EXPECT_EQ(columns[0], "word.spelled");

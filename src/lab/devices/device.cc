@@ -26,7 +26,7 @@ void Device::EncodeState(double seq, double t, std::uint32_t endpoint_bits, std:
                          std::vector<unsigned char>* out) const {
   State(scratch);
   // a commanded kind's state starts with its status word: the endpoint's bits (refused, watchdog) join it
-  if (command_length() > 0 && endpoint_bits != 0 && !scratch->empty()) {
+  if (command_input() && command_input()->command_length() > 0 && endpoint_bits != 0 && !scratch->empty()) {
     const double word = (*scratch)[0];
     const std::uint32_t own = word >= 0 && word <= 4294967295.0 ? static_cast<std::uint32_t>(word) : 0;
     (*scratch)[0] = static_cast<double>(own | endpoint_bits);
@@ -43,12 +43,13 @@ void Device::EncodeState(double seq, double t, std::uint32_t endpoint_bits, std:
 void Device::ConfigureEndpoint(double control_hz, bridge::EndpointConfig* ec) const {
   ec->kind = kind();
   (void)control_hz;
-  ec->owner_timeout_s = owner_timeout_s();
-  ec->command_length = command_length();
+  const CommandInput* input = command_input();
+  ec->owner_timeout_s = input ? input->owner_timeout_s() : 1.0;
+  ec->command_length = input ? input->command_length() : 0;
   if (ec->command_length > 0) {
-    ec->check_command = [this](const std::vector<double>& p) { return CheckCommand(p); };
+    ec->check_command = [input](const std::vector<double>& p) { return input->CheckCommand(p); };
     ec->status_first = true;
-    ec->watchdog_periods = watchdog_periods();
+    ec->watchdog_periods = input->watchdog_periods();
   }
 }
 
@@ -56,7 +57,7 @@ std::string Device::DescribeJson(const bridge::DeviceDescription& common) const 
   return bridge::DescribeJson(common, bridge::KindName(static_cast<int>(kind())), DescribeFacts());
 }
 
-bool Device::TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) {
+bool CommandInput::TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch) {
   if (!endpoint.TakeCommand(scratch)) return false;
   Command(*scratch);
   return true;

@@ -1,19 +1,26 @@
-// The lab's device seam: one interface for every simulated device (arm,
-// wrench, camera, base, gripper, feet, imu, gaze, pose, point, yoyo, sim), so
-// that the step loop, the log and the bridge treat them alike. A kind is one
-// file pair under src/lab/devices/ and one row of the kinds table
-// (device_kinds.cc).
+// The lab's device seam: one interface for every simulated device, so that
+// the step loop, the log and the bridge treat them alike. The kinds (the rows
+// of device_kinds.cc): arm, wrench, sim, camera, base, gripper, feet, imu,
+// gaze, pose, point, yoyo, counter, scene, word, tool. A kind is one file pair
+// under src/lab/devices/ and one row of the kinds table.
 //
-// Order of calls (src/lab/lab_runner.cc):
-//   creation  the kind's factory with the DeviceContext; then Bind() once
-//             every device exists (a device that drives another finds it)
-//   reset     SetInitialState() before the first mj_forward; Start() after
-//             it; after a second mj_forward, Reset()
-//   period    TakeCommand()/Hold() from the bridge (or commands of the lab's
-//             own controller); BeginPeriod(); every physics step Actuate()
-//             between mj_step1 and mj_step2 and AfterStep() after mj_step2;
-//             Sample() at the period's end; Row() for the log; Deliver()
-//             before the period's states go out, AfterPublish() after
+// Order of calls
+//   creation  (lab_runner.cc) the kind's factory with the DeviceContext; then
+//             Bind() once every device exists (a device that drives another
+//             finds it); the claims of the command sources (command_writer())
+//   reset     (lab_runner_impl.cc) SetInitialState() before the first
+//             mj_forward; Start() after it; after a second mj_forward, Reset()
+//   period    (lab_run_session.cc) the command sources write, in order: the
+//             wire (CommandInput::TakeCommand()/Hold() of the served devices),
+//             the built-in controller or the task programs, then the devices
+//             that drive another (CommandWriter::Write); every physics step
+//             StepHooks::Actuate() between mj_step1 and mj_step2 and AfterStep()
+//             after mj_step2; Sample() at the period's end; Row() for the log
+//             (LogReader::LogRow() after it); RenderedOutput::Deliver() before
+//             the period's states go out, AfterPublish() after
+// The base holds what every kind has (reset, sampling, log columns, the
+// wire's state and describe reply); the rest is a capability a kind opts into
+// (device_capabilities.h).
 // A device reads mjData and writes only the controls of its own actuators.
 // Nothing on the period path throws or allocates.
 #pragma once
@@ -27,6 +34,7 @@
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_endpoint.h"
 #include "bridge/bridge_protocol.h"
+#include "lab/devices/device_capabilities.h"
 #include "lab/devices/device_config.h"
 
 namespace vlab::lab {
@@ -39,16 +47,6 @@ struct DeviceContext {
   std::string scene;       ///< the scene's MJCF path, for messages and for reloading it (cameras)
 };
 
-/// How the lab treats a device's command input.
-enum class CommandRole {
-  kNone,             ///< output only
-  kRun,              ///< the run's own control (sim): taken by the lab's loop, never waited for
-  kWaited,           ///< lockstep waits for its owner's command once it has an owner
-  kWaitedFromStart,  ///< ... and period 0 waits for an owner (arms: the controllers must be there)
-  kDriven,           ///< commands taken, but another device drives it (an arm under a point device)
-};
-
-/// A device that serves itself on its own socket (a camera's chunked frames).
 /// Frames of a device that streams them (a camera).
 struct FrameCounters {
   long sent = 0;     ///< frames sent to at least one subscriber
@@ -56,6 +54,7 @@ struct FrameCounters {
   long dropped = 0;  ///< not rendered: the ring of frames in flight was full
 };
 
+/// A device that serves itself on its own socket (a camera's chunked frames).
 class OwnTransport {
  public:
   virtual ~OwnTransport() = default;
@@ -90,8 +89,6 @@ class Device {
   // ---- creation and reset
   /// Once every device of the scenario exists. Throws InputError.
   virtual void Bind(const std::vector<Device*>& devices) { (void)devices; }
-  /// The device it commands ("": none), e.g. a point device's arm.
-  virtual std::string drives() const { return ""; }
   /// Before the first mj_forward of a reset: initial joint positions.
   virtual void SetInitialState(mjData& d) const { (void)d; }
   /// After mj_forward: start servos, write the controls of the first instant.
@@ -100,45 +97,14 @@ class Device {
   virtual void Reset(const mjData& d) { (void)d; }
 
   // ---- the control period
-  /// Start of a period at time t, after the period's commands (and holds).
-  virtual void BeginPeriod(const mjData& d, double t) {
-    (void)d;
-    (void)t;
-  }
-  /// Every physics step, between mj_step1 and mj_step2: write own controls.
-  virtual void Actuate(mjData& d, double dt) {
-    (void)d;
-    (void)dt;
-  }
-  /// Every physics step, after mj_step2.
-  virtual void AfterStep(const mjData& d, double dt) {
-    (void)d;
-    (void)dt;
-  }
   /// End of a period at time t.
   virtual void Sample(const mjData& d, double t) {
     (void)d;
     (void)t;
   }
-  /// Before the run, on the thread that runs the lab (a camera makes its renderer).
-  virtual void BeforeRun(mjData* d) { (void)d; }
-  /// At every period end t (and t = 0), after the log row, before the states go out.
-  virtual void Deliver(double t, mjData* d) {
-    (void)t;
-    (void)d;
-  }
-  /// After the states of a period end went out, the state still that of the period end.
-  virtual void AfterPublish(mjData* d) { (void)d; }
 
   // ---- the log
   /// Log columns, prefixed "NAME.".
-  /// The log's columns ("time" first), once the lab has them all (a scene
-  /// stream's `signals` resolve here); throws InputError naming a column it
-  /// lacks.
-  virtual void BindLog(const std::vector<std::string>& columns) { (void)columns; }
-  /// Each log row as the lab writes it (columns as BindLog's), after Sample
-  /// and before the period's states are published.
-  virtual void LogRow(const double* row) { (void)row; }
   virtual std::vector<std::string> Columns() const { return {}; }
   virtual int ColumnCount() const { return 0; }
   /// ColumnCount() values of the last Sample().
@@ -160,43 +126,40 @@ class Device {
   /// bits of its endpoint (refused, watchdog). Default: header + State().
   virtual void EncodeState(double seq, double t, std::uint32_t endpoint_bits, std::vector<double>* scratch,
                            std::vector<unsigned char>* out) const;
-  /// The endpoint's rules for this device (kind, command length and check,
-  /// watchdog, owner timeout). `control_hz` converts seconds to periods.
+  /// The endpoint's rules for this device (kind; its command input's length
+  /// and check, watchdog, owner timeout). `control_hz` converts seconds to periods.
   virtual void ConfigureEndpoint(double control_hz, bridge::EndpointConfig* config) const;
   /// The describe reply, from the facts every device shares.
   virtual std::string DescribeJson(const bridge::DeviceDescription& common) const;
   /// The kind's facts for the default describe reply: a JSON object with
   /// "layout", "units" and the kind's own fields.
   virtual std::string DescribeFacts() const { return "{}"; }
-  /// A device with its own transport (cameras), or null.
-  virtual OwnTransport* own_transport() { return nullptr; }
 
-  // ---- commands
-  /// Default: waited for once owned when it takes commands, else output only.
-  virtual CommandRole command_role() const {
-    return command_length() > 0 ? CommandRole::kWaited : CommandRole::kNone;
+  // ---- capabilities: what the kind has beyond this base (device_capabilities.h), null
+  // where it has none; the lab asks once, at load, and keeps a list per capability
+  CommandInput* command_input() const { return capabilities_.command_input; }
+  StepHooks* step_hooks() const { return capabilities_.step_hooks; }
+  RenderedOutput* rendered_output() const { return capabilities_.rendered_output; }
+  LogReader* log_reader() const { return capabilities_.log_reader; }
+  /// A device with its own transport (cameras), or null.
+  OwnTransport* own_transport() const { return capabilities_.own_transport; }
+  /// A device that writes another device's command input (point, tool), or null.
+  CommandWriter* command_writer() const { return capabilities_.command_writer; }
+  /// A joint servo input that other sources command in process (an arm), or null.
+  SimArm* arm() const { return capabilities_.arm; }
+  /// The run's own control (the sim device), or null.
+  SimControl* sim_control() const { return capabilities_.sim_control; }
+  /// The role of its command input (kNone without one).
+  CommandRole command_role() const {
+    return capabilities_.command_input ? capabilities_.command_input->command_role() : CommandRole::kNone;
   }
-  /// Payload length of a command (0: an output-only device).
-  virtual int command_length() const { return 0; }
-  /// Checks a command payload of command_length() finite values.
-  virtual bridge::CommandCheck CheckCommand(const std::vector<double>& payload) const {
-    (void)payload;
-    return bridge::CommandCheck::kAccept;
-  }
-  /// Applies an accepted command payload.
-  virtual void Command(const std::vector<double>& payload) { (void)payload; }
-  /// Takes the endpoint's newest accepted command, if any, and applies it.
-  /// True when there was one.
-  virtual bool TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* scratch);
-  /// The watchdog fired, or a hold was asked for: stop safely.
-  virtual void Hold() {}
-  virtual int watchdog_periods() const { return 0; }
-  virtual double owner_timeout_s() const { return 1.0; }
 
  protected:
   explicit Device(const DeviceConfig& config) : name_(config.name), kind_(config.kind), where_(config.where) {}
   /// "FILE:LINE: device 'NAME'", the start of every message about it.
   std::string who() const { return where_ + ": device '" + name_ + "'"; }
+  /// What the kind offers: its constructor sets the interfaces it implements.
+  Capabilities capabilities_;
 
  private:
   std::string name_;

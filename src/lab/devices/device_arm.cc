@@ -294,14 +294,6 @@ void SimArm::Row(const mjData& d, double* out) const {
 }
 
 
-
-void SimArm::SetDriver(const std::string& driver, const std::string& where) {
-  if (!driver_.empty() && driver_ != driver) {
-    throw InputError(where + "arm '" + name() + "' is driven by point device '" + driver_ + "' too");
-  }
-  driver_ = driver;
-}
-
 void SimArm::Hold() {
   command_.mode = bridge::ArmMode::kHold;
   Command(command_);

@@ -22,8 +22,9 @@
 //   - a command with the wrong size, a non-finite value, a position outside the
 //     joint range, a velocity beyond max_velocity or a torque outside the motor
 //     range is refused and counted; the arm keeps its previous command.
-// An arm may be driven by another device (a point device): its commands then
-// come from that device, and lockstep does not wait for its own.
+// An arm may be driven by another device (a point device, which holds the
+// arm's claim: lab_command_writer.h): its commands then come from that device,
+// and lockstep does not wait for its own.
 #pragma once
 
 #include <memory>
@@ -61,7 +62,7 @@ std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r);
 /// Makes a SimArm.
 std::unique_ptr<Device> MakeArm(const DeviceContext& context, const DeviceConfig& config);
 
-class SimArm final : public Device {
+class SimArm final : public Device, public CommandInput, public StepHooks {
  public:
   /// Binds the device to the model's joints and motors. Throws InputError
   /// naming the device, its scenario line and the missing or unsuitable element.
@@ -83,16 +84,17 @@ class SimArm final : public Device {
   const bridge::ArmState& state() const { return state_; }
   /// Samples the device output into `state`.
   void Sample(const mjData& data, double time_s, bridge::ArmState* state) const;
-  /// Marks the arm as driven by the device `driver` (one driver at most).
-  /// Throws InputError naming `where` when another device drives it already.
-  void SetDriver(const std::string& driver, const std::string& where);
+  /// Marks the arm as driven by the device `driver` (the lab does, once the
+  /// claim table gave that device the arm's command input): lockstep then does
+  /// not wait for the arm's own clients.
+  void set_driver(const std::string& driver) { driver_ = driver; }
   const std::string& driver() const { return driver_; }
 
   long refused_commands() const { return refused_; }
   const Eigen::VectorXd& kp() const { return kp_; }
   const Eigen::VectorXd& kd() const { return kd_; }
 
-  // Device
+  // Device; CommandInput (a typed command: TakeCommand); StepHooks (the servo)
   void SetInitialState(mjData& d) const override;
   void Start(mjData& d) override;
   void Reset(const mjData& d) override;
@@ -117,7 +119,11 @@ class SimArm final : public Device {
   double owner_timeout_s() const override { return owner_timeout_s_; }
 
  private:
-  explicit SimArm(const DeviceConfig& config) : Device(config) {}
+  explicit SimArm(const DeviceConfig& config) : Device(config) {
+    capabilities_.command_input = this;
+    capabilities_.step_hooks = this;
+    capabilities_.arm = this;
+  }
 
   const mjModel* model_ = nullptr;
   std::vector<std::string> joint_names_;

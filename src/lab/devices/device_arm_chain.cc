@@ -45,14 +45,12 @@ ArmChain MakeArmChain(const mjModel* model, const ArmChainParams& params, const 
 }
 
 void BindArmChain(ArmChain& chain, const ArmChainParams& params, const std::vector<Device*>& devices,
-                  const std::string& device_name, const std::string& who) {
-  const std::string who_arm = who + ": arm: ";
+                  const std::string& who) {
   chain.arm = nullptr;
   for (Device* d : devices) {
-    if (d->name() == params.arm) chain.arm = dynamic_cast<SimArm*>(d);
+    if (d->name() == params.arm) chain.arm = d->arm();
   }
-  if (!chain.arm) throw InputError(who_arm + "the scenario has no arm device '" + params.arm + "'");
-  chain.arm->SetDriver(device_name, who_arm);
+  if (!chain.arm) throw InputError(who + ": arm: the scenario has no arm device '" + params.arm + "'");
   // chain joint i is arm joint arm_index[i]
   chain.arm_index.clear();
   const std::vector<std::string>& joints = chain.arm->joint_names();

@@ -29,6 +29,7 @@
 #include "control/task_space.h"
 #include "lab/devices/device.h"
 #include "lab/devices/device_arm.h"
+#include "lab/lab_command_writer.h"
 
 namespace vlab::lab {
 
@@ -70,12 +71,12 @@ struct ArmChain {
 ArmChain MakeArmChain(const mjModel* model, const ArmChainParams& params, const std::string& who);
 
 /// Binds the chain to its arm: the device named params.arm among `devices`, which
-/// must be an arm device; registers `device_name` as its one driver and maps every
-/// chain joint to its arm joint. Throws InputError naming the device (`who`) when
-/// there is no such arm, it has a driver already, or a chain joint is not one of
-/// its joints.
+/// must be an arm device, and maps every chain joint to its arm joint. Throws
+/// InputError naming the device (`who`) when there is no such arm or a chain
+/// joint is not one of its joints. (That the device is the arm's one driver is
+/// the lab's claim table's to check: lab_command_writer.h.)
 void BindArmChain(ArmChain& chain, const ArmChainParams& params, const std::vector<Device*>& devices,
-                  const std::string& device_name, const std::string& who);
+                  const std::string& who);
 
 /// Reads the chain's joint positions and velocities out of `d` into chain.q,
 /// chain.qd and sets the chain's state to them. No allocation.

@@ -29,9 +29,11 @@ namespace vlab::lab {
 
 namespace {
 
-class SimBase final : public Device {
+class SimBase final : public Device, public CommandInput, public StepHooks {
  public:
   SimBase(const mjModel* m, const DeviceConfig& c, std::uint64_t seed) : Device(c), config_(c.ParamsAs<BaseParams>()) {
+    capabilities_.command_input = this;
+    capabilities_.step_hooks = this;
     const int want[3] = {mjJNT_SLIDE, mjJNT_SLIDE, mjJNT_HINGE};
     for (int i = 0; i < 3; ++i) {
       const std::string& j = config_.joints[i];

@@ -179,7 +179,10 @@ struct SimCamera::Worker {
   mjData* warm = nullptr;        // the state of the warm-up draw (control thread's, read before ready)
 };
 
-SimCamera::SimCamera(const DeviceConfig& config) : Device(config) {}
+SimCamera::SimCamera(const DeviceConfig& config) : Device(config) {
+  capabilities_.own_transport = this;
+  capabilities_.rendered_output = this;
+}
 
 long SimCamera::worker_thread_id() const { return worker_ ? worker_->tid.load() : 0; }
 

@@ -83,7 +83,7 @@ std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r);
 /// Makes a SimCamera.
 std::unique_ptr<Device> MakeCamera(const DeviceContext& context, const DeviceConfig& config);
 
-class SimCamera final : public Device, public OwnTransport {
+class SimCamera final : public Device, public OwnTransport, public RenderedOutput {
  public:
   /// Binds the MJCF camera and builds the webcam model. Throws InputError
   /// naming the device: unknown camera, size above the offscreen buffer, a
@@ -117,8 +117,7 @@ class SimCamera final : public Device, public OwnTransport {
   bridge::EndpointCounters counters() const override { return server_->counters().endpoint; }
   FrameCounters frames() const override { return {server_->counters().frames_sent, late_, dropped_}; }
 
-  // Device
-  OwnTransport* own_transport() override { return this; }
+  // RenderedOutput
   /// Before the run: makes the renderer and renders once from `d` (nothing is
   /// sent), so that the first frame does not pay for the GL context and the
   /// first draw (a realtime run's first periods). Nothing when not served.

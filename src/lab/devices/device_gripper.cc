@@ -33,9 +33,11 @@ namespace {
 
 constexpr double kAtRest_m_per_s = 0.005;  // jaw speed below which a grasp can be reported
 
-class SimGripper final : public Device {
+class SimGripper final : public Device, public CommandInput, public StepHooks {
  public:
   SimGripper(const mjModel* m, const DeviceConfig& c) : Device(c), config_(c.ParamsAs<GripperParams>()) {
+    capabilities_.command_input = this;
+    capabilities_.step_hooks = this;
     servo_ = Actuator(m, c, config_.servo);
     drive_ = Actuator(m, c, config_.force_actuator);
     if (m->actuator_trntype[servo_] != mjTRN_TENDON || m->actuator_trntype[drive_] != mjTRN_TENDON ||

@@ -20,7 +20,8 @@
 // Hold (before the first command, on the watchdog, after a reset): the arm
 // holds its joints where they are (arm hold mode); the next command starts the
 // set-point from where the site then is.
-// Ownership: the device drives its arm in every period, from the start. The
+// Ownership: the device holds its arm's claim (a command source:
+// lab/lab_command_writer.h) and drives it in every period, from the start. The
 // arm device stays readable on its own port, but what it is sent is overridden
 // by the point device's command of the same period (and lockstep does not wait
 // for the arm's owner).
@@ -38,15 +39,18 @@ namespace vlab::lab {
 
 namespace {
 
-class SimPoint final : public Device {
+class SimPoint final : public Device, public CommandInput, public CommandWriter {
  public:
   SimPoint(const DeviceContext& context, const DeviceConfig& c)
       : Device(c), model_(context.model), config_(c.ParamsAs<PointParams>()), period_s_(context.control_period_s),
-        chain_(MakeArmChain(model_, config_, who())) {}
+        chain_(MakeArmChain(model_, config_, who())) {
+    capabilities_.command_input = this;
+    capabilities_.command_writer = this;
+  }
 
   // its arm: an arm device of the scenario, driven by this device alone
-  void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, name(), who()); }
-  std::string drives() const override { return config_.arm; }
+  void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, who()); }
+  std::vector<Claim> Claims() const override { return {{config_.arm, "point device '" + name() + "'", where()}}; }
   int log_rank() const override { return 3; }  // after the other devices, as in every log written so far
 
 
@@ -76,9 +80,11 @@ class SimPoint final : public Device {
   int watchdog_periods() const override { return config_.input.watchdog_periods; }
   double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
 
-  void BeginPeriod(const mjData& d, double) override {
+  // the arm's command of the period, toward the newest command (a command source: lab_command_writer.h)
+  bool Write(const CommandPeriod& period, std::string*) override {
+    const mjData& d = *period.data;
     bool resumed = false;
-    if (!BeginArmChainPeriod(chain_, d, &resumed)) return;  // holding
+    if (!BeginArmChainPeriod(chain_, d, &resumed)) return true;  // holding
     if (resumed) setpoint_ = chain_.model->TipPose().p_W;  // from a hold: start where the site is
     // rate limit: the set-point moves toward the command at most max_speed
     Eigen::Vector3d step = command_ - setpoint_;
@@ -90,6 +96,7 @@ class SimPoint final : public Device {
     target.v_W = step / period_s_;
     DriveArm(chain_, target);
     setpoint_ += step;
+    return true;
   }
 
   void Sample(const mjData& d, double) override {

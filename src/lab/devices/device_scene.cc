@@ -65,10 +65,11 @@ nlohmann::json Array(const T* values, int n) {
   return a;
 }
 
-class SimScene final : public Device {
+class SimScene final : public Device, public LogReader {
  public:
   SimScene(const DeviceContext& context, const DeviceConfig& c)
       : Device(c), config_(c.ParamsAs<SceneParams>()), model_(context.model), scene_(context.scene) {
+    capabilities_.log_reader = this;
     const double period_s = context.control_period_s;
     interval_s_ = config_.rate_hz > 0 ? 1.0 / config_.rate_hz : period_s;
     if (interval_s_ < period_s - kSameTime_s) {

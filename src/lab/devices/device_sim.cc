@@ -37,6 +37,8 @@ SimControl::SimControl(const DeviceConfig& config) : Device(config) {
   on_owner_lost_ = p.on_owner_lost;
   owner_timeout_s_ = p.owner_timeout_s;
   ops_ = p.ops;
+  capabilities_.command_input = this;
+  capabilities_.sim_control = this;
 }
 
 void SimControl::Bind(const std::vector<Device*>& devices) {

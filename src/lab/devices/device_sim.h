@@ -45,7 +45,7 @@ struct SimParams : DeviceParams {
 std::shared_ptr<const DeviceParams> ReadSimParams(MapReader& r);
 std::unique_ptr<Device> MakeSim(const DeviceContext& context, const DeviceConfig& config);
 
-class SimControl final : public Device {
+class SimControl final : public Device, public CommandInput {
  public:
   explicit SimControl(const DeviceConfig& config);
 

@@ -28,7 +28,7 @@
 // Hold (before the first command, on the watchdog, after a reset): the arm
 // holds its joints where they are (arm hold mode); the next command starts the
 // set-point from where the tool then is.
-// Ownership: as the point device: the device drives its arm in every period;
+// Ownership: as the point device: the device holds its arm's claim and drives it in every period;
 // what the arm is sent on its own port is overridden.
 // A target inside every limit may still be out of the arm's reach with that
 // orientation: the tool then stops as near as the damped least squares gets it
@@ -53,11 +53,13 @@ namespace {
 constexpr double kQuaternionNormTolerance = 1e-3;
 constexpr int kCommandValues = 7;
 
-class SimTool final : public Device {
+class SimTool final : public Device, public CommandInput, public CommandWriter {
  public:
   SimTool(const DeviceContext& context, const DeviceConfig& c)
       : Device(c), model_(context.model), config_(c.ParamsAs<ToolParams>()), period_s_(context.control_period_s),
         chain_(MakeArmChain(model_, config_, who())) {
+    capabilities_.command_input = this;
+    capabilities_.command_writer = this;
     reach_centre_ = Eigen::Vector3d(config_.reach_centre[0], config_.reach_centre[1], config_.reach_centre[2]);
     reach_radius_ = config_.reach == ToolParams::Reach::kFixed ? config_.reach_radius : INFINITY;
     if (config_.reach == ToolParams::Reach::kAuto) ChainLength();
@@ -66,8 +68,8 @@ class SimTool final : public Device {
   }
 
   // its arm: an arm device of the scenario, driven by this device alone
-  void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, name(), who()); }
-  std::string drives() const override { return config_.arm; }
+  void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, who()); }
+  std::vector<Claim> Claims() const override { return {{config_.arm, "tool device '" + name() + "'", where()}}; }
   int log_rank() const override { return 3; }  // after the other devices, as the point device
 
   void Reset(const mjData& d) override {
@@ -105,9 +107,11 @@ class SimTool final : public Device {
   int watchdog_periods() const override { return config_.input.watchdog_periods; }
   double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
 
-  void BeginPeriod(const mjData& d, double) override {
+  // the arm's command of the period, toward the newest command (a command source: lab_command_writer.h)
+  bool Write(const CommandPeriod& period, std::string*) override {
+    const mjData& d = *period.data;
     bool resumed = false;
-    if (!BeginArmChainPeriod(chain_, d, &resumed)) return;  // holding
+    if (!BeginArmChainPeriod(chain_, d, &resumed)) return true;  // holding
     if (resumed) {  // from a hold: start where the tool is
       const control::Pose tip = chain_.model->TipPose();
       p_set_ = tip.p_W;
@@ -128,6 +132,7 @@ class SimTool final : public Device {
     DriveArm(chain_, target);
     p_set_ += step;
     if (turn.norm() > 0) R_set_ = Eigen::AngleAxisd(turn.norm(), turn / turn.norm()).toRotationMatrix() * R_set_;
+    return true;
   }
 
   void Sample(const mjData& d, double) override {

@@ -18,9 +18,10 @@ int SensorAddress(const mjModel* m, const DeviceConfig& c, const std::string& na
   return id;
 }
 
-class SimWrench final : public Device {
+class SimWrench final : public Device, public StepHooks {
  public:
   SimWrench(const DeviceContext& context, const DeviceConfig& c) : Device(c) {
+    capabilities_.step_hooks = this;
     const mjModel* m = context.model;
     const WrenchParams& p = c.ParamsAs<WrenchParams>();
     const int force = SensorAddress(m, c, p.force_sensor, mjSENS_FORCE, "force");
