@@ -57,6 +57,8 @@
 
 #include <Eigen/Core>
 
+#include <nlohmann/json.hpp>
+
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"

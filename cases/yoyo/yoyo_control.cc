@@ -60,6 +60,8 @@
 
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"

@@ -11,6 +11,8 @@
 #include <optional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "bridge/bridge_camera_server.h"
 #include "bridge/bridge_markers.h"
 #include "render/renderer.h"
