@@ -40,7 +40,9 @@ ThreadCounters ReadThreadCounters(int schedstat_fd) {
   }
   // (schedstat's on-CPU time lags by up to a tick for the running thread; this clock does not)
   timespec cpu{};
-  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu) == 0) c.on_cpu_s = static_cast<double>(cpu.tv_sec) + cpu.tv_nsec * 1e-9;
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu) == 0) {
+    c.on_cpu_s = static_cast<double>(cpu.tv_sec) + static_cast<double>(cpu.tv_nsec) * 1e-9;
+  }
   // schedstat: "cpu_ns run_delay_ns timeslices"
   char buf[128];
   if (ReadSmall(schedstat_fd, buf, sizeof buf)) {
@@ -89,13 +91,20 @@ std::string StallRecord::Cause() const {
     return "waited " + Milliseconds(cpu_wait) + " for a CPU (" + std::to_string(involuntary_switches) +
            " involuntary switches: another thread or process ran on its CPU)";
   }
-  // neither: where was the thread at its deadline? Running or runnable for all of the window
-  // but the lateness means it was still at work then (busy); less means it had gone to sleep
-  // and woke late (a halted vCPU is neither waiting nor stolen from: core_realtime.h)
+  // neither: where was the thread across the window? On a CPU, waiting for one, or asleep
+  // (voluntary waits); time in none of them, without a wait, was taken from it while it held
+  // its CPU: its vCPU stopped (steal that /proc/stat's 10 ms ticks missed) or interrupts ran
+  // (with IRQ time accounting, not charged to the thread)
   const std::string counts = " (" + std::to_string(voluntary_switches) + " voluntary waits, " +
                              std::to_string(minor_faults) + " minor page faults)";
   if (on_cpu_s < 0) return "not explained by a CPU wait or steal; on-CPU time unknown" + counts;
   const std::string ran = "ran " + Milliseconds(on_cpu_s) + " of the " + Milliseconds(window_s) + " window";
+  const double unaccounted = window_s - on_cpu_s - cpu_wait;
+  if (voluntary_switches == 0 && unaccounted >= lateness_s / 3) {
+    return "its CPU was taken without a switch: it " + ran + ", never waited for a CPU nor slept, and lost " +
+           Milliseconds(unaccounted) + " (its vCPU stopped, or interrupts ran)" + counts;
+  }
+  // where at its deadline? still at work (busy), or gone to sleep and woken late
   if (on_cpu_s + cpu_wait >= window_s - lateness_s) return "busy in the lab: it " + ran + counts;
   std::string line = "a late wake-up: it slept past its deadline (" + ran + "; a CPU leaving deep idle, or a timer or "
                      "interrupt delivered late)" + counts;

@@ -142,6 +142,15 @@ TEST(StallProbe, NamesTheLargestCause) {
   EXPECT_NE(r.Cause().find("busy in the lab: it ran 9.5 ms of the 22.0 ms window (4 voluntary waits"),
             std::string::npos)
       << r.Cause();
+  r.on_cpu_s = 0.0008;  // ran 0.8 ms, waited 1, never slept: 20.2 ms in none of them
+  r.voluntary_switches = 0;
+  EXPECT_NE(r.Cause().find("its CPU was taken without a switch: it ran 0.8 ms of the 22.0 ms window, never waited "
+                           "for a CPU nor slept, and lost 20.2 ms"),
+            std::string::npos)
+      << r.Cause();
+  r.on_cpu_s = 0.0195;  // ran 19.5 of 22 without a wait: busy
+  EXPECT_NE(r.Cause().find("busy in the lab: it ran 19.5 ms"), std::string::npos) << r.Cause();
+  r.voluntary_switches = 4;
   r.major_faults = 2;
   EXPECT_NE(r.Cause().find("2 major page faults"), std::string::npos) << r.Cause();
 }
