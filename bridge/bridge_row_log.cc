@@ -3,8 +3,8 @@
 #include <pthread.h>
 #include <sched.h>
 
-#include <cerrno>
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <stdexcept>
 

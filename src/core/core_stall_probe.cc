@@ -96,7 +96,8 @@ std::string StallRecord::Cause() const {
   // its CPU: its vCPU stopped (steal that /proc/stat's 10 ms ticks missed) or interrupts ran
   // (with IRQ time accounting, not charged to the thread)
   const std::string counts = " (" + std::to_string(voluntary_switches) + " voluntary waits, " +
-                             std::to_string(minor_faults) + " minor page faults)";
+                             std::to_string(minor_faults) + " minor page faults" +
+                             (run_delay_s < 0 ? "; run delay unknown)" : ")");
   if (on_cpu_s < 0) return "not explained by a CPU wait or steal; on-CPU time unknown" + counts;
   const std::string ran = "ran " + Milliseconds(on_cpu_s) + " of the " + Milliseconds(window_s) + " window";
   const double unaccounted = window_s - on_cpu_s - cpu_wait;
@@ -106,10 +107,8 @@ std::string StallRecord::Cause() const {
   }
   // where at its deadline? still at work (busy), or gone to sleep and woken late
   if (on_cpu_s + cpu_wait >= window_s - lateness_s) return "busy in the lab: it " + ran + counts;
-  std::string line = "a late wake-up: it slept past its deadline (" + ran + "; a CPU leaving deep idle, or a timer or "
-                     "interrupt delivered late)" + counts;
-  if (run_delay_s < 0) line += "; run delay unknown";
-  return line;
+  return "a late wake-up: it slept past its deadline (" + ran + "; a CPU leaving deep idle, or a timer or interrupt "
+         "delivered late)" + counts;
 }
 
 StallProbe::~StallProbe() {

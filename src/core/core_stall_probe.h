@@ -61,8 +61,10 @@ struct StallRecord {
   /// "waited 4.1 ms for a CPU (3 involuntary switches)" (or "... after its
   /// wake-up" where it was never preempted), "steal 9.8 ms (the
   /// hypervisor ran another guest)", "2 major page faults"; when none of those
-  /// explains it, by the thread's time on a CPU: "busy in the lab" when it ran
-  /// or waited for a CPU past its deadline, else "a late wake-up" (it slept past
+  /// explains it, by the thread's time on a CPU: "its CPU was taken without a
+  /// switch" when, never waiting, it lost time it neither ran nor waited for a
+  /// CPU (its vCPU stopped, or interrupts ran), "busy in the lab" when it ran or
+  /// waited for a CPU past its deadline, else "a late wake-up" (it slept past
   /// its deadline: a CPU leaving deep idle, a timer or interrupt delivered late),
   /// or "not explained" where the kernel gives no on-CPU time.
   std::string Cause() const;

@@ -150,6 +150,9 @@ TEST(StallProbe, NamesTheLargestCause) {
       << r.Cause();
   r.on_cpu_s = 0.0195;  // ran 19.5 of 22 without a wait: busy
   EXPECT_NE(r.Cause().find("busy in the lab: it ran 19.5 ms"), std::string::npos) << r.Cause();
+  r.run_delay_s = -1;  // (a kernel without schedstat: every line says so)
+  EXPECT_NE(r.Cause().find("0 minor page faults; run delay unknown)"), std::string::npos) << r.Cause();
+  r.run_delay_s = 0.001;
   r.voluntary_switches = 4;
   r.major_faults = 2;
   EXPECT_NE(r.Cause().find("2 major page faults"), std::string::npos) << r.Cause();
