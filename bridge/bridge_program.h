@@ -1,6 +1,6 @@
 // What every controller program beside the lab needs around its loop, in one place:
-// HOST:PORT arguments, a stop flag that SIGTERM and SIGINT set (vlab run ends an
-// external controller with SIGTERM, docs/scenarios.md), reads in short slices so that
+// HOST:PORT arguments, the stop flag that SIGTERM and SIGINT set (bridge_signals.h; vlab run
+// ends an external controller with SIGTERM, docs/scenarios.md), reads in short slices so that
 // the flag is seen soon, and a main() that turns a bridge error into exit status 2.
 // Header only: a program links vlab_bridge and nothing else.
 //
@@ -11,7 +11,6 @@
 //   }
 #pragma once
 
-#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -19,6 +18,7 @@
 #include <string>
 
 #include "bridge/bridge_errors.h"
+#include "bridge/bridge_signals.h"
 
 namespace vlab::bridge::program {
 
@@ -41,17 +41,8 @@ inline bool ParseAddress(const std::string& text, Address* a) {
   return !a->host.empty() && a->port > 0;
 }
 
-/// Set by SIGTERM or SIGINT once InstallStopHandlers ran.
-inline volatile std::sig_atomic_t g_stop = 0;
-
-inline void InstallStopHandlers() {
-  const auto on_signal = [](int) { g_stop = 1; };
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGINT, on_signal);
-}
-
-/// True once a stop signal came.
-inline bool Stopped() { return g_stop != 0; }
+/// True once a stop signal came (the one stop handler, bridge_signals.h).
+inline bool Stopped() { return StopRequested(); }
 
 /// Reads block this long at a time, so a stop signal is seen within it.
 inline constexpr double kPoll_s = 0.05;
@@ -86,12 +77,12 @@ bool ReadNext(Client& c, double timeout_s, State* s) {
   return false;
 }
 
-/// Installs the stop handlers and returns `run()`; an exception it throws is printed
+/// Installs the stop handler and returns `run()`; an exception it throws is printed
 /// as "NAME: what" with exit status 2, or ends quietly with 0 when a stop signal came
 /// first (the lab went away because the run ended).
 template <typename Run>
 int Main(const char* name, Run run) {
-  InstallStopHandlers();
+  InstallStopSignals();
   try {
     return run();
   } catch (const std::exception& e) {

@@ -29,8 +29,8 @@
 #include "cli/cli_commands.h"
 #include "cli/cli_cpus.h"
 #include "core/core_realtime.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 
 namespace vlab::cli {
 

@@ -40,9 +40,9 @@
 #include "core/core_errors.h"
 #include "cli/cli_cpus.h"
 #include "core/core_realtime.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
-#include "lab/lab_stats.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
+#include "lab/outputs/lab_stats.h"
 
 namespace vlab::cli {
 

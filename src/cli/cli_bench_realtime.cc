@@ -48,9 +48,9 @@
 #include "core/core_errors.h"
 #include "core/core_realtime.h"
 #include "lab/devices/device_camera.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
-#include "lab/lab_stats.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
+#include "lab/outputs/lab_stats.h"
 
 namespace vlab::cli {
 

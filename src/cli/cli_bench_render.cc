@@ -33,8 +33,8 @@
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/devices/device_camera.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 #include "render/image_io.h"
 #include "render/renderer.h"
 

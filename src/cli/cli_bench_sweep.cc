@@ -15,8 +15,8 @@
 #include "cli/cli_cpus.h"
 #include "core/core_errors.h"
 #include "core/core_realtime.h"
-#include "lab/lab_scenario.h"
-#include "lab/lab_sweep.h"
+#include "lab/scenario/lab_scenario.h"
+#include "lab/sweep/lab_sweep.h"
 
 namespace vlab::cli {
 

@@ -30,8 +30,8 @@
 #include "core/core_mujoco.h"
 #include "core/core_realtime.h"
 #include "lab/devices/device_scene.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 
 namespace vlab::cli {
 

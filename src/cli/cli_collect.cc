@@ -7,7 +7,7 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "lab/lab_collect.h"
+#include "lab/sweep/lab_collect.h"
 
 namespace vlab::cli {
 

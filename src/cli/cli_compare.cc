@@ -7,13 +7,13 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "core/core_signals.h"
-#include "lab/lab_compare.h"
-#include "lab/lab_golden.h"
-#include "lab/lab_output.h"
-#include "lab/lab_log.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "bridge/bridge_signals.h"
+#include "lab/judge/lab_compare.h"
+#include "lab/judge/lab_golden.h"
+#include "lab/outputs/lab_output.h"
+#include "lab/outputs/lab_log.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 
 namespace vlab::cli {
 

@@ -11,7 +11,7 @@
 #include "bridge/bridge_markers.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 #include "vision/vision_cubes.h"
 #include "vision/vision_scene.h"
 

@@ -128,7 +128,7 @@ void CheckJoints(const Arm& from, const Arm& to) {
 }
 
 int Follow(const FollowArgs& a) {
-  program::InstallStopHandlers();
+  InstallStopSignals();
   if (!(a.connect_timeout_s > 0)) throw InputError("follow: --connect-timeout must be > 0 s");
   if (!(a.timeout_s > 0)) throw InputError("follow: --timeout must be > 0 s");
   if (!(a.settle_s >= 0)) throw InputError("follow: --settle must be >= 0 s");

@@ -7,9 +7,9 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "core/core_signals.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "bridge/bridge_signals.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 
 namespace vlab::cli {
 

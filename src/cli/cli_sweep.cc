@@ -18,9 +18,9 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "core/core_signals.h"
-#include "lab/lab_sweep.h"
-#include "lab/lab_sweep_text.h"
+#include "bridge/bridge_signals.h"
+#include "lab/sweep/lab_sweep.h"
+#include "lab/sweep/lab_sweep_text.h"
 
 namespace vlab::cli {
 

@@ -17,8 +17,8 @@
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "core/core_signals.h"
-#include "lab/lab_yaml.h"
+#include "bridge/bridge_signals.h"
+#include "lab/scenario/lab_yaml.h"
 #include "task/task_runtime.h"
 #include "task/task_udp.h"
 

@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "cli/cli_commands.h"
-#include "core/core_signals.h"
+#include "bridge/bridge_signals.h"
 #include "view/view_gltf.h"
 #include "view/view_program.h"
 

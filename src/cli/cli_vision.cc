@@ -14,7 +14,7 @@
 #include "bridge/bridge_errors.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "core/core_signals.h"
+#include "bridge/bridge_signals.h"
 #include "vision/vision_program.h"
 #include "vision/vision_yoyo_program.h"
 

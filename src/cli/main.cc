@@ -6,8 +6,8 @@
 #include <CLI/CLI.hpp>
 
 #include "cli/cli_commands.h"
-#include "lab/lab_scenario.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_scenario.h"
+#include "lab/scenario/lab_yaml.h"
 
 #ifndef VLAB_VERSION
 #define VLAB_VERSION "0.0.0"

@@ -64,7 +64,7 @@ struct ClockConfig {
   double period_s = 0.002;  ///< control period, s
   LockstepConfig lockstep;
   RealtimeConfig realtime;  ///< (realtime also waits for period 0 up to lockstep.start_timeout_s)
-  /// Non-zero (a signal's number, g_stop_requested of core_signals.h) ends every
+  /// Non-zero (a signal's number, g_stop_requested of bridge_signals.h) ends every
   /// wait within kStopCheck_s: BeginPeriod returns kStopped. nullptr: never.
   const volatile std::sig_atomic_t* stop = nullptr;
 };

@@ -15,7 +15,7 @@
 #include "kinsim/kinsim_scene.h"
 #include "kinsim/kinsim_server.h"
 #include "core/core_errors.h"
-#include "core/core_signals.h"
+#include "bridge/bridge_signals.h"
 
 namespace {
 

@@ -9,7 +9,7 @@
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "lab/devices/device_scene.h"
-#include "lab/lab_poses.h"
+#include "lab/outputs/lab_poses.h"
 
 namespace vlab::view {
 

@@ -10,7 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
-#include "lab/lab_compare.h"
+#include "lab/judge/lab_compare.h"
 
 namespace vlab::view {
 

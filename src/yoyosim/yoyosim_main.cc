@@ -13,7 +13,7 @@
 
 #include "bridge/bridge_errors.h"
 #include "core/core_errors.h"
-#include "core/core_signals.h"
+#include "bridge/bridge_signals.h"
 #include "yoyosim/yoyosim.h"
 #include "yoyosim/yoyosim_server.h"
 

@@ -17,7 +17,6 @@
 //   counters received=R accepted=A refused=F stale=S duplicate=D describes=N
 //                                                 at the end (SECONDS, SIGTERM or SIGINT)
 // Limits: velocity |qd| <= 2 rad/s, torque |tau| <= 50 N m, position +-3 rad.
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <chrono>
@@ -28,11 +27,9 @@
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_endpoint.h"
 #include "bridge/bridge_errors.h"
+#include "bridge/bridge_signals.h"
 
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
 
 constexpr double kPeriod_s = 0.002;
 constexpr int kJoints = 7;
@@ -77,8 +74,7 @@ int main(int argc, char** argv) {
   }
   const int port = std::atoi(argv[1]);
   const double seconds = std::atof(argv[2]);
-  std::signal(SIGTERM, OnSignal);
-  std::signal(SIGINT, OnSignal);
+  vlab::InstallStopSignals();
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
 
   std::unique_ptr<UdpSocket> socket;
@@ -98,7 +94,7 @@ int main(int argc, char** argv) {
   state.qd.assign(kJoints, 0.0);
   state.tau.assign(kJoints, 0.0);
   const Clock::time_point start = Clock::now();
-  for (long k = 0; !g_stop; ++k) {
+  for (long k = 0; !vlab::StopRequested(); ++k) {
     // handle what arrives until this period's end, then publish its state
     const Clock::time_point end = start + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(kPeriod_s * static_cast<double>(k + 1)));

@@ -15,8 +15,8 @@
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 #include "test_util.h"
 
 namespace vlab::lab {

@@ -17,8 +17,8 @@
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_kinds.h"
-#include "lab/lab_command_writer.h"
-#include "lab/lab_runner.h"
+#include "lab/run/lab_command_writer.h"
+#include "lab/run/lab_runner.h"
 #include "test_util.h"
 
 namespace vlab::lab::arm_driver_rig {

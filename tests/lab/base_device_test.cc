@@ -21,7 +21,7 @@
 #include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/lab_runner.h"
+#include "lab/run/lab_runner.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 

@@ -17,7 +17,7 @@
 #include "bridge/bridge_client.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_camera.h"
-#include "lab/lab_runner.h"
+#include "lab/run/lab_runner.h"
 #include "test_util.h"
 
 namespace vlab::lab {

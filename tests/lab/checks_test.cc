@@ -1,7 +1,7 @@
 // Checks: each reduction over a hand-made series equals its closed form; the
 // window and the bounds decide pass/fail; empty windows, NaN samples and
 // unknown signals fail loudly.
-#include "lab/lab_checks.h"
+#include "lab/judge/lab_checks.h"
 
 #include <gtest/gtest.h>
 

@@ -12,7 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lab/lab_log.h"
+#include "lab/outputs/lab_log.h"
 #include "test_run_output.h"
 #include "test_util.h"
 

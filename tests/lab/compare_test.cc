@@ -1,7 +1,7 @@
 // lab_compare.h: logs aligned by time, tolerances per column pattern, first and
 // worst divergence; lab_golden.h: golden.yaml read strictly, logs thinned byte for byte.
-#include "lab/lab_compare.h"
-#include "lab/lab_golden.h"
+#include "lab/judge/lab_compare.h"
+#include "lab/judge/lab_golden.h"
 
 #include <gtest/gtest.h>
 

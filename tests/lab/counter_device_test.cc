@@ -19,7 +19,7 @@
 #include "core/core_errors.h"
 #include "lab/devices/device_counter.h"
 #include "lab/devices/device_kinds.h"
-#include "lab/lab_scenario.h"
+#include "lab/scenario/lab_scenario.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 

@@ -1,4 +1,4 @@
-// Scenario controllers of type `external` (src/lab/lab_external.cc), through
+// Scenario controllers of type `external` (src/lab/run/lab_external.cc), through
 // the real vlab binary: `vlab run` serves the devices on free loopback ports,
 // starts the program with its placeholders expanded, runs lockstep and keeps
 // the program's output in controller.log; the same scenario twice gives the same log bit for
@@ -19,7 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
-#include "lab/lab_external.h"
+#include "lab/run/lab_external.h"
 #include "test_run_output.h"
 #include "test_util.h"
 

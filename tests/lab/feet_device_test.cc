@@ -1,5 +1,5 @@
 // Tests the feet device's support columns (src/lab/devices/device_sensors.cc with
-// `pads` and `weight_of`) and the support polygon (src/lab/lab_support_polygon.cc)
+// `pads` and `weight_of`) and the support polygon (src/lab/devices/support_polygon.cc)
 // against closed forms:
 //   - a block resting on four pads with its COM off centre: the FSR sum is its
 //     weight m g, the centre of pressure is the COM's ground projection (moment
@@ -21,8 +21,8 @@
 #include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_support_polygon.h"
+#include "lab/run/lab_runner.h"
+#include "lab/devices/support_polygon.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 

@@ -14,7 +14,7 @@
 #include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/lab_runner.h"
+#include "lab/run/lab_runner.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 

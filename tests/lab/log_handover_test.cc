@@ -1,10 +1,10 @@
-// CsvLog's hand-over when the writer cannot write (src/lab/lab_log.h): the log
+// CsvLog's hand-over when the writer cannot write (src/lab/outputs/lab_log.h): the log
 // goes to a FIFO nobody reads, so the writer thread blocks in its first write
 // and the step loop fills every block. The append that finds no free block
 // waits (counted) and loses no row: once a reader drains the FIFO, every row
 // arrives in order. The reader starts only when the appending thread is seen
 // asleep (its state in /proc), so the wait is certain, not a race.
-#include "lab/lab_log.h"
+#include "lab/outputs/lab_log.h"
 
 #include <sys/stat.h>
 #include <sys/syscall.h>

@@ -1,7 +1,7 @@
 // CsvLog: what is appended reads back bit for bit, across many writer blocks;
 // FormatDouble round-trips; write failures name the file and the error, and
 // show in failed() as soon as the writer meets them. (OutputDir: output_test.cc.)
-#include "lab/lab_log.h"
+#include "lab/outputs/lab_log.h"
 #include "core/core_errors.h"
 
 #include <gtest/gtest.h>

@@ -3,8 +3,8 @@
 // the path during the run is kept and the run's files go to a sibling; any
 // name the file system takes works (a short staging name); staging folders of
 // dead runs are removed, those of live runs never.
-#include "lab/lab_output.h"
-#include "lab/lab_output_fs.h"
+#include "lab/outputs/lab_output.h"
+#include "lab/outputs/lab_output_fs.h"
 #include "core/core_errors.h"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // --set KEY=VALUE (lab_overrides.h): dotted paths reach map keys and list items by
 // name or index; values get the scenario file's typing and errors, and an error
 // on an overridden key names the --set; `vlab run --set` records them in summary.json.
-#include "lab/lab_overrides.h"
-#include "lab/lab_scenario.h"
+#include "lab/scenario/lab_overrides.h"
+#include "lab/scenario/lab_scenario.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_wrench.h"
 

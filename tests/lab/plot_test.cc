@@ -1,4 +1,4 @@
-// Tests the scenario plots (src/lab/lab_plot.cc): tick positions are 1, 2, 5 x
+// Tests the scenario plots (src/lab/outputs/lab_plot.cc): tick positions are 1, 2, 5 x
 // 10^k multiples covering the range; a plot of a known CSV is a PNG of the
 // documented size whose curve passes through the pixels the axes put its
 // points at; a missing column or file is an error naming the plot and the
@@ -12,7 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/core_errors.h"
-#include "lab/lab_plot.h"
+#include "lab/outputs/lab_plot.h"
 #include "test_util.h"
 
 namespace vlab::lab {

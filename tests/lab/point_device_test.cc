@@ -12,7 +12,7 @@
 #include "bridge/bridge_layouts.h"
 #include "control/task_space.h"
 #include "lab/devices/device_point.h"
-#include "lab/lab_command_writer.h"
+#include "lab/run/lab_command_writer.h"
 #include "mujoco_fixture.h"
 
 namespace vlab::lab {

@@ -1,4 +1,4 @@
-// Ports a run takes for itself (src/lab/lab_command.cc, `port: auto`, `vlab serve --ports
+// Ports a run takes for itself (src/lab/run/lab_command.cc, `port: auto`, `vlab serve --ports
 // auto`, `vlab devices`), through the real vlab binary: two serves of one scenario with `port:
 // auto` side by side each bind their own free ports and report them (start line and
 // summary.json); an external controller's {port:NAME} is a free port, released before the

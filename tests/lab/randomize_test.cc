@@ -2,7 +2,7 @@
 // read strictly; the layout obeys every constraint it was given (closed forms for a 50 mm
 // cube); the same seed gives the same layout, another seed another; a run puts the layout
 // in place at its start and the cubes rest there.
-#include "lab/lab_randomize.h"
+#include "lab/scenario/lab_randomize.h"
 
 #include <cmath>
 #include <set>
@@ -11,8 +11,8 @@
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 #include "test_util.h"
 
 namespace vlab::lab {

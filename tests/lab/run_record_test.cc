@@ -1,6 +1,6 @@
 // lab_run_record.h: a run's record says what changed, field by field, and its
 // hash differs when any field does.
-#include "lab/lab_run_record.h"
+#include "lab/outputs/lab_run_record.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Scenario loading: valid files parse into the right values; every kind of bad
 // input is an InputError naming the file, the line and the key.
-#include "lab/lab_scenario.h"
+#include "lab/scenario/lab_scenario.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_wrench.h"
 

@@ -25,9 +25,9 @@
 
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_errors.h"
-#include "lab/lab_bridge.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_bridge.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 #include "test_util.h"
 
 namespace {

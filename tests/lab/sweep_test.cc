@@ -2,8 +2,8 @@
 // a grid expands in order with stable ids, every override is checked before any run,
 // runs already complete with the same record are skipped (the others run again, said why),
 // and the collected table is one row per run.
-#include "lab/lab_collect.h"
-#include "lab/lab_sweep.h"
+#include "lab/sweep/lab_collect.h"
+#include "lab/sweep/lab_sweep.h"
 
 #include <gtest/gtest.h>
 

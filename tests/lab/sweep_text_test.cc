@@ -1,7 +1,7 @@
 // lab_sweep_text.h: every value a sweep file can hold reaches `vlab run --set`
 // as one line of printable YAML that reads back as the same value, and a job
 // line never carries a control character.
-#include "lab/lab_sweep_text.h"
+#include "lab/sweep/lab_sweep_text.h"
 
 #include <gtest/gtest.h>
 

@@ -9,8 +9,8 @@
 
 #include "core/core_errors.h"
 #include "core/core_input_file.h"
-#include "lab/lab_yaml.h"
-#include "lab/lab_yaml_check.h"
+#include "lab/scenario/lab_yaml.h"
+#include "lab/scenario/lab_yaml_check.h"
 #include "test_util.h"
 
 namespace vlab::lab {

@@ -18,7 +18,7 @@
 #include "lab/devices/device_kinds.h"
 #include "lab/devices/device_yoyo.h"
 #include "core/core_mujoco.h"
-#include "lab/lab_runner.h"
+#include "lab/run/lab_runner.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 

@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "core/core_errors.h"
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 #include "test_util.h"
 
 namespace vlab::lab {

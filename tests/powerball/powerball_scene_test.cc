@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
-#include "lab/lab_powerball.h"
+#include "lab/devices/powerball_truth.h"
 #include "mujoco_fixture.h"
 
 namespace vlab::lab {

@@ -1,5 +1,5 @@
 // The PowerBall model (mjcf/powerball/) on its test gimbal (powerball_gimbal.xml), the shell
-// driven by the test, against closed forms (README "Physics"; notation of lab_powerball.h:
+// driven by the test, against closed forms (README "Physics"; notation of powerball_truth.h:
 // spin omega about the axle a, precession nu of the axle relative to the shell, groove
 // rolling radius R, tip radius r, spin inertia I_s; all read back from the compiled model).
 //
@@ -25,7 +25,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
-#include "lab/lab_powerball.h"
+#include "lab/devices/powerball_truth.h"
 #include "mujoco_fixture.h"
 
 namespace vlab::lab {

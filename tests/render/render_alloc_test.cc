@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 #include "test_util.h"
 
 // Counts heap allocations (operator new ends in malloc) process-wide.

@@ -3,8 +3,8 @@
 // byte-identical logs.
 #include <gtest/gtest.h>
 
-#include "lab/lab_runner.h"
-#include "lab/lab_scenario.h"
+#include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_scenario.h"
 #include "render/renderer.h"
 #include "test_util.h"
 

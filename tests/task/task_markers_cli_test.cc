@@ -30,7 +30,7 @@ struct Pose {
   Eigen::Quaterniond q;
 };
 
-// the bodies' poses of the recorded frame at time t (poses.bin, src/lab/lab_poses.h)
+// the bodies' poses of the recorded frame at time t (poses.bin, src/lab/outputs/lab_poses.h)
 std::map<std::string, Pose> PosesAt(const std::string& dir, double t) {
   const nlohmann::json scene = nlohmann::json::parse(ReadFile(dir + "/scene.json"));
   const std::vector<std::string> names = scene.at("bodies").get<std::vector<std::string>>();

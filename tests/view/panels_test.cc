@@ -33,7 +33,7 @@
 #include <boost/beast/websocket.hpp>
 
 #include "bridge/bridge_camera_client.h"
-#include "lab/lab_compare.h"
+#include "lab/judge/lab_compare.h"
 #include "test_process.h"
 #include "test_util.h"
 #include "view/view_panels.h"

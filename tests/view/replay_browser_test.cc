@@ -38,7 +38,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cdp_client.h"
-#include "lab/lab_compare.h"
+#include "lab/judge/lab_compare.h"
 #include "test_process.h"
 #include "test_util.h"
 

@@ -15,8 +15,8 @@
 #include "core/core_errors.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/devices/device_scene.h"
-#include "lab/lab_poses.h"
-#include "lab/lab_scenario.h"
+#include "lab/outputs/lab_poses.h"
+#include "lab/scenario/lab_scenario.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 

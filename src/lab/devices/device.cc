@@ -5,7 +5,7 @@
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_layouts.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

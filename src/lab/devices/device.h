@@ -5,12 +5,12 @@
 // under src/lab/devices/ and one row of the kinds table.
 //
 // Order of calls
-//   creation  (lab_runner.cc) the kind's factory with the DeviceContext; then
+//   creation  (run/lab_runner.cc) the kind's factory with the DeviceContext; then
 //             Bind() once every device exists (a device that drives another
 //             finds it); the claims of the command sources (command_writer())
-//   reset     (lab_runner_impl.cc) SetInitialState() before the first
+//   reset     (run/lab_runner_impl.cc) SetInitialState() before the first
 //             mj_forward; Start() after it; after a second mj_forward, Reset()
-//   period    (lab_run_session.cc) the command sources write, in order: the
+//   period    (run/lab_run_session.cc) the command sources write, in order: the
 //             wire (CommandInput::TakeCommand()/Hold() of the served devices),
 //             the built-in controller or the task programs, then the devices
 //             that drive another (CommandWriter::Write); every physics step

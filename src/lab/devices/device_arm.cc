@@ -6,7 +6,7 @@
 
 #include "bridge/bridge_describe.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

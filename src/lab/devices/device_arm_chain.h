@@ -29,7 +29,7 @@
 #include "control/task_space.h"
 #include "lab/devices/device.h"
 #include "lab/devices/device_arm.h"
-#include "lab/lab_command_writer.h"
+#include "lab/run/lab_command_writer.h"
 
 namespace vlab::lab {
 

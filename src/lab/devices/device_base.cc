@@ -22,7 +22,7 @@
 
 #include "lab/devices/device_base.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::lab {

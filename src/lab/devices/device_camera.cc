@@ -18,8 +18,8 @@
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "core/core_realtime.h"
-#include "lab/lab_log.h"
-#include "lab/lab_yaml.h"
+#include "lab/outputs/lab_log.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

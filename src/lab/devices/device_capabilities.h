@@ -14,7 +14,7 @@
 //   LogReader       reads the lab's log rows (scene: its `signals`)
 //   OwnTransport    its own socket instead of a bridge endpoint (camera)
 //   CommandWriter   writes another device's command input (point, tool:
-//                   lab/lab_command_writer.h)
+//                   lab/run/lab_command_writer.h)
 // Two kinds are also addressed by type where other parts need them whole: the
 // arm (a joint servo input the built-in controller, task programs and the
 // task-space devices command in process) and the sim device (the run's own
@@ -31,7 +31,7 @@
 
 namespace vlab::lab {
 
-class CommandWriter;  // lab/lab_command_writer.h
+class CommandWriter;  // lab/run/lab_command_writer.h
 class OwnTransport;   // lab/devices/device.h
 class SimArm;         // lab/devices/device_arm.h
 class SimControl;     // lab/devices/device_sim.h

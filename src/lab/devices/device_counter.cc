@@ -13,7 +13,7 @@
 //           at or after its time (gates are whole control periods)
 //   log     NAME.revolutions, NAME.rpm (the output), NAME.true_rpm (the joint's
 //           speed at the period end, lab ground truth); with `powerball: true` also
-//           the ball's truth (lab_powerball.h): NAME.spin_rpm (rotor spin relative to
+//           the ball's truth (powerball_truth.h): NAME.spin_rpm (rotor spin relative to
 //           the shell), NAME.precess_rate (rad/s, relative to the shell), NAME.slip
 //           (tip slip ratio) and NAME.moment (N m, |wall couple|)
 // A gate-time counter reads the mean speed over its gate, not the speed at its
@@ -25,9 +25,9 @@
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_counter.h"
-#include "lab/lab_log.h"
-#include "lab/lab_powerball.h"
-#include "lab/lab_yaml.h"
+#include "lab/outputs/lab_log.h"
+#include "lab/devices/powerball_truth.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

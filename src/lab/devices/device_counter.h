@@ -14,7 +14,7 @@ struct CounterParams : DeviceParams {
   std::string joint;        ///< the MJCF hinge joint whose turns are counted
   double rate_hz = 0.0;     ///< readings per second: the gate is 1 / rate (0: every control period)
   double resolution = 0.0;  ///< rpm: the speed reading's step (0: not quantised)
-  bool powerball = false;   ///< also log a PowerBall's ground truth (lab_powerball.h; lab only)
+  bool powerball = false;   ///< also log a PowerBall's ground truth (powerball_truth.h; lab only)
 };
 
 /// Reads a counter entry's keys (joint, rate, resolution, powerball).

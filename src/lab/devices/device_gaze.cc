@@ -28,7 +28,7 @@
 
 #include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

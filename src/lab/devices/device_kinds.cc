@@ -16,7 +16,7 @@
 #include "lab/devices/device_word.h"
 #include "lab/devices/device_wrench.h"
 #include "lab/devices/device_yoyo.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

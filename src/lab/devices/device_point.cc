@@ -21,7 +21,7 @@
 // holds its joints where they are (arm hold mode); the next command starts the
 // set-point from where the site then is.
 // Ownership: the device holds its arm's claim (a command source:
-// lab/lab_command_writer.h) and drives it in every period, from the start. The
+// lab/run/lab_command_writer.h) and drives it in every period, from the start. The
 // arm device stays readable on its own port, but what it is sent is overridden
 // by the point device's command of the same period (and lockstep does not wait
 // for the arm's owner).
@@ -33,7 +33,7 @@
 #include "control/task_space.h"
 #include "lab/devices/device_arm_chain.h"
 #include "lab/devices/device_point.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

@@ -21,7 +21,7 @@
 
 #include "lab/devices/device_pose.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

@@ -23,8 +23,8 @@
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_scene.h"
-#include "lab/lab_log.h"
-#include "lab/lab_yaml.h"
+#include "lab/outputs/lab_log.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

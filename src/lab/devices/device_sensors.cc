@@ -22,8 +22,8 @@
 
 #include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
-#include "lab/lab_support_polygon.h"
+#include "lab/scenario/lab_yaml.h"
+#include "lab/devices/support_polygon.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::lab {

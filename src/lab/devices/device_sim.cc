@@ -1,7 +1,7 @@
 #include "lab/devices/device_sim.h"
 
 #include "bridge/bridge_describe.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

@@ -44,7 +44,7 @@
 #include "core/core_errors.h"
 #include "lab/devices/device_arm_chain.h"
 #include "lab/devices/device_tool.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

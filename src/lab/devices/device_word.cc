@@ -36,7 +36,7 @@
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_word.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 #include "vision/vision_cube_faces.h"
 
 namespace vlab::lab {

@@ -3,7 +3,7 @@
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_messages.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 

@@ -27,7 +27,7 @@
 #include "bridge/bridge_yoyo.h"
 #include "lab/devices/device_yoyo.h"
 #include "core/core_errors.h"
-#include "lab/lab_yaml.h"
+#include "lab/scenario/lab_yaml.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::lab {
