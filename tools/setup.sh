@@ -7,7 +7,7 @@ VLAB_APT_PACKAGES=(
   build-essential cmake pkg-config
   libmujoco-dev libqhull-dev libosmesa6-dev
   libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libboost-dev
-  python3 clang libclang-rt-14-dev
+  python3 clang libclang-rt-14-dev lld
   libgtest-dev
   libopencv-dev libopencv-contrib-dev
   libjs-three
