@@ -111,74 +111,56 @@ std::unique_ptr<CameraServer> CameraServer::Create(const CameraServerConfig& con
         "test_drop_probability must be 0 to 1");
 
   std::unique_ptr<CameraServer> s(new CameraServer(config));
-  s->socket_ = UdpSocket::Bind(config.bind_address, config.port);
-  s->send_buffer_bytes_ = SetSocketBuffer(s->socket_->fd(), SO_SNDBUF, config.send_buffer_bytes);
-  s->describe_json_ = CameraDescribeJson(d, config.bind_address, s->socket_->local_port(), config.chunk_bytes);
+  DeviceServerConfig server;
+  server.bind_address = config.bind_address;
+  server.port = config.port;
+  server.max_datagrams = 0;  // every datagram queued
+  s->server_ = DeviceServer::Bind(server);
+  s->send_buffer_bytes_ = SetSocketBuffer(s->server_->fd(), SO_SNDBUF, config.send_buffer_bytes);
   SessionConfig sessions;
   sessions.kind = DeviceKind::kCamera;
   sessions.max_subscribers = config.max_subscribers;
   sessions.subscriber_timeout_s = config.subscriber_timeout_s;
-  s->sessions_ = std::make_unique<SessionTable>(sessions);
-  s->receive_buffer_.resize(65536);
+  s->server_->ServeSessions(sessions,
+                            CameraDescribeJson(d, config.bind_address, s->server_->port(), config.chunk_bytes));
   s->chunk_.resize(ChunkDatagramBytes(config.chunk_bytes));
-  s->payload_.reserve(kMaxPacketValues);
   s->drop_state_ = config.test_drop_seed;
   return s;
 }
 
-int CameraServer::port() const { return socket_->local_port(); }
+int CameraServer::port() const { return server_->port(); }
 
-int CameraServer::fd() { return socket_->fd(); }
+int CameraServer::fd() { return server_->fd(); }
 
 void CameraServer::Poll(double timeout_s) {
-  Endpoint from;
-  double wait_s = timeout_s;
-  for (;;) {
-    const long n = socket_->Receive(receive_buffer_.data(), receive_buffer_.size(), &from, wait_s);
-    if (n < 0) return;
-    Handle(receive_buffer_.data(), static_cast<std::size_t>(n), from);
-    wait_s = 0;  // then only what is already queued
-  }
+  server_->Drain(timeout_s, [this](const unsigned char* data, std::size_t size, const Endpoint& from) {
+    Handle(data, size, from);
+  });
 }
 
 void CameraServer::DropSilent() {
-  const long before = sessions_->counters().expired;
-  sessions_->Expire();
-  counters_.subscribers_dropped += sessions_->counters().expired - before;
+  SessionTable& sessions = server_->sessions();
+  const long before = sessions.counters().expired;
+  sessions.Expire();
+  counters_.subscribers_dropped += sessions.counters().expired - before;
 }
 
 void CameraServer::Handle(const unsigned char* data, std::size_t size, const Endpoint& from) {
   EndpointCounters& c = counters_.endpoint;
   ++c.received;
-  Header header;
-  DecodeError e = DecodePacket(data, size, &header, &payload_);
-  // a describe request is answered whatever kind it names (0: any): tools discover with it
-  const bool describe = e == DecodeError::kNone && header.type == static_cast<int>(MessageType::kDescribe);
-  if (e == DecodeError::kNone &&
-      (describe ? header.kind > kMaxDeviceKind : header.kind != static_cast<int>(DeviceKind::kCamera))) {
-    e = DecodeError::kBadKind;
+  // a camera takes no commands: one is refused as malformed, like a state or a broken datagram
+  switch (server_->HandleRequest(data, size, from)) {
+    case DeviceServer::Request::kDescribed:
+      ++c.describes;
+      break;
+    case DeviceServer::Request::kSession:
+      break;
+    default:
+      ++c.refused;
+      ++c.refused_malformed;
+      break;
   }
-  const bool request = describe || header.type == static_cast<int>(MessageType::kSubscribe);
-  // a camera takes no commands, and states and session replies go the other way
-  if (e == DecodeError::kNone && !request) e = DecodeError::kBadType;
-  if (e == DecodeError::kNone) {
-    switch (sessions_->HandleRequest(header, payload_, from, *socket_)) {
-      case SessionTable::Outcome::kMalformed:
-        e = DecodeError::kBadLength;
-        break;
-      case SessionTable::Outcome::kDescribe:
-        ++c.describes;
-        socket_->SendTo(reinterpret_cast<const unsigned char*>(describe_json_.data()), describe_json_.size(), from);
-        break;
-      default:
-        break;
-    }
-  }
-  if (e != DecodeError::kNone) {
-    ++c.refused;
-    ++c.refused_malformed;
-  }
-  c.sessions = sessions_->counters();
+  c.sessions = server_->sessions().counters();
 }
 
 bool CameraServer::TestDrop() {
@@ -193,7 +175,7 @@ bool CameraServer::TestDrop() {
 
 bool CameraServer::SendBytes(const ChunkHeader& frame, const std::uint8_t* data) {
   DropSilent();
-  std::vector<SessionTable::Session>& subscribers = sessions_->sessions();
+  std::vector<SessionTable::Session>& subscribers = server_->sessions().sessions();
   if (subscribers.empty()) return false;
   for (SessionTable::Session& s : subscribers) s.mark = false;
   const int count = ChunkCount(frame.frame_bytes, config_.chunk_bytes);
@@ -211,7 +193,7 @@ bool CameraServer::SendBytes(const ChunkHeader& frame, const std::uint8_t* data)
       continue;
     }
     for (SessionTable::Session& s : subscribers) {
-      if (socket_->SendTo(chunk_.data(), size, s.endpoint)) {
+      if (server_->socket().SendTo(chunk_.data(), size, s.endpoint)) {
         ++counters_.chunks_sent;
         counters_.bytes_sent += static_cast<long>(h.chunk_bytes);
       } else {
@@ -264,7 +246,7 @@ bool CameraServer::SendImage(std::int64_t id, double time_s, const std::uint8_t*
     return false;
   }
   DropSilent();
-  if (sessions_->sessions().empty()) {  // nobody listens: skip the encoding
+  if (server_->sessions().sessions().empty()) {  // nobody listens: skip the encoding
     ++counters_.frames;
     last_id_ = id;
     return false;

@@ -30,10 +30,9 @@
 #include <vector>
 
 #include "bridge/bridge_camera.h"
+#include "bridge/bridge_device_server.h"
 #include "bridge/bridge_endpoint.h"
 #include "bridge/bridge_protocol.h"
-#include "bridge/bridge_session.h"
-#include "bridge/bridge_udp.h"
 
 namespace vlab::bridge {
 
@@ -134,10 +133,10 @@ class CameraServer {
   int port() const;
   /// The socket's descriptor, to wait on it together with others (WaitReadable).
   int fd();
-  int subscribers() const { return static_cast<int>(sessions_->sessions().size()); }
+  int subscribers() const { return static_cast<int>(server_->sessions().sessions().size()); }
   /// SO_SNDBUF the kernel granted, bytes.
   int send_buffer_bytes() const { return send_buffer_bytes_; }
-  const std::string& describe_json() const { return describe_json_; }
+  const std::string& describe_json() const { return server_->describe_json(); }
   const CameraServerConfig& config() const { return config_; }
   const CameraServerCounters& counters() const { return counters_; }
 
@@ -150,16 +149,12 @@ class CameraServer {
 
   CameraServerConfig config_;
   CameraServerCounters counters_;
-  std::unique_ptr<UdpSocket> socket_;
-  std::string describe_json_;
-  std::unique_ptr<SessionTable> sessions_;
+  std::unique_ptr<DeviceServer> server_;
   std::int64_t last_id_ = -1;
   int send_buffer_bytes_ = 0;
   std::uint64_t drop_state_ = 0;
   // scratch, sized at creation
-  std::vector<unsigned char> receive_buffer_;
   std::vector<unsigned char> chunk_;
-  std::vector<double> payload_;
   std::unique_ptr<FrameEncoder> encoder_;  // SendImage's
   std::vector<std::uint8_t> encoded_;
 };

@@ -8,12 +8,15 @@
 // checks and image outputs are not evaluated or written: this command renders.
 // SIGINT or SIGTERM ends the run at the next period: the frames rendered so far
 // are kept (frames.csv, render.json saying so, the video closed), exit code 1.
-#include <chrono>
+// A frame that cannot be written ends the rendering the same way: the frames
+// written whole before it are kept, render.json says which file failed, exit 1.
+// The frames are the lab's image outputs (lab/outputs/lab_images.h), laid out flat.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
@@ -21,14 +24,13 @@
 #include "core/core_errors.h"
 #include "bridge/bridge_signals.h"
 #include "lab/devices/device_camera.h"
+#include "lab/outputs/lab_images.h"
 #include "lab/outputs/lab_log.h"
 #include "core/core_mujoco.h"
 #include "lab/outputs/lab_output.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
-#include "render/image_io.h"
 #include "render/renderer.h"
-#include "render/video.h"
 
 namespace vlab::cli {
 
@@ -50,22 +52,13 @@ struct RenderArgs {
   bool quiet = false;
 };
 
-// a frame is due when t reaches n * every, up to rounding of the period sums
+// frames that fit a duration: n * every <= duration, up to rounding of the period sums
 constexpr double kDueTolerance_s = 1e-9;
 
-std::string FrameName(const char* kind, long n) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "%s_%06ld.png", kind, n);
-  return name;
-}
-
-// where to write `file`: inside the output folder's staging folder when the
-// file lies in the output folder, else where it was asked for
-std::string StagedPath(const std::string& file, const std::string& out_dir, const lab::OutputDir& out) {
-  namespace fs = std::filesystem;
-  const fs::path rel = fs::absolute(file).lexically_normal().lexically_relative(fs::absolute(out_dir).lexically_normal());
-  if (rel.empty() || *rel.begin() == "..") return file;
-  return out.File(rel.string());
+// the options that set an image output's fields, for messages
+std::string OptionOf(std::size_t, const std::string& field) {
+  if (field == "width, height") return "--width, --height";
+  return "--" + field;
 }
 
 // the image size the scenario sets for this camera (a camera device or an image output), else 640 x 480
@@ -130,62 +123,46 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
 
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
   const mjModel* m = lab->model();
-  int camera = -1;
-  try {
-    camera = render::CameraId(m, a.camera);
-  } catch (const vlab::InputError& e) {
-    throw vlab::InputError("--camera: scene '" + scenario.scene + "': " + e.what());
-  }
-  int width = 0, height = 0;
-  ScenarioSize(scenario, a.camera, &width, &height);
-  if (given("--width")) width = a.width;
-  if (given("--height")) height = a.height;
-  render::Renderer::Options options;
-  options.width = width;
-  options.height = height;
-  options.profile = profile;
-  options.scene = scenario.scene;
-  options.log_renderer = !a.quiet;
-  std::unique_ptr<render::Renderer> renderer = render::Renderer::Create(m, options);
+  lab::ImageOutputConfig image;
+  image.camera = a.camera;
+  ScenarioSize(scenario, a.camera, &image.width, &image.height);
+  if (given("--width")) image.width = a.width;
+  if (given("--height")) image.height = a.height;
+  image.every_s = every;
+  image.depth = a.depth;
+  image.segmentation = a.segmentation;
+  image.video = a.video;
+  image.profile = profile;
+  image.where = scenario.file;
+  lab::ImageOptions layout;
+  layout.flat = true;
+  layout.video_anywhere = true;
+  layout.max_frames = frames;
+  layout.log_renderer = !a.quiet;
+  layout.name = OptionOf;
+  // the camera and size are checked, and the renderer made, before anything is written
+  std::unique_ptr<lab::ImageOutputs> images =
+      lab::ImageOutputs::Create(m, {image}, scenario.scene, period, layout);
+  const int width = image.width, height = image.height;
 
   // outputs: a staging folder renamed into place whole; the video staged beside its final name
   const std::string out_dir =
       a.out_dir.empty() ? "out/" + scenario.name + "/render/" + a.camera : a.out_dir;
   std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
-  std::unique_ptr<render::VideoFile> video;
-  if (!a.video.empty()) {
-    // a video inside the output folder is written into its staging folder, so
-    // that it moves into place with the frames instead of being replaced by them
-    const std::string video_path = StagedPath(a.video, out_dir, *out);
-    const std::filesystem::path parent = std::filesystem::path(video_path).parent_path();
-    std::error_code ec;
-    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-    video = render::VideoFile::Create(video_path, 1.0 / every, width, height);
-  }
+  images->Open(*out);
 
-  render::RgbImage rgb;
-  render::DepthImage depth;
-  render::SegmentationImage seg;
-  std::vector<double> times;
-  times.reserve(static_cast<std::size_t>(frames));
-  double render_s = 0;
   lab::RunOptions run;
   run.clock = ClockMode::kFast;  // offline: as fast as rendering allows, whatever the scenario's clock
   run.interrupt = &g_stop_requested;
   ProgressBar bar(!a.quiet);
   run.progress = [&bar](double f) { bar.Update(f); };
-  run.observe = [&](double t, const mjModel*, mjData* d) {
-    const long n = static_cast<long>(times.size());
-    if (n >= frames || t + kDueTolerance_s < n * every) return;
-    const auto t0 = std::chrono::steady_clock::now();
-    renderer->Render(d, camera, &rgb, a.depth ? &depth : nullptr);
-    if (a.segmentation) renderer->RenderSegmentation(d, camera, &seg);
-    render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    render::WritePng(out->File(FrameName("rgb", n)), rgb);
-    if (a.depth) render::WriteDepthPng(out->File(FrameName("depth", n)), depth);
-    if (a.segmentation) render::WriteSegmentationPng(out->File(FrameName("seg", n)), seg);
-    if (video) video->Add(rgb);
-    times.push_back(t);
+  run.observe = [&images](double t, const mjModel*, mjData* d) {
+    try {
+      images->Observe(t, d);
+    } catch (const std::runtime_error&) {
+      if (!images->failed()) throw;  // (not a write: rendering failed)
+      // a frame not written: the rest of the run renders nothing; the frames before it are kept
+    }
   };
   vlab::SetMujocoErrorCleanup([staging = out->File("")] {  // a MuJoCo error ends the process: leave nothing
     std::error_code ec;
@@ -198,36 +175,43 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     return 1;
   }
 
-  // frames.csv and render.json: when each frame was taken, and how to read the images
+  // frames.csv (the video closed with it) and render.json: when each frame was taken, and how to read the images
+  images->Finish();
+  const std::vector<double>& times = images->frame_times(0);
+  const double render_s = images->render_wall_s(0);
+  const std::string gl = images->gl_renderer();
   {
-    std::ofstream csv(out->File("frames.csv"));
-    csv << "frame,time\n";
-    for (std::size_t n = 0; n < times.size(); ++n) csv << n << "," << lab::FormatDouble(times[n]) << "\n";
+    const int camera = render::CameraId(m, a.camera);
     const render::Intrinsics k = render::CameraIntrinsics(m, camera, width, height);
     nlohmann::json files = {{"rgb", "rgb_NNNNNN.png: 8-bit RGB"}, {"times", "frames.csv: frame, simulated time (s)"}};
     if (a.depth) files["depth"] = "depth_NNNNNN.png: 16-bit, mm along the optical axis, 0: nothing drawn";
     if (a.segmentation) files["segmentation"] = "seg_NNNNNN.png: 16-bit, geom id + 1, 0: no geom";
-    if (video) files["video"] = a.video;
+    if (!a.video.empty()) files["video"] = a.video;
     nlohmann::json meta = {
         {"scenario", scenario.name}, {"scene", scenario.scene}, {"camera", a.camera},
         {"width", width}, {"height", height}, {"profile", render::ProfileName(profile)},
         {"every_s", every}, {"frames", times.size()}, {"files", files},
         {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
-        {"gl_renderer", renderer->gl_renderer()}, {"render_wall_s", render_s}, {"mujoco", vlab::MujocoVersion()}};
+        {"gl_renderer", gl}, {"render_wall_s", render_s}, {"mujoco", vlab::MujocoVersion()}};
     if (r.interrupted_by) meta["interrupted"] = r.failure;  // the frames before it are all there
+    if (images->failed()) meta["failed"] = images->error();  // ... and here too
     std::ofstream json(out->File("render.json"));
     json << meta.dump(2) << "\n";
-    if (!csv || !json) throw std::runtime_error("output folder '" + out_dir + "': write failed");
+    if (!json) throw std::runtime_error("output folder '" + out_dir + "': write failed");
   }
-  if (video) video->Finish();
   const std::string placed = out->Commit();  // out_dir, or a sibling when another run wrote out_dir meanwhile
   if (!out->note().empty()) std::fprintf(stderr, "vlab: %s\n", out->note().c_str());
 
   const double fps = render_s > 0 ? times.size() / render_s : 0.0;
   std::printf("%s: %zu frames %dx%d of camera '%s' (%s), every %s s, in %s/%s%s; %.1f fps rendered; %s\n",
               scenario.name.c_str(), times.size(), width, height, a.camera.c_str(), render::ProfileName(profile),
-              lab::FormatDouble(every).c_str(), placed.c_str(), video ? "; video " : "",
-              video ? a.video.c_str() : "", fps, renderer->gl_renderer().c_str());
+              lab::FormatDouble(every).c_str(), placed.c_str(), a.video.empty() ? "" : "; video ",
+              a.video.c_str(), fps, gl.c_str());
+  if (images->failed()) {
+    std::fprintf(stderr, "vlab: %s; the %zu frames written before it are kept\n", images->error().c_str(),
+                 times.size());
+    return 1;
+  }
   if (r.interrupted_by) {
     std::fprintf(stderr, "vlab: %s; the %zu frames rendered before it are kept\n", r.failure.c_str(), times.size());
     return 1;

@@ -14,10 +14,6 @@ namespace vlab::kinsim {
 
 namespace {
 
-// the most datagrams handled in one period, so that a flood cannot stall the loop
-constexpr int kMaxDatagramsPerPeriod = 1000;
-
-
 long long NowNs() {
   timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
@@ -39,15 +35,18 @@ std::unique_ptr<KinsimServer> KinsimServer::Create(const ServerConfig& c, std::u
   }
   std::unique_ptr<KinsimServer> s(new KinsimServer());
   s->config_ = c;
-  s->socket_ = bridge::UdpSocket::Bind(c.bind_address, c.port);  // throws NetworkError naming the address
+  bridge::DeviceServerConfig server;
+  server.bind_address = c.bind_address;
+  server.port = c.port;
+  s->server_ = bridge::DeviceServer::Bind(server);  // throws NetworkError naming the address
 
   const KinArmConfig& a = arm->config();
   bridge::ArmDescription d;
   d.name = a.name;
   d.server = "vlab-kinsim";
   d.clock = "realtime";
-  d.address = s->socket_->local_endpoint().address().to_string();
-  d.port = s->socket_->local_port();
+  d.address = s->server_->local_endpoint().address().to_string();
+  d.port = s->server_->port();
   d.control_hz = c.rate_hz;
   d.joints = a.joints;
   d.position_min = a.position_min;
@@ -68,10 +67,8 @@ std::unique_ptr<KinsimServer> KinsimServer::Create(const ServerConfig& c, std::u
   e.position_min = a.position_min;
   e.position_max = a.position_max;
   e.velocity_max = a.velocity_max;
-  s->endpoint_ = std::make_unique<bridge::DeviceEndpoint>(std::move(e));
+  s->server_->Serve(std::move(e));
 
-  // one byte more than the largest valid datagram, so that a longer one is seen as too long
-  s->datagram_.resize((bridge::kMaxPacketValues + 1) * sizeof(double));
   s->packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
   s->command_.value.reserve(bridge::kMaxPacketValues);
   arm->Sample(&s->state_);
@@ -81,16 +78,12 @@ std::unique_ptr<KinsimServer> KinsimServer::Create(const ServerConfig& c, std::u
 
 void KinsimServer::RunPeriod(long k) {
   // 1. drain the socket: every datagram that arrived since the last period
-  for (int i = 0; i < kMaxDatagramsPerPeriod; ++i) {
-    bridge::Endpoint from;
-    const long size = socket_->Receive(datagram_.data(), datagram_.size(), &from, 0.0);
-    if (size < 0) break;
-    endpoint_->Handle(datagram_.data(), static_cast<std::size_t>(size), from, k, *socket_);
-  }
+  server_->Receive(k);
 
   // 2. watchdog, then the newest accepted command
-  const bool watchdog_hold = endpoint_->BeginPeriod(k);
-  if (endpoint_->TakeArmCommand(&command_)) {
+  bridge::DeviceEndpoint& endpoint = server_->endpoint();
+  const bool watchdog_hold = endpoint.BeginPeriod(k);
+  if (endpoint.TakeArmCommand(&command_)) {
     if (arm_->Command(command_)) {
       ++counters_.applied;
       last_applied_period_ = k;
@@ -112,18 +105,19 @@ void KinsimServer::RunPeriod(long k) {
   // 3. step (period 0 closes at time 0: the initial state) and publish
   if (k > 0) arm_->Step(1.0 / config_.rate_hz);
   arm_->Sample(&state_);
-  state_.status |= endpoint_->status_bits();
+  state_.status |= endpoint.status_bits();
   if (mode_hold_) state_.status |= bridge::kStatusWatchdog | bridge::kStatusHolding;
   bridge::EncodeArmState(static_cast<double>(k), static_cast<double>(k) / config_.rate_hz, state_, &packet_);
-  endpoint_->Publish(packet_, *socket_);
+  server_->Publish(packet_);
   counters_.periods = k + 1;
 }
 
-void KinsimServer::Run(const volatile std::sig_atomic_t* stop) {
+void KinsimServer::Run(const volatile std::sig_atomic_t* stop_flag) {
+  const bridge::StopCheck stopped(stop_flag);
   const double period_ns = 1e9 / config_.rate_hz;
   const long last = config_.duration_s > 0 ? std::lround(config_.duration_s * config_.rate_hz) : -1;
   long long start_ns = NowNs();
-  for (long k = 0; (last < 0 || k <= last) && !(stop && *stop); ++k) {
+  for (long k = 0; (last < 0 || k <= last) && !stopped(); ++k) {
     RunPeriod(k);
     // absolute deadline of period k+1; no drift whatever the rate
     const long long deadline_ns = start_ns + std::llround(static_cast<double>(k + 1) * period_ns);
@@ -137,7 +131,7 @@ void KinsimServer::Run(const volatile std::sig_atomic_t* stop) {
     }
     const timespec at{static_cast<time_t>(deadline_ns / 1000000000LL), static_cast<long>(deadline_ns % 1000000000LL)};
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr) == EINTR) {
-      if (stop && *stop) break;
+      if (stopped()) break;
     }
   }
 }
@@ -145,13 +139,13 @@ void KinsimServer::Run(const volatile std::sig_atomic_t* stop) {
 std::string KinsimServer::StartLine() const {
   char text[256];
   std::snprintf(text, sizeof(text), "vlab-kinsim: arm '%s' (%d joint%s) on %s, %g Hz", arm_->config().name.c_str(),
-                arm_->dof(), arm_->dof() == 1 ? "" : "s", bridge::EndpointText(socket_->local_endpoint()).c_str(),
+                arm_->dof(), arm_->dof() == 1 ? "" : "s", bridge::EndpointText(server_->local_endpoint()).c_str(),
                 config_.rate_hz);
   return text;
 }
 
 std::string KinsimServer::ReportText() const {
-  const bridge::EndpointCounters& e = endpoint_->counters();
+  const bridge::EndpointCounters& e = server_->endpoint().counters();
   const ServerCounters& s = counters_;
   char text[1024];
   std::snprintf(text, sizeof(text),

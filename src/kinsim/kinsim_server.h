@@ -19,8 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "bridge/bridge_endpoint.h"
-#include "bridge/bridge_udp.h"
+#include "bridge/bridge_device_server.h"
 #include "kinsim/kinsim.h"
 
 namespace vlab::kinsim {
@@ -57,27 +56,26 @@ class KinsimServer {
   /// Runs one period k without pacing (Run calls it; tests may too).
   void RunPeriod(long k);
 
-  int port() const { return socket_->local_port(); }
-  const std::string& describe_json() const { return endpoint_->config().describe_json; }
+  int port() const { return server_->port(); }
+  const std::string& describe_json() const { return server_->describe_json(); }
   /// "vlab-kinsim: arm 'pa10' (7 joints) on 127.0.0.1:50010, 500 Hz"
   std::string StartLine() const;
   /// Counters as a few lines of text (no trailing newline).
   std::string ReportText() const;
   const ServerCounters& counters() const { return counters_; }
-  const bridge::EndpointCounters& endpoint_counters() const { return endpoint_->counters(); }
+  const bridge::EndpointCounters& endpoint_counters() const { return server_->endpoint().counters(); }
 
  private:
   KinsimServer() = default;
 
   ServerConfig config_;
   std::unique_ptr<KinArm> arm_;
-  std::unique_ptr<bridge::UdpSocket> socket_;
-  std::unique_ptr<bridge::DeviceEndpoint> endpoint_;
+  std::unique_ptr<bridge::DeviceServer> server_;
   ServerCounters counters_;
   long last_applied_period_ = -1;
   bool mode_hold_ = false;
   // scratch, sized at start
-  std::vector<unsigned char> datagram_, packet_;
+  std::vector<unsigned char> packet_;
   bridge::ArmCommandMsg command_;
   bridge::ArmStateMsg state_;
 };

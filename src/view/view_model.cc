@@ -8,8 +8,8 @@
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/devices/device_scene.h"
-#include "lab/outputs/lab_poses.h"
+#include "scene/scene_geometry.h"
+#include "scene/scene_pose_frame.h"
 
 namespace vlab::view {
 
@@ -23,7 +23,7 @@ void PutBytes(std::string* out, const void* data, std::size_t n) {
 
 std::string EncodeFrame(double time, double seq, const double* poses, int values) {
   std::string out;
-  lab::EncodePoseFrame(time, seq, poses, values, &out);
+  scene::EncodePoseFrame(time, seq, poses, values, &out);
   return out;
 }
 
@@ -103,7 +103,7 @@ void ViewModel::BindJoints(const std::vector<std::string>& names) {
 void ViewModel::ArmPoses(const std::vector<double>& q, const std::vector<int>& bodies, double* out) {
   for (std::size_t i = 0; i < qpos_adr_.size() && i < q.size(); ++i) d_->qpos[qpos_adr_[i]] = q[i];
   mj_kinematics(m_, d_);
-  lab::ScenePoses(*d_, bodies, out);
+  scene::ScenePoses(*d_, bodies, out);
 }
 
 }  // namespace vlab::view

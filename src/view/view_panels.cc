@@ -10,7 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
-#include "lab/judge/lab_compare.h"
+#include "scene/scene_csv.h"
 
 namespace vlab::view {
 
@@ -109,7 +109,7 @@ std::vector<double> ArmSignals::Values(const Eigen::VectorXd& q, const Eigen::Ve
 }
 
 std::string ReplayPlotRows(const std::string& log_csv, const std::vector<std::string>& signals) {
-  const lab::CsvTable table = lab::ReadCsvTable(log_csv);
+  const scene::CsvTable table = scene::ReadCsvTable(log_csv);
   std::vector<int> columns = {table.Column("time")};
   if (columns[0] < 0) throw InputError("vlab view: '" + log_csv + "' has no column 'time'");
   for (const std::string& s : signals) {

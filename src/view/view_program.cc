@@ -19,7 +19,7 @@
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
 #include "core/core_errors.h"
-#include "lab/devices/device_scene.h"
+#include "scene/scene_geometry.h"
 #include "view/view_access.h"
 #include "view/view_model.h"
 #include "view/view_panels.h"
@@ -212,8 +212,8 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     arm = std::make_unique<bridge::Arm>(bridge::Arm::Connect(host, port, o.connect_timeout_s));
     model->BindJoints(arm->joint_names());
     if (!plots.empty()) plot_feed = std::make_unique<PlotFeed>(*arm, plots, o.rate_hz);
-    bodies = lab::SceneBodies(model->model());
-    info = lab::SceneGeometry(model->model(), bodies);
+    bodies = scene::SceneBodies(model->model());
+    info = scene::SceneGeometry(model->model(), bodies);
     info["rate_hz"] = o.rate_hz;
     info["mode"] = "live";
     source = "arm '" + arm->name() + "' at " + o.arm + ", poses by MuJoCo kinematics of " + o.model;

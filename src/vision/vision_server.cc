@@ -10,7 +10,6 @@ namespace vlab::vision {
 namespace {
 
 using nlohmann::json;
-constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
 
 json MarkerFields() {
   return {"dictionary", "id", "valid", "reprojection_error", "T_camera[16]", "world_valid", "T_world[16]"};
@@ -20,7 +19,12 @@ json MarkerFields() {
 
 std::unique_ptr<MarkersServer> MarkersServer::Create(const MarkersServerConfig& config) {
   std::unique_ptr<MarkersServer> server(new MarkersServer(config));
-  server->socket_ = bridge::UdpSocket::Bind(config.bind_address, config.port);
+  bridge::DeviceServerConfig s;
+  s.bind_address = config.bind_address;
+  s.port = config.port;
+  s.max_datagrams = 0;  // every datagram queued
+  server->server_ = bridge::DeviceServer::Bind(s);
+  server->server_->ServeSessions(Sessions(config, &server->now_s_), "");
   server->RebuildDescribe();
   return server;
 }
@@ -35,58 +39,33 @@ bridge::SessionConfig MarkersServer::Sessions(const MarkersServerConfig& config,
 }
 
 MarkersServer::MarkersServer(const MarkersServerConfig& config)
-    : config_(config), table_(config.max_markers), sessions_(Sessions(config, &now_s_)), buffer_(kBufferBytes) {
-  payload_.reserve(bridge::kMaxPacketValues);
+    : config_(config), table_(config.max_markers) {
   packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
 }
 
 int MarkersServer::Poll(double now_s) {
-  int handled = 0;
-  for (;;) {
-    bridge::Endpoint from;
-    bool truncated = false;
-    const long size = socket_->Receive(buffer_.data(), buffer_.size(), &from, 0, &truncated);
-    if (size < 0) return handled;
-    ++handled;
-    now_s_ = now_s;
-    Handle(size, from, truncated);
-  }
+  now_s_ = now_s;
+  return server_->Drain(0, [this](const unsigned char* data, std::size_t size, const bridge::Endpoint& from) {
+    Handle(data, size, from);
+  });
 }
 
-void MarkersServer::Handle(long size, const bridge::Endpoint& from, bool truncated) {
+void MarkersServer::Handle(const unsigned char* data, std::size_t size, const bridge::Endpoint& from) {
   ++counters_.received;
   auto refuse = [this](long* reason) {
     ++*reason;
     ++counters_.refused;
   };
-  bridge::Header header;
-  bridge::DecodeError e =
-      truncated ? bridge::DecodeError::kTooLong
-                : bridge::DecodePacket(buffer_.data(), static_cast<std::size_t>(size), &header, &payload_);
-  using bridge::MessageType;
-  // a describe request is answered whatever kind it names (0: any): tools discover with it
-  const bool describe = e == bridge::DecodeError::kNone && header.type == static_cast<int>(MessageType::kDescribe);
-  if (e == bridge::DecodeError::kNone &&
-      (describe ? header.kind > bridge::kMaxDeviceKind : header.kind != static_cast<int>(bridge::DeviceKind::kMarkers))) {
-    e = bridge::DecodeError::kBadKind;
-  }
-  if (e == bridge::DecodeError::kNone && (header.type == static_cast<int>(MessageType::kState) ||
-                                          header.type == static_cast<int>(MessageType::kSession))) {
-    e = bridge::DecodeError::kBadType;
-  }
-  if (e != bridge::DecodeError::kNone) return refuse(&counters_.refused_malformed);
-  if (describe || header.type == static_cast<int>(MessageType::kSubscribe)) {
-    const auto outcome = sessions_.HandleRequest(header, payload_, from, *socket_);
-    counters_.sessions = sessions_.counters();
-    if (outcome == bridge::SessionTable::Outcome::kMalformed) return refuse(&counters_.refused_malformed);
-    if (outcome == bridge::SessionTable::Outcome::kDescribe) {
-      ++counters_.describes;
-      socket_->SendTo(reinterpret_cast<const unsigned char*>(describe_json_.data()), describe_json_.size(), from);
-    }
-    return;
-  }
-  if (!sessions_.Touch(from)) return refuse(&counters_.refused_not_subscribed);
-  if (bridge::ParseMarkersCommand(header, payload_, &descriptions_) != bridge::DecodeError::kNone) {
+  using Request = bridge::DeviceServer::Request;
+  const Request request = server_->HandleRequest(data, size, from);
+  counters_.sessions = server_->sessions().counters();
+  if (request == Request::kMalformed) return refuse(&counters_.refused_malformed);
+  if (request == Request::kDescribed) ++counters_.describes;
+  if (request != Request::kCommand) return;
+  // a marker-description command, from a subscriber
+  if (!server_->sessions().Touch(from)) return refuse(&counters_.refused_not_subscribed);
+  if (bridge::ParseMarkersCommand(server_->header(), server_->payload(), &descriptions_) !=
+      bridge::DecodeError::kNone) {
     return refuse(&counters_.refused_malformed);
   }
   if (!Describe(descriptions_)) return refuse(&counters_.refused_limits);
@@ -101,10 +80,9 @@ bool MarkersServer::Describe(const std::vector<bridge::MarkerDescriptionMsg>& de
 
 void MarkersServer::Publish(double seq, double time, const bridge::MarkersStateMsg& state, double now_s) {
   now_s_ = now_s;
-  sessions_.Expire();
-  counters_.sessions = sessions_.counters();
   bridge::EncodeMarkersState(seq, time, state, &packet_);
-  for (const auto& s : sessions_.sessions()) socket_->SendTo(packet_.data(), packet_.size(), s.endpoint);
+  server_->PublishToSubscribers(packet_);
+  counters_.sessions = server_->sessions().counters();
   ++counters_.states;
 }
 
@@ -125,7 +103,7 @@ void MarkersServer::RebuildDescribe() {
             {"protocol", bridge::kProtocolVersion},
             {"server", std::string("vlab vision (OpenCV ") + CV_VERSION + " aruco)"},
             {"clock", "realtime"},
-            {"endpoint", {{"address", config_.bind_address}, {"port", socket_ ? socket_->local_port() : config_.port}}},
+            {"endpoint", {{"address", config_.bind_address}, {"port", server_->port()}}},
             {"rates", {{"control_hz", 0.0}}},
             {"header", {"magic", "version", "kind", "type", "seq", "time", "length"}},
             {"layout",
@@ -147,7 +125,7 @@ void MarkersServer::RebuildDescribe() {
             {"markers", markers},
             {"dictionaries", dictionaries}};
   j.update(config_.describe_extra, true);
-  describe_json_ = j.dump();
+  server_->set_describe_json(j.dump());
 }
 
 }  // namespace vlab::vision

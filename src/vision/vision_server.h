@@ -29,9 +29,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_device_server.h"
 #include "bridge/bridge_markers.h"
-#include "bridge/bridge_session.h"
-#include "bridge/bridge_udp.h"
 #include "vision/vision_locate.h"
 
 namespace vlab::vision {
@@ -75,29 +74,25 @@ class MarkersServer {
   bool Describe(const std::vector<bridge::MarkerDescriptionMsg>& descriptions);
 
   /// The describe reply now (JSON text).
-  const std::string& describe_json() const { return describe_json_; }
-  int local_port() const { return socket_->local_port(); }
-  int fd() { return socket_->fd(); }
-  int subscribers() const { return static_cast<int>(sessions_.sessions().size()); }
+  const std::string& describe_json() const { return server_->describe_json(); }
+  int local_port() const { return server_->port(); }
+  int fd() { return server_->fd(); }
+  int subscribers() const { return static_cast<int>(server_->sessions().sessions().size()); }
   const MarkersServerCounters& counters() const { return counters_; }
 
  private:
   explicit MarkersServer(const MarkersServerConfig& config);
   static bridge::SessionConfig Sessions(const MarkersServerConfig& config, const double* now_s);
-  void Handle(long size, const bridge::Endpoint& from, bool truncated);
+  void Handle(const unsigned char* data, std::size_t size, const bridge::Endpoint& from);
   void RebuildDescribe();
 
   MarkersServerConfig config_;
-  std::unique_ptr<bridge::UdpSocket> socket_;
+  std::unique_ptr<bridge::DeviceServer> server_;
   MarkerTable table_;
   MarkersServerCounters counters_;
   double now_s_ = 0;  // the caller's clock at the last Poll or Publish: the sessions' clock
-  bridge::SessionTable sessions_;
-  std::string describe_json_;
   // scratch
-  std::vector<unsigned char> buffer_;
   std::vector<unsigned char> packet_;
-  std::vector<double> payload_;
   std::vector<bridge::MarkerDescriptionMsg> descriptions_;
 };
 

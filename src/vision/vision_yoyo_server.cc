@@ -14,7 +14,6 @@ namespace vlab::vision {
 namespace {
 
 using nlohmann::json;
-constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
 // DeviceEndpoint counts time in periods: the vision program's are 10 ms ticks
 // of its monotonic clock (frames may come at any rate)
 constexpr double kTicksPerSecond = 100;
@@ -53,45 +52,28 @@ json YoyoDescribe(const YoyoServerConfig& config, int port) {
 
 std::unique_ptr<YoyoServer> YoyoServer::Create(const YoyoServerConfig& config) {
   std::unique_ptr<YoyoServer> server(new YoyoServer());
-  server->socket_ = bridge::UdpSocket::Bind(config.bind_address, config.port);
+  bridge::DeviceServerConfig s;
+  s.bind_address = config.bind_address;
+  s.port = config.port;
+  s.max_datagrams = 0;  // every datagram queued
+  server->server_ = bridge::DeviceServer::Bind(s);
   bridge::EndpointConfig e;
   e.name = config.name;
   e.kind = bridge::DeviceKind::kYoyo;
-  e.describe_json = YoyoDescribe(config, server->socket_->local_port()).dump();
+  e.describe_json = YoyoDescribe(config, server->server_->port()).dump();
   e.subscriber_timeout_s = config.subscriber_timeout_s;
   e.max_subscribers = std::max(1, config.max_subscribers);
   e.watchdog_periods = 0;
   e.command_length = 0;  // no commands
-  server->endpoint_ = std::make_unique<bridge::DeviceEndpoint>(std::move(e));
-  server->buffer_.resize(kBufferBytes);
-  server->packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
+  server->server_->Serve(std::move(e));
   return server;
 }
 
-int YoyoServer::Poll(double now_s) {
-  int handled = 0;
-  for (;;) {
-    bridge::Endpoint from;
-    bool truncated = false;
-    const long size = socket_->Receive(buffer_.data(), buffer_.size(), &from, 0, &truncated);
-    if (size < 0) return handled;
-    ++handled;
-    // a truncated datagram was longer than any valid one: handed over whole-buffer, refused as too long
-    endpoint_->Handle(buffer_.data(), truncated ? buffer_.size() : static_cast<std::size_t>(size), from, Tick(now_s),
-                      *socket_);
-  }
-}
+int YoyoServer::Poll(double now_s) { return server_->Receive(Tick(now_s)); }
 
 void YoyoServer::Publish(double seq, double time, const double* state) {
-  bridge::Header header;
-  header.kind = static_cast<int>(bridge::DeviceKind::kYoyo);
-  header.type = static_cast<int>(bridge::MessageType::kState);
-  header.seq = seq;
-  header.time = time;
   constexpr int n = bridge::ValueCount(bridge::LayoutOf(bridge::DeviceKind::kYoyo).state);
-  header.length = n;
-  bridge::EncodePacket(header, state, n, &packet_);
-  endpoint_->Publish(packet_, *socket_);
+  server_->Publish(seq, time, state, n);
   ++states_;
 }
 

@@ -25,8 +25,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "bridge/bridge_endpoint.h"
-#include "bridge/bridge_udp.h"
+#include "bridge/bridge_device_server.h"
 
 namespace vlab::vision {
 
@@ -52,19 +51,17 @@ class YoyoServer {
   /// Sends one state (7 values, bridge::kYoyoStateLayout) to every subscriber.
   void Publish(double seq, double time, const double* state);
 
-  const std::string& describe_json() const { return endpoint_->config().describe_json; }
-  const bridge::EndpointCounters& counters() const { return endpoint_->counters(); }
+  const std::string& describe_json() const { return server_->describe_json(); }
+  const bridge::EndpointCounters& counters() const { return server_->endpoint().counters(); }
   long states() const { return states_; }
-  int local_port() const { return socket_->local_port(); }
-  int fd() { return socket_->fd(); }
+  int local_port() const { return server_->port(); }
+  int fd() { return server_->fd(); }
 
  private:
   YoyoServer() = default;
 
-  std::unique_ptr<bridge::UdpSocket> socket_;
-  std::unique_ptr<bridge::DeviceEndpoint> endpoint_;
+  std::unique_ptr<bridge::DeviceServer> server_;
   long states_ = 0;
-  std::vector<unsigned char> buffer_, packet_;
 };
 
 /// The describe reply of the yoyo device (without the extra facts).

@@ -14,8 +14,6 @@ namespace vlab::yoyosim {
 
 namespace {
 
-// the most datagrams handled per socket and call, so that a flood cannot stall the loop
-constexpr int kMaxDatagramsPerReceive = 1000;
 // longest single wait: a stop request (signal) is seen within this, s
 constexpr double kPollSlice_s = 0.05;
 
@@ -49,20 +47,26 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
 
   std::unique_ptr<YoyoSimServer> s(new YoyoSimServer());
   s->config_ = c;
-  s->point_socket_ = bridge::UdpSocket::Bind(c.bind_address, c.point_port);  // throws NetworkError naming it
-  s->yoyo_socket_ = bridge::UdpSocket::Bind(c.bind_address, c.yoyo_port);
+  // a new subscriber gets the latest state at once (it may be what lockstep waits on)
+  bridge::DeviceServerConfig server;
+  server.bind_address = c.bind_address;
+  server.send_latest = true;
+  server.port = c.point_port;
+  s->point_ = bridge::DeviceServer::Bind(server);  // throws NetworkError naming it
+  server.port = c.yoyo_port;
+  s->yoyo_ = bridge::DeviceServer::Bind(server);
   const double period = sim->period_s();
 
   bridge::DeviceDescription d;
   d.server = "vlab-yoyosim (MuJoCo " + vlab::MujocoVersion() + ")";
   d.clock = c.clock;
-  d.address = s->point_socket_->local_endpoint().address().to_string();
+  d.address = s->point_->local_endpoint().address().to_string();
   d.control_hz = 1.0 / period;
 
   bridge::EndpointConfig point;
   d.name = point.name = "point";
-  d.port = s->point_socket_->local_port();
-  point.kind = bridge::DeviceKind::kPoint;
+  d.port = s->point_->port();
+  point.kind = kPoint;
   point.describe_json = PointDescribeJson(d, *sim, PointFacts{c.speed_max, c.watchdog_periods, c.owner_timeout_s});
   point.owner_timeout_s = c.owner_timeout_s;
   point.subscriber_timeout_s = c.subscriber_timeout_s;
@@ -71,15 +75,15 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
   point.status_first = true;
   YoyoSimServer* self = s.get();
   point.check_command = [self](const std::vector<double>& p) { return self->CheckSetPoint(p); };
-  s->point_ = std::make_unique<bridge::DeviceEndpoint>(std::move(point));
+  s->point_->Serve(std::move(point));
 
   bridge::EndpointConfig yoyo;
   d.name = yoyo.name = "yoyo";
-  d.port = s->yoyo_socket_->local_port();
-  yoyo.kind = bridge::DeviceKind::kYoyo;
+  d.port = s->yoyo_->port();
+  yoyo.kind = kYoyo;
   yoyo.describe_json = YoyoDescribeJson(d, *sim);
   yoyo.subscriber_timeout_s = point.subscriber_timeout_s;
-  s->yoyo_ = std::make_unique<bridge::DeviceEndpoint>(std::move(yoyo));
+  s->yoyo_->Serve(std::move(yoyo));
 
   // the lab's clock policy
   ClockConfig clock;
@@ -93,10 +97,6 @@ std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std:
   const long periods = c.duration_s > 0 ? std::lround(c.duration_s / period) : 0;
   s->clock_ = MakeClock(clock, periods);
 
-  // one byte more than the largest valid datagram, so that a longer one is seen as too long
-  s->datagram_.resize((bridge::kMaxPacketValues + 1) * sizeof(double));
-  s->point_state_.reserve(bridge::kMaxPacketValues * sizeof(double));
-  s->yoyo_state_.reserve(bridge::kMaxPacketValues * sizeof(double));
   s->command_.reserve(bridge::kMaxPacketValues);
   s->sim_ = std::move(sim);
   return s;
@@ -107,47 +107,34 @@ bridge::CommandCheck YoyoSimServer::CheckSetPoint(const std::vector<double>& p) 
 }
 
 void YoyoSimServer::Receive() {
-  for (bool point : {true, false}) {
-    bridge::UdpSocket& socket = point ? *point_socket_ : *yoyo_socket_;
-    bridge::DeviceEndpoint& endpoint = point ? *point_ : *yoyo_;
-    const std::vector<unsigned char>& last_state = point ? point_state_ : yoyo_state_;
-    for (int i = 0; i < kMaxDatagramsPerReceive; ++i) {
-      bridge::Endpoint from;
-      const long size = socket.Receive(datagram_.data(), datagram_.size(), &from, 0.0);
-      if (size < 0) break;
-      using Received = bridge::DeviceEndpoint::Received;
-      const Received what = endpoint.Handle(datagram_.data(), static_cast<std::size_t>(size), from, period_, socket);
-      // a new subscriber gets the latest state at once (it may be what lockstep waits on)
-      if (what == Received::kSubscribed && !last_state.empty()) {
-        socket.SendTo(last_state.data(), last_state.size(), from);
-      }
-      if (what != Received::kCommand || !point) continue;
-      // an accepted set-point: the newest, applied at the next period start
-      point_->TakeCommand(&command_);
-      std::copy(command_.begin(), command_.begin() + 3, pending_W_.begin());
-      pending_ = true;
-    }
-  }
+  point_->Receive(period_, [this] {
+    // an accepted set-point: the newest, applied at the next period start
+    point_->endpoint().TakeCommand(&command_);
+    std::copy(command_.begin(), command_.begin() + 3, pending_W_.begin());
+    pending_ = true;
+  });
+  yoyo_->Receive(period_);
 }
 
 void YoyoSimServer::Poll(double timeout_s, vlab::PollWait) {
-  if (stop_ && *stop_) return;
-  const int fds[2] = {point_socket_->fd(), yoyo_socket_->fd()};
+  if (stopped_()) return;
+  const int fds[2] = {point_->fd(), yoyo_->fd()};
   if (bridge::WaitReadable(fds, 2, std::min(timeout_s, kPollSlice_s))) Receive();
 }
 
 bool YoyoSimServer::Answered(std::int64_t k) const {
-  if (stop_ && *stop_) return true;  // stop waiting: the loop ends
-  if (!point_->has_owner()) return k > 0;
-  return point_->last_accepted_seq() >= static_cast<double>(k);
+  if (stopped_()) return true;  // stop waiting: the loop ends
+  const bridge::DeviceEndpoint& point = point_->endpoint();
+  if (!point.has_owner()) return k > 0;
+  return point.last_accepted_seq() >= static_cast<double>(k);
 }
 
 void YoyoSimServer::BeginPeriod(long k, vlab::PeriodStart start) {
   // lockstep: a silent owner costs a timeout per period, then loses the point
   if (start == vlab::PeriodStart::kTimedOut) {
     ++counters_.timeouts;
-    if (++consecutive_timeouts_ >= config_.release_after && point_->has_owner()) {
-      point_->ReleaseOwner();
+    if (++consecutive_timeouts_ >= config_.release_after && point_->endpoint().has_owner()) {
+      point_->endpoint().ReleaseOwner();
       ++counters_.releases;
       if (!config_.quiet) {
         std::fprintf(stderr, "vlab-yoyosim: no command for %d periods in a row (t = %.3f s): point released\n",
@@ -159,7 +146,7 @@ void YoyoSimServer::BeginPeriod(long k, vlab::PeriodStart start) {
   }
   Receive();  // what came since the clock's last poll
   // watchdog: hold where the hand is, once, until the next accepted command
-  if (point_->BeginPeriod(k)) {
+  if (point_->endpoint().BeginPeriod(k)) {
     if (!watchdog_hold_) {
       sim_->Hold();
       pending_ = false;  // the hold ends the way to the last set-point
@@ -184,25 +171,19 @@ void YoyoSimServer::BeginPeriod(long k, vlab::PeriodStart start) {
 }
 
 void YoyoSimServer::Publish(long k) {
-  const bridge::Header point{static_cast<int>(bridge::DeviceKind::kPoint), static_cast<int>(bridge::MessageType::kState),
-                             static_cast<double>(k), static_cast<double>(k) * sim_->period_s(), kPointValues};
   static_assert(sizeof(values_) / sizeof(values_[0]) >= static_cast<std::size_t>(std::max(kPointValues, bridge::kYoyoValues)));
+  const double seq = static_cast<double>(k), time = static_cast<double>(k) * sim_->period_s();
   sim_->SamplePoint(values_);
-  const std::uint32_t status = static_cast<std::uint32_t>(values_[kPointStatus]) | point_->status_bits();
+  const std::uint32_t status = static_cast<std::uint32_t>(values_[kPointStatus]) | point_->endpoint().status_bits();
   values_[kPointStatus] = static_cast<double>(status);
-  bridge::EncodePacket(point, values_, kPointValues, &point_state_);
-  point_->Publish(point_state_, *point_socket_);
-  bridge::Header yoyo = point;
-  yoyo.kind = static_cast<int>(kYoyo);
-  yoyo.length = bridge::kYoyoValues;
+  point_->Publish(seq, time, values_, kPointValues);
   sim_->SampleYoyo(values_);
-  bridge::EncodePacket(yoyo, values_, bridge::kYoyoValues, &yoyo_state_);
-  yoyo_->Publish(yoyo_state_, *yoyo_socket_);
+  yoyo_->Publish(seq, time, values_, bridge::kYoyoValues);
 }
 
 int YoyoSimServer::Run(const volatile std::sig_atomic_t* stop) {
-  stop_ = stop;
-  auto stopped = [stop] { return stop && *stop; };
+  stopped_ = bridge::StopCheck(stop);
+  const bridge::StopCheck stopped = stopped_;
   const long last = config_.duration_s > 0 ? std::lround(config_.duration_s / sim_->period_s()) : -1;
   int result = 0;
   Publish(0);
@@ -229,15 +210,15 @@ int YoyoSimServer::Run(const volatile std::sig_atomic_t* stop) {
 std::string YoyoSimServer::StartLine() const {
   char text[512];
   std::snprintf(text, sizeof(text), "vlab-yoyosim: point on %s, yoyo on %s, %s, %g Hz, scene %s",
-                bridge::EndpointText(point_socket_->local_endpoint()).c_str(),
-                bridge::EndpointText(yoyo_socket_->local_endpoint()).c_str(), config_.clock.c_str(),
+                bridge::EndpointText(point_->local_endpoint()).c_str(),
+                bridge::EndpointText(yoyo_->local_endpoint()).c_str(), config_.clock.c_str(),
                 1.0 / sim_->period_s(), sim_->scene().c_str());
   return text;
 }
 
 std::string YoyoSimServer::ReportText() const {
-  const bridge::EndpointCounters& p = point_->counters();
-  const bridge::EndpointCounters& y = yoyo_->counters();
+  const bridge::EndpointCounters& p = point_->endpoint().counters();
+  const bridge::EndpointCounters& y = yoyo_->endpoint().counters();
   const ServerCounters& s = counters_;
   char text[1024];
   std::snprintf(text, sizeof(text),

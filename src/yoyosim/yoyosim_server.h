@@ -5,9 +5,10 @@
 //   input   point port: point commands [x, y, z] (hand set-point, m, world),
 //           describe requests; yoyo port: describe requests (commands refused)
 //   output  one point state and one yoyo state per period to every subscriber
-//           of each (seq = k, time = k * period_s); describe replies (JSON),
-//           each followed by the device's latest state (a client that connects
-//           while lockstep waits gets the state to answer at once)
+//           of each (seq = k, time = k * period_s); describe replies (JSON);
+//           a new subscriber gets the device's latest state at once (a client
+//           that connects while lockstep waits gets the state to answer; with
+//           kStatusNotOwner when another client owns the point)
 //   rate    1 / period_s. lockstep: state k of both devices is published, then
 //           the loop waits for the point command answering k (from its owner;
 //           period 0: for a first owner, start_timeout_s) before it simulates
@@ -31,8 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "bridge/bridge_endpoint.h"
-#include "bridge/bridge_udp.h"
+#include "bridge/bridge_device_server.h"
 #include "core/core_clock.h"
 #include "yoyosim/yoyosim.h"
 
@@ -81,16 +81,16 @@ class YoyoSimServer final : public vlab::CommandSource {
   /// some client owns the point; later: true while nobody owns it).
   bool Answered(std::int64_t k) const override;
 
-  int point_port() const { return point_socket_->local_port(); }
-  int yoyo_port() const { return yoyo_socket_->local_port(); }
+  int point_port() const { return point_->port(); }
+  int yoyo_port() const { return yoyo_->port(); }
   const YoyoSim& sim() const { return *sim_; }
   /// "vlab-yoyosim: point on 127.0.0.1:50060, yoyo on 127.0.0.1:50061, lockstep, 100 Hz, scene ..."
   std::string StartLine() const;
   /// Counters as a few lines of text (no trailing newline).
   std::string ReportText() const;
   const ServerCounters& counters() const { return counters_; }
-  const bridge::EndpointCounters& point_counters() const { return point_->counters(); }
-  const bridge::EndpointCounters& yoyo_counters() const { return yoyo_->counters(); }
+  const bridge::EndpointCounters& point_counters() const { return point_->endpoint().counters(); }
+  const bridge::EndpointCounters& yoyo_counters() const { return yoyo_->endpoint().counters(); }
 
  private:
   YoyoSimServer() = default;
@@ -101,18 +101,16 @@ class YoyoSimServer final : public vlab::CommandSource {
 
   ServerConfig config_;
   std::unique_ptr<YoyoSim> sim_;
-  std::unique_ptr<bridge::UdpSocket> point_socket_, yoyo_socket_;
-  std::unique_ptr<bridge::DeviceEndpoint> point_, yoyo_;
+  std::unique_ptr<bridge::DeviceServer> point_, yoyo_;
   std::unique_ptr<vlab::Clock> clock_;
   ServerCounters counters_;
-  const volatile std::sig_atomic_t* stop_ = nullptr;
+  bridge::StopCheck stopped_;
   long period_ = 0;              // the period being waited for or run
   bool pending_ = false;         // an accepted set-point not yet reached by the set-point in force
   Vec3 pending_W_{};
   bool watchdog_hold_ = false;
   int consecutive_timeouts_ = 0;
   // scratch, sized at start
-  std::vector<unsigned char> datagram_, point_state_, yoyo_state_;  // the states: the latest published
   std::vector<double> command_;
   double values_[7] = {0, 0, 0, 0, 0, 0, 0};
 };

@@ -1,6 +1,9 @@
 // The real vlab binary: `vlab render` writes N readable PNGs of the right size
 // and an MP4 of N frames; bad input is one line and exit 2 with nothing
 // written; image outputs of `vlab run` (tests/data/render_outputs.yaml).
+#include <sys/wait.h>
+
+#include <cstdlib>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -129,6 +132,31 @@ TEST(CliRender, RendersWhatFitsTheScenario) {
   EXPECT_NE(r.err.find("vlab: render: "), std::string::npos) << "the GL renderer is logged";
   EXPECT_EQ(Lines(ReadFile(dir / "frames/frames.csv")),
             (std::vector<std::string>{"frame,time", "0,0", "1,5", "2,10"}));
+}
+
+// a frame that cannot be written (here: larger than the file size limit, SIGXFSZ ignored, so
+// the write fails with EFBIG as on a full disk) ends the rendering like SIGINT: an error naming
+// the file, the frames written whole before it kept (none here), render.json saying so, exit 1
+TEST(CliRender, AFrameThatCannotBeWrittenIsReportedAndNothingHalfWrittenIsLeft) {
+  TempDir dir;
+  const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && trap '' XFSZ && ulimit -f 8 && '" VLAB_BINARY_DIR
+                          "/vlab' render scenes/pa10_reach --camera overview --frames 3 --width 160 --height 120 "
+                          "--profile fast -q --out '" + (dir / "frames") + "' >'" + (dir / "out") + "' 2>'" +
+                          (dir / "err") + "' </dev/null";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  const std::string err = ReadFile(dir / "err");
+  EXPECT_EQ(WEXITSTATUS(status), 1) << err;
+  EXPECT_NE(err.find("rgb_000000.png': write failed: "), std::string::npos) << err;
+  EXPECT_NE(err.find("the 0 frames written before it are kept"), std::string::npos) << err;
+  EXPECT_EQ(Lines(err).size(), 1u) << err;
+  // the folder is in place whole, without the frame that failed, and no staging folder is left
+  EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"frames", "out", "err"}));
+  EXPECT_EQ(Entries(dir / "frames"), (std::set<std::string>{"frames.csv", "render.json", ".vlab-output"}));
+  EXPECT_EQ(Lines(ReadFile(dir / "frames/frames.csv")), (std::vector<std::string>{"frame,time"}));
+  const auto meta = nlohmann::json::parse(ReadFile(dir / "frames/render.json"));
+  EXPECT_EQ(meta["frames"], 0);
+  EXPECT_NE(meta.value("failed", "").find("rgb_000000.png"), std::string::npos) << meta.dump();
 }
 
 struct BadInput {

@@ -23,7 +23,7 @@
 #include <mujoco/mujoco.h>
 
 #include "bridge/bridge_client.h"
-#include "lab/devices/device_scene.h"
+#include "scene/scene_geometry.h"
 #include "test_process.h"
 
 namespace vlab {
@@ -60,9 +60,9 @@ TEST(ArmViewTest, PosesFromAnArmDevicesJointStatesByKinematics) {
     d->qpos[m->jnt_qposadr[mj_name2id(m, mjOBJ_JOINT, client.joint_names()[i].c_str())]] = state.q[i];
   }
   mj_kinematics(m, d);
-  const std::vector<int> bodies = lab::SceneBodies(m);
+  const std::vector<int> bodies = scene::SceneBodies(m);
   std::vector<double> want(7 * bodies.size());
-  lab::ScenePoses(*d, bodies, want.data());
+  scene::ScenePoses(*d, bodies, want.data());
   mj_deleteData(d);
   mj_deleteModel(m);
 

@@ -33,7 +33,7 @@
 #include <boost/beast/websocket.hpp>
 
 #include "bridge/bridge_camera_client.h"
-#include "lab/judge/lab_compare.h"
+#include "scene/scene_csv.h"
 #include "test_process.h"
 #include "test_util.h"
 #include "view/view_panels.h"
@@ -165,7 +165,7 @@ TEST(ViewPanelsTest, CameraBytesRelayedUnchangedAndPlotSamplesEqualTheLog) {
   EXPECT_GE(matched, static_cast<int>(sent.size() / 2)) << pictures.size() << " pictures relayed";
 
   // /plot: each sample is the log row of its time
-  const lab::CsvTable log = lab::ReadCsvTable(dir / "run/log.csv");
+  const scene::CsvTable log = scene::ReadCsvTable(dir / "run/log.csv");
   const int time_col = log.Column("time"), q_col = log.Column("pa10.q.S1"), qd_col = log.Column("pa10.qd.E1");
   ASSERT_GE(q_col, 0);
   ASSERT_GE(qd_col, 0);

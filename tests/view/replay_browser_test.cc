@@ -38,7 +38,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cdp_client.h"
-#include "lab/judge/lab_compare.h"
+#include "scene/scene_csv.h"
 #include "test_process.h"
 #include "test_util.h"
 
@@ -228,7 +228,7 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
   // the plot: log.csv's time and pa10.q.S1, and its line on the canvas
   const nlohmann::json plots = chromium.Evaluate(
       "fetch('plots.bin').then(r => r.arrayBuffer()).then(b => Array.from(new Float64Array(b)))");
-  const lab::CsvTable log = lab::ReadCsvTable(dir / "run/log.csv");
+  const scene::CsvTable log = scene::ReadCsvTable(dir / "run/log.csv");
   ASSERT_EQ(plots.size(), 2 * log.rows.size());
   const int time_col = log.Column("time"), q_col = log.Column("pa10.q.S1");
   for (std::size_t k = 0; k < log.rows.size(); ++k) {

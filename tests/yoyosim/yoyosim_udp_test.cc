@@ -230,6 +230,31 @@ TEST(YoyosimUdp, BadPacketsAreRefusedAndCountedWhileTheRunGoesOn) {
   EXPECT_TRUE(Has(p.output(), "yoyo: received 4, describes 0, refused 2")) << p.output();  // 2: the handshake
 }
 
+TEST(YoyosimUdp, ANewSubscriberWhileAnotherOwnsThePointGetsNotOwnerInItsFirstState) {
+  YoyosimProcess p({"--duration", "0.03", "--start-timeout", "10", "--timeout", "5"});
+  ASSERT_TRUE(p.ok()) << p.output();
+  Raw owner(p.point_port()), other(p.point_port());
+  ASSERT_GT(vlab::testing::WireSubscribe(*owner.socket, owner.to, DeviceKind::kPoint), 0);
+  ASSERT_TRUE(owner.Next());
+  ASSERT_EQ(owner.header.seq, 0);
+  owner.Command(0, {0.0, 0.0, 1.5});  // the owner now; lockstep runs period 0 and waits for the answer to 1
+  ASSERT_TRUE(owner.Next());
+  ASSERT_EQ(owner.header.seq, 1);
+  EXPECT_EQ(static_cast<unsigned>(owner.values[kPointStatus]) & kStatusNotOwner, 0u);
+  // the latest state goes to a newcomer at once, marked like every later one
+  ASSERT_GT(vlab::testing::WireSubscribe(*other.socket, other.to, DeviceKind::kPoint), 0);
+  ASSERT_TRUE(other.Next());
+  EXPECT_EQ(other.header.seq, 1);
+  EXPECT_EQ(static_cast<unsigned>(other.values[kPointStatus]) & kStatusNotOwner, kStatusNotOwner);
+  for (int k = 1; k < 3; ++k) {
+    owner.Command(k, {0.0, 0.0, 1.5});
+    ASSERT_TRUE(owner.Next());
+    ASSERT_TRUE(other.Next());
+    EXPECT_EQ(static_cast<unsigned>(other.values[kPointStatus]) & kStatusNotOwner, kStatusNotOwner);
+  }
+  EXPECT_EQ(p.Wait(), 0) << p.output();
+}
+
 TEST(YoyosimUdp, LockstepReleasesASilentOwnerAfterThreeTimeouts) {
   YoyosimProcess p({"--duration", "0.5", "--start-timeout", "10", "--timeout", "0.1"});
   ASSERT_TRUE(p.ok()) << p.output();

@@ -11,6 +11,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "lab/devices/device.h"
+#include "scene/scene_geometry.h"
 
 namespace vlab::lab {
 
@@ -22,22 +23,10 @@ struct SceneParams : DeviceParams {
 
 inline constexpr int kMaxSceneSignals = 16;
 
-/// The bodies a scene stream carries, in stream order: every body except the
-/// world that has a visible geom (group 0-2, alpha > 0), in body-id order.
-std::vector<int> SceneBodies(const mjModel* m);
-
-/// The visual geometry of a scene, the describe reply's "bodies" and "geoms"
-/// (also written as scene.json beside a pose recording): every visible geom
-/// with its body (index into `bodies`, -1 for the world), type, size, pose in
-/// its body's frame, rgba (the material's where it has one), mesh id (-1:
-/// none) and texture (id, kind "2d"/"cube", width, height, repeat; id -1:
-/// none), and the meshes' vertex and face counts. Mesh vertices and texture
-/// pixels are not in it: a viewer takes them from the same MJCF.
-nlohmann::json SceneGeometry(const mjModel* m, const std::vector<int>& bodies);
-
-/// Writes the poses of `bodies` (x, y, z, qw, qx, qy, qz each, world frame)
-/// from mjData's xpos and xquat into out[0 .. 7 * bodies.size()).
-void ScenePoses(const mjData& d, const std::vector<int>& bodies, double* out);
+/// The stream's bodies, geometry and poses (scene/scene_geometry.h, shared with the view).
+using scene::SceneBodies;
+using scene::SceneGeometry;
+using scene::ScenePoses;
 
 /// Reads a scene entry's keys (rate, signals).
 std::shared_ptr<const DeviceParams> ReadSceneParams(MapReader& r);

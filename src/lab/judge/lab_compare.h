@@ -17,21 +17,13 @@
 #include <string>
 #include <vector>
 
+#include "scene/scene_csv.h"
+
 namespace vlab::lab {
 
-/// A CSV log in memory: header and rows of numbers.
-struct CsvTable {
-  std::string file;
-  std::vector<std::string> columns;
-  std::vector<std::vector<double>> rows;
-  /// Index of a column, -1 when absent.
-  int Column(const std::string& name) const;
-};
-
-/// Reads a CSV log of numbers with a header line (log.csv). Throws InputError
-/// naming the file and line on a missing file, a row of the wrong width or a
-/// field that is not a number.
-CsvTable ReadCsvTable(const std::string& path);
+/// A CSV log read back (scene/scene_csv.h, shared with the view).
+using scene::CsvTable;
+using scene::ReadCsvTable;
 
 /// The tolerance of the columns whose names match `pattern` (fnmatch glob).
 struct ColumnTolerance {

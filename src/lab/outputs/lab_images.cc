@@ -27,6 +27,16 @@ std::string FrameName(const char* kind, long n) {
   return name;
 }
 
+// where to write a video given as a path: inside the output folder's staging
+// folder when the file lies in the output folder, else where it was asked for
+std::string StagedPath(const std::string& file, const OutputDir& out) {
+  namespace fs = std::filesystem;
+  const fs::path rel =
+      fs::absolute(file).lexically_normal().lexically_relative(fs::absolute(out.final_dir()).lexically_normal());
+  if (rel.empty() || *rel.begin() == "..") return file;
+  return out.File(rel.string());
+}
+
 }  // namespace
 
 struct ImageOutputs::Impl {
@@ -44,47 +54,55 @@ struct ImageOutputs::Impl {
     render::SegmentationImage seg;
   };
   const mjModel* m = nullptr;
+  ImageOptions options;
   std::map<render::Profile, std::unique_ptr<render::Renderer>> renderers;
   std::vector<Output> outputs;
   double write_wall_s = 0;
+  std::string error;  // the first frame that could not be written ("": none)
 
   void Frame(Output& o, double t, mjData* d);
+  void Write(Output& o, std::vector<std::string>* written);
 };
 
 ImageOutputs::ImageOutputs(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ImageOutputs::~ImageOutputs() = default;
 
 std::unique_ptr<ImageOutputs> ImageOutputs::Create(const mjModel* m, const std::vector<ImageOutputConfig>& configs,
-                                                   const std::string& scene, double control_period_s) {
+                                                   const std::string& scene, double control_period_s,
+                                                   const ImageOptions& options) {
   auto impl = std::make_unique<Impl>();
   impl->m = m;
+  impl->options = options;
   std::map<render::Profile, std::pair<int, int>> sizes;  // largest image per profile
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const ImageOutputConfig& c = configs[i];
-    const std::string key = c.where + ": outputs.images[" + std::to_string(i) + "].";
+    const auto key = [&](const std::string& field) {
+      if (options.name) return options.name(i, field);
+      return c.where + ": outputs.images[" + std::to_string(i) + "]." + field;
+    };
     Impl::Output o;
     o.config = c;
     try {
       o.camera = render::CameraId(m, c.camera);
     } catch (const InputError& e) {
-      throw InputError(key + "camera: scene '" + scene + "': " + e.what());
+      throw InputError(key("camera") + ": scene '" + scene + "': " + e.what());
     }
     if (c.width > m->vis.global.offwidth || c.height > m->vis.global.offheight) {
-      throw InputError(key + "width, height: " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+      throw InputError(key("width, height") + ": " + std::to_string(c.width) + "x" + std::to_string(c.height) +
                        " exceeds the offscreen buffer " + std::to_string(m->vis.global.offwidth) + "x" +
                        std::to_string(m->vis.global.offheight) + " of scene '" + scene +
                        "' (<visual><global offwidth offheight>)");
     }
     if (c.every_s < control_period_s * (1 - 1e-9)) {
-      throw InputError(key + "every: " + FormatDouble(c.every_s) + " s is shorter than the control period " +
+      throw InputError(key("every") + ": " + FormatDouble(c.every_s) + " s is shorter than the control period " +
                        FormatDouble(control_period_s) + " s (frames are taken at period ends)");
     }
     for (const Impl::Output& other : impl->outputs) {
       if (other.config.camera == c.camera) {
-        throw InputError(key + "camera: a second output of camera '" + c.camera + "' (one output per camera)");
+        throw InputError(key("camera") + ": a second output of camera '" + c.camera + "' (one output per camera)");
       }
       if (!c.video.empty() && other.config.video == c.video) {
-        throw InputError(key + "video: '" + c.video + "' is written by another output too");
+        throw InputError(key("video") + ": '" + c.video + "' is written by another output too");
       }
     }
     const render::Profile profile = c.profile;
@@ -98,6 +116,7 @@ std::unique_ptr<ImageOutputs> ImageOutputs::Create(const mjModel* m, const std::
     options.height = size.second;
     options.profile = profile;
     options.scene = scene;
+    options.log_renderer = impl->options.log_renderer;
     impl->renderers[profile] = render::Renderer::Create(m, options);
   }
   for (Impl::Output& o : impl->outputs) {
@@ -112,12 +131,22 @@ void ImageOutputs::Open(const OutputDir& out) {
   for (Impl::Output& o : impl_->outputs) {
     const ImageOutputConfig& c = o.config;
     if (c.png || c.depth || c.segmentation) {
-      o.folder = out.File(c.camera);
+      o.folder = impl_->options.flat ? out.staging_dir() : out.File(c.camera);
       std::error_code ec;
       std::filesystem::create_directories(o.folder, ec);
       if (ec) throw std::runtime_error("image folder '" + o.folder + "': " + ec.message());
     }
-    if (!c.video.empty()) o.video = render::VideoFile::Create(out.File(c.video), 1.0 / c.every_s, c.width, c.height);
+    if (c.video.empty()) continue;
+    std::string path = out.File(c.video);
+    if (impl_->options.video_anywhere) {
+      // a video inside the output folder is written into its staging folder, so
+      // that it moves into place with the frames instead of being replaced by them
+      path = StagedPath(c.video, out);
+      const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+      std::error_code ec;
+      if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    }
+    o.video = render::VideoFile::Create(path, 1.0 / c.every_s, c.width, c.height);
   }
 }
 
@@ -127,20 +156,61 @@ void ImageOutputs::Impl::Frame(Output& o, double t, mjData* d) {
   if (c.png || c.depth || !c.video.empty()) o.renderer->Render(d, o.camera, &o.rgb, c.depth ? &o.depth : nullptr);
   if (c.segmentation) o.renderer->RenderSegmentation(d, o.camera, &o.seg);
   const auto t1 = std::chrono::steady_clock::now();
-  if (c.png) render::WritePng(o.folder + "/" + FrameName("rgb", o.frames), o.rgb);
-  if (c.depth) render::WriteDepthPng(o.folder + "/" + FrameName("depth", o.frames), o.depth);
-  if (c.segmentation) render::WriteSegmentationPng(o.folder + "/" + FrameName("seg", o.frames), o.seg);
-  if (o.video) o.video->Add(o.rgb);
   o.render_wall_s += std::chrono::duration<double>(t1 - t0).count();
+  std::vector<std::string> written;
+  try {
+    Write(o, &written);
+  } catch (const std::runtime_error& e) {
+    // nothing half-written: the frame's files that did go out are removed, and the outputs stop
+    for (const std::string& path : written) {
+      std::error_code ec;
+      std::filesystem::remove(path, ec);
+    }
+    error = e.what();
+    throw;
+  }
   write_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   o.times_s.push_back(t);
   ++o.frames;
 }
 
+void ImageOutputs::Impl::Write(Output& o, std::vector<std::string>* written) {
+  const ImageOutputConfig& c = o.config;
+  const std::string stem = o.folder + "/";
+  if (c.png) {
+    written->push_back(stem + FrameName("rgb", o.frames));
+    render::WritePng(written->back(), o.rgb);
+  }
+  if (c.depth) {
+    written->push_back(stem + FrameName("depth", o.frames));
+    render::WriteDepthPng(written->back(), o.depth);
+  }
+  if (c.segmentation) {
+    written->push_back(stem + FrameName("seg", o.frames));
+    render::WriteSegmentationPng(written->back(), o.seg);
+  }
+  if (o.video) o.video->Add(o.rgb);  // (last: a frame is in the video only when its PNGs are written)
+}
+
 void ImageOutputs::Observe(double t, mjData* d) {
+  if (failed()) return;
+  const long max_frames = impl_->options.max_frames;
   for (Impl::Output& o : impl_->outputs) {
+    if (max_frames > 0 && o.frames >= max_frames) continue;
     if (t + kDueTolerance_s >= o.frames * o.config.every_s) impl_->Frame(o, t, d);
   }
+}
+
+bool ImageOutputs::failed() const { return !impl_->error.empty(); }
+
+const std::string& ImageOutputs::error() const { return impl_->error; }
+
+const std::vector<double>& ImageOutputs::frame_times(std::size_t i) const { return impl_->outputs.at(i).times_s; }
+
+double ImageOutputs::render_wall_s(std::size_t i) const { return impl_->outputs.at(i).render_wall_s; }
+
+std::string ImageOutputs::gl_renderer() const {
+  return impl_->renderers.empty() ? std::string() : impl_->renderers.begin()->second->gl_renderer();
 }
 
 void ImageOutputs::Finish() {
@@ -174,9 +244,7 @@ nlohmann::json ImageOutputs::Summary() const {
                        {"files", files},
                        {"render_wall_s", o.render_wall_s}});
   }
-  std::string gl;
-  if (!impl_->renderers.empty()) gl = impl_->renderers.begin()->second->gl_renderer();
-  return {{"gl_renderer", gl}, {"outputs", outputs}, {"write_wall_s", impl_->write_wall_s}};
+  return {{"gl_renderer", gl_renderer()}, {"outputs", outputs}, {"write_wall_s", impl_->write_wall_s}};
 }
 
 }  // namespace vlab::lab

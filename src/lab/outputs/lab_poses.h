@@ -17,13 +17,14 @@
 
 #include <mujoco/mujoco.h>
 
+#include "scene/scene_pose_frame.h"
+
 namespace vlab::lab {
 
 class OutputDir;
 
-/// The bytes of one pose frame (see above) into `out` (resized; no
-/// allocation once it has the capacity). Little-endian hosts only.
-void EncodePoseFrame(double time, double seq, const double* poses, int values, std::string* out);
+/// The bytes of one pose frame (scene/scene_pose_frame.h, shared with the view).
+using scene::EncodePoseFrame;
 
 class PoseRecorder {
  public:
