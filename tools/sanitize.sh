@@ -3,7 +3,7 @@
 # (CMake target vlab_unit_tests, tests/CMakeLists.txt), built with AddressSanitizer and
 # UndefinedBehaviorSanitizer into build-asan/, then `ctest -L unit` there. Any sanitizer
 # report fails its test. Run from anywhere; ./test.sh runs it when VLAB_SANITIZE=1.
-#   tools/sanitize.sh [ctest options]      e.g. tools/sanitize.sh -R lab_log
+#   tools/sanitize.sh [ctest options]      e.g. tools/sanitize.sh -R CsvLogTest
 # Environment: VLAB_ASAN_BUILD (default build-asan) is the build folder.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
