@@ -1,10 +1,16 @@
 #!/usr/bin/env bash
-# vlab test suite: install what is missing, build, run every test through ctest.
+# vlab test suite: install what is missing, build (warnings are errors: VLAB_WERROR), run
+# every test through ctest. With VLAB_SANITIZE=1, then the sanitizer lane (tools/sanitize.sh:
+# the unit tests under AddressSanitizer + UndefinedBehaviorSanitizer, in build-asan/).
 #   ./test.sh [ctest options]      e.g. ./test.sh -R physics
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 cd "$here"
 source tools/setup.sh
 vlab_setup --tests
-cd build
-exec ctest --output-on-failure -j "$(nproc)" "$@"
+status=0
+(cd build && ctest --output-on-failure -j "$(nproc)" "$@") || status=$?
+if [ "${VLAB_SANITIZE:-0}" = 1 ]; then
+  tools/sanitize.sh || status=$?
+fi
+exit $status

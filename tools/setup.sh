@@ -22,6 +22,8 @@ VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)
 VLAB_TEST_APT_PACKAGES+=(parallel slurm-wlm munge)
 # for the tests only: headless Chromium renders vlab view's page (tests/view/browser_test.cc)
 VLAB_TEST_APT_PACKAGES+=(chromium)
+# for the tests only: format_check (tests/format_check.sh) holds the tree to .clang-format
+VLAB_TEST_APT_PACKAGES+=(clang-format)
 
 vlab_missing_packages() {
   local pkg missing=()
@@ -57,11 +59,13 @@ vlab_install_packages() {
   rm -f "$log"
 }
 
+# vlab_build [CMAKE_OPTION...]: configures build/ on its first build, and again whenever
+# options are given (./test.sh gives -DVLAB_WERROR=ON), then builds everything
 vlab_build() {
   local jobs log
   jobs="$(nproc 2>/dev/null || echo 2)"
-  if [ ! -f build/CMakeCache.txt ]; then
-    cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  if [ ! -f build/CMakeCache.txt ] || [ $# -gt 0 ]; then
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
   fi
   log="build/build.log"
   echo "vlab: building (log: $log)"
@@ -73,10 +77,13 @@ vlab_build() {
 }
 
 # vlab_setup [--tests]: --tests (./test.sh) also installs the packages only the tests need
+# and builds with -Werror (VLAB_WERROR: any compiler warning fails the build)
 vlab_setup() {
+  local options=()
   if [ "${1:-}" = --tests ]; then
     VLAB_APT_PACKAGES+=("${VLAB_TEST_APT_PACKAGES[@]}")
+    options=(-DVLAB_WERROR=ON)
   fi
   vlab_install_packages
-  vlab_build
+  vlab_build "${options[@]}"
 }

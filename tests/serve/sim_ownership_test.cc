@@ -249,7 +249,7 @@ TEST(SimOwnership, ATableFullOfSubscribersDoesNotLockTheControllerOut) {
   double answered = -1;
   while (answered < periods - 1) {
     ASSERT_TRUE(ReadState(*ctl, arm, DeviceKind::kArm, &h, &p)) << "after state " << answered;
-    if (answered >= 0) EXPECT_FALSE(static_cast<std::uint32_t>(p[0]) & bridge::kStatusNotOwner) << h.seq;
+    if (answered >= 0) { EXPECT_FALSE(static_cast<std::uint32_t>(p[0]) & bridge::kStatusNotOwner) << h.seq; }
     SendHold(*ctl, arm, h.seq);
     answered = h.seq;
   }

@@ -67,6 +67,7 @@ class YoyoSimTest : public vlab::test::MujocoTest {
   double Drop() const { return sim_->data()->qvel[drop_dof_]; }  // d', m/s (downward, hand frame)
 
   std::unique_ptr<YoyoSim> sim_;
+  std::unique_ptr<YoyoSim> first_sim_;  // a test's first simulator, watched (WatchData) until TearDown
   int drop_dof_ = -1, drop_qpos_ = -1;
   double share_ = 0;
   double point_[7] = {}, yoyo_[7] = {};
@@ -217,6 +218,7 @@ TEST_F(YoyoSimTest, SameCommandsGiveTheSameStatesBitForBit) {
   sim_->SampleYoyo(yoyo_);
   double first[7];
   std::copy(yoyo_, yoyo_ + 7, first);
+  first_sim_ = std::move(sim_);
   SetUp();
   Run(150, at);
   sim_->SampleYoyo(yoyo_);

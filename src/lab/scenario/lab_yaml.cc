@@ -116,7 +116,7 @@ std::string MapReader::Child(const std::string& key) const { return path_.empty(
 void MapReader::Fail(const std::string& key, const std::string& message) const {
   YAML::Node at = node_;
   for (const auto& item : node_) {
-    if (item.first.Scalar() == key) at = item.second;
+    if (item.first.Scalar() == key) at.reset(item.second);
   }
   throw InputError(YamlError(file_, at, Child(key), message));
 }
