@@ -16,9 +16,7 @@ bool IsWhole(double v, double lo, double hi) { return v >= lo && v <= hi && v ==
 
 }  // namespace
 
-const char* EncodingName(CameraEncoding encoding) {
-  return encoding == CameraEncoding::kJpeg ? "jpeg" : "raw";
-}
+const char* EncodingName(CameraEncoding encoding) { return encoding == CameraEncoding::kJpeg ? "jpeg" : "raw"; }
 
 bool EncodingFromName(const std::string& name, CameraEncoding* encoding) {
   if (name == "raw") {
@@ -33,20 +31,34 @@ bool EncodingFromName(const std::string& name, CameraEncoding* encoding) {
 
 const char* ChunkErrorName(ChunkError e) {
   switch (e) {
-    case ChunkError::kNone: return "ok";
-    case ChunkError::kTooShort: return "too short";
-    case ChunkError::kBadMagic: return "bad magic";
-    case ChunkError::kBadVersion: return "bad version";
-    case ChunkError::kBadKind: return "wrong device kind";
-    case ChunkError::kBadType: return "wrong message type";
-    case ChunkError::kBadLength: return "bad length";
-    case ChunkError::kNotFinite: return "non-finite value";
-    case ChunkError::kBadValue: return "value out of domain";
-    case ChunkError::kBadImage: return "bad image size or encoding";
-    case ChunkError::kBadLayout: return "bad chunk layout";
-    case ChunkError::kBadPose: return "bad pose";
-    case ChunkError::kInconsistent: return "inconsistent with its frame";
-    case ChunkError::kTooLarge: return "frame too large";
+    case ChunkError::kNone:
+      return "ok";
+    case ChunkError::kTooShort:
+      return "too short";
+    case ChunkError::kBadMagic:
+      return "bad magic";
+    case ChunkError::kBadVersion:
+      return "bad version";
+    case ChunkError::kBadKind:
+      return "wrong device kind";
+    case ChunkError::kBadType:
+      return "wrong message type";
+    case ChunkError::kBadLength:
+      return "bad length";
+    case ChunkError::kNotFinite:
+      return "non-finite value";
+    case ChunkError::kBadValue:
+      return "value out of domain";
+    case ChunkError::kBadImage:
+      return "bad image size or encoding";
+    case ChunkError::kBadLayout:
+      return "bad chunk layout";
+    case ChunkError::kBadPose:
+      return "bad pose";
+    case ChunkError::kInconsistent:
+      return "inconsistent with its frame";
+    case ChunkError::kTooLarge:
+      return "frame too large";
   }
   return "unknown";
 }
@@ -63,8 +75,8 @@ std::size_t EncodeCameraChunk(const ChunkHeader& h, const std::uint8_t* bytes, u
       static_cast<double>(h.height), static_cast<double>(h.encoding), static_cast<double>(h.frame_bytes),
       static_cast<double>(h.offset), static_cast<double>(h.chunk_bytes), h.pose.valid ? 1.0 : 0.0,
       // an unknown pose travels as the origin and the identity
-      h.pose.valid ? p.x() : 0.0, h.pose.valid ? p.y() : 0.0, h.pose.valid ? p.z() : 0.0,
-      h.pose.valid ? q.w() : 1.0, h.pose.valid ? q.x() : 0.0, h.pose.valid ? q.y() : 0.0, h.pose.valid ? q.z() : 0.0};
+      h.pose.valid ? p.x() : 0.0, h.pose.valid ? p.y() : 0.0, h.pose.valid ? p.z() : 0.0, h.pose.valid ? q.w() : 1.0,
+      h.pose.valid ? q.x() : 0.0, h.pose.valid ? q.y() : 0.0, h.pose.valid ? q.z() : 0.0};
   unsigned char* at = out;
   for (double v : values) {
     PutDouble(v, at);
@@ -74,8 +86,7 @@ std::size_t EncodeCameraChunk(const ChunkHeader& h, const std::uint8_t* bytes, u
   return kChunkHeaderBytes + h.chunk_bytes;
 }
 
-ChunkError DecodeCameraChunk(const unsigned char* data, std::size_t size, ChunkHeader* h,
-                             const unsigned char** bytes) {
+ChunkError DecodeCameraChunk(const unsigned char* data, std::size_t size, ChunkHeader* h, const unsigned char** bytes) {
   // framing: the 7-value header, then `length` values, then the bytes
   if (size < kHeaderBytes) return ChunkError::kTooShort;
   double header[kHeaderValues];

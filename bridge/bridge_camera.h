@@ -59,16 +59,16 @@ bool EncodingFromName(const std::string& name, CameraEncoding* encoding);
 /// (x right, y down, z forward) in the world frame W.
 struct CameraPose {
   bool valid = false;  ///< false: unknown (a camera without --pose); the values are then meaningless
-  Eigen::Vector3d p_WC = Eigen::Vector3d::Zero();                  ///< position of C's origin, m
-  Eigen::Quaterniond q_WC = Eigen::Quaterniond::Identity();        ///< orientation of C in W (unit)
+  Eigen::Vector3d p_WC = Eigen::Vector3d::Zero();            ///< position of C's origin, m
+  Eigen::Quaterniond q_WC = Eigen::Quaterniond::Identity();  ///< orientation of C in W (unit)
 };
 
 /// One whole frame as it travels: what the device sends and a client receives.
 struct CameraFrame {
-  std::int64_t id = 0;     ///< frame id, increasing by one per frame the device produces
-  double time_s = 0;       ///< exposure stamp, s (middle of the exposure; the device's clock)
-  int width = 0;           ///< pixels
-  int height = 0;          ///< pixels
+  std::int64_t id = 0;  ///< frame id, increasing by one per frame the device produces
+  double time_s = 0;    ///< exposure stamp, s (middle of the exposure; the device's clock)
+  int width = 0;        ///< pixels
+  int height = 0;       ///< pixels
   CameraEncoding encoding = CameraEncoding::kRaw;
   std::vector<std::uint8_t> data;  ///< the frame's bytes (raw RGB8 or a JPEG file)
   CameraPose pose;
@@ -92,7 +92,7 @@ struct ChunkHeader {
 /// Why a chunk was refused (names: ChunkErrorName).
 enum class ChunkError {
   kNone = 0,
-  kTooShort,      ///< fewer bytes than the 7-value header plus `length` values
+  kTooShort,  ///< fewer bytes than the 7-value header plus `length` values
   kBadMagic,
   kBadVersion,
   kBadKind,       ///< not kind 4 (camera)

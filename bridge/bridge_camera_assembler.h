@@ -34,19 +34,19 @@
 namespace vlab::bridge {
 
 struct AssemblerConfig {
-  int slots = 4;                                ///< frames in progress at once (1..64)
-  double timeout_s = 1.0;                       ///< an incomplete frame is dropped this long after its first chunk
-  std::size_t max_frame_bytes = 64u << 20;      ///< larger frames are refused (kTooLarge)
-  std::int64_t restart_gap = 64;                ///< frames: an id this far below the newest means a restart
-  double restart_time_s = 1.0;                  ///< s: a time this far before the newest means a restart
+  int slots = 4;                            ///< frames in progress at once (1..64)
+  double timeout_s = 1.0;                   ///< an incomplete frame is dropped this long after its first chunk
+  std::size_t max_frame_bytes = 64u << 20;  ///< larger frames are refused (kTooLarge)
+  std::int64_t restart_gap = 64;            ///< frames: an id this far below the newest means a restart
+  double restart_time_s = 1.0;              ///< s: a time this far before the newest means a restart
 };
 
 struct AssemblerCounters {
-  long chunks = 0;        ///< datagrams offered to Add
-  long accepted = 0;      ///< chunks stored
-  long duplicates = 0;    ///< chunks received before (ignored)
-  long late = 0;          ///< chunks of frames already delivered or dropped (ignored)
-  long refused = 0;       ///< malformed or inconsistent chunks, all reasons
+  long chunks = 0;                                  ///< datagrams offered to Add
+  long accepted = 0;                                ///< chunks stored
+  long duplicates = 0;                              ///< chunks received before (ignored)
+  long late = 0;                                    ///< chunks of frames already delivered or dropped (ignored)
+  long refused = 0;                                 ///< malformed or inconsistent chunks, all reasons
   std::array<long, kChunkErrorCount> refused_by{};  ///< refused, indexed by ChunkError
   long frames_completed = 0;
   long frames_dropped = 0;      ///< incomplete frames dropped, all reasons (the three below and restarts)
@@ -90,8 +90,8 @@ class FrameAssembler {
  private:
   struct Slot {
     bool busy = false;
-    ChunkHeader first;          // the first chunk's fields: the others must agree
-    std::size_t piece = 0;      // P: bytes of every chunk but the last
+    ChunkHeader first;      // the first chunk's fields: the others must agree
+    std::size_t piece = 0;  // P: bytes of every chunk but the last
     double started_s = 0;
     int received = 0;
     std::vector<std::uint8_t> data;

@@ -51,11 +51,8 @@ CameraClient CameraClient::Connect(const std::string& address, int port, const C
 }
 
 CameraClient::CameraClient(const std::string& address, int port, const CameraClientOptions& options)
-    : options_(options),
-      device_(UdpSocket::Resolve(address, port)),
-      impl_(new Impl(options.assembler)),
-      buffer_(kBufferBytes),
-      start_(Clock::now()) {
+    : options_(options), device_(UdpSocket::Resolve(address, port)), impl_(new Impl(options.assembler)),
+      buffer_(kBufferBytes), start_(Clock::now()) {
   const bool any_v4 = options.bind_address == "0.0.0.0";
   socket_ = UdpSocket::Bind(any_v4 && device_.address().is_v6() ? "::" : options.bind_address, 0);
   receive_buffer_bytes_ = SetSocketBuffer(socket_->fd(), SO_RCVBUF, options.receive_buffer_bytes);

@@ -36,11 +36,11 @@
 namespace vlab::bridge {
 
 struct CameraClientOptions {
-  double timeout_s = 1.0;               ///< Connect waits this long for the describe reply, s
+  double timeout_s = 1.0;                ///< Connect waits this long for the describe reply, s
   std::string bind_address = "0.0.0.0";  ///< local address (port: any free one)
-  int receive_buffer_bytes = 8 << 20;   ///< SO_RCVBUF asked for (forced where permitted)
-  double keepalive_s = 1.0;             ///< renew the subscription this often while receiving, s
-  bool decode = true;                   ///< fill Frame::rgb (JPEG decoded with OpenCV)
+  int receive_buffer_bytes = 8 << 20;    ///< SO_RCVBUF asked for (forced where permitted)
+  double keepalive_s = 1.0;              ///< renew the subscription this often while receiving, s
+  bool decode = true;                    ///< fill Frame::rgb (JPEG decoded with OpenCV)
   AssemblerConfig assembler;
 };
 

@@ -10,7 +10,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-
 namespace vlab::bridge {
 
 struct FrameEncoder::Jpeg {
@@ -58,8 +57,11 @@ std::string CameraDescribeJson(const CameraDescription& d, const std::string& ad
                   {"chunk_index", "chunk_count", "width", "height", "encoding", "frame_bytes", "offset", "chunk_bytes",
                    "pose_valid", "px", "py", "pz", "qw", "qx", "qy", "qz", "bytes[chunk_bytes]"}},
                  {"command", json::array()}};
-  j["units"] = {{"time", "s (middle of the exposure)"}, {"width", "px"},         {"height", "px"},
-                {"position", "m (world)"},            {"orientation", "unit quaternion w x y z (world)"},
+  j["units"] = {{"time", "s (middle of the exposure)"},
+                {"width", "px"},
+                {"height", "px"},
+                {"position", "m (world)"},
+                {"orientation", "unit quaternion w x y z (world)"},
                 {"intrinsics", "px"}};
   j["width"] = d.width;
   j["height"] = d.height;
@@ -68,8 +70,8 @@ std::string CameraDescribeJson(const CameraDescription& d, const std::string& ad
   j["encodings"] = {{"raw", 0}, {"jpeg", 1}};
   j["jpeg_quality"] = d.jpeg_quality;
   j["chunk_bytes"] = chunk_bytes;
-  j["intrinsics"] = {{"model", "pinhole"}, {"width", d.width}, {"height", d.height}, {"fx", d.fx}, {"fy", d.fy},
-                     {"cx", d.cx},         {"cy", d.cy},         {"source", d.intrinsics_source}};
+  j["intrinsics"] = {{"model", "pinhole"}, {"width", d.width}, {"height", d.height}, {"fx", d.fx},
+                     {"fy", d.fy},         {"cx", d.cx},       {"cy", d.cy},         {"source", d.intrinsics_source}};
   j["distortion"] = {{"model", "plumb_bob"},
                      {"k1", d.distortion[0]},
                      {"k2", d.distortion[1]},
@@ -107,8 +109,7 @@ std::unique_ptr<CameraServer> CameraServer::Create(const CameraServerConfig& con
         "chunk_bytes too small: a raw frame would need more than 65535 chunks");
   Check(config.subscriber_timeout_s > 0, "subscriber_timeout_s must be > 0");
   Check(config.max_subscribers >= 1, "max_subscribers must be >= 1");
-  Check(config.test_drop_probability >= 0 && config.test_drop_probability <= 1,
-        "test_drop_probability must be 0 to 1");
+  Check(config.test_drop_probability >= 0 && config.test_drop_probability <= 1, "test_drop_probability must be 0 to 1");
 
   std::unique_ptr<CameraServer> s(new CameraServer(config));
   DeviceServerConfig server;
@@ -206,8 +207,8 @@ bool CameraServer::SendBytes(const ChunkHeader& frame, const std::uint8_t* data)
     ++counters_.test_damaged_frames;
     return false;
   }
-  const bool whole = std::any_of(subscribers.begin(), subscribers.end(),
-                                 [](const SessionTable::Session& s) { return !s.mark; });
+  const bool whole =
+      std::any_of(subscribers.begin(), subscribers.end(), [](const SessionTable::Session& s) { return !s.mark; });
   if (whole) ++counters_.frames_sent;
   return whole;
 }

@@ -39,22 +39,22 @@ namespace vlab::bridge {
 /// What a camera's describe reply says about it (docs/protocol_camera.md).
 struct CameraDescription {
   std::string name = "camera";
-  std::string server;            ///< "vlab camera", "vlab serve (MuJoCo 2.2.2)"
-  std::string source;            ///< "/dev/video0", "clip.avi", "MJCF camera 'webcam'"
+  std::string server;              ///< "vlab camera", "vlab serve (MuJoCo 2.2.2)"
+  std::string source;              ///< "/dev/video0", "clip.avi", "MJCF camera 'webcam'"
   std::string clock = "realtime";  ///< whose time the stamps are: realtime (wall clock), lockstep, fast
-  int width = 640;               ///< pixels
+  int width = 640;                 ///< pixels
   int height = 480;
-  double fps = 30;               ///< nominal frame rate, Hz
+  double fps = 30;  ///< nominal frame rate, Hz
   CameraEncoding encoding = CameraEncoding::kJpeg;
-  int jpeg_quality = 90;         ///< 1..100
+  int jpeg_quality = 90;  ///< 1..100
   /// Pinhole intrinsics of the images as sent, pixels (centres at whole numbers).
   double fx = 0, fy = 0, cx = 0, cy = 0;
-  std::string intrinsics_source = "fovy";  ///< fovy | calibration | estimated
+  std::string intrinsics_source = "fovy";        ///< fovy | calibration | estimated
   std::array<double, 4> distortion{0, 0, 0, 0};  ///< k1 k2 p1 p2 (OpenCV plumb_bob) of the images as sent
-  double exposure_s = 0;         ///< exposure time; the stamp is its middle
-  double latency_s = 0;          ///< from the exposure stamp to sending
-  double noise = 0;              ///< pixel noise, grey levels (0: none or unknown)
-  std::string pose = "none";     ///< none | fixed | moving: what the chunks' pose fields carry
+  double exposure_s = 0;                         ///< exposure time; the stamp is its middle
+  double latency_s = 0;                          ///< from the exposure stamp to sending
+  double noise = 0;                              ///< pixel noise, grey levels (0: none or unknown)
+  std::string pose = "none";                     ///< none | fixed | moving: what the chunks' pose fields carry
 };
 
 /// The describe reply (JSON) of a camera bound at address:port.
@@ -66,7 +66,7 @@ struct CameraServerConfig {
   int port = 0;  ///< 0: any free port
   CameraDescription description;
   std::size_t chunk_bytes = kDefaultChunkBytes;  ///< frame bytes per chunk, 1..kMaxChunkBytes
-  double subscriber_timeout_s = 10;             ///< drop a subscriber silent this long (wall clock)
+  double subscriber_timeout_s = 10;              ///< drop a subscriber silent this long (wall clock)
   int max_subscribers = 16;
   int send_buffer_bytes = 4 << 20;  ///< SO_SNDBUF asked for (a burst of chunks to every subscriber)
   /// Test hook: drop each chunk with this probability before it is sent
@@ -76,13 +76,13 @@ struct CameraServerConfig {
 };
 
 struct CameraServerCounters {
-  EndpointCounters endpoint;  ///< received, describes, refused, refused_malformed, sessions (the rest stay 0)
-  long frames = 0;            ///< frames given to Send / SendImage
-  long frames_sent = 0;       ///< frames sent to at least one subscriber
-  long chunks_sent = 0;       ///< datagrams sent, all subscribers
-  long send_failures = 0;     ///< datagrams the socket did not take
-  long bytes_sent = 0;        ///< frame bytes sent, all subscribers
-  long refused_frames = 0;    ///< frames that break the layout (size, encoding, id not increasing)
+  EndpointCounters endpoint;     ///< received, describes, refused, refused_malformed, sessions (the rest stay 0)
+  long frames = 0;               ///< frames given to Send / SendImage
+  long frames_sent = 0;          ///< frames sent to at least one subscriber
+  long chunks_sent = 0;          ///< datagrams sent, all subscribers
+  long send_failures = 0;        ///< datagrams the socket did not take
+  long bytes_sent = 0;           ///< frame bytes sent, all subscribers
+  long refused_frames = 0;       ///< frames that break the layout (size, encoding, id not increasing)
   long test_dropped_chunks = 0;  ///< chunks dropped by the test hook
   long test_damaged_frames = 0;  ///< frames with at least one chunk dropped by the test hook
   long subscribers_dropped = 0;  ///< silent subscribers dropped

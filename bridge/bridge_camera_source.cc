@@ -14,8 +14,8 @@ namespace vlab::bridge {
 
 struct VideoSource::Impl {
   cv::VideoCapture capture;
-  cv::Mat bgr;            // as read
-  cv::Mat scaled;         // resized to the delivered size
+  cv::Mat bgr;                // as read
+  cv::Mat scaled;             // resized to the delivered size
   bool first_pending = true;  // Open read the first frame; Read returns it first
 };
 
@@ -27,9 +27,7 @@ namespace {
 bool IsDevicePath(const std::string& s) { return s.rfind("/dev/video", 0) == 0; }
 
 // a video file: FFmpeg when this OpenCV has it (no GStreamer chatter), else any backend
-int FileBackend() {
-  return cv::videoio_registry::hasBackend(cv::CAP_FFMPEG) ? cv::CAP_FFMPEG : cv::CAP_ANY;
-}
+int FileBackend() { return cv::videoio_registry::hasBackend(cv::CAP_FFMPEG) ? cv::CAP_FFMPEG : cv::CAP_ANY; }
 
 }  // namespace
 

@@ -19,7 +19,7 @@ class VideoSourceError : public std::runtime_error {
 };
 
 struct VideoSourceOptions {
-  int width = 0;   ///< device: size to ask for (0: its default); frames of another size are scaled to it
+  int width = 0;  ///< device: size to ask for (0: its default); frames of another size are scaled to it
   int height = 0;
   double fps = 0;  ///< device: rate to ask for (0: its default)
 };

@@ -17,7 +17,7 @@ namespace vlab::bridge {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
+constexpr std::size_t kBufferBytes = 65536;     // any UDP datagram fits
 constexpr double kMaxSeq = 9007199254740992.0;  // 2^53: the largest whole seq a double holds exactly
 
 std::string Number(double v) {
@@ -65,7 +65,8 @@ DeviceClient::DeviceClient(DeviceKind kind, const std::string& address, int port
   // the handshake: the cookie, then the describe reply and the subscription;
   // states arriving meanwhile are checked for their kind and skipped
   session_->Connect(
-      *socket_, device_, timeout_s, &buffer_, [this](const unsigned char* json, long size) { CheckDescribe(json, size); },
+      *socket_, device_, timeout_s, &buffer_,
+      [this](const unsigned char* json, long size) { CheckDescribe(json, size); },
       [this](long size) { AcceptState(size, false); }, &skipped_);
 }
 
@@ -121,7 +122,8 @@ bool DeviceClient::ReceiveFromDevice(Clock::time_point deadline, long* size) {
   // poll briefly first (a lockstep answer comes within tens of microseconds, and a
   // sleeping thread's wake-up costs as much again), yielding so a peer on this core runs
   const Clock::time_point spin_until =
-      std::min(deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kClientSpin_s)));
+      std::min(deadline, Clock::now() +
+                             std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kClientSpin_s)));
   for (;;) {
     Endpoint from;
     long n = socket_->Receive(buffer_.data(), buffer_.size(), &from, 0.0);
@@ -161,8 +163,8 @@ bool DeviceClient::AcceptState(long size, bool parse) {
   // (not while connecting: the layout, e.g. the joint count, is not known yet)
   if (e == DecodeError::kNone && parse) e = ParseState(header, payload_);
   if (e != DecodeError::kNone) {
-    throw ProtocolError(Label() + ": malformed state datagram (" + std::to_string(size) + " bytes): " +
-                        DecodeErrorName(e));
+    throw ProtocolError(Label() + ": malformed state datagram (" + std::to_string(size) +
+                        " bytes): " + DecodeErrorName(e));
   }
   header_ = header;
   return true;

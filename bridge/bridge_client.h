@@ -129,12 +129,12 @@ class Arm : public DeviceClient {
  public:
   /// One state, sampled by the device at the end of control period `seq`.
   struct State {
-    std::int64_t seq = 0;  ///< control period k; answer with Write(..., seq)
-    double time = 0;       ///< simulated time of the sample, s
+    std::int64_t seq = 0;      ///< control period k; answer with Write(..., seq)
+    double time = 0;           ///< simulated time of the sample, s
     std::uint32_t status = 0;  ///< ArmStatusBit flags (bridge_protocol.h)
-    Eigen::VectorXd q;     ///< joint positions, rad
-    Eigen::VectorXd qd;    ///< joint velocities, rad/s
-    Eigen::VectorXd tau;   ///< applied joint torques, N m
+    Eigen::VectorXd q;         ///< joint positions, rad
+    Eigen::VectorXd qd;        ///< joint velocities, rad/s
+    Eigen::VectorXd tau;       ///< applied joint torques, N m
   };
 
   /// Connects to the arm device at address:port (numeric IPv4/IPv6 or a host

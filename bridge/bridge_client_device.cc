@@ -60,8 +60,7 @@ std::vector<std::string> ExpandLayoutFields(const nlohmann::json& fields, const 
   return out;
 }
 
-Device::Device(DeviceKind kind, const std::string& address, int port, double timeout_s,
-               const std::string& bind_address)
+Device::Device(DeviceKind kind, const std::string& address, int port, double timeout_s, const std::string& bind_address)
     : DeviceClient(Float64Kind(kind), address, port, timeout_s, bind_address) {
   const nlohmann::json& layout = describe().contains("layout") ? describe()["layout"] : nlohmann::json();
   if (!layout.is_object()) throw ProtocolError(Label() + ": describe reply has no layout");
@@ -99,8 +98,7 @@ double Device::Field(const State& state, std::string_view name) const {
   if (i < 0) throw std::invalid_argument(Label() + ": no state field '" + std::string(name) + "'");
   if (static_cast<int>(state.values.size()) != state_length_) {
     throw std::invalid_argument(Label() + ": field '" + std::string(name) + "' of a state with " +
-                                std::to_string(state.values.size()) + " values, not " +
-                                std::to_string(state_length_));
+                                std::to_string(state.values.size()) + " values, not " + std::to_string(state_length_));
   }
   return state.values[static_cast<std::size_t>(i)];
 }

@@ -89,8 +89,8 @@ class Device : public DeviceClient {
   int command_length_ = 0;
   std::vector<std::string> state_names_, command_names_;
   std::vector<double> values_;
-  std::vector<double> command_;   ///< WriteFields' command, sized at connect
-  std::vector<char> given_;       ///< which command fields WriteFields was given
+  std::vector<double> command_;  ///< WriteFields' command, sized at connect
+  std::vector<char> given_;      ///< which command fields WriteFields was given
 };
 
 }  // namespace vlab::bridge

@@ -30,8 +30,8 @@ std::string DescribeJson(const ArmDescription& d) {
   j["layout"] = LayoutJson(DeviceKind::kArm, static_cast<int>(n));
   j["units"] = {{"q", "rad"}, {"qd", "rad/s"}, {"tau", "N m"}, {"value", "rad (mode 1), rad/s (mode 2), N m (mode 3)"}};
   j["modes"] = {{"hold", 0}, {"position", 1}, {"velocity", 2}, {"torque", 3}};
-  j["status_bits"] = {{"holding", kStatusHolding},     {"refused", kStatusRefused},   {"saturated", kStatusSaturated},
-                      {"at_limit", kStatusAtLimit},    {"watchdog", kStatusWatchdog}, {"not_owner", kStatusNotOwner}};
+  j["status_bits"] = {{"holding", kStatusHolding},  {"refused", kStatusRefused},   {"saturated", kStatusSaturated},
+                      {"at_limit", kStatusAtLimit}, {"watchdog", kStatusWatchdog}, {"not_owner", kStatusNotOwner}};
   j["joints"] = d.joints;
   j["limits"] = {{"position_min", d.position_min},
                  {"position_max", d.position_max},

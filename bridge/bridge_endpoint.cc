@@ -60,15 +60,19 @@ bool DeviceEndpoint::CheckArmLimits(const ArmCommandMsg& c) const {
     return true;
   };
   switch (c.mode) {
-    case 1: return within(config_.position_min, config_.position_max, c.value);
-    case 2: return within_abs(config_.velocity_max, c.value);
-    case 3: return within_abs(config_.torque_max, c.value);
-    default: return true;  // hold: values unused
+    case 1:
+      return within(config_.position_min, config_.position_max, c.value);
+    case 2:
+      return within_abs(config_.velocity_max, c.value);
+    case 3:
+      return within_abs(config_.torque_max, c.value);
+    default:
+      return true;  // hold: values unused
   }
 }
 
 DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::size_t size, const Endpoint& from,
-                                                 long period, UdpSocket& socket) {
+                                                long period, UdpSocket& socket) {
   ++counters_.received;
   ReleaseSilentOwner();  // first: an owner back after its timeout is an owner no more
   const bool from_owner = owner_ && *owner_ == from;
@@ -81,7 +85,8 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   DecodeError e = DecodePacket(data, size, &header_, &payload_);
   // a describe request is answered whatever kind it names (0: any): tools discover with it
   const bool describe = e == DecodeError::kNone && header_.type == static_cast<int>(MessageType::kDescribe);
-  if (e == DecodeError::kNone && (describe ? header_.kind > kMaxDeviceKind : header_.kind != static_cast<int>(config_.kind))) {
+  if (e == DecodeError::kNone &&
+      (describe ? header_.kind > kMaxDeviceKind : header_.kind != static_cast<int>(config_.kind))) {
     e = DecodeError::kBadKind;
   }
   if (e == DecodeError::kNone && (header_.type == static_cast<int>(MessageType::kState) ||

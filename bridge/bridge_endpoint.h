@@ -68,21 +68,21 @@ namespace vlab::bridge {
 
 /// Counters of a device endpoint (reported by the sim device and in summary.json).
 struct EndpointCounters {
-  long received = 0;         ///< datagrams received
-  long requests = 0;         ///< well-formed describe and subscribe requests (answered, or limited)
-  long accepted = 0;         ///< commands accepted
-  long describes = 0;        ///< describe requests answered
-  long refused = 0;          ///< all refusals: malformed + limits + not owner (stale and duplicate apart)
-  long refused_malformed = 0;  ///< size, magic, version, kind, type, length, NaN/Inf, domain
-  long refused_limits = 0;   ///< wrong joint count or a value beyond a limit
-  long refused_not_owner = 0;  ///< commands from a non-owner
+  long received = 0;                ///< datagrams received
+  long requests = 0;                ///< well-formed describe and subscribe requests (answered, or limited)
+  long accepted = 0;                ///< commands accepted
+  long describes = 0;               ///< describe requests answered
+  long refused = 0;                 ///< all refusals: malformed + limits + not owner (stale and duplicate apart)
+  long refused_malformed = 0;       ///< size, magic, version, kind, type, length, NaN/Inf, domain
+  long refused_limits = 0;          ///< wrong joint count or a value beyond a limit
+  long refused_not_owner = 0;       ///< commands from a non-owner
   long refused_not_subscribed = 0;  ///< commands from a source that is no subscriber
-  long stale = 0;            ///< seq lower than the last accepted, or older than the window (ignored)
-  long duplicate = 0;        ///< seq equal to the last accepted (ignored)
-  long future = 0;           ///< seq of a state not published yet (ignored)
-  long watchdog_holds = 0;   ///< times the watchdog put the arm on hold
-  long owners_released = 0;  ///< owners released after falling silent (or by the lab)
-  SessionCounters sessions;  ///< handshakes, subscriptions, rate limits
+  long stale = 0;                   ///< seq lower than the last accepted, or older than the window (ignored)
+  long duplicate = 0;               ///< seq equal to the last accepted (ignored)
+  long future = 0;                  ///< seq of a state not published yet (ignored)
+  long watchdog_holds = 0;          ///< times the watchdog put the arm on hold
+  long owners_released = 0;         ///< owners released after falling silent (or by the lab)
+  SessionCounters sessions;         ///< handshakes, subscriptions, rate limits
 };
 
 /// What a gate says about a subscriber's command (EndpointConfig::gate).
@@ -102,10 +102,10 @@ enum class CommandCheck {
 struct EndpointConfig {
   std::string name;
   DeviceKind kind = DeviceKind::kArm;
-  std::string describe_json;  ///< the device's describe reply
+  std::string describe_json;         ///< the device's describe reply
   double owner_timeout_s = 1;        ///< wall clock
   double subscriber_timeout_s = 10;  ///< wall clock
-  int watchdog_periods = 3;   ///< arm only; 0 disables
+  int watchdog_periods = 3;          ///< arm only; 0 disables
   // arm only: one entry per joint (empty: no limit of that kind)
   int joints = 0;
   std::vector<double> position_min, position_max, velocity_max, torque_max;

@@ -35,17 +35,17 @@ namespace vlab::bridge {
 
 /// How many payload values one layout field stands for.
 enum class FieldGroup : int {
-  kOne = 0,          ///< one value
-  kPerJoint = 1,     ///< one value per joint of the device (arm)
+  kOne = 0,             ///< one value
+  kPerJoint = 1,        ///< one value per joint of the device (arm)
   kPerSensorValue = 2,  ///< one value per configured sensor value (feet, imu)
 };
 
 /// One field of a state or command payload. Strings are literals (so they
 /// are null-terminated); unit "" means a pure number (counts, codes, flags).
 struct LayoutField {
-  const char* name;     ///< as in describe replies' "layout" ("grasped"; a group: "q")
-  const char* unit;     ///< SI unit as docs/protocol.md writes it ("m/s"), "" for none
-  const char* meaning;  ///< a short description
+  const char* name;                     ///< as in describe replies' "layout" ("grasped"; a group: "q")
+  const char* unit;                     ///< SI unit as docs/protocol.md writes it ("m/s"), "" for none
+  const char* meaning;                  ///< a short description
   FieldGroup group = FieldGroup::kOne;  ///< one value, or a group of them
 };
 
@@ -243,22 +243,50 @@ inline constexpr KindLayout kKindLayouts[kMaxDeviceKind] = {
      layout_detail::Fields(layout_detail::kBaseCommand), "a holonomic mobile base"},
     {DeviceKind::kGripper, "gripper", true, layout_detail::Fields(layout_detail::kGripperState),
      layout_detail::Fields(layout_detail::kGripperCommand), "a parallel gripper"},
-    {DeviceKind::kFeet, "feet", true, layout_detail::Fields(layout_detail::kFeetState), {},
+    {DeviceKind::kFeet,
+     "feet",
+     true,
+     layout_detail::Fields(layout_detail::kFeetState),
+     {},
      "output only; one value per touch sensor"},
-    {DeviceKind::kImu, "imu", true, layout_detail::Fields(layout_detail::kImuState), {},
+    {DeviceKind::kImu,
+     "imu",
+     true,
+     layout_detail::Fields(layout_detail::kImuState),
+     {},
      "output only; one value per gyro or accelerometer axis"},
     {DeviceKind::kPoint, "point", true, layout_detail::Fields(layout_detail::kPointState),
      layout_detail::Fields(layout_detail::kPointCommand), "a commanded and measured point (a hand)"},
     {DeviceKind::kYoyo, "yoyo", true, layout_detail::Fields(layout_detail::kYoyoState), {}, "output only"},
-    {DeviceKind::kGaze, "gaze", true, layout_detail::Fields(layout_detail::kGazeState), {},
+    {DeviceKind::kGaze,
+     "gaze",
+     true,
+     layout_detail::Fields(layout_detail::kGazeState),
+     {},
      "output only; lab ground truth"},
-    {DeviceKind::kPose, "pose", true, layout_detail::Fields(layout_detail::kPoseState), {},
+    {DeviceKind::kPose,
+     "pose",
+     true,
+     layout_detail::Fields(layout_detail::kPoseState),
+     {},
      "output only; ground truth of a tracked frame"},
-    {DeviceKind::kCounter, "counter", true, layout_detail::Fields(layout_detail::kCounterState), {},
+    {DeviceKind::kCounter,
+     "counter",
+     true,
+     layout_detail::Fields(layout_detail::kCounterState),
+     {},
      "output only; a gate-time speed counter"},
-    {DeviceKind::kScene, "scene", true, layout_detail::Fields(layout_detail::kSceneState), {},
+    {DeviceKind::kScene,
+     "scene",
+     true,
+     layout_detail::Fields(layout_detail::kSceneState),
+     {},
      "output only; 7 values per visual body, published at the describe reply's rate_hz"},
-    {DeviceKind::kWord, "word", true, layout_detail::Fields(layout_detail::kWordState), {},
+    {DeviceKind::kWord,
+     "word",
+     true,
+     layout_detail::Fields(layout_detail::kWordState),
+     {},
      "output only; lab ground truth; 5 values per letter"},
     {DeviceKind::kTool, "tool", true, layout_detail::Fields(layout_detail::kToolState),
      layout_detail::Fields(layout_detail::kToolCommand), "a commanded and measured tool pose"},

@@ -48,9 +48,10 @@ struct ArmCommand {
 /// Output of a wrench (force/torque sensor) device.
 struct WrenchState {
   double time_s = 0.0;
-  Eigen::Matrix<double, 6, 1> wrench = Eigen::Matrix<double, 6, 1>::Zero();  ///< Fx Fy Fz (N), Mx My Mz (N·m), sensor frame
-  int filter = 0;          ///< JR3 filter index the values come from (0 = unfiltered)
-  bool saturated = false;  ///< any axis beyond the ADC range during the period
+  Eigen::Matrix<double, 6, 1> wrench =
+      Eigen::Matrix<double, 6, 1>::Zero();  ///< Fx Fy Fz (N), Mx My Mz (N·m), sensor frame
+  int filter = 0;                           ///< JR3 filter index the values come from (0 = unfiltered)
+  bool saturated = false;                   ///< any axis beyond the ADC range during the period
 };
 
 }  // namespace vlab::bridge

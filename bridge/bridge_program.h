@@ -34,7 +34,8 @@ inline bool ParseAddress(const std::string& text, Address* a) {
   const std::size_t colon = text.rfind(':');
   if (colon == std::string::npos) return false;
   a->host = text.substr(0, colon);
-  if (a->host.size() > 2 && a->host.front() == '[' && a->host.back() == ']') a->host = a->host.substr(1, a->host.size() - 2);
+  if (a->host.size() > 2 && a->host.front() == '[' && a->host.back() == ']')
+    a->host = a->host.substr(1, a->host.size() - 2);
   char* end = nullptr;
   const long port = std::strtol(text.c_str() + colon + 1, &end, 10);
   a->port = end && *end == '\0' && port > 0 && port < 65536 ? static_cast<int>(port) : 0;

@@ -56,24 +56,39 @@ DecodeError Expect(const Header& h, DeviceKind kind, MessageType type) {
 
 const char* DecodeErrorName(DecodeError e) {
   switch (e) {
-    case DecodeError::kNone: return "ok";
-    case DecodeError::kTooShort: return "too short";
-    case DecodeError::kTooLong: return "too long";
-    case DecodeError::kBadMagic: return "bad magic";
-    case DecodeError::kBadVersion: return "bad version";
-    case DecodeError::kBadKind: return "wrong device kind";
-    case DecodeError::kBadType: return "wrong message type";
-    case DecodeError::kBadLength: return "bad length";
-    case DecodeError::kNotFinite: return "non-finite value";
-    case DecodeError::kBadValue: return "value out of domain";
+    case DecodeError::kNone:
+      return "ok";
+    case DecodeError::kTooShort:
+      return "too short";
+    case DecodeError::kTooLong:
+      return "too long";
+    case DecodeError::kBadMagic:
+      return "bad magic";
+    case DecodeError::kBadVersion:
+      return "bad version";
+    case DecodeError::kBadKind:
+      return "wrong device kind";
+    case DecodeError::kBadType:
+      return "wrong message type";
+    case DecodeError::kBadLength:
+      return "bad length";
+    case DecodeError::kNotFinite:
+      return "non-finite value";
+    case DecodeError::kBadValue:
+      return "value out of domain";
   }
   return "unknown";
 }
 
 void EncodePacket(const Header& h, const double* payload, int count, std::vector<unsigned char>* out) {
   out->resize(static_cast<std::size_t>(kHeaderValues + count) * sizeof(double));
-  const double header[kHeaderValues] = {kMagic, static_cast<double>(kProtocolVersion), static_cast<double>(h.kind),
-                                        static_cast<double>(h.type), h.seq, h.time, static_cast<double>(count)};
+  const double header[kHeaderValues] = {kMagic,
+                                        static_cast<double>(kProtocolVersion),
+                                        static_cast<double>(h.kind),
+                                        static_cast<double>(h.type),
+                                        h.seq,
+                                        h.time,
+                                        static_cast<double>(count)};
   unsigned char* p = out->data();
   for (double v : header) {
     PutDouble(v, p);

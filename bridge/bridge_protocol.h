@@ -59,16 +59,16 @@ enum class DeviceKind : int {
   kArm = 1,
   kWrench = 2,
   kSim = 3,
-  kCamera = 4,   ///< bridge_camera.h
-  kMarkers = 5,  ///< tracked marker poses (vision)
-  kBase = 6,     ///< holonomic mobile base
-  kGripper = 7,  ///< parallel gripper
-  kFeet = 8,     ///< foot force-sensing resistors
-  kImu = 9,      ///< gyro and accelerometer
-  kPoint = 10,   ///< a commanded point (the yo-yo's hand)
-  kYoyo = 11,    ///< yo-yo state
-  kGaze = 12,    ///< ground-truth gaze of a camera on a target (lab only)
-  kPose = 13,    ///< pose of a tracked frame, like a motion-capture system
+  kCamera = 4,    ///< bridge_camera.h
+  kMarkers = 5,   ///< tracked marker poses (vision)
+  kBase = 6,      ///< holonomic mobile base
+  kGripper = 7,   ///< parallel gripper
+  kFeet = 8,      ///< foot force-sensing resistors
+  kImu = 9,       ///< gyro and accelerometer
+  kPoint = 10,    ///< a commanded point (the yo-yo's hand)
+  kYoyo = 11,     ///< yo-yo state
+  kGaze = 12,     ///< ground-truth gaze of a camera on a target (lab only)
+  kPose = 13,     ///< pose of a tracked frame, like a motion-capture system
   kCounter = 14,  ///< speed counter on a spinning joint (the PowerBall's rpm counter)
   kScene = 15,    ///< poses of every visual body, for viewers (vlab view)
   kWord = 16,     ///< lettered cubes against their slots: is the word spelled (lab only)
@@ -79,12 +79,12 @@ enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3, kSubscri
 
 /// Arm status bits (state payload value 0, as a whole number).
 enum ArmStatusBit : std::uint32_t {
-  kStatusHolding = 1u << 0,        ///< holding: no command yet, watchdog hold, or hold mode
-  kStatusRefused = 1u << 1,        ///< the last command from the owner was refused (NaN, limits, size)
-  kStatusSaturated = 1u << 2,      ///< a torque was clipped to its motor range this period
-  kStatusAtLimit = 1u << 3,        ///< a joint is at or beyond a position limit
-  kStatusWatchdog = 1u << 4,       ///< on hold because the owner fell silent
-  kStatusNotOwner = 1u << 5,       ///< sent to a client whose commands are refused: another owns the arm
+  kStatusHolding = 1u << 0,    ///< holding: no command yet, watchdog hold, or hold mode
+  kStatusRefused = 1u << 1,    ///< the last command from the owner was refused (NaN, limits, size)
+  kStatusSaturated = 1u << 2,  ///< a torque was clipped to its motor range this period
+  kStatusAtLimit = 1u << 3,    ///< a joint is at or beyond a position limit
+  kStatusWatchdog = 1u << 4,   ///< on hold because the owner fell silent
+  kStatusNotOwner = 1u << 5,   ///< sent to a client whose commands are refused: another owns the arm
 };
 
 /// Sim device operations (command payload value 0).
@@ -103,15 +103,15 @@ struct Header {
 /// Why a datagram was refused.
 enum class DecodeError {
   kNone = 0,
-  kTooShort,      ///< fewer bytes than a header, or not a whole number of float64
-  kTooLong,       ///< more than kMaxPacketValues values
+  kTooShort,  ///< fewer bytes than a header, or not a whole number of float64
+  kTooLong,   ///< more than kMaxPacketValues values
   kBadMagic,
   kBadVersion,
-  kBadKind,       ///< not the receiving device's kind
+  kBadKind,  ///< not the receiving device's kind
   kBadType,
-  kBadLength,     ///< length field does not match the datagram, or the layout
-  kNotFinite,     ///< a NaN or infinity anywhere in the datagram
-  kBadValue,      ///< a value outside its domain (mode, op, seq not a whole number ≥ 0)
+  kBadLength,  ///< length field does not match the datagram, or the layout
+  kNotFinite,  ///< a NaN or infinity anywhere in the datagram
+  kBadValue,   ///< a value outside its domain (mode, op, seq not a whole number ≥ 0)
 };
 const char* DecodeErrorName(DecodeError error);
 
@@ -144,7 +144,7 @@ struct WrenchStateMsg {
 };
 struct SimStateMsg {
   double sim_time = 0;
-  int mode = 0;  ///< 0 running, 1 paused
+  int mode = 0;   ///< 0 running, 1 paused
   int clock = 0;  ///< ClockCode
   double periods = 0;
   double refused_packets = 0;

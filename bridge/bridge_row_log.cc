@@ -52,9 +52,7 @@ void RowLog::Add(const double* values) {
   ::sem_post(&rows_);
 }
 
-std::string RowLog::error() const {
-  return ok() ? std::string() : path_ + ": " + std::strerror(error_);
-}
+std::string RowLog::error() const { return ok() ? std::string() : path_ + ": " + std::strerror(error_); }
 
 void RowLog::WriterMain() {
   // normal priority whatever the loop's (a thread inherits its maker's policy)

@@ -171,8 +171,8 @@ bool SessionTable::TakeDescribeToken(const Endpoint& from, double now) {
       *it = {from, static_cast<double>(config_.describe_burst), now};
     }
   }
-  it->tokens = std::min(static_cast<double>(config_.describe_burst),
-                        it->tokens + (now - it->last_s) * config_.describe_rate_hz);
+  it->tokens =
+      std::min(static_cast<double>(config_.describe_burst), it->tokens + (now - it->last_s) * config_.describe_rate_hz);
   it->last_s = now;
   if (it->tokens < 1) return false;
   it->tokens -= 1;
@@ -194,9 +194,9 @@ bool SessionTable::Touch(const Endpoint& from) {
 }
 
 void SessionTable::Remove(const Endpoint& from) {
-  sessions_.erase(std::remove_if(sessions_.begin(), sessions_.end(),
-                                 [&](const Session& s) { return s.endpoint == from; }),
-                  sessions_.end());
+  sessions_.erase(
+      std::remove_if(sessions_.begin(), sessions_.end(), [&](const Session& s) { return s.endpoint == from; }),
+      sessions_.end());
 }
 
 void SessionTable::Expire(const Endpoint* keep) {
@@ -246,7 +246,9 @@ void ClientSession::Connect(UdpSocket& socket, const Endpoint& device, double ti
       char within[32];
       std::snprintf(within, sizeof within, "%g", timeout_s);
       throw TimeoutError(label_ + ": " +
-                         (cookie_ == 0 ? "no answer" : !described ? "no describe reply" : "no subscription") +
+                         (cookie_ == 0 ? "no answer"
+                          : !described ? "no describe reply"
+                                       : "no subscription") +
                          " within " + within + " s (is a device of this kind and protocol version " +
                          std::to_string(kProtocolVersion) + " serving that address and port?)");
     }

@@ -57,12 +57,12 @@ inline constexpr int kMaxSessionResult = static_cast<int>(SessionResult::kRefuse
 
 /// Counters of the sessions of one device (part of EndpointCounters).
 struct SessionCounters {
-  long challenges = 0;       ///< requests answered with a challenge (no or a wrong cookie)
-  long subscribed = 0;       ///< subscriptions granted (renewals not counted)
-  long unsubscribed = 0;     ///< subscriptions ended by the subscriber
-  long expired = 0;          ///< subscribers dropped after falling silent
-  long refused_full = 0;     ///< subscriptions refused: table full
-  long evicted = 0;          ///< subscribers dropped to make room for a newcomer (SessionConfig::evict)
+  long challenges = 0;         ///< requests answered with a challenge (no or a wrong cookie)
+  long subscribed = 0;         ///< subscriptions granted (renewals not counted)
+  long unsubscribed = 0;       ///< subscriptions ended by the subscriber
+  long expired = 0;            ///< subscribers dropped after falling silent
+  long refused_full = 0;       ///< subscriptions refused: table full
+  long evicted = 0;            ///< subscribers dropped to make room for a newcomer (SessionConfig::evict)
   long describes_limited = 0;  ///< describe requests refused by the rate limit
 };
 

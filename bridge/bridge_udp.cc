@@ -172,9 +172,8 @@ Endpoint UdpSocket::Resolve(const std::string& address, int port) {
   const bool name_chars = !address.empty() && std::all_of(address.begin(), address.end(), [](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.';
   });
-  const bool numeric = std::all_of(address.begin(), address.end(), [](char c) {
-    return std::isdigit(static_cast<unsigned char>(c)) || c == '.';
-  });
+  const bool numeric = std::all_of(address.begin(), address.end(),
+                                   [](char c) { return std::isdigit(static_cast<unsigned char>(c)) || c == '.'; });
   if (!name_chars || numeric) throw NetworkError("address '" + address + "' is neither an IP address nor a host name");
   asio::io_context io;
   asio::ip::udp::resolver resolver(io);
@@ -226,7 +225,8 @@ long UdpSocket::Receive(unsigned char* buffer, std::size_t capacity, Endpoint* f
   // recvfrom with MSG_TRUNC reports the datagram's real size
   sockaddr_storage addr{};
   socklen_t len = sizeof(addr);
-  const ssize_t n = ::recvfrom(fd, buffer, capacity, MSG_TRUNC | MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&addr), &len);
+  const ssize_t n =
+      ::recvfrom(fd, buffer, capacity, MSG_TRUNC | MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&addr), &len);
   if (n < 0) return -1;
   if (from) *from = Endpoint::FromSockaddr(reinterpret_cast<const sockaddr*>(&addr), len);
   if (static_cast<std::size_t>(n) > capacity) {

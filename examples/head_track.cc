@@ -29,9 +29,9 @@
 #include <cstdlib>
 #include <deque>
 #include <future>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"
@@ -48,15 +48,15 @@ using vlab::bridge::program::Address;
 using vlab::bridge::program::ParseAddress;
 using vlab::bridge::program::Stopped;
 
-constexpr double kReadTimeout_s = 2.0;    // no state for this long: the run is over
-constexpr double kFrameTimeout_s = 1.0;   // wait for a frame the lab has sent
-constexpr double kSlice_s = 0.05;         // waits are cut into slices to see SIGTERM
-constexpr double kEyeGain = 25.0;         // 1/s
-constexpr double kNeckGain = 3.0;         // 1/s
+constexpr double kReadTimeout_s = 2.0;       // no state for this long: the run is over
+constexpr double kFrameTimeout_s = 1.0;      // wait for a frame the lab has sent
+constexpr double kSlice_s = 0.05;            // waits are cut into slices to see SIGTERM
+constexpr double kEyeGain = 25.0;            // 1/s
+constexpr double kNeckGain = 3.0;            // 1/s
 constexpr double kAlpha = 0.7, kBeta = 0.3;  // alpha-beta filter of the gaze angles
 constexpr double kGap_s = 0.5;               // the ball unseen this long: restart, stop predicting
-constexpr const char* kJoints[7] = {"neck_pitch", "neck_roll", "neck_yaw", "head_tilt",
-                                    "eye_tilt", "left_eye_pan", "right_eye_pan"};
+constexpr const char* kJoints[7] = {"neck_pitch", "neck_roll",    "neck_yaw",     "head_tilt",
+                                    "eye_tilt",   "left_eye_pan", "right_eye_pan"};
 enum Joint { kNeckPitch, kNeckRoll, kNeckYaw, kHeadTilt, kEyeTilt, kLeftPan, kRightPan };
 
 struct Options {
@@ -187,7 +187,8 @@ Eigen::VectorXd Command(const Eye& l, const Eye& r, const Arm::State& s, const A
   v[kNeckRoll] = kNeckGain * (0 - q[kNeckRoll]);
   // stay inside the velocity limits, and stop short of the position limits
   for (int j = 0; j < 7; ++j) {
-    if (!arm.velocity_max().empty()) v[j] = std::clamp(v[j], -0.95 * arm.velocity_max()[j], 0.95 * arm.velocity_max()[j]);
+    if (!arm.velocity_max().empty())
+      v[j] = std::clamp(v[j], -0.95 * arm.velocity_max()[j], 0.95 * arm.velocity_max()[j]);
     if (!arm.position_min().empty() && q[j] < arm.position_min()[j] + 0.02) v[j] = std::max(v[j], 0.0);
     if (!arm.position_max().empty() && q[j] > arm.position_max()[j] - 0.02) v[j] = std::min(v[j], 0.0);
   }
@@ -231,8 +232,10 @@ int Run(const Options& o) {
   // first states with hold commands (the lab then subscribes both at once)
   vlab::bridge::CameraClientOptions co;
   co.timeout_s = 5.0;
-  auto left_future = std::async(std::launch::async, [&] { return CameraClient::Connect(o.left.host, o.left.port, co); });
-  auto right_future = std::async(std::launch::async, [&] { return CameraClient::Connect(o.right.host, o.right.port, co); });
+  auto left_future =
+      std::async(std::launch::async, [&] { return CameraClient::Connect(o.left.host, o.left.port, co); });
+  auto right_future =
+      std::async(std::launch::async, [&] { return CameraClient::Connect(o.right.host, o.right.port, co); });
   Arm::State state = arm.Read(5.0);
   auto ready = [](auto& f) { return f.wait_for(std::chrono::milliseconds(20)) == std::future_status::ready; };
   while (!(ready(left_future) & ready(right_future))) {
@@ -241,7 +244,9 @@ int Run(const Options& o) {
   }
   Eye left = MakeEye("left", kLeftPan, left_future.get(), period);
   Eye right = MakeEye("right", kRightPan, right_future.get(), period);
-  if (!o.quiet) std::printf("head_track: %s, %s, %s\n", arm.Label().c_str(), left.camera.Label().c_str(), right.camera.Label().c_str());
+  if (!o.quiet)
+    std::printf("head_track: %s, %s, %s\n", arm.Label().c_str(), left.camera.Label().c_str(),
+                right.camera.Label().c_str());
 
   // the loop: states in order of seq; the joint history for the images' times
   std::deque<Arm::State> history;

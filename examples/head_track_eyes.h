@@ -40,9 +40,9 @@ EyeAngles FixateAngles(double u, double v, const Intrinsics& k, double pan, doub
 /// vlab's webcam model): frame i is exposed at i / fps + exposure / 2, rendered
 /// at the first control period end at or after that and sent latency later.
 struct FrameSchedule {
-  double fps = 30;            ///< Hz
-  double exposure_s = 0;      ///< s
-  double latency_s = 0;       ///< s
+  double fps = 30;                  ///< Hz
+  double exposure_s = 0;            ///< s
+  double latency_s = 0;             ///< s
   double control_period_s = 0.002;  ///< the lab's control period, s
 };
 

@@ -38,10 +38,10 @@
 
 namespace {
 
+using Eigen::VectorXd;
 using vlab::bridge::Arm;
 using vlab::bridge::ArmMode;
 using vlab::bridge::Device;
-using Eigen::VectorXd;
 
 using vlab::bridge::program::Address;
 using vlab::bridge::program::ParseAddress;
@@ -50,15 +50,15 @@ using vlab::bridge::program::Stopped;
 
 struct Options {
   Address arm{"127.0.0.1", 50020};
-  Address feet;              // port 0: no feet client
-  double stand_s = 30.0;     // standing before the squat, s
-  double max_error = -1.0;   // rad; < 0: not checked
-  double timeout_s = 2.0;    // silence that ends the run, s
+  Address feet;             // port 0: no feet client
+  double stand_s = 30.0;    // standing before the squat, s
+  double max_error = -1.0;  // rad; < 0: not checked
+  double timeout_s = 2.0;   // silence that ends the run, s
   bool quiet = false;
 };
 
-constexpr double kSettle_s = 0.5;      // the pads sink into the floor at first
-constexpr double kConnect_s = 5.0;     // describe reply wait
+constexpr double kSettle_s = 0.5;   // the pads sink into the floor at first
+constexpr double kConnect_s = 5.0;  // describe reply wait
 
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
@@ -125,7 +125,8 @@ int Run(const Options& o) {
   Arm arm = Arm::Connect(o.arm.host, o.arm.port, kConnect_s);
   std::unique_ptr<Device> feet;
   if (o.feet.port > 0) {
-    feet = std::make_unique<Device>(Device::Connect(vlab::bridge::DeviceKind::kFeet, o.feet.host, o.feet.port, kConnect_s));
+    feet = std::make_unique<Device>(
+        Device::Connect(vlab::bridge::DeviceKind::kFeet, o.feet.host, o.feet.port, kConnect_s));
   }
   Script script;
   script.stand_s = o.stand_s;

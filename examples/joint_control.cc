@@ -31,9 +31,9 @@
 
 namespace {
 
+using Eigen::VectorXd;
 using vlab::bridge::Arm;
 using vlab::bridge::ArmMode;
-using Eigen::VectorXd;
 
 struct Options {
   std::string host = "127.0.0.1";
@@ -173,7 +173,8 @@ int Run(const Options& o) {
 int main(int argc, char** argv) {
   Options options;
   if (!ParseOptions(argc, argv, &options)) {
-    std::fprintf(stderr, "usage: %s [--arm HOST:PORT] [--gain K (1/s)] [--max-error E (rad)] [--duration S] [--quiet]\n",
+    std::fprintf(stderr,
+                 "usage: %s [--arm HOST:PORT] [--gain K (1/s)] [--max-error E (rad)] [--duration S] [--quiet]\n",
                  argv[0]);
     return 2;
   }

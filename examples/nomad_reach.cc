@@ -29,8 +29,8 @@
 #include <memory>
 #include <string>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
@@ -43,12 +43,12 @@
 
 namespace {
 
+using Eigen::Vector3d;
+using Eigen::VectorXd;
 using vlab::bridge::Arm;
 using vlab::bridge::ArmMode;
 using vlab::bridge::Device;
 using vlab::bridge::DeviceKind;
-using Eigen::Vector3d;
-using Eigen::VectorXd;
 
 using vlab::bridge::program::kPoll_s;
 using vlab::bridge::program::Stopped;
@@ -59,7 +59,7 @@ constexpr double kOdometryGain = 5.0;  // 1/s on the base's position error
 constexpr int kBaseX = vlab::bridge::StateIndex(DeviceKind::kBase, "x");
 constexpr int kBaseY = vlab::bridge::StateIndex(DeviceKind::kBase, "y");
 constexpr int kBaseYaw = vlab::bridge::StateIndex(DeviceKind::kBase, "yaw");
-constexpr double kWorldFrame = 1;      // the base command's frame: world
+constexpr double kWorldFrame = 1;  // the base command's frame: world
 
 struct Options {
   std::string scene;
@@ -144,7 +144,8 @@ ArmModel LoadArm(const std::string& scene, const VectorXd& q_rest) {
 int Run(const Options& o) {
   Device base = Device::Connect(DeviceKind::kBase, o.base_host, o.base_port, 1.0);
   Arm arm = Arm::Connect(o.arm_host, o.arm_port, 1.0);
-  if (arm.joints() != 7) throw std::runtime_error(arm.Label() + " has " + std::to_string(arm.joints()) + " joints, not 7");
+  if (arm.joints() != 7)
+    throw std::runtime_error(arm.Label() + " has " + std::to_string(arm.joints()) + " joints, not 7");
   Arm::State s = arm.Read(o.timeout_s);
   Device::State b;
   if (!ReadAfter(base, s.seq - 1, o.timeout_s, &b)) return 0;
@@ -153,7 +154,7 @@ int Run(const Options& o) {
   const double x0 = b.values[kBaseX];
   ArmModel model = LoadArm(o.scene, q_hold);
 
-  Vector3d p_start = Vector3d::Zero();  // tool at the start of the reach, world
+  Vector3d p_start = Vector3d::Zero();                   // tool at the start of the reach, world
   Eigen::Matrix3d R_hold = Eigen::Matrix3d::Identity();  // tool orientation on the base
   double error = 0;
   for (;;) {
@@ -187,8 +188,7 @@ int Run(const Options& o) {
       p_start = tip.p_W;
       R_hold = tip.R_W;
     } else {
-      const vlab::control::ScalingSample ts =
-          vlab::control::EvaluateTimeScaling({}, kReach_s, t - kDrive_s - kStand_s);
+      const vlab::control::ScalingSample ts = vlab::control::EvaluateTimeScaling({}, kReach_s, t - kDrive_s - kStand_s);
       vlab::control::TaskSpaceTarget target;
       target.pose.p_W = p_start + ts.s * (p_target - p_start);
       target.pose.R_W = R_hold;

@@ -38,8 +38,8 @@ class GlContext {
 
  private:
   GlContext() = default;
-  void* context_ = nullptr;              // OSMesaContext
-  std::vector<std::uint8_t> window_;     // RGBA window buffer (unused by offscreen rendering)
+  void* context_ = nullptr;           // OSMesaContext
+  std::vector<std::uint8_t> window_;  // RGBA window buffer (unused by offscreen rendering)
   std::string description_;
 };
 

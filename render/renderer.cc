@@ -90,7 +90,7 @@ int CameraId(const mjModel* m, const std::string& name) {
     known += (i ? ", " : "") + std::string(n ? n : "(unnamed #" + std::to_string(i) + ")");
   }
   throw vlab::InputError("no camera '" + name + "' in the scene (" +
-                        (known.empty() ? std::string("it has no cameras") : "cameras: " + known) + ")");
+                         (known.empty() ? std::string("it has no cameras") : "cameras: " + known) + ")");
 }
 
 void GeomsToBodies(const mjModel* m, const SegmentationImage& seg, std::vector<std::int32_t>* bodies) {
@@ -202,9 +202,9 @@ std::unique_ptr<Renderer> Renderer::Create(const mjModel* m, const Options& opti
   if (options.width < 1 || options.height < 1 || options.width > max_w || options.height > max_h) {
     const std::string scene = options.scene.empty() ? "the scene" : "scene '" + options.scene + "'";
     throw vlab::InputError("image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
-                          " does not fit the offscreen buffer " + std::to_string(max_w) + "x" +
-                          std::to_string(max_h) + " of " + scene + " (raise <visual><global offwidth=\"...\" " +
-                          "offheight=\"...\"/> in the scene)");
+                           " does not fit the offscreen buffer " + std::to_string(max_w) + "x" + std::to_string(max_h) +
+                           " of " + scene + " (raise <visual><global offwidth=\"...\" " +
+                           "offheight=\"...\"/> in the scene)");
   }
   // one creation at a time in the process: MuJoCo loads its GL function pointers
   // (process-global) in mjr_makeContext, and offsamples is set on the shared model below

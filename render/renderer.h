@@ -96,11 +96,11 @@ int BindRasterizers(const std::vector<int>& cpus);
 class Renderer {
  public:
   struct Options {
-    int width = 640;   ///< largest image this renderer will draw (<= offscreen buffer)
+    int width = 640;  ///< largest image this renderer will draw (<= offscreen buffer)
     int height = 480;
     Profile profile = Profile::kFast;
-    std::string scene;          ///< scene file, named in error messages ("": "the scene")
-    bool log_renderer = true;   ///< print "vlab: render: GL_RENDERER; GL_VERSION" to stderr, once per process
+    std::string scene;         ///< scene file, named in error messages ("": "the scene")
+    bool log_renderer = true;  ///< print "vlab: render: GL_RENDERER; GL_VERSION" to stderr, once per process
   };
   /// Creates the GL context and MuJoCo's render context for `m` (which must
   /// outlive the renderer). Throws InputError when width x height exceeds the

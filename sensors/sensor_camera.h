@@ -71,15 +71,15 @@ PinholeIntrinsics IntrinsicsFromFovy(double fovy_rad, int width, int height);
 double FovyFromHfov(double hfov_rad, int width, int height);
 
 struct CameraModelConfig {
-  int width = 640;     ///< output image, pixels (1..8192)
+  int width = 640;  ///< output image, pixels (1..8192)
   int height = 480;
-  double fps = 30.0;   ///< frame rate, Hz (0 < fps <= 1000)
+  double fps = 30.0;  ///< frame rate, Hz (0 < fps <= 1000)
   /// Vertical field of view, rad; default from the QuickCam's horizontal one at 640x480 (~36.5 deg).
   double fovy_rad = FovyFromHfov(kQuickCamHfovDeg * 3.14159265358979323846 / 180.0, 640, 480);
   double exposure_s = 0.0;  ///< exposure time, s (0 <= exposure < 1 / fps); the stamp is its middle
   double latency_s = 0.03;  ///< stamp to delivery, s (0..1) [EST]
   std::array<double, 4> distortion{0, 0, 0, 0};  ///< k1, k2, p1, p2 (plumb_bob); all 0: no distortion
-  double noise = 0.0;       ///< pixel noise standard deviation, grey levels (0..64)
+  double noise = 0.0;                            ///< pixel noise standard deviation, grey levels (0..64)
   /// The ideal image Apply receives: size and intrinsics. width 0: the same as the output's.
   PinholeIntrinsics ideal;
 };

@@ -62,10 +62,10 @@ class ZigguratNormal {
   static constexpr int kLayers = 128;
   double Slow(Xoshiro256pp& rng, int layer, double x) const;
 
-  std::array<double, kLayers + 1> edge_{};   // layer widths: edge_[0] base width, edge_[1] = r, edge_[128] = 0
-  std::array<double, kLayers + 1> height_{};  // exp(-edge²/2)
+  std::array<double, kLayers + 1> edge_{};     // layer widths: edge_[0] base width, edge_[1] = r, edge_[128] = 0
+  std::array<double, kLayers + 1> height_{};   // exp(-edge²/2)
   std::array<std::uint64_t, kLayers> fast_{};  // 56-bit thresholds: value < fast_[i] lies under the curve
-  std::array<double, kLayers> scale_{};       // edge_[i] / 2^56
+  std::array<double, kLayers> scale_{};        // edge_[i] / 2^56
 };
 
 }  // namespace vlab::sensors

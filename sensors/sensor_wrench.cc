@@ -24,8 +24,7 @@ Wrench DrawStandardNormal(const WrenchSensorModel& model, Xoshiro256pp& rng) {
 }
 
 // counts clipped to the int16 range and (optionally) rounded; flags what was hit
-Wrench ToCounts(const WrenchSensorModel& model, const Wrench& value, bool* saturated,
-                bool* near_saturated) {
+Wrench ToCounts(const WrenchSensorModel& model, const Wrench& value, bool* saturated, bool* near_saturated) {
   Wrench counts = value.cwiseQuotient(model.lsb());
   for (int i = 0; i < 6; ++i) {
     const double magnitude = std::abs(counts[i]);
@@ -40,21 +39,19 @@ Wrench ToCounts(const WrenchSensorModel& model, const Wrench& value, bool* satur
 }
 
 // what the host reads: every data set as clipped (and rounded) counts times lsb
-void FillReading(const WrenchSensorModel& model, const WrenchSensorState& state,
-                 WrenchReading& reading) {
+void FillReading(const WrenchSensorModel& model, const WrenchSensorState& state, WrenchReading& reading) {
   // filter0 is already ADC data
   reading.all_filters[0] = state.output[0];
   for (int k = 1; k < kWrenchFilterCount; ++k) {
-    reading.all_filters[k] =
-        ToCounts(model, state.output[k], nullptr, nullptr).cwiseProduct(model.lsb());
+    reading.all_filters[k] = ToCounts(model, state.output[k], nullptr, nullptr).cwiseProduct(model.lsb());
   }
   reading.filter = model.filter();
   reading.wrench = reading.all_filters[model.filter()];
 }
 
 // one sensor sample: noise, ADC, then every stage whose update instant this is
-void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state,
-                   const Wrench& true_wrench, WrenchReading& reading) {
+void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench,
+                   WrenchReading& reading) {
   ++state.sample_count;
 
   // sensor signal plus bias and white noise
@@ -65,8 +62,7 @@ void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state,
 
   // ADC clip and quantisation give filter0
   bool saturated = false;
-  state.output[0] =
-      ToCounts(model, signal, &saturated, &reading.near_saturated).cwiseProduct(model.lsb());
+  state.output[0] = ToCounts(model, signal, &saturated, &reading.near_saturated).cwiseProduct(model.lsb());
   if (saturated) {
     reading.saturated = true;
     state.saturated_latched = true;
@@ -100,8 +96,7 @@ void Reset(const WrenchSensorModel& model, WrenchSensorState& state, const Wrenc
   state.bias = model.bias_sigma().cwiseProduct(unit_bias);
 
   // filter0 holds the noise-free ADC value of the initial load; every stage is in steady state
-  state.output[0] =
-      ToCounts(model, initial_load + state.bias, nullptr, nullptr).cwiseProduct(model.lsb());
+  state.output[0] = ToCounts(model, initial_load + state.bias, nullptr, nullptr).cwiseProduct(model.lsb());
   for (int k = 1; k < kWrenchFilterCount; ++k) {
     const WrenchFilterStage& stage = model.stage(k);
     const Wrench& u = state.output[k - 1];
@@ -118,8 +113,8 @@ void Reset(const WrenchSensorModel& model, WrenchSensorState& state, const Wrenc
   state.ready = true;
 }
 
-WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench,
-                     double dt, WrenchReading* flags) {
+WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench, double dt,
+                     WrenchReading* flags) {
   if (!state.ready) {
     ++state.rejected_updates;
     flags->status = WrenchStatus::kNotReset;
@@ -151,8 +146,7 @@ WrenchReading Read(const WrenchSensorModel& model, const WrenchSensorState& stat
   return reading;
 }
 
-WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state,
-                     const Wrench& true_wrench, double dt) {
+WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench, double dt) {
   WrenchReading reading;
   reading.filter = model.filter();
   if (Advance(model, state, true_wrench, dt, &reading) == WrenchStatus::kNotReset) return reading;

@@ -110,8 +110,8 @@ struct WrenchSensorConfig {
 /// One low-pass stage: coefficients of b0 (1 + z^-1)^2 / (1 + a1 z^-1 + a2 z^-2).
 struct WrenchFilterStage {
   double b0 = 0.0, b1 = 0.0, b2 = 0.0, a1 = 0.0, a2 = 0.0;
-  double cutoff_hz = 0.0;     // −3 dB frequency
-  double rate_hz = 0.0;       // update rate
+  double cutoff_hz = 0.0;        // −3 dB frequency
+  double rate_hz = 0.0;          // update rate
   std::uint64_t decimation = 1;  // updated every `decimation` sensor samples
 };
 
@@ -160,14 +160,14 @@ class WrenchSensorModel {
 
 /// Mutable sensor state: filter states, generator, bias, sample clock. Call Reset before use.
 struct WrenchSensorState {
-  bool ready = false;                               // set by Reset
-  std::array<Wrench, kWrenchFilterCount> output{};  // latest unquantised data sets 0..6
+  bool ready = false;                                     // set by Reset
+  std::array<Wrench, kWrenchFilterCount> output{};        // latest unquantised data sets 0..6
   std::array<Wrench, kWrenchFilterCount - 1> z1{}, z2{};  // transposed DF-II states, stage 1..6
-  Wrench bias = Wrench::Zero();                     // drawn at Reset [N, N·m]
+  Wrench bias = Wrench::Zero();                           // drawn at Reset [N, N·m]
   Xoshiro256pp rng;
-  std::uint64_t sample_count = 0;     // samples processed since Reset
-  double phase_samples = 0.0;         // time since the last sample, in sample periods, [0, 1)
-  bool saturated_latched = false;     // any sample clipped since Reset
+  std::uint64_t sample_count = 0;  // samples processed since Reset
+  double phase_samples = 0.0;      // time since the last sample, in sample periods, [0, 1)
+  bool saturated_latched = false;  // any sample clipped since Reset
   std::uint64_t saturated_samples = 0;
   std::uint64_t rejected_updates = 0;  // Update calls refused (non-finite input/dt, no Reset)
 };
@@ -192,15 +192,14 @@ struct WrenchReading {
 /// Re-seeds the generator, draws the bias and sets the filters to steady state at
 /// `initial_load` (+ bias), as if that load had been applied forever. Sample phase = 0.
 /// Setup path: throws std::invalid_argument if initial_load is not finite.
-void Reset(const WrenchSensorModel& model, WrenchSensorState& state,
-           const Wrench& initial_load = Wrench::Zero());
+void Reset(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& initial_load = Wrench::Zero());
 
 /// Advances the sensor like Update but forms no reading: for callers that feed the sensor
 /// more often than they read it (the lab feeds it every physics step and reads it once per
 /// control period). Sets flags->status, adds to flags->samples and sets (never clears)
 /// flags->saturated / near_saturated; the data sets in *flags are left untouched.
-WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench,
-                     double dt, WrenchReading* flags);
+WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench, double dt,
+                     WrenchReading* flags);
 
 /// What the host reads now: every data set as clipped (and rounded) counts times lsb.
 WrenchReading Read(const WrenchSensorModel& model, const WrenchSensorState& state);
@@ -208,7 +207,6 @@ WrenchReading Read(const WrenchSensorModel& model, const WrenchSensorState& stat
 /// Advances the sensor by dt [s] with `true_wrench` held over (t, t + dt] and returns what the
 /// host reads at t + dt. dt = 0 only reads. Never throws, never allocates: bad input is
 /// refused (status kRejectedInput, last data returned, state.rejected_updates counted).
-WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state,
-                     const Wrench& true_wrench, double dt);
+WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench, double dt);
 
 }  // namespace vlab::sensors

@@ -29,9 +29,7 @@ constexpr KnownSensor kKnownSensors[] = {
     {"50M31A", {100.0, 100.0, 200.0, 6.0, 6.0, 6.0}},
 };
 
-[[noreturn]] void Fail(const std::string& what) {
-  throw std::invalid_argument("wrench sensor: " + what);
-}
+[[noreturn]] void Fail(const std::string& what) { throw std::invalid_argument("wrench sensor: " + what); }
 
 std::string KnownSensorNames() {
   std::string names;
@@ -49,8 +47,7 @@ void CheckAxes(const Wrench& value, const char* field, bool allow_zero) {
     const bool ok = std::isfinite(v) && (allow_zero ? v >= 0.0 : v > 0.0);
     if (!ok) {
       std::ostringstream message;
-      message << field << "[" << i << "] must be " << (allow_zero ? ">= 0" : "> 0")
-              << " and finite (got " << v << ")";
+      message << field << "[" << i << "] must be " << (allow_zero ? ">= 0" : "> 0") << " and finite (got " << v << ")";
       Fail(message.str());
     }
   }
@@ -107,15 +104,12 @@ std::unique_ptr<WrenchSensorModel> WrenchSensorModel::Create(const WrenchSensorC
     Fail(message.str());
   }
   if (config.filter < 0 || config.filter >= kWrenchFilterCount) {
-    Fail("filter " + std::to_string(config.filter) + " out of range 0.." +
-         std::to_string(kWrenchFilterCount - 1));
+    Fail("filter " + std::to_string(config.filter) + " out of range 0.." + std::to_string(kWrenchFilterCount - 1));
   }
 
   // noise and bias: explicit, or a fraction of full scale
-  const Wrench noise = config.noise_sigma.value_or(
-      model->full_scale_ * kDefaultNoiseFractionOfFullScale);
-  const Wrench bias = config.bias_sigma.value_or(
-      model->full_scale_ * kDefaultBiasFractionOfFullScale);
+  const Wrench noise = config.noise_sigma.value_or(model->full_scale_ * kDefaultNoiseFractionOfFullScale);
+  const Wrench bias = config.bias_sigma.value_or(model->full_scale_ * kDefaultBiasFractionOfFullScale);
   CheckAxes(noise, "noise_sigma", /*allow_zero=*/true);
   CheckAxes(bias, "bias_sigma", /*allow_zero=*/true);
   model->noise_sigma_ = config.enable_noise ? noise : Wrench::Zero();

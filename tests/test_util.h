@@ -83,8 +83,9 @@ struct ProcessResult {
 inline ProcessResult RunVlab(const std::string& args, int timeout_s = 120, const std::string& signal = "") {
   TempDir tmp;
   const std::string how = signal.empty() ? "timeout " : "timeout --preserve-status -s " + signal + " ";
-  const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && " + how + std::to_string(timeout_s) + " '" VLAB_BINARY_DIR
-                          "/vlab' " + args + " >'" + (tmp / "out") + "' 2>'" + (tmp / "err") + "' </dev/null";
+  const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && " + how + std::to_string(timeout_s) +
+                          " '" VLAB_BINARY_DIR "/vlab' " + args + " >'" + (tmp / "out") + "' 2>'" + (tmp / "err") +
+                          "' </dev/null";
   const int status = std::system(cmd.c_str());
   ProcessResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

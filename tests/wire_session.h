@@ -23,8 +23,8 @@ inline double WireSubscribe(bridge::UdpSocket& socket, const bridge::Endpoint& d
                             int action = 1, double timeout_s = 2.0,
                             std::vector<std::vector<unsigned char>>* other = nullptr) {
   using Clock = std::chrono::steady_clock;
-  const Clock::time_point end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                   std::chrono::duration<double>(timeout_s));
+  const Clock::time_point end =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
   std::vector<unsigned char> request, buffer(65536);
   double cookie = 0;
   bridge::Header h;
@@ -46,8 +46,8 @@ inline double WireSubscribe(bridge::UdpSocket& socket, const bridge::Endpoint& d
       bridge::SessionResult result;
       if (!bridge::ParseSessionReply(h, payload, &cookie, &result)) return 0;
       if (result == bridge::SessionResult::kChallenge && attempt == 0) break;
-      const bool ok = action == 1 ? result == bridge::SessionResult::kSubscribed
-                                  : result == bridge::SessionResult::kUnsubscribed;
+      const bool ok =
+          action == 1 ? result == bridge::SessionResult::kSubscribed : result == bridge::SessionResult::kUnsubscribed;
       return ok ? cookie : 0;
     }
   }
@@ -80,13 +80,14 @@ inline int PlayHandshake(bridge::UdpSocket& socket, bridge::Endpoint* client, br
   int good = 0;
   for (int i = 0; i < 3; ++i) {
     const long n = socket.Receive(buffer.data(), buffer.size(), client, timeout_s);
-    if (n < 0 || bridge::DecodePacket(buffer.data(), static_cast<std::size_t>(n), &h, &p) != bridge::DecodeError::kNone ||
+    if (n < 0 ||
+        bridge::DecodePacket(buffer.data(), static_cast<std::size_t>(n), &h, &p) != bridge::DecodeError::kNone ||
         p.size() != 2) {
       return good;
     }
-    const std::vector<unsigned char> reply =
-        i == 0 ? SessionReplyPacket(kind, cookie, bridge::SessionResult::kChallenge)
-               : SessionReplyPacket(kind, cookie, bridge::SessionResult::kSubscribed);
+    const std::vector<unsigned char> reply = i == 0
+                                                 ? SessionReplyPacket(kind, cookie, bridge::SessionResult::kChallenge)
+                                                 : SessionReplyPacket(kind, cookie, bridge::SessionResult::kSubscribed);
     const bool describe = h.type == static_cast<int>(bridge::MessageType::kDescribe);
     const bool subscribe = h.type == static_cast<int>(bridge::MessageType::kSubscribe);
     if (i == 0 ? describe && p[0] == 0 : (describe || subscribe) && p[0] == cookie) ++good;

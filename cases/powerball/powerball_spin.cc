@@ -88,17 +88,17 @@ constexpr double kRollRatio = 0.0012 / 0.027;  // r / R
 // 23.5 mm, ball 0.25 kg at 62.5 mm: centre of mass 39.2 mm out; inertia about it across the
 // axis 5.2e-4 kg m^2 (README "Controller") [DERIVED]
 constexpr double kComOffset_m = 0.0392, kToolInertia = 5.2e-4;
-constexpr int kW1 = 5, kW2 = 6;                // joint indices of W1 and W2 in the arm
-constexpr double kPll = 4.0;                   // rad/s: phase-locked loop gain
-constexpr double kPllMax = 2.0;                // rad/s: its largest correction of the phase rate
-constexpr double kSmooth = 2.0 * kPi * 20.0;   // rad/s: first-order low-pass of the couple
-constexpr double kMinCouple = 0.02;            // N m: the axle angle is read above this
-constexpr double kFilterDelay_s = 0.3 / 125.0; // JR3 filter 2's group delay (sensors/sensor_wrench.h)
-constexpr double kAlphaRate = 3.0 * kDeg;      // rad/s: how fast the cone angle may change
-constexpr double kRamp_s = 3.0;                // s: the cone angle's ramp at the start
-constexpr double kRegulatorBand = 2500.0;      // rpm below the target where alpha tapers to 0
-constexpr double kPull = 20.0;                 // 1/s: velocity per position error
-constexpr double kMaxJointSpeed = 6.0;         // rad/s: under the arm's 2 pi wrist limit
+constexpr int kW1 = 5, kW2 = 6;                 // joint indices of W1 and W2 in the arm
+constexpr double kPll = 4.0;                    // rad/s: phase-locked loop gain
+constexpr double kPllMax = 2.0;                 // rad/s: its largest correction of the phase rate
+constexpr double kSmooth = 2.0 * kPi * 20.0;    // rad/s: first-order low-pass of the couple
+constexpr double kMinCouple = 0.02;             // N m: the axle angle is read above this
+constexpr double kFilterDelay_s = 0.3 / 125.0;  // JR3 filter 2's group delay (sensors/sensor_wrench.h)
+constexpr double kAlphaRate = 3.0 * kDeg;       // rad/s: how fast the cone angle may change
+constexpr double kRamp_s = 3.0;                 // s: the cone angle's ramp at the start
+constexpr double kRegulatorBand = 2500.0;       // rpm below the target where alpha tapers to 0
+constexpr double kPull = 20.0;                  // 1/s: velocity per position error
+constexpr double kMaxJointSpeed = 6.0;          // rad/s: under the arm's 2 pi wrist limit
 // rad/s: the largest change from one command to the next. The cone needs alpha nu^2 dt, at
 // most 0.22 rad/s per 1 ms period (12,000 rpm, 4.1 deg); a command after a stall of the
 // loop (realtime, a loaded machine: 21 ms seen) would step by that times the stall, and a
@@ -115,24 +115,37 @@ struct Options {
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--quiet") { o->quiet = true; continue; }
+    if (arg == "--quiet") {
+      o->quiet = true;
+      continue;
+    }
     if (i + 1 >= argc) return false;
     const std::string v = argv[++i];
     bool ok = true;
-    if (arg == "--arm") ok = ParseAddress(v, &o->arm);
-    else if (arg == "--jr3") ok = ParseAddress(v, &o->jr3);
-    else if (arg == "--counter") ok = ParseAddress(v, &o->counter);
-    else if (arg == "--target-rpm") o->target_rpm = std::atof(v.c_str());
-    else if (arg == "--alpha-max") o->alpha_max_deg = std::atof(v.c_str());
-    else if (arg == "--delta") o->delta_deg = std::atof(v.c_str());
-    else if (arg == "--wrist-speed") o->wrist_speed = std::atof(v.c_str());
-    else if (arg == "--log") o->log = v;
-    else if (arg == "--timeout") o->timeout_s = std::atof(v.c_str());
-    else return false;
+    if (arg == "--arm")
+      ok = ParseAddress(v, &o->arm);
+    else if (arg == "--jr3")
+      ok = ParseAddress(v, &o->jr3);
+    else if (arg == "--counter")
+      ok = ParseAddress(v, &o->counter);
+    else if (arg == "--target-rpm")
+      o->target_rpm = std::atof(v.c_str());
+    else if (arg == "--alpha-max")
+      o->alpha_max_deg = std::atof(v.c_str());
+    else if (arg == "--delta")
+      o->delta_deg = std::atof(v.c_str());
+    else if (arg == "--wrist-speed")
+      o->wrist_speed = std::atof(v.c_str());
+    else if (arg == "--log")
+      o->log = v;
+    else if (arg == "--timeout")
+      o->timeout_s = std::atof(v.c_str());
+    else
+      return false;
     if (!ok) return false;
   }
-  return o->arm.port > 0 && o->jr3.port > 0 && o->counter.port > 0 && o->target_rpm > 0 &&
-         o->alpha_max_deg > 0 && o->alpha_max_deg <= 15 && o->wrist_speed > 0 && o->timeout_s > 0;
+  return o->arm.port > 0 && o->jr3.port > 0 && o->counter.port > 0 && o->target_rpm > 0 && o->alpha_max_deg > 0 &&
+         o->alpha_max_deg <= 15 && o->wrist_speed > 0 && o->timeout_s > 0;
 }
 
 double Wrap(double angle) { return std::remainder(angle, 2.0 * kPi); }
@@ -156,7 +169,8 @@ int Run(const Options& o) {
   Wrench jr3 = Wrench::Connect(o.jr3.host, o.jr3.port, kConnect_s);
   Device counter = Device::Connect(DeviceKind::kCounter, o.counter.host, o.counter.port, kConnect_s);
   if (arm.joints() != 7) {
-    std::fprintf(stderr, "powerball_spin: arm '%s' has %d joints, not the PA10's 7\n", arm.name().c_str(), arm.joints());
+    std::fprintf(stderr, "powerball_spin: arm '%s' has %d joints, not the PA10's 7\n", arm.name().c_str(),
+                 arm.joints());
     return 2;
   }
   // lockstep: every period in turn; otherwise (realtime) the newest state, skipping any the
@@ -171,8 +185,13 @@ int Run(const Options& o) {
   // (written by its own thread: the loop never waits for the disk)
   std::unique_ptr<vlab::bridge::program::RowLog> log;
   if (!o.log.empty()) {
-    log = vlab::bridge::program::RowLog::Open(o.log, {{"time", 4}, {"counter_rpm", 1}, {"nu_ff", 4}, {"alpha_deg", 4},
-                                                      {"alpha_measured_deg", 4}, {"phi_hat", 4}, {"psi", 4},
+    log = vlab::bridge::program::RowLog::Open(o.log, {{"time", 4},
+                                                      {"counter_rpm", 1},
+                                                      {"nu_ff", 4},
+                                                      {"alpha_deg", 4},
+                                                      {"alpha_measured_deg", 4},
+                                                      {"phi_hat", 4},
+                                                      {"psi", 4},
                                                       {"couple", 5}});
   }
 
@@ -195,7 +214,7 @@ int Run(const Options& o) {
     // 2. the rotor's couple in the groove plane (flange y, z), gravity and inertia removed
     const Eigen::Matrix<double, 6, 1>& f = w.wrench;
     const double raw_y = f(4) - kComOffset_m * f(0) - kToolInertia * accel[0];  // W1 turns about -y
-    const double raw_z = f(5) + kToolInertia * accel[1];                          // W2 turns about +z
+    const double raw_z = f(5) + kToolInertia * accel[1];                        // W2 turns about +z
     const double smooth = first ? 1.0 : 1.0 - std::exp(-kSmooth * dt);
     m_y += smooth * (raw_y - m_y);
     m_z += smooth * (raw_z - m_z);
@@ -250,8 +269,8 @@ int Run(const Options& o) {
     if (log) {
       // the cone the wrist made: the tilt of e3 from the measured W1, W2
       const double alpha_measured = std::hypot(a.q(kW1) - q0(kW1), a.q(kW2) - q0(kW2));
-      const double row[] = {t, c.values[kCounterRpm], nu_ff, alpha / kDeg, alpha_measured / kDeg, phi_hat, Wrap(psi),
-                            couple};
+      const double row[] = {
+          t, c.values[kCounterRpm], nu_ff, alpha / kDeg, alpha_measured / kDeg, phi_hat, Wrap(psi), couple};
       log->Add(row);
     }
   } while (NextArmState(arm, per_period, o.timeout_s, &a));

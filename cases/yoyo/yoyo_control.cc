@@ -88,8 +88,8 @@ constexpr int Yoyo(const char* field) { return vlab::bridge::StateIndex(DeviceKi
 constexpr int kHandX = Hand("x"), kHandY = Hand("y"), kHandZ = Hand("z"), kHandVz = Hand("vz");
 constexpr int kYoyoStatus = Yoyo("status"), kYoyoZ = Yoyo("z"), kYoyoVz = Yoyo("vz");
 constexpr int kYoyoForce = Yoyo("string_force");
-constexpr double kDescent = 0.928;   // m/s^2, g m r^2 / (m r^2 + J) (mjcf/yoyo/README.md)
-constexpr double kE2 = 0.657;        // e^2: a free yo-yo keeps this share of its fall height per bottom
+constexpr double kDescent = 0.928;  // m/s^2, g m r^2 / (m r^2 + J) (mjcf/yoyo/README.md)
+constexpr double kE2 = 0.657;       // e^2: a free yo-yo keeps this share of its fall height per bottom
 constexpr double kUp_s = 0.30, kLead = 0.03, kPre_s = 0.4, kRet_s = 0.6, kMaxStroke = 0.19, kLowFrac = 0.5;
 constexpr double kGain0 = 0.75, kGainMin = 0.2, kGainMax = 5.0, kP0 = 100.0, kForget = 0.9, kDamp = 0.8;
 constexpr double kTolerance = 0.10;  // of the level
@@ -105,21 +105,35 @@ struct Options {
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--quiet") { o->quiet = true; continue; }
+    if (arg == "--quiet") {
+      o->quiet = true;
+      continue;
+    }
     if (i + 1 >= argc) return false;
     const std::string v = argv[++i];
     bool ok = true;
-    if (arg == "--hand") ok = ParseAddress(v, &o->hand);
-    else if (arg == "--yoyo") ok = ParseAddress(v, &o->yoyo);
-    else if (arg == "--force") ok = ParseAddress(v, &o->force);
-    else if (arg == "--mirror") ok = ParseAddress(v, &o->mirror);
-    else if (arg == "--level") o->level = std::atof(v.c_str());
-    else if (arg == "--string") o->string = std::atof(v.c_str());
-    else if (arg == "--log") o->log = v;
-    else if (arg == "--check-from") o->check_from = std::atof(v.c_str());
-    else if (arg == "--check-for") o->check_for = std::atof(v.c_str());
-    else if (arg == "--timeout") o->timeout_s = std::atof(v.c_str());
-    else return false;
+    if (arg == "--hand")
+      ok = ParseAddress(v, &o->hand);
+    else if (arg == "--yoyo")
+      ok = ParseAddress(v, &o->yoyo);
+    else if (arg == "--force")
+      ok = ParseAddress(v, &o->force);
+    else if (arg == "--mirror")
+      ok = ParseAddress(v, &o->mirror);
+    else if (arg == "--level")
+      o->level = std::atof(v.c_str());
+    else if (arg == "--string")
+      o->string = std::atof(v.c_str());
+    else if (arg == "--log")
+      o->log = v;
+    else if (arg == "--check-from")
+      o->check_from = std::atof(v.c_str());
+    else if (arg == "--check-for")
+      o->check_for = std::atof(v.c_str());
+    else if (arg == "--timeout")
+      o->timeout_s = std::atof(v.c_str());
+    else
+      return false;
     if (!ok) return false;
   }
   return o->hand.port > 0 && o->yoyo.port > 0 && o->level > 0 && o->string > 0 && o->timeout_s > 0;
@@ -141,8 +155,13 @@ double Cosine(double from, double to, double t, double duration) {  // raised co
   return from + (to - from) * 0.5 * (1 - std::cos(M_PI * s));
 }
 
-struct Swing { int n; double t, top; };
-struct HandAt { double t, z, vz; };
+struct Swing {
+  int n;
+  double t, top;
+};
+struct HandAt {
+  double t, z, vz;
+};
 
 // The yo-yo's state for period `seq`. per_period: waits for it, as ReadUntil; *seen: not
 // flagged kYoyoNotSeen. Otherwise: takes the states that have arrived, without waiting;
@@ -174,7 +193,8 @@ int Run(const Options& o) {
   std::unique_ptr<Wrench> force;
   std::unique_ptr<Device> mirror;
   if (o.force.port) force = std::make_unique<Wrench>(Wrench::Connect(o.force.host, o.force.port, kConnect_s));
-  if (o.mirror.port) mirror = std::make_unique<Device>(Device::Connect(DeviceKind::kPoint, o.mirror.host, o.mirror.port, kConnect_s));
+  if (o.mirror.port)
+    mirror = std::make_unique<Device>(Device::Connect(DeviceKind::kPoint, o.mirror.host, o.mirror.port, kConnect_s));
   const bool per_period = yoyo.describe().value("clock", "") == "lockstep";
   std::string self;
   const unsigned long long hash = SelfHash(&self);
@@ -192,8 +212,14 @@ int Run(const Options& o) {
   // (written by its own thread: the loop never waits for the disk)
   std::unique_ptr<RowLog> log;
   if (!o.log.empty()) {
-    log = RowLog::Open(o.log, {{"time", 3}, {"hand_z", 6}, {"yoyo_z", 6}, {"string_force", 5}, {"swing_top_z", 6},
-                               {"level_z", 6}, {"stroke", 5}, {"yoyo_time", 3}});
+    log = RowLog::Open(o.log, {{"time", 3},
+                               {"hand_z", 6},
+                               {"yoyo_z", 6},
+                               {"string_force", 5},
+                               {"swing_top_z", 6},
+                               {"level_z", 6},
+                               {"stroke", 5},
+                               {"yoyo_time", 3}});
   }
 
   // per swing n: a_{n+1} = e2 a_n + G S_n (a: amplitude, S: the stroke); deadbeat on the
@@ -267,8 +293,9 @@ int Run(const Options& o) {
         stroke = std::clamp((target - kE2 * amp) / gain, 0.0, kMaxStroke);
         amp_prev = amp, stroke_prev = stroke;
         phase = kFalling, t_top = t, z_from = z_cmd, z_low = z0 - kLowFrac * stroke;
-        if (!o.quiet) std::printf("swing %zu: top %.4f m (amplitude %.4f m), t = %.2f s, G %.3f, next stroke %.4f m\n",
-                                  swings.size(), top, amp, t, gain, stroke);
+        if (!o.quiet)
+          std::printf("swing %zu: top %.4f m (amplitude %.4f m), t = %.2f s, G %.3f, next stroke %.4f m\n",
+                      swings.size(), top, amp, t, gain, stroke);
       }
     }
     if (phase == kFalling) {

@@ -37,12 +37,12 @@
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_udp.h"
 #include "cli/cli_commands.h"
-#include "core/core_errors.h"
 #include "cli/cli_cpus.h"
+#include "core/core_errors.h"
 #include "core/core_realtime.h"
+#include "lab/outputs/lab_stats.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
-#include "lab/outputs/lab_stats.h"
 
 namespace vlab::cli {
 
@@ -182,9 +182,8 @@ std::string ExampleBinary() {
 // the scenario served at 1 kHz for `seconds`, the example controller (a child
 // process) driving the arm, in `layout`; `periods_s` (if given) gets the wall
 // time of every period but the first
-lab::RunResult ServeWithController(lab::Scenario scenario, ClockMode clock, double seconds,
-                                   const std::string& example, const Layout& layout,
-                                   std::vector<double>* periods_s = nullptr) {
+lab::RunResult ServeWithController(lab::Scenario scenario, ClockMode clock, double seconds, const std::string& example,
+                                   const Layout& layout, std::vector<double>* periods_s = nullptr) {
   scenario.duration_s = seconds;
   scenario.control_period_s = 0.001;  // 1 kHz: one physics step per period
   const int port = bridge::UdpSocket::Bind("127.0.0.1", 0)->local_port();
@@ -232,10 +231,11 @@ int BenchBridge(const BenchArgs& args) {
     const std::vector<int> allowed = ThreadCpus();
     std::printf("  CPUs: %zu allowed (%s) of %ld online\n", allowed.size(), CpuListText(allowed).c_str(),
                 sysconf(_SC_NPROCESSORS_ONLN));
-    std::printf("  the lab waits as it does when serving (spin %.0f us, then ppoll); its peer, a child process,\n"
-                "  waits as the client library does (polls %.0f us, yielding, then ppoll): within the spins both\n"
-                "  sides busy-poll, so the echo is the busy-poll round trip\n",
-                kLabSpinSeconds * 1e6, bridge::kClientSpin_s * 1e6);
+    std::printf(
+        "  the lab waits as it does when serving (spin %.0f us, then ppoll); its peer, a child process,\n"
+        "  waits as the client library does (polls %.0f us, yielding, then ppoll): within the spins both\n"
+        "  sides busy-poll, so the echo is the busy-poll round trip\n",
+        kLabSpinSeconds * 1e6, bridge::kClientSpin_s * 1e6);
     const std::vector<Layout> layouts = Layouts(allowed);
     if (allowed.size() < 2) std::printf("  cross core: not measured (one CPU allowed)\n");
 
@@ -252,10 +252,11 @@ int BenchBridge(const BenchArgs& args) {
                 CpuListText(layouts.front().lab_cpus).c_str());
 
     const double lockstep_s = args.duration_s > 0 ? args.duration_s : 5.0;
-    std::printf("  lockstep, %.0f periods: the wall time of a period, p50 and mean; ratio = period p50 / that\n"
-                "  layout's echo p50 (goal <= 1.5); the exchange = the period p50 less the physics step, against\n"
-                "  the echo p50 (goal <= 2):\n",
-                lockstep_s * 1000);
+    std::printf(
+        "  lockstep, %.0f periods: the wall time of a period, p50 and mean; ratio = period p50 / that\n"
+        "  layout's echo p50 (goal <= 1.5); the exchange = the period p50 less the physics step, against\n"
+        "  the echo p50 (goal <= 2):\n",
+        lockstep_s * 1000);
     for (std::size_t i = 0; i < layouts.size(); ++i) {
       std::vector<double> periods;
       const lab::RunResult ls =
@@ -280,8 +281,7 @@ int BenchBridge(const BenchArgs& args) {
     }
 
     const double realtime_s = args.realtime_s;
-    const lab::RunResult rt =
-        ServeWithController(scenario, ClockMode::kRealtime, realtime_s, example, layouts.back());
+    const lab::RunResult rt = ServeWithController(scenario, ClockMode::kRealtime, realtime_s, example, layouts.back());
     const auto& st = rt.clock_stats;
     const double missed = st.periods ? 100.0 * static_cast<double>(st.missed_deadlines) / st.periods : 0.0;
     std::printf("  realtime %.0f s, unpinned: %ld periods, missed deadlines %ld (%.3f %%, goal < 0.5 %%) -> %s\n",

@@ -33,11 +33,11 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <stdexcept>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <future>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -48,9 +48,9 @@
 #include "core/core_errors.h"
 #include "core/core_realtime.h"
 #include "lab/devices/device_camera.h"
+#include "lab/outputs/lab_stats.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
-#include "lab/outputs/lab_stats.h"
 
 namespace vlab::cli {
 
@@ -62,9 +62,9 @@ constexpr int kPriority = 50;
 
 // what one receiver saw
 struct Received {
-  long frames = 0;    // whole frames
-  long lost = 0;      // ids skipped between the first and the last whole frame
-  long torn = 0;      // incomplete (dropped by the assembler) or undecodable
+  long frames = 0;  // whole frames
+  long lost = 0;    // ids skipped between the first and the last whole frame
+  long torn = 0;    // incomplete (dropped by the assembler) or undecodable
   bool connected = false;
   std::string error;
 };
@@ -113,7 +113,7 @@ struct Way {
 // what one run measured: plain data, so that a child process can send it up a pipe
 struct Figures {
   long periods = 0, missed = 0;
-  double p50 = 0, p99 = 0, max = 0;  // period-start lateness, s
+  double p50 = 0, p99 = 0, max = 0;      // period-start lateness, s
   long sent = 0, late = 0, dropped = 0;  // the lab's cameras
   long frames = 0, lost = 0, torn = 0;   // the receivers
   char note[512] = "";                   // a receiver's error or the run's failure
@@ -210,8 +210,8 @@ double MissedPercent(const Figures& f) { return f.periods ? 100.0 * static_cast<
 void Print(const char* name, const Figures& f) {
   std::printf("    %-11s missed %5ld of %ld (%6.3f %%); lateness p50 %7.1f us, p99 %8.1f us, max %8.1f us\n", name,
               f.missed, f.periods, MissedPercent(f), f.p50 * 1e6, f.p99 * 1e6, f.max * 1e6);
-  std::printf("    %-11s frames: %ld sent, %ld received whole, %ld lost, %ld torn, %ld late, %ld not rendered%s%s\n", "",
-              f.sent, f.frames, f.lost, f.torn, f.late, f.dropped, f.note[0] ? "; " : "", f.note);
+  std::printf("    %-11s frames: %ld sent, %ld received whole, %ld lost, %ld torn, %ld late, %ld not rendered%s%s\n",
+              "", f.sent, f.frames, f.lost, f.torn, f.late, f.dropped, f.note[0] ? "; " : "", f.note);
 }
 
 }  // namespace
@@ -231,10 +231,11 @@ int BenchRealtime(const BenchArgs& args) {
     base.controller = lab::ControllerConfig{};
     for (lab::DeviceConfig& d : base.devices) d.port = 0;  // nothing else served: nothing to wait for
     const std::vector<int> allowed = ThreadCpus();
-    std::printf("vlab bench realtime: scenario %s at 1 kHz (realtime clock, arm holding), cameras 640x480 at 30 Hz\n"
-                "  (MJCF camera 'overview', JPEG q90, fast profile unless named, each rendered and encoded on its own\n"
-                "  worker), %.0f s each way\n",
-                base.name.c_str(), duration);
+    std::printf(
+        "vlab bench realtime: scenario %s at 1 kHz (realtime clock, arm holding), cameras 640x480 at 30 Hz\n"
+        "  (MJCF camera 'overview', JPEG q90, fast profile unless named, each rendered and encoded on its own\n"
+        "  worker), %.0f s each way\n",
+        base.name.c_str(), duration);
     std::printf("  CPUs: %zu allowed (%s) of %ld online\n", allowed.size(), CpuListText(allowed).c_str(),
                 sysconf(_SC_NPROCESSORS_ONLN));
     // may this process have SCHED_FIFO? asked on a scratch thread, given back at once

@@ -17,15 +17,15 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <atomic>
 #include <functional>
 #include <stdexcept>
-#include <thread>
 #include <string>
+#include <thread>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_camera_server.h"
@@ -82,7 +82,8 @@ class LoopbackWire {
     // answer the client's describe request: it subscribes
     const auto deadline = Clock::now() + std::chrono::seconds(5);
     while (server_->subscribers() == 0 && Clock::now() < deadline) server_->Poll(0.01);
-    if (server_->subscribers() == 0) throw std::runtime_error("bench render: the loopback camera client did not connect");
+    if (server_->subscribers() == 0)
+      throw std::runtime_error("bench render: the loopback camera client did not connect");
   }
   ~LoopbackWire() {
     stop_ = true;
@@ -168,8 +169,7 @@ int BenchRender(const BenchArgs& args) {
     std::printf("vlab bench render: scenario %s, scene %s, camera '%s'\n", scenario.name.c_str(),
                 scenario.scene.c_str(), camera.c_str());
     std::printf("  state at t = 0; %.2f s of rendering per measurement, best of %d; %ld CPUs; LP_NUM_THREADS %s\n",
-                seconds, args.repeat, cpus,
-                lp ? lp : "unset (llvmpipe: one thread per CPU)");
+                seconds, args.repeat, cpus, lp ? lp : "unset (llvmpipe: one thread per CPU)");
 
     render::RgbImage rgb;
     double fast_vga = 0;
@@ -187,11 +187,13 @@ int BenchRender(const BenchArgs& args) {
       for (auto [w, h] : {std::pair{640, 480}, std::pair{320, 240}}) {
         if (profile == render::Profile::kDraft && w != 640) continue;  // (the size many cameras are served at)
         const double fps = Best(args.repeat, [&, w = w, h = h] {
-          return Rate([&] {
-            rgb.width = w;
-            rgb.height = h;
-            r->Render(d, cam, &rgb);
-          }, seconds);
+          return Rate(
+              [&] {
+                rgb.width = w;
+                rgb.height = h;
+                r->Render(d, cam, &rgb);
+              },
+              seconds);
         });
         if (profile == render::Profile::kFast && w == 640) fast_vga = fps;
         std::printf("  a. render %-8s %4dx%-4d %8.1f fps  %6.2f ms/frame\n", render::ProfileName(profile), w, h, fps,
@@ -207,25 +209,30 @@ int BenchRender(const BenchArgs& args) {
     std::vector<std::uint8_t> jpeg;
     rgb.width = rgb.height = 0;  // the renderer's size: 640x480
     const double encoded = Best(args.repeat, [&] {
-      return Rate([&] {
-        r->Render(d, cam, &rgb);
-        render::EncodeJpeg(rgb, kJpegQuality, &jpeg);
-      }, seconds);
+      return Rate(
+          [&] {
+            r->Render(d, cam, &rgb);
+            render::EncodeJpeg(rgb, kJpegQuality, &jpeg);
+          },
+          seconds);
     });
     std::printf("  b. render + JPEG q%d (fast 640x480) %8.1f fps  %6.2f ms/frame  (%zu bytes/frame)\n", kJpegQuality,
                 encoded, 1000 / encoded, jpeg.size());
     {
       LoopbackWire wire(rgb.width, rgb.height, kJpegQuality);
       const double sent = Best(args.repeat, [&] {
-        return Rate([&] {
-          r->Render(d, cam, &rgb);
-          wire.Send(rgb, d->time);
-        }, seconds);
+        return Rate(
+            [&] {
+              r->Render(d, cam, &rgb);
+              wire.Send(rgb, d->time);
+            },
+            seconds);
       });
       std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the last frames in flight
-      std::printf("  c. render + JPEG + send (fast 640x480) %8.1f fps  %6.2f ms/frame  (%ld of %ld frames received "
-                  "whole, %ld datagrams not taken)\n",
-                  sent, 1000 / sent, wire.received(), wire.sent(), wire.failures());
+      std::printf(
+          "  c. render + JPEG + send (fast 640x480) %8.1f fps  %6.2f ms/frame  (%ld of %ld frames received "
+          "whole, %ld datagrams not taken)\n",
+          sent, 1000 / sent, wire.received(), wire.sent(), wire.failures());
     }
     std::printf("  goal: >= %.0f fps at 640x480 fast -> %.2fx the goal: %s\n", kGoalFps, fast_vga / kGoalFps,
                 fast_vga >= kGoalFps ? "met" : "NOT met");

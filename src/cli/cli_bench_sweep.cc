@@ -36,7 +36,8 @@ int BenchSweep(const BenchArgs& args) {
     if (args.duration_s > 0) sweep.duration_s = args.duration_s;
     const lab::Scenario scenario = lab::LoadScenario(sweep.scenario, sweep.runs.at(0).sets);
     const std::vector<int> cpus = ThreadCpus();
-    std::printf("CPUs: %zu allowed (%s); %ld online\n", cpus.size(), CpuListText(cpus).c_str(), ::sysconf(_SC_NPROCESSORS_ONLN));
+    std::printf("CPUs: %zu allowed (%s); %ld online\n", cpus.size(), CpuListText(cpus).c_str(),
+                ::sysconf(_SC_NPROCESSORS_ONLN));
     std::printf("sweep %s: %zu runs of %s%s, %.3g s simulated each\n", sweep.name.c_str(), sweep.runs.size(),
                 sweep.scenario.c_str(), scenario.outputs.images.empty() ? " (no cameras)" : " (WITH camera images)",
                 sweep.duration_s > 0 ? sweep.duration_s : scenario.duration_s);
@@ -68,8 +69,8 @@ int BenchSweep(const BenchArgs& args) {
     std::printf("(b) vlab sweep -j 2: %zu runs in %.2f s: %8.1f runs/min (best of %d)   ratio b/a %.2f (goal >= 1.8)\n",
                 sweep.runs.size(), best[2], b, args.repeat, b / a);
     const double rounds = std::ceil(n / 2.0);
-    std::printf("    bound set by the run count: %zu runs in %.0f rounds of 2 -> b/a <= %.2f\n", sweep.runs.size(), rounds,
-                n / rounds);
+    std::printf("    bound set by the run count: %zu runs in %.0f rounds of 2 -> b/a <= %.2f\n", sweep.runs.size(),
+                rounds, n / rounds);
     if (failures) std::printf("note: %d of the sweeps had a run that did not pass\n", failures);
     return 0;
   });

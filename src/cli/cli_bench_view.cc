@@ -25,8 +25,8 @@
 
 #include "cli/cli_commands.h"
 #include "cli/cli_cpus.h"
-#include "core/core_errors.h"
 #include "core/core_clock.h"
+#include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "core/core_realtime.h"
 #include "lab/devices/device_scene.h"
@@ -90,8 +90,8 @@ class Viewer {
     asio::io_context io;
     boost::beast::websocket::stream<asio::ip::tcp::socket> ws(io);
     boost::beast::error_code ec;
-    ws.next_layer().connect({asio::ip::make_address("127.0.0.1"),
-                             static_cast<unsigned short>(std::atoi(line.c_str() + colon + 1))}, ec);
+    ws.next_layer().connect(
+        {asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(std::atoi(line.c_str() + colon + 1))}, ec);
     if (!ec) ws.handshake("127.0.0.1", "/ws", ec);
     while (!ec && !stop_) {
       boost::beast::flat_buffer b;
@@ -152,19 +152,22 @@ double PeriodTime(const lab::Scenario& scenario, bool viewer, long* frames, long
 int BenchView(const BenchArgs& args) {
   return WithErrorReport([&args] {
     vlab::InstallMujocoHandlers();
-    lab::Scenario with = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario.empty() ? kDefaultScenario : args.scenario));
+    lab::Scenario with =
+        lab::LoadScenario(lab::ResolveScenarioPath(args.scenario.empty() ? kDefaultScenario : args.scenario));
     with.duration_s = args.duration_s > 0 ? args.duration_s : 30.0;
     with.checks.clear();
     lab::Scenario without = with;
-    without.devices.erase(std::remove_if(without.devices.begin(), without.devices.end(),
-                                         [](const lab::DeviceConfig& d) { return d.kind == bridge::DeviceKind::kScene; }),
-                          without.devices.end());
+    without.devices.erase(
+        std::remove_if(without.devices.begin(), without.devices.end(),
+                       [](const lab::DeviceConfig& d) { return d.kind == bridge::DeviceKind::kScene; }),
+        without.devices.end());
     const lab::DeviceConfig* scene = nullptr;
     for (const auto& d : with.devices) {
       if (d.kind == bridge::DeviceKind::kScene) scene = &d;
     }
     if (!scene || scene->port == 0) {
-      throw vlab::InputError(with.file + ": bench view needs a served device of kind scene (e.g. " + kDefaultScenario + ")");
+      throw vlab::InputError(with.file + ": bench view needs a served device of kind scene (e.g. " + kDefaultScenario +
+                             ")");
     }
     const std::vector<int> cpus = ThreadCpus();
     std::printf("vlab bench view: scenario %s, %.1f s simulated per run, control period %.3f ms, best of %d\n",
@@ -193,11 +196,13 @@ int BenchView(const BenchArgs& args) {
     const std::size_t n = lab::SceneBodies(lab->model()).size();
     const double rate = scene->ParamsAs<lab::SceneParams>().rate_hz;
     const double udp = 8.0 * (7 + 7 * n), ws = 16.0 + 28 * n + 4;  // + the WebSocket frame header
-    std::printf("  stream: %zu bodies at %.0f Hz: UDP %.0f B/frame = %.1f kB/s per subscriber; WebSocket %.0f B/frame = "
-                "%.1f kB/s per browser (at real time)\n",
-                n, rate, udp, udp * rate / 1e3, ws, ws * rate / 1e3);
+    std::printf(
+        "  stream: %zu bodies at %.0f Hz: UDP %.0f B/frame = %.1f kB/s per subscriber; WebSocket %.0f B/frame = "
+        "%.1f kB/s per browser (at real time)\n",
+        n, rate, udp, udp * rate / 1e3, ws, ws * rate / 1e3);
     if (late) std::printf("  (the viewer attached after a run's midpoint: give a longer --duration)\n");
-    if (frames > 0) std::printf("  measured: %.0f B of payload per WebSocket frame\n", static_cast<double>(bytes) / frames);
+    if (frames > 0)
+      std::printf("  measured: %.0f B of payload per WebSocket frame\n", static_cast<double>(bytes) / frames);
     return 0;
   });
 }

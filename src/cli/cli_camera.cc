@@ -14,9 +14,9 @@
 #include "bridge/bridge_camera_server.h"
 #include "bridge/bridge_camera_source.h"
 #include "bridge/bridge_errors.h"
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
 
 namespace vlab::cli {
 
@@ -217,10 +217,10 @@ int RunCamera(const CameraArgs& a) {
     }
   }
   const bridge::CameraServerCounters& c = server->counters();
-  std::printf("vlab camera: %ld frames (%ld sent whole to subscribers, %ld chunks, %ld send failures), "
-              "%d subscribers, %ld requests refused; %s\n",
-              c.frames, c.frames_sent, c.chunks_sent, c.send_failures, server->subscribers(), c.endpoint.refused,
-              why.c_str());
+  std::printf(
+      "vlab camera: %ld frames (%ld sent whole to subscribers, %ld chunks, %ld send failures), "
+      "%d subscribers, %ld requests refused; %s\n",
+      c.frames, c.frames_sent, c.chunks_sent, c.send_failures, server->subscribers(), c.endpoint.refused, why.c_str());
   return 0;
 }
 
@@ -237,8 +237,7 @@ Subcommand AddCameraCommand(CLI::App& app) {
   cmd->add_option("--fps", args->fps, "Device: rate to ask for; file: rate to play at (default: the file's)");
   cmd->add_option("--width", args->width, "Image width, pixels (device: asked for; frames are scaled to it)");
   cmd->add_option("--height", args->height, "Image height, pixels (with --width)");
-  cmd->add_option("--encoding", args->encoding, "jpeg | raw (default jpeg)")
-      ->check(CLI::IsMember({"jpeg", "raw"}));
+  cmd->add_option("--encoding", args->encoding, "jpeg | raw (default jpeg)")->check(CLI::IsMember({"jpeg", "raw"}));
   cmd->add_option("--jpeg-quality", args->jpeg_quality, "JPEG quality 1-100 (default 90)");
   cmd->add_flag("--loop", args->loop, "File: start again at its end");
   cmd->add_option("--frames", args->frames, "Stop after this many frames");

@@ -15,7 +15,7 @@ namespace {
 
 struct CollectArgs {
   std::string dir;
-  std::string csv;   // "" = stdout
+  std::string csv;  // "" = stdout
   bool no_timings = false;
   std::string plot, x, y;
 };
@@ -48,8 +48,9 @@ int Collect(const CollectArgs& a) {
 Subcommand AddCollectCommand(CLI::App& app) {
   auto args = std::make_shared<CollectArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "collect", "One CSV row per run of a sweep folder (id, seed, overrides, verdict, each check's value and "
-                 "verdict, timings) and a summary line; optionally a plot of a check against a swept parameter");
+      "collect",
+      "One CSV row per run of a sweep folder (id, seed, overrides, verdict, each check's value and "
+      "verdict, timings) and a summary line; optionally a plot of a check against a swept parameter");
   cmd->add_option("dir", args->dir, "Sweep folder (DIR/ID/summary.json)")->required();
   cmd->add_option("-o,--csv", args->csv, "Write the table to this file (default: stdout)");
   cmd->add_flag("--no-timings", args->no_timings, "Leave out the timing columns (tables of two engines then compare)");

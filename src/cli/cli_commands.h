@@ -19,12 +19,12 @@ namespace vlab::cli {
 
 struct RunArgs {
   std::string scenario;
-  std::string out_dir;    ///< "" = out/<scenario name>
+  std::string out_dir;  ///< "" = out/<scenario name>
   bool quiet = false;
   bool list_signals = false;
-  double duration_s = 0;  ///< > 0 overrides the scenario's duration
-  long long seed = -1;    ///< >= 0 overrides the scenario's seed
-  int rt_priority = -1;   ///< >= 0 overrides the scenario's realtime.priority
+  double duration_s = 0;          ///< > 0 overrides the scenario's duration
+  long long seed = -1;            ///< >= 0 overrides the scenario's seed
+  int rt_priority = -1;           ///< >= 0 overrides the scenario's realtime.priority
   std::vector<std::string> sets;  ///< --set KEY=VALUE scenario overrides, in order
 };
 int RunCommand(const RunArgs& args);
@@ -37,28 +37,28 @@ struct ServeArgs {
   std::string clock;               ///< "" = the scenario's
   std::string out_dir;
   double duration_s = 0;
-  bool json = false;               ///< devices: print the describe JSON too
-  bool quiet = false;              ///< serve: no per-device counter lines
-  int rt_priority = -1;            ///< >= 0 overrides the scenario's realtime.priority
-  int max_subscribers = 16;        ///< serve: subscribers each device endpoint keeps
+  bool json = false;         ///< devices: print the describe JSON too
+  bool quiet = false;        ///< serve: no per-device counter lines
+  int rt_priority = -1;      ///< >= 0 overrides the scenario's realtime.priority
+  int max_subscribers = 16;  ///< serve: subscribers each device endpoint keeps
 };
 int ServeCommand(const ServeArgs& args);
 int DevicesCommand(const ServeArgs& args);
 
 struct BenchArgs {
-  std::string what;       ///< "physics"
-  std::string scenario;   ///< scenario whose scene and devices are measured
-  double duration_s = 0;  ///< simulated seconds per measurement (0: scenario's)
-  int repeat = 3;         ///< measurements per variant; the best is reported
+  std::string what;        ///< "physics"
+  std::string scenario;    ///< scenario whose scene and devices are measured
+  double duration_s = 0;   ///< simulated seconds per measurement (0: scenario's)
+  int repeat = 3;          ///< measurements per variant; the best is reported
   double realtime_s = 30;  ///< bridge: length of the realtime run, s
 };
 int BenchCommand(const BenchArgs& args);
 int BenchBridge(const BenchArgs& args);
 int BenchRender(const BenchArgs& args);
 int BenchRealtime(const BenchArgs& args);  // cli_bench_realtime.cc
-int BenchTask(const BenchArgs& args);  // cli_bench_task.cc
-int BenchSweep(const BenchArgs& args);  // cli_bench_sweep.cc
-int BenchView(const BenchArgs& args);  // cli_bench_view.cc
+int BenchTask(const BenchArgs& args);      // cli_bench_task.cc
+int BenchSweep(const BenchArgs& args);     // cli_bench_sweep.cc
+int BenchView(const BenchArgs& args);      // cli_bench_view.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.
@@ -67,18 +67,18 @@ struct Subcommand {
   CLI::App* app = nullptr;
   std::function<int()> run;
 };
-Subcommand AddRenderCommand(CLI::App& app);  // cli_render.cc
-Subcommand AddCameraCommand(CLI::App& app);  // cli_camera.cc
-Subcommand AddVisionCommand(CLI::App& app);  // cli_vision.cc
-Subcommand AddCubesCommand(CLI::App& app);   // cli_cubes.cc
-Subcommand AddTaskCommand(CLI::App& app);    // cli_task.cc
+Subcommand AddRenderCommand(CLI::App& app);   // cli_render.cc
+Subcommand AddCameraCommand(CLI::App& app);   // cli_camera.cc
+Subcommand AddVisionCommand(CLI::App& app);   // cli_vision.cc
+Subcommand AddCubesCommand(CLI::App& app);    // cli_cubes.cc
+Subcommand AddTaskCommand(CLI::App& app);     // cli_task.cc
 Subcommand AddCompareCommand(CLI::App& app);  // cli_compare.cc
 Subcommand AddGoldenCommand(CLI::App& app);   // cli_compare.cc
 Subcommand AddSweepCommand(CLI::App& app);    // cli_sweep.cc
 Subcommand AddCollectCommand(CLI::App& app);  // cli_collect.cc
-Subcommand AddViewCommand(CLI::App& app);    // cli_view.cc
-Subcommand AddExportCommand(CLI::App& app);  // cli_view.cc
-Subcommand AddFollowCommand(CLI::App& app);  // cli_follow.cc
+Subcommand AddViewCommand(CLI::App& app);     // cli_view.cc
+Subcommand AddExportCommand(CLI::App& app);   // cli_view.cc
+Subcommand AddFollowCommand(CLI::App& app);   // cli_follow.cc
 
 /// Runs a sweep's runs here, `jobs` at a time, into out/ID, skipping complete runs
 /// (cli_sweep.cc); quiet: no lines printed. Returns 0 when every run passed.

@@ -5,13 +5,13 @@
 #include <filesystem>
 #include <memory>
 
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
 #include "lab/judge/lab_compare.h"
 #include "lab/judge/lab_golden.h"
-#include "lab/outputs/lab_output.h"
 #include "lab/outputs/lab_log.h"
+#include "lab/outputs/lab_output.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
 
@@ -108,7 +108,8 @@ int OneGolden(const GoldenArgs& a, const std::string& dir, const std::string& wo
   lab::WriteDecimatedLog(out + "/log.csv", thinned, g.every);
   lab::AddToOutputList(out, "golden_log.csv");  // vlab's too: a later --keep run into DIR replaces it
   if (!a.update) {
-    if (!fs::is_regular_file(g.log())) throw InputError(g.log() + ": no golden log yet (write it: vlab golden --update " + dir + ")");
+    if (!fs::is_regular_file(g.log()))
+      throw InputError(g.log() + ": no golden log yet (write it: vlab golden --update " + dir + ")");
     lab::CompareReport report = lab::CompareLogs(lab::ReadCsvTable(thinned), lab::ReadCsvTable(g.log()), g.compare);
     report.run_file = "a new run of " + g.scenario;
     std::fputs(lab::FormatCompareReport(report, a.all).c_str(), stdout);
@@ -142,7 +143,8 @@ int Golden(const GoldenArgs& a) {
   bool temporary = false;
   if (work.empty()) {
     std::string pattern = (fs::temp_directory_path() / "vlab-golden-XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw std::runtime_error("cannot create a temporary folder in " + fs::temp_directory_path().string());
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot create a temporary folder in " + fs::temp_directory_path().string());
     work = pattern;
     temporary = true;
   }
@@ -162,11 +164,13 @@ int Golden(const GoldenArgs& a) {
 Subcommand AddCompareCommand(CLI::App& app) {
   auto args = std::make_shared<CompareArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "compare", "Compare a run's log with a golden log column by column within tolerances; print the first and the "
-                 "worst divergence of each diverging column; exit 0 all within, 1 not");
+      "compare",
+      "Compare a run's log with a golden log column by column within tolerances; print the first and the "
+      "worst divergence of each diverging column; exit 0 all within, 1 not");
   cmd->add_option("run", args->run, "The run: its output folder or a log CSV")->required();
-  cmd->add_option("golden", args->golden,
-                  "The golden: a golden folder (its golden.yaml's tolerances apply after --tol), a run folder or a log CSV")
+  cmd->add_option(
+         "golden", args->golden,
+         "The golden: a golden folder (its golden.yaml's tolerances apply after --tol), a run folder or a log CSV")
       ->required();
   cmd->add_option("--tol", args->tolerances,
                   "GLOB=ABS[,REL]: columns matching GLOB may differ by ABS + REL*|golden| (first match wins; a column "
@@ -182,8 +186,9 @@ Subcommand AddCompareCommand(CLI::App& app) {
 Subcommand AddGoldenCommand(CLI::App& app) {
   auto args = std::make_shared<GoldenArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "golden", "Run each golden's scenario (GOLDEN/golden.yaml) and compare its log with GOLDEN/log.csv; with "
-                "--update, print what changed and rewrite GOLDEN/log.csv instead");
+      "golden",
+      "Run each golden's scenario (GOLDEN/golden.yaml) and compare its log with GOLDEN/log.csv; with "
+      "--update, print what changed and rewrite GOLDEN/log.csv instead");
   cmd->add_option("golden", args->dirs, "Golden folders (e.g. tests/goldens/pa10_reach)")->required();
   cmd->add_flag("--update", args->update, "Regenerate: rewrite GOLDEN/log.csv from a new run, printing what changed");
   cmd->add_flag("--all", args->all, "One line per compared column, not only failing ones");

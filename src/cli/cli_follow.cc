@@ -41,7 +41,7 @@ using bridge::Arm;
 using bridge::ArmMode;
 using Clock = std::chrono::steady_clock;
 
-constexpr double kRestSpeed = 1e-3;  // rad/s: a source joint slower than this stands still
+constexpr double kRestSpeed = 1e-3;   // rad/s: a source joint slower than this stands still
 constexpr double kKeepAlive_s = 1.0;  // the source never gets commands: renew its subscription
 // one connect attempt: a handshake resends its request only every 0.25 s, so to answer within
 // a few tens of ms of a device's start, try afresh this often
@@ -64,7 +64,7 @@ struct FollowCounters {
   double max_moving = 0, max_rest = 0;  // rad
   long rest_periods = 0;
   int rest_joint = -1;
-  double rest_time = 0;  // s, the target's time of max_rest
+  double rest_time = 0;     // s, the target's time of max_rest
   double clock_offset = 0;  // s, source time - target time at the first command
 };
 
@@ -95,8 +95,8 @@ Arm ConnectArm(const std::string& option, const std::string& text, double timeou
       throw InputError("follow: " + option + " " + text + ": " + e.what());
     } catch (const bridge::BridgeError& e) {
       if (program::Stopped() || Seconds(start) >= timeout_s) {
-        throw InputError("follow: " + option + " " + text + ": no arm answered within " +
-                         Num(timeout_s) + " s (" + e.what() + ")");
+        throw InputError("follow: " + option + " " + text + ": no arm answered within " + Num(timeout_s) + " s (" +
+                         e.what() + ")");
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
@@ -122,9 +122,9 @@ std::string JointList(const Arm& arm) {
 // the same joints in the same order, or exit 2 naming both devices
 void CheckJoints(const Arm& from, const Arm& to) {
   if (from.joint_names() == to.joint_names()) return;
-  throw InputError("follow: " + from.Label() + " has " + std::to_string(from.joints()) + " joints (" +
-                   JointList(from) + "), " + to.Label() + " has " + std::to_string(to.joints()) + " (" +
-                   JointList(to) + "): a follower needs the same joints in the same order");
+  throw InputError("follow: " + from.Label() + " has " + std::to_string(from.joints()) + " joints (" + JointList(from) +
+                   "), " + to.Label() + " has " + std::to_string(to.joints()) + " (" + JointList(to) +
+                   "): a follower needs the same joints in the same order");
 }
 
 int Follow(const FollowArgs& a) {
@@ -190,8 +190,8 @@ int Follow(const FollowArgs& a) {
     if (target.status & bridge::kStatusNotOwner) {
       ++c.not_owner;
       if (Seconds(owned) > a.timeout_s) {
-        throw bridge::BridgeError(to.Label() + ": another client has owned its command input for " +
-                                  Num(a.timeout_s) + " s");
+        throw bridge::BridgeError(to.Label() + ": another client has owned its command input for " + Num(a.timeout_s) +
+                                  " s");
       }
     } else {
       owned = Clock::now();
@@ -211,9 +211,10 @@ int Follow(const FollowArgs& a) {
     }
   }
 
-  std::printf("vlab follow: %ld periods, %ld commands (%ld not sent), target states with refused %ld, not owner "
-              "%ld; no new source state %ld; source time - target time at the first command %.3f s\n",
-              c.periods, c.commands, c.send_failed, c.refused, c.not_owner, c.stale_source, c.clock_offset);
+  std::printf(
+      "vlab follow: %ld periods, %ld commands (%ld not sent), target states with refused %ld, not owner "
+      "%ld; no new source state %ld; source time - target time at the first command %.3f s\n",
+      c.periods, c.commands, c.send_failed, c.refused, c.not_owner, c.stale_source, c.clock_offset);
   std::printf("vlab follow: tracking error max %.6f rad while the source moved, %.6f rad at rest (%ld periods",
               c.max_moving, c.max_rest, c.rest_periods);
   if (c.rest_joint >= 0) {

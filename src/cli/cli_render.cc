@@ -20,13 +20,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
+#include "core/core_mujoco.h"
 #include "lab/devices/device_camera.h"
 #include "lab/outputs/lab_images.h"
 #include "lab/outputs/lab_log.h"
-#include "core/core_mujoco.h"
 #include "lab/outputs/lab_output.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
@@ -86,7 +86,8 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   if (given("--fps") && given("--every")) throw vlab::InputError("--fps and --every: give one of them, not both");
   if (given("--fps") && !(a.fps > 0 && std::isfinite(a.fps))) throw vlab::InputError("--fps must be > 0");
   if (given("--every") && !(a.every_s > 0 && std::isfinite(a.every_s))) throw vlab::InputError("--every must be > 0 s");
-  if (given("--out") && a.out_dir.empty()) throw vlab::InputError("--out: an empty name (give a folder, e.g. --out frames)");
+  if (given("--out") && a.out_dir.empty())
+    throw vlab::InputError("--out: an empty name (give a folder, e.g. --out frames)");
   if (given("--frames") && a.frames < 1) throw vlab::InputError("--frames must be >= 1");
   if (given("--width") && a.width < 1) throw vlab::InputError("--width must be >= 1 pixel");
   if (given("--height") && a.height < 1) throw vlab::InputError("--height must be >= 1 pixel");
@@ -104,7 +105,7 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   const double every = given("--fps") ? 1.0 / a.fps : given("--every") ? a.every_s : 0.1;
   if (every < period * (1 - 1e-9)) {
     throw vlab::InputError("frame interval " + lab::FormatDouble(every) + " s is shorter than the control period " +
-                          lab::FormatDouble(period) + " s of " + scenario.file + " (frames are taken at period ends)");
+                           lab::FormatDouble(period) + " s of " + scenario.file + " (frames are taken at period ends)");
   }
   // frames that fit the scenario; the run ends at the first period end at or after the last one
   const long fit = static_cast<long>(std::floor(scenario.duration_s / every + kDueTolerance_s)) + 1;
@@ -141,13 +142,11 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   layout.log_renderer = !a.quiet;
   layout.name = OptionOf;
   // the camera and size are checked, and the renderer made, before anything is written
-  std::unique_ptr<lab::ImageOutputs> images =
-      lab::ImageOutputs::Create(m, {image}, scenario.scene, period, layout);
+  std::unique_ptr<lab::ImageOutputs> images = lab::ImageOutputs::Create(m, {image}, scenario.scene, period, layout);
   const int width = image.width, height = image.height;
 
   // outputs: a staging folder renamed into place whole; the video staged beside its final name
-  const std::string out_dir =
-      a.out_dir.empty() ? "out/" + scenario.name + "/render/" + a.camera : a.out_dir;
+  const std::string out_dir = a.out_dir.empty() ? "out/" + scenario.name + "/render/" + a.camera : a.out_dir;
   std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
   images->Open(*out);
 
@@ -187,13 +186,20 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
     if (a.depth) files["depth"] = "depth_NNNNNN.png: 16-bit, mm along the optical axis, 0: nothing drawn";
     if (a.segmentation) files["segmentation"] = "seg_NNNNNN.png: 16-bit, geom id + 1, 0: no geom";
     if (!a.video.empty()) files["video"] = a.video;
-    nlohmann::json meta = {
-        {"scenario", scenario.name}, {"scene", scenario.scene}, {"camera", a.camera},
-        {"width", width}, {"height", height}, {"profile", render::ProfileName(profile)},
-        {"every_s", every}, {"frames", times.size()}, {"files", files},
-        {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
-        {"gl_renderer", gl}, {"render_wall_s", render_s}, {"mujoco", vlab::MujocoVersion()}};
-    if (r.interrupted_by) meta["interrupted"] = r.failure;  // the frames before it are all there
+    nlohmann::json meta = {{"scenario", scenario.name},
+                           {"scene", scenario.scene},
+                           {"camera", a.camera},
+                           {"width", width},
+                           {"height", height},
+                           {"profile", render::ProfileName(profile)},
+                           {"every_s", every},
+                           {"frames", times.size()},
+                           {"files", files},
+                           {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}}},
+                           {"gl_renderer", gl},
+                           {"render_wall_s", render_s},
+                           {"mujoco", vlab::MujocoVersion()}};
+    if (r.interrupted_by) meta["interrupted"] = r.failure;   // the frames before it are all there
     if (images->failed()) meta["failed"] = images->error();  // ... and here too
     std::ofstream json(out->File("render.json"));
     json << meta.dump(2) << "\n";
@@ -205,8 +211,8 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
   const double fps = render_s > 0 ? times.size() / render_s : 0.0;
   std::printf("%s: %zu frames %dx%d of camera '%s' (%s), every %s s, in %s/%s%s; %.1f fps rendered; %s\n",
               scenario.name.c_str(), times.size(), width, height, a.camera.c_str(), render::ProfileName(profile),
-              lab::FormatDouble(every).c_str(), placed.c_str(), a.video.empty() ? "" : "; video ",
-              a.video.c_str(), fps, gl.c_str());
+              lab::FormatDouble(every).c_str(), placed.c_str(), a.video.empty() ? "" : "; video ", a.video.c_str(), fps,
+              gl.c_str());
   if (images->failed()) {
     std::fprintf(stderr, "vlab: %s; the %zu frames written before it are kept\n", images->error().c_str(),
                  times.size());
@@ -223,11 +229,11 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
 
 Subcommand AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "render", "Render a scenario's camera offscreen: PNG frames (RGB, depth, segmentation) and MP4 video "
-                "(interrupted: the frames rendered so far are kept, exit 1)");
-  cmd->add_option("scenario", args->scenario, "Scenario file (YAML); the .yaml extension may be left out")
-      ->required();
+  CLI::App* cmd =
+      app.add_subcommand("render",
+                         "Render a scenario's camera offscreen: PNG frames (RGB, depth, segmentation) and MP4 video "
+                         "(interrupted: the frames rendered so far are kept, exit 1)");
+  cmd->add_option("scenario", args->scenario, "Scenario file (YAML); the .yaml extension may be left out")->required();
   cmd->add_option("--camera", args->camera, "MJCF camera to render")->required();
   cmd->add_option("--fps", args->fps, "Frames per simulated second (or --every)");
   cmd->add_option("--every", args->every_s, "Simulated seconds between frames, from t = 0 (default 0.1)");
@@ -238,8 +244,9 @@ Subcommand AddRenderCommand(CLI::App& app) {
   cmd->add_flag("--segmentation", args->segmentation, "Also write seg_NNNNNN.png (16-bit, geom id + 1)");
   cmd->add_option("--width", args->width, "Image width, pixels (default: the scenario's for this camera, or 640)");
   cmd->add_option("--height", args->height, "Image height, pixels (default: the scenario's, or 480)");
-  cmd->add_option("--profile", args->profile,
-                  "draft (fast, no sky, coarser round geoms) | fast (no shadows, reflections, MSAA) | quality (default)");
+  cmd->add_option(
+      "--profile", args->profile,
+      "draft (fast, no sky, coarser round geoms) | fast (no shadows, reflections, MSAA) | quality (default)");
   cmd->add_flag("-q,--quiet", args->quiet, "No GL renderer line, progress bar or notes");
   return {cmd, [args, cmd] { return WithErrorReport([&] { return Render(*args, *cmd); }); }};
 }

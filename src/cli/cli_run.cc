@@ -6,9 +6,9 @@
 
 #include <unistd.h>
 
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
 #include "lab/outputs/lab_log.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
@@ -17,9 +17,7 @@ namespace vlab::cli {
 
 namespace {
 
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 std::string Bound(const lab::CheckConfig& c) {
   std::string text;
@@ -103,9 +101,12 @@ int RunCommand(const RunArgs& args) {
 
     if (!args.quiet) {
       for (const auto& c : r.checks) {
-        std::printf("  %s  %-28s %s(%s) = %s  (%s)\n", c.skipped ? "skip" : c.pass ? "pass" : "FAIL", c.config.name.c_str(),
-                    lab::ReduceName(c.config.reduce), c.config.signal.c_str(), lab::FormatDouble(c.value).c_str(),
-                    Bound(c.config).c_str());
+        std::printf("  %s  %-28s %s(%s) = %s  (%s)\n",
+                    c.skipped ? "skip"
+                    : c.pass  ? "pass"
+                              : "FAIL",
+                    c.config.name.c_str(), lab::ReduceName(c.config.reduce), c.config.signal.c_str(),
+                    lab::FormatDouble(c.value).c_str(), Bound(c.config).c_str());
       }
     }
     const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;

@@ -5,9 +5,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
 
@@ -69,8 +69,8 @@ int ServeCommand(const ServeArgs& args) {
     options.serve = &bridge;
     if (!args.clock.empty()) options.clock = ParseClockMode(args.clock, "--clock");
     options.on_serving = [&scenario, &options](const std::vector<lab::ServedDevice>& devices) {
-      std::string line = "vlab serve: " + scenario.name + ", clock " +
-                         ClockModeName(options.clock.value_or(scenario.clock)) + ";";
+      std::string line =
+          "vlab serve: " + scenario.name + ", clock " + ClockModeName(options.clock.value_or(scenario.clock)) + ";";
       for (const auto& d : devices) {
         line += " " + d.name + " (" + d.kind + ") " + d.address + ":" + std::to_string(d.port) + ";";
       }
@@ -90,15 +90,16 @@ int ServeCommand(const ServeArgs& args) {
     for (const auto& d : r.served) {
       if (args.quiet) break;
       const auto& c = d.counters;
-      std::printf("  %-8s received %ld, accepted %ld, refused %ld (malformed %ld, limits %ld, not owner %ld, "
-                  "not subscribed %ld), stale %ld, duplicate %ld, future %ld, watchdog holds %ld; subscribed %ld, "
-                  "challenges %ld\n",
-                  d.name.c_str(), c.received, c.accepted, c.refused, c.refused_malformed, c.refused_limits,
-                  c.refused_not_owner, c.refused_not_subscribed, c.stale, c.duplicate, c.future, c.watchdog_holds,
-                  c.sessions.subscribed, c.sessions.challenges);
+      std::printf(
+          "  %-8s received %ld, accepted %ld, refused %ld (malformed %ld, limits %ld, not owner %ld, "
+          "not subscribed %ld), stale %ld, duplicate %ld, future %ld, watchdog holds %ld; subscribed %ld, "
+          "challenges %ld\n",
+          d.name.c_str(), c.received, c.accepted, c.refused, c.refused_malformed, c.refused_limits, c.refused_not_owner,
+          c.refused_not_subscribed, c.stale, c.duplicate, c.future, c.watchdog_holds, c.sessions.subscribed,
+          c.sessions.challenges);
     }
-    std::printf("%s: %s, %.2f s simulated in %.2f s, clock %s; output in %s/\n", scenario.name.c_str(),
-                Verdict(r), r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), r.out_dir.c_str());
+    std::printf("%s: %s, %.2f s simulated in %.2f s, clock %s; output in %s/\n", scenario.name.c_str(), Verdict(r),
+                r.sim_time_s, r.loop_wall_s, ClockModeName(r.clock), r.out_dir.c_str());
     PrintPlots(scenario, r.out_dir, r);
     if (!r.out_note.empty()) std::fprintf(stderr, "vlab: %s\n", r.out_note.c_str());
     if (r.exit_code != 0) std::fprintf(stderr, "vlab: %s\n", r.failure.c_str());

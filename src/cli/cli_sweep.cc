@@ -16,9 +16,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
 #include "lab/sweep/lab_sweep.h"
 #include "lab/sweep/lab_sweep_text.h"
 
@@ -34,7 +34,7 @@ struct SweepArgs {
   bool list = false;
   bool pending = false;  // --list: only the runs that are not current
   int jobs = 1;
-  std::string vlab;     // program named in --list ("" = this binary)
+  std::string vlab;  // program named in --list ("" = this binary)
 };
 
 double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
@@ -144,7 +144,8 @@ int RunSweepHere(const lab::Sweep& sweep, const std::string& out, int jobs, bool
   while (next < todo.size() || !running.empty()) {
     while (!g_stop_requested && next < todo.size() && static_cast<int>(running.size()) < jobs) {
       const lab::SweepRun& run = sweep.runs[todo[next++]];
-      running[Start(self, lab::RunArguments(sweep, run, out), out + "/logs/" + run.id + ".txt")] = {todo[next - 1], Now()};
+      running[Start(self, lab::RunArguments(sweep, run, out), out + "/logs/" + run.id + ".txt")] = {todo[next - 1],
+                                                                                                    Now()};
     }
     if (g_stop_requested && !forwarded) {
       for (const auto& r : running) ::kill(r.first, g_stop_requested);
@@ -195,7 +196,8 @@ namespace {
 int SweepMain(const SweepArgs& a) {
   if (a.jobs < 1 || a.jobs > 1024) throw InputError("-j must be 1 to 1024");
   const lab::Sweep sweep = lab::LoadSweep(a.file);
-  const std::string out = fs::absolute(a.out_dir.empty() ? "sweeps/" + sweep.name : a.out_dir).lexically_normal().string();
+  const std::string out =
+      fs::absolute(a.out_dir.empty() ? "sweeps/" + sweep.name : a.out_dir).lexically_normal().string();
   if (a.list) {
     lab::Sweep absolute = sweep;
     absolute.scenario = fs::absolute(sweep.scenario).lexically_normal().string();
@@ -228,16 +230,19 @@ int SweepMain(const SweepArgs& a) {
 Subcommand AddSweepCommand(CLI::App& app) {
   auto args = std::make_shared<SweepArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "sweep", "Run a scenario over seeds and a grid or list of --set overrides (SWEEP.yaml, docs/sweeps.md): "
-               "--list prints one vlab run command per run for GNU parallel or Slurm; otherwise runs them here, "
-               "skipping runs already complete whose record matches (a run whose scenario, seed, duration or vlab "
-               "changed since is run again, and said so)");
+      "sweep",
+      "Run a scenario over seeds and a grid or list of --set overrides (SWEEP.yaml, docs/sweeps.md): "
+      "--list prints one vlab run command per run for GNU parallel or Slurm; otherwise runs them here, "
+      "skipping runs already complete whose record matches (a run whose scenario, seed, duration or vlab "
+      "changed since is run again, and said so)");
   cmd->add_option("sweep", args->file, "Sweep file (YAML)")->required();
-  cmd->add_flag("--list", args->list, "Print one vlab run command per run (absolute paths; each value one line of YAML, control characters "
+  cmd->add_flag("--list", args->list,
+                "Print one vlab run command per run (absolute paths; each value one line of YAML, control characters "
                 "escaped) and exit");
-  cmd->add_flag("--pending", args->pending,
-                "--list: only the runs that are not complete and current (stderr names each finished run that changed since it "
-                "ran, and why)");
+  cmd->add_flag(
+      "--pending", args->pending,
+      "--list: only the runs that are not complete and current (stderr names each finished run that changed since it "
+      "ran, and why)");
   cmd->add_option("-j,--jobs", args->jobs, "Runs at a time, 1 to 1024 (default 1)");
   cmd->add_option("--out", args->out_dir, "Sweep folder: one run folder per run, ID = pNN_sSEED (default sweeps/NAME)");
   cmd->add_option("--vlab", args->vlab, "--list: the vlab program to name in each command (default: this one)");

@@ -14,10 +14,10 @@
 #include <cstdio>
 #include <memory>
 
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "bridge/bridge_signals.h"
 #include "lab/scenario/lab_yaml.h"
 #include "task/task_runtime.h"
 #include "task/task_udp.h"
@@ -35,7 +35,7 @@ struct TaskArgs {
   std::string scene;
   std::string tip_site;
   std::string base_body = "world";
-  double period_s = 0;               // 0: from the arm's describe reply
+  double period_s = 0;  // 0: from the arm's describe reply
   long long seed = 1;
   double timeout_s = 5.0;
   bool hold = false;
@@ -107,7 +107,8 @@ int Task(const TaskArgs& a) {
     if (runtime->finished() && !a.hold) break;
   }
   if (!runtime->finished()) {
-    std::fprintf(stderr, "vlab task: stopped by %s before the script ended\n", StopSignalName(g_stop_requested).c_str());
+    std::fprintf(stderr, "vlab task: stopped by %s before the script ended\n",
+                 StopSignalName(g_stop_requested).c_str());
     return 1;
   }
   if (!a.quiet) std::printf("vlab task: %s ended after %ld periods\n", a.script.c_str(), periods);
@@ -123,7 +124,8 @@ Subcommand AddTaskCommand(CLI::App& app) {
   cmd->add_option("script", a->script, "The .lua script")->required();
   cmd->add_option("--arm", a->arm, "The arm the script moves: HOST:PORT")->required();
   cmd->add_option("--wrench", a->wrenches, "A wrench (force/torque) device: HOST:PORT (repeatable)");
-  cmd->add_option("--device", a->devices, "Any float64 device, or a markers device (vlab vision): KIND=HOST:PORT, e.g. "
+  cmd->add_option("--device", a->devices,
+                  "Any float64 device, or a markers device (vlab vision): KIND=HOST:PORT, e.g. "
                   "gripper=127.0.0.1:50020, markers=127.0.0.1:50014 (repeatable)");
   cmd->add_option("--param", a->params,
                   "NAME=VALUE: the script's PARAMS.NAME (a number, true/false, or else a string; repeatable)");

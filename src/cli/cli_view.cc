@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "cli/cli_commands.h"
 #include "bridge/bridge_signals.h"
+#include "cli/cli_commands.h"
 #include "view/view_gltf.h"
 #include "view/view_program.h"
 
@@ -13,8 +13,9 @@ namespace vlab::cli {
 Subcommand AddViewCommand(CLI::App& app) {
   auto o = std::make_shared<view::ViewOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "view", "Serve a live 3-D view of the lab to a browser (HTTP + WebSocket, three.js): from a scene device, "
-              "an arm device, or a recorded run; read-only");
+      "view",
+      "Serve a live 3-D view of the lab to a browser (HTTP + WebSocket, three.js): from a scene device, "
+      "an arm device, or a recorded run; read-only");
   cmd->add_option("--scene", o->scene, "Scene device to draw, HOST:PORT (a scenario's kind: scene device)");
   cmd->add_option("--arm", o->arm,
                   "Arm device to draw instead, HOST:PORT (vlab serve, vlab-kinsim or a real arm's driver): poses "
@@ -23,7 +24,8 @@ Subcommand AddViewCommand(CLI::App& app) {
   cmd->add_option("--model", o->model,
                   "MJCF scene for meshes, textures and cameras (--arm: required; --scene, --replay: default the "
                   "one the device or recording names)");
-  cmd->add_option("--rate", o->rate_hz, "--arm: pose frames and plot samples per second (default 30; --scene: the device's rate)");
+  cmd->add_option("--rate", o->rate_hz,
+                  "--arm: pose frames and plot samples per second (default 30; --scene: the device's rate)");
   cmd->add_option("--camera", o->camera,
                   "Camera device, HOST:PORT: its pictures in a panel, newest first (JPEG relayed as sent, raw as PNG)");
   cmd->add_option("--plot", o->plot,
@@ -69,9 +71,10 @@ Subcommand AddExportCommand(CLI::App& app) {
     std::string run, glb, model;
   };
   auto a = std::make_shared<Args>();
-  CLI::App* cmd = app.add_subcommand(
-      "export", "Write a run's recorded poses (outputs: {poses: ...}) as glTF 2.0 (.glb) with animation, for "
-                "Blender and three.js");
+  CLI::App* cmd =
+      app.add_subcommand("export",
+                         "Write a run's recorded poses (outputs: {poses: ...}) as glTF 2.0 (.glb) with animation, for "
+                         "Blender and three.js");
   cmd->add_option("run", a->run, "The run's output folder (with scene.json and poses.bin)")->required();
   cmd->add_option("file", a->glb, "The .glb file to write (never overwritten)")->required();
   cmd->add_option("--model", a->model, "MJCF for meshes (default: the one scene.json names)");

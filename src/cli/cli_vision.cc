@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "bridge/bridge_errors.h"
+#include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
 #include "vision/vision_program.h"
 #include "vision/vision_yoyo_program.h"
 
@@ -26,7 +26,7 @@ struct VisionArgs {
   std::string camera;
   int port = 50014;
   std::string bind = "127.0.0.1";
-  std::string name;  // default: vision (markers), yoyo_vision (yoyo)
+  std::string name;    // default: vision (markers), yoyo_vision (yoyo)
   int yoyo_port = -1;  // >= 0: the yo-yo tracker's yoyo device instead of the markers device
   std::string blob_color = "red";
   std::string line;  // "X,Y"
@@ -141,7 +141,8 @@ int RunUntilDone(Program& program, const VisionArgs& a, void (*report)(const Pro
 
 int YoyoVision(const VisionArgs& a, vision::YoyoVisionConfig config) {
   if (a.yoyo_port > 65535) throw vlab::InputError("--yoyo-port " + std::to_string(a.yoyo_port) + " outside 0..65535");
-  if (!a.markers.empty()) throw vlab::InputError("--marker and --yoyo-port exclude each other: run two vision programs");
+  if (!a.markers.empty())
+    throw vlab::InputError("--marker and --yoyo-port exclude each other: run two vision programs");
   config.blob = vision::BlobColor(a.blob_color);
   if (!a.line.empty()) config.line = ParseLine(a.line);
   config.connect_timeout_s = a.connect_timeout_s;

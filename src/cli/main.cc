@@ -14,7 +14,8 @@
 #endif
 
 int main(int argc, char** argv) {
-  CLI::App app{"vlab " VLAB_VERSION ": a virtual robotics lab on MuJoCo.\n"
+  CLI::App app{"vlab " VLAB_VERSION
+               ": a virtual robotics lab on MuJoCo.\n"
                "Exit codes: 0 success; 1 a check failed, the run diverged or raised a MuJoCo warning the\n"
                "scenario does not allow, or it was interrupted (SIGINT, SIGTERM: what ran is written, result\n"
                "'interrupted'); 2 bad input (file, key, option, output folder)."};
@@ -28,9 +29,10 @@ int main(int argc, char** argv) {
       "Written whole: staged in PARENT/.vlab-PID-N and renamed into place; when another run put its folder there "
       "meanwhile, this run's goes to DIR.2 (DIR.3, ...) and says so";
   vlab::cli::RunArgs run;
-  CLI::App* run_cmd = app.add_subcommand(
-      "run", "Run a scenario headless; write out/NAME/log.csv, summary.json and the scenario's outputs "
-             "(the plots' paths are printed)");
+  CLI::App* run_cmd =
+      app.add_subcommand("run",
+                         "Run a scenario headless; write out/NAME/log.csv, summary.json and the scenario's outputs "
+                         "(the plots' paths are printed)");
   run_cmd->add_option("scenario", run.scenario, "Scenario file (YAML); the .yaml extension may be left out")
       ->required();
   run_cmd->add_option("--out", run.out_dir, kOutHelp);
@@ -45,21 +47,22 @@ int main(int argc, char** argv) {
       "SCHED_DEADLINE too (90 % of each period; root or CAP_SYS_NICE); 0: normal priority (default: the "
       "scenario's realtime.priority); what was granted is printed and recorded in summary.json";
   run_cmd->add_option("--rt-priority", run.rt_priority, rt_help)->check(CLI::Range(0, 99));
-  run_cmd->add_option("--set", run.sets,
-                      "KEY=VALUE: override a scenario key by its dotted path, list items by name or index "
-                      "(devices.jr3.filter=2, controller.gains.position=15); VALUE is YAML, typed and checked "
-                      "like the file; repeatable; recorded in summary.json")
+  run_cmd
+      ->add_option("--set", run.sets,
+                   "KEY=VALUE: override a scenario key by its dotted path, list items by name or index "
+                   "(devices.jr3.filter=2, controller.gains.position=15); VALUE is YAML, typed and checked "
+                   "like the file; repeatable; recorded in summary.json")
       ->allow_extra_args(false);
 
   vlab::cli::ServeArgs serve;
   CLI::App* serve_cmd =
-      app.add_subcommand("serve", "Run a scenario with its devices served over UDP (lockstep or realtime clock); "
-                                  "a lockstep run that no controller sent a command to fails");
+      app.add_subcommand("serve",
+                         "Run a scenario with its devices served over UDP (lockstep or realtime clock); "
+                         "a lockstep run that no controller sent a command to fails");
   vlab::cli::ServeArgs devices;
   CLI::App* devices_cmd = app.add_subcommand("devices", "List a scenario's devices, UDP endpoints and layouts");
   for (auto [cmd, a] : {std::pair{serve_cmd, &serve}, std::pair{devices_cmd, &devices}}) {
-    cmd->add_option("scenario", a->scenario, "Scenario file (YAML); the .yaml extension may be left out")
-        ->required();
+    cmd->add_option("scenario", a->scenario, "Scenario file (YAML); the .yaml extension may be left out")->required();
     cmd->add_option("--bind", a->bind, "Address the device sockets bind to (default 127.0.0.1)");
     cmd->add_option("--port", a->ports, "DEVICE=PORT: serve DEVICE on PORT (0 or auto: any free port); repeatable");
     cmd->add_option("--ports", a->ports_mode,
@@ -75,24 +78,27 @@ int main(int argc, char** argv) {
                       "Only the start line and the result line (no line saying whom it waits for, no counters)");
   serve_cmd->add_option("--duration", serve.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   serve_cmd->add_option("--rt-priority", serve.rt_priority, rt_help)->check(CLI::Range(0, 99));
-  serve_cmd->add_option("--subscribers", serve.max_subscribers,
-                        "Subscribers each device keeps (default 16; cameras keep 16); a full table drops the one "
-                        "heard from least recently, never a device's owner")
+  serve_cmd
+      ->add_option("--subscribers", serve.max_subscribers,
+                   "Subscribers each device keeps (default 16; cameras keep 16); a full table drops the one "
+                   "heard from least recently, never a device's owner")
       ->check(CLI::Range(1, 4096));
   devices_cmd->add_flag("--json", devices.json, "Print each device's describe reply too");
 
   vlab::cli::BenchArgs bench;
-  CLI::App* bench_cmd = app.add_subcommand(
-      "bench", "Measure performance against a baseline in the same run; prints the CPUs used first");
-  bench_cmd->add_option("what", bench.what,
-                        "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
-                        "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
-                        "| render (fps per size and profile, JPEG, send) | realtime (1 kHz beside 2 and 4 served 640x480 cameras: quiet, under 2 CPU hogs, "
-                        "and under them at realtime priority when permitted; 4 cameras at priority in the draft "
-                        "profile too) "
-                        "| task (a task script vs the built-in task_space controller, period time) "
-                        "| sweep (runs per minute of vlab sweep -j 2 vs -j 1) "
-                        "| view (lab period with and without the scene stream + one viewer)")
+  CLI::App* bench_cmd =
+      app.add_subcommand("bench", "Measure performance against a baseline in the same run; prints the CPUs used first");
+  bench_cmd
+      ->add_option("what", bench.what,
+                   "Benchmark: physics (lab loop vs bare mj_step, b/a on the CPUs allowed and on one CPU) | "
+                   "bridge (echo floor and lockstep period p50: same core, cross core, unpinned; then realtime) "
+                   "| render (fps per size and profile, JPEG, send) | realtime (1 kHz beside 2 and 4 served 640x480 "
+                   "cameras: quiet, under 2 CPU hogs, "
+                   "and under them at realtime priority when permitted; 4 cameras at priority in the draft "
+                   "profile too) "
+                   "| task (a task script vs the built-in task_space controller, period time) "
+                   "| sweep (runs per minute of vlab sweep -j 2 vs -j 1) "
+                   "| view (lab period with and without the scene stream + one viewer)")
       ->required()
       ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task", "sweep", "view"}));
   bench_cmd->add_option("--scenario", bench.scenario,
@@ -106,13 +112,11 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant, 1 to 100 (best kept)");
 
   // subcommands that define themselves in their own files
-  const std::vector<vlab::cli::Subcommand> more = {vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app),
-                                                   vlab::cli::AddVisionCommand(app), vlab::cli::AddCubesCommand(app),
-                                                   vlab::cli::AddTaskCommand(app), vlab::cli::AddCompareCommand(app),
-                                                   vlab::cli::AddGoldenCommand(app), vlab::cli::AddSweepCommand(app),
-                                                   vlab::cli::AddCollectCommand(app), vlab::cli::AddViewCommand(app),
-                                                   vlab::cli::AddExportCommand(app),
-                                                   vlab::cli::AddFollowCommand(app)};
+  const std::vector<vlab::cli::Subcommand> more = {
+      vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app), vlab::cli::AddVisionCommand(app),
+      vlab::cli::AddCubesCommand(app),  vlab::cli::AddTaskCommand(app),   vlab::cli::AddCompareCommand(app),
+      vlab::cli::AddGoldenCommand(app), vlab::cli::AddSweepCommand(app),  vlab::cli::AddCollectCommand(app),
+      vlab::cli::AddViewCommand(app),   vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app)};
 
   try {
     app.parse(argc, argv);

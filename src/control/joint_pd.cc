@@ -9,16 +9,16 @@ namespace {
 
 void CheckSize(const char* name, const Eigen::VectorXd& v, Eigen::Index n) {
   if (v.size() != n) {
-    throw std::invalid_argument(std::string("joint pd: ") + name + " has size " +
-                                std::to_string(v.size()) + ", q has size " + std::to_string(n));
+    throw std::invalid_argument(std::string("joint pd: ") + name + " has size " + std::to_string(v.size()) +
+                                ", q has size " + std::to_string(n));
   }
 }
 
 }  // namespace
 
-Eigen::VectorXd JointPdGravityTorque(const JointPdGains& gains, const Eigen::VectorXd& q,
-                                     const Eigen::VectorXd& qd, const Eigen::VectorXd& q_des,
-                                     const Eigen::VectorXd& qd_des, const Eigen::VectorXd& g) {
+Eigen::VectorXd JointPdGravityTorque(const JointPdGains& gains, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                     const Eigen::VectorXd& q_des, const Eigen::VectorXd& qd_des,
+                                     const Eigen::VectorXd& g) {
   Eigen::VectorXd tau;
   JointPdGravityTorque(gains, q, qd, q_des, qd_des, g, &tau);
   return tau;

@@ -21,9 +21,9 @@ struct JointPdGains {
 /// Joint torques (N·m or N) of the PD law above. All vectors are in chain order
 /// and must have the same size as q; otherwise throws std::invalid_argument
 /// naming the mismatched argument and both sizes. Allocates the result only.
-Eigen::VectorXd JointPdGravityTorque(const JointPdGains& gains, const Eigen::VectorXd& q,
-                                     const Eigen::VectorXd& qd, const Eigen::VectorXd& q_des,
-                                     const Eigen::VectorXd& qd_des, const Eigen::VectorXd& g);
+Eigen::VectorXd JointPdGravityTorque(const JointPdGains& gains, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                     const Eigen::VectorXd& q_des, const Eigen::VectorXd& qd_des,
+                                     const Eigen::VectorXd& g);
 
 /// The same, written into `tau` (resized to the joint count; no allocation
 /// when it already has that size): for control loops.

@@ -31,17 +31,16 @@ std::unique_ptr<RobotModel> RobotModel::Create(const mjModel* m, const Config& c
   int body = m->site_bodyid[site];
   while (body != base) {
     if (body == 0) {
-      throw std::invalid_argument("robot model: body '" + config.base_body +
-                                  "' is not an ancestor of site '" + config.tip_site + "'");
+      throw std::invalid_argument("robot model: body '" + config.base_body + "' is not an ancestor of site '" +
+                                  config.tip_site + "'");
     }
     // a body's joints are stored consecutively; keep them in model order
     std::vector<int> body_joints;
     for (int j = m->body_jntadr[body]; j >= 0 && j < m->body_jntadr[body] + m->body_jntnum[body]; ++j) {
       const int type = m->jnt_type[j];
       if (type != mjJNT_HINGE && type != mjJNT_SLIDE) {
-        throw std::invalid_argument("robot model: joint '" + Name(m, mjOBJ_JOINT, j) +
-                                    "' between '" + config.base_body + "' and site '" +
-                                    config.tip_site + "' is not a hinge or slide");
+        throw std::invalid_argument("robot model: joint '" + Name(m, mjOBJ_JOINT, j) + "' between '" +
+                                    config.base_body + "' and site '" + config.tip_site + "' is not a hinge or slide");
       }
       body_joints.push_back(j);
     }
@@ -49,8 +48,8 @@ std::unique_ptr<RobotModel> RobotModel::Create(const mjModel* m, const Config& c
     body = m->body_parentid[body];
   }
   if (joints.empty()) {
-    throw std::invalid_argument("robot model: no joints between body '" + config.base_body +
-                                "' and site '" + config.tip_site + "'");
+    throw std::invalid_argument("robot model: no joints between body '" + config.base_body + "' and site '" +
+                                config.tip_site + "'");
   }
 
   mjData* d = mj_makeData(m);

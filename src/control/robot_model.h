@@ -28,9 +28,9 @@
 #include <string>
 #include <vector>
 
+#include <mujoco/mujoco.h>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <mujoco/mujoco.h>
 
 namespace vlab::control {
 

@@ -18,8 +18,8 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 void CheckNonNegative(const char* field, double value) {
   if (!std::isfinite(value) || value < 0.0) {
-    throw std::invalid_argument(std::string("task space config: ") + field +
-                                " must be finite and >= 0, got " + std::to_string(value));
+    throw std::invalid_argument(std::string("task space config: ") + field + " must be finite and >= 0, got " +
+                                std::to_string(value));
   }
 }
 
@@ -30,13 +30,12 @@ Eigen::Vector3d OrientationError(const Eigen::Matrix3d& R_d_W, const Eigen::Matr
 }
 
 Eigen::MatrixXd DampedPseudoInverse(const Eigen::MatrixXd& J, double damping) {
-  const Eigen::MatrixXd A =
-      J * J.transpose() + damping * damping * Eigen::MatrixXd::Identity(J.rows(), J.rows());
+  const Eigen::MatrixXd A = J * J.transpose() + damping * damping * Eigen::MatrixXd::Identity(J.rows(), J.rows());
   return J.transpose() * A.ldlt().solve(Eigen::MatrixXd::Identity(J.rows(), J.rows()));
 }
 
 std::unique_ptr<TaskSpaceController> TaskSpaceController::Create(const TaskSpaceConfig& config,
-                                                                  const RobotModel& model) {
+                                                                 const RobotModel& model) {
   CheckNonNegative("k_position", config.k_position);
   CheckNonNegative("k_orientation", config.k_orientation);
   CheckNonNegative("damping", config.damping);
@@ -67,9 +66,8 @@ std::unique_ptr<TaskSpaceController> TaskSpaceController::Create(const TaskSpace
       }
     }
   } else if (config.q_rest.size() != n) {
-    throw std::invalid_argument("task space config: q_rest has size " +
-                                std::to_string(config.q_rest.size()) + ", chain has " +
-                                std::to_string(n) + " joints");
+    throw std::invalid_argument("task space config: q_rest has size " + std::to_string(config.q_rest.size()) +
+                                ", chain has " + std::to_string(n) + " joints");
   } else if (!config.q_rest.allFinite()) {
     throw std::invalid_argument("task space config: q_rest is not finite");
   } else {
@@ -98,18 +96,16 @@ void TaskSpaceController::NullSpaceVelocity(const Eigen::VectorXd& q) {
   }
 }
 
-const TaskSpaceOutput& TaskSpaceController::Update(const RobotModel& model,
-                                                   const Eigen::VectorXd& q,
+const TaskSpaceOutput& TaskSpaceController::Update(const RobotModel& model, const Eigen::VectorXd& q,
                                                    const TaskSpaceTarget& target) {
   const int n = static_cast<int>(J_.cols());
   if (model.dof() != n || q.size() != n || model.model().nv != nv_) {
-    throw std::invalid_argument("task space controller: built for " + std::to_string(n) +
-                                " joints, got model dof " + std::to_string(model.dof()) +
-                                " and q size " + std::to_string(q.size()));
+    throw std::invalid_argument("task space controller: built for " + std::to_string(n) + " joints, got model dof " +
+                                std::to_string(model.dof()) + " and q size " + std::to_string(q.size()));
   }
   TaskSpaceOutput& out = out_;
-  out.ok = q.allFinite() && target.pose.p_W.allFinite() && target.pose.R_W.allFinite() &&
-           target.v_W.allFinite() && target.w_W.allFinite();
+  out.ok = q.allFinite() && target.pose.p_W.allFinite() && target.pose.R_W.allFinite() && target.v_W.allFinite() &&
+           target.w_W.allFinite();
   if (!out.ok) {
     out.qd_cmd.setZero();
     return out;

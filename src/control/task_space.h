@@ -81,11 +81,11 @@ struct TaskSpaceTarget {
 struct TaskSpaceOutput {
   Eigen::VectorXd qd_cmd;  ///< joint velocity command, rad/s or m/s, chain order
   Eigen::Matrix<double, 6, 1> error_W = Eigen::Matrix<double, 6, 1>::Zero();  ///< [p_d − p; e_o]
-  double position_error_m = 0.0;       ///< |p_d − p|, m
-  double orientation_error_rad = 0.0;  ///< |e_o| ∈ [0, π], rad
-  double damping = 0.0;                ///< λ used, after adaptation
-  double speed_scale = 1.0;            ///< uniform factor applied for max_joint_speed, (0, 1]
-  bool ok = true;  ///< false if an input was non-finite; qd_cmd is then zero
+  double position_error_m = 0.0;                                              ///< |p_d − p|, m
+  double orientation_error_rad = 0.0;                                         ///< |e_o| ∈ [0, π], rad
+  double damping = 0.0;                                                       ///< λ used, after adaptation
+  double speed_scale = 1.0;  ///< uniform factor applied for max_joint_speed, (0, 1]
+  bool ok = true;            ///< false if an input was non-finite; qd_cmd is then zero
 };
 
 /// Orientation error e_o (rad, world frame): the rotation vector of R_d·Rᵀ,
@@ -101,15 +101,13 @@ class TaskSpaceController {
   /// Validates `config` against `model` (dof, limits) and sizes all buffers.
   /// Throws std::invalid_argument naming the bad field (negative gain, q_rest
   /// size, non-finite value, ...).
-  static std::unique_ptr<TaskSpaceController> Create(const TaskSpaceConfig& config,
-                                                     const RobotModel& model);
+  static std::unique_ptr<TaskSpaceController> Create(const TaskSpaceConfig& config, const RobotModel& model);
 
   /// One control step. `model` must be the chain given to Create, already set
   /// to the current state; `q` is that state's chain positions. Returns a
   /// reference to an internal output, valid until the next call. Never
   /// allocates; throws std::invalid_argument only on a size mismatch.
-  const TaskSpaceOutput& Update(const RobotModel& model, const Eigen::VectorXd& q,
-                                const TaskSpaceTarget& target);
+  const TaskSpaceOutput& Update(const RobotModel& model, const Eigen::VectorXd& q, const TaskSpaceTarget& target);
 
   /// Effective rest posture (chain order).
   const Eigen::VectorXd& q_rest() const { return q_rest_; }

@@ -7,14 +7,12 @@ namespace vlab::control {
 
 void ValidateTimeScaling(const TimeScaling& scaling, double duration_s, const std::string& where) {
   if (!std::isfinite(duration_s) || duration_s <= 0.0) {
-    throw std::invalid_argument(where + ": duration_s must be finite and > 0, got " +
-                                std::to_string(duration_s));
+    throw std::invalid_argument(where + ": duration_s must be finite and > 0, got " + std::to_string(duration_s));
   }
   if (scaling.type == TimeScalingType::kTrapezoidal) {
     const double a = scaling.acceleration_fraction;
     if (!std::isfinite(a) || a <= 0.0 || a > 0.5) {
-      throw std::invalid_argument(where + ": acceleration_fraction must lie in (0, 0.5], got " +
-                                  std::to_string(a));
+      throw std::invalid_argument(where + ": acceleration_fraction must lie in (0, 0.5], got " + std::to_string(a));
     }
   } else if (scaling.type != TimeScalingType::kQuintic) {
     throw std::invalid_argument(where + ": unknown time scaling type");

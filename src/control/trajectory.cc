@@ -60,12 +60,10 @@ std::unique_ptr<JointTrajectory> JointTrajectory::Create(const JointTrajectoryCo
     const Eigen::VectorXd& w = config.waypoints[i];
     if (w.size() != n) {
       throw std::invalid_argument("joint trajectory: waypoint " + std::to_string(i) + " has " +
-                                  std::to_string(w.size()) + " joints, waypoint 0 has " +
-                                  std::to_string(n));
+                                  std::to_string(w.size()) + " joints, waypoint 0 has " + std::to_string(n));
     }
     if (!w.allFinite()) {
-      throw std::invalid_argument("joint trajectory: waypoint " + std::to_string(i) +
-                                  " is not finite");
+      throw std::invalid_argument("joint trajectory: waypoint " + std::to_string(i) + " is not finite");
     }
   }
   std::unique_ptr<JointTrajectory> traj(new JointTrajectory());
@@ -103,8 +101,7 @@ void JointTrajectory::Evaluate(double t, JointSample* out) const {
 
 // --- Cartesian trajectory --------------------------------------------------
 
-std::unique_ptr<CartesianTrajectory> CartesianTrajectory::Create(
-    const CartesianTrajectoryConfig& config) {
+std::unique_ptr<CartesianTrajectory> CartesianTrajectory::Create(const CartesianTrajectoryConfig& config) {
   std::vector<double> end_times = ValidateSegments(config.waypoints.size(), config.segments);
   std::vector<Eigen::Quaterniond> quats;
   for (size_t i = 0; i < config.waypoints.size(); ++i) {
@@ -113,9 +110,8 @@ std::unique_ptr<CartesianTrajectory> CartesianTrajectory::Create(
     if (!w.p_W.allFinite() || !w.R_W.allFinite()) throw std::invalid_argument(name + " is not finite");
     const double orth = (w.R_W.transpose() * w.R_W - Eigen::Matrix3d::Identity()).norm();
     if (orth > 1e-6 || w.R_W.determinant() < 0.0) {
-      throw std::invalid_argument(name + ": R_W is not a rotation (|RᵀR − I| = " +
-                                  std::to_string(orth) + ", det = " +
-                                  std::to_string(w.R_W.determinant()) + ")");
+      throw std::invalid_argument(name + ": R_W is not a rotation (|RᵀR − I| = " + std::to_string(orth) +
+                                  ", det = " + std::to_string(w.R_W.determinant()) + ")");
     }
     quats.push_back(Eigen::Quaterniond(w.R_W).normalized());
   }

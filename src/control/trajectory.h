@@ -86,12 +86,12 @@ struct CartesianTrajectoryConfig {
 
 /// Cartesian trajectory sample, everything in the world frame.
 struct CartesianSample {
-  Pose pose;                                     ///< p_W (m), R_W (world <- frame)
-  Eigen::Vector3d v_W = Eigen::Vector3d::Zero();  ///< linear velocity, m/s
-  Eigen::Vector3d w_W = Eigen::Vector3d::Zero();  ///< angular velocity, rad/s
-  Eigen::Vector3d a_W = Eigen::Vector3d::Zero();  ///< linear acceleration, m/s²
+  Pose pose;                                          ///< p_W (m), R_W (world <- frame)
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero();      ///< linear velocity, m/s
+  Eigen::Vector3d w_W = Eigen::Vector3d::Zero();      ///< angular velocity, rad/s
+  Eigen::Vector3d a_W = Eigen::Vector3d::Zero();      ///< linear acceleration, m/s²
   Eigen::Vector3d alpha_W = Eigen::Vector3d::Zero();  ///< angular acceleration, rad/s²
-  bool done = false;  ///< t is at or past the end of the last segment
+  bool done = false;                                  ///< t is at or past the end of the last segment
 };
 
 /// Straight-line / SLERP Cartesian trajectory through waypoint poses.
@@ -117,9 +117,9 @@ class CartesianTrajectory {
 
  private:
   struct Segment {
-    Eigen::Vector3d p0_W, dp_W;    // start position and displacement, m
-    Eigen::Quaterniond q0, q1;     // start and end orientation, q1 on q0's hemisphere
-    Eigen::Vector3d rotvec_W;      // θ·u_W of the segment's rotation, rad
+    Eigen::Vector3d p0_W, dp_W;  // start position and displacement, m
+    Eigen::Quaterniond q0, q1;   // start and end orientation, q1 on q0's hemisphere
+    Eigen::Vector3d rotvec_W;    // θ·u_W of the segment's rotation, rad
     SegmentTiming timing;
   };
   CartesianTrajectory() = default;

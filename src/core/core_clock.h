@@ -41,10 +41,10 @@ enum class OnTimeout {
 
 /// Lockstep clock: the lab waits for the commands that answer each period.
 struct LockstepConfig {
-  double timeout_s = 1.0;        ///< wait per period (wall time)
+  double timeout_s = 1.0;         ///< wait per period (wall time)
   double start_timeout_s = 30.0;  ///< wait for the first command (period 0)
   OnTimeout on_timeout = OnTimeout::kHold;
-  int release_after = 3;         ///< consecutive timeouts after which the silent owner is released
+  int release_after = 3;  ///< consecutive timeouts after which the silent owner is released
 };
 
 /// Realtime clock: periods paced to the wall clock.

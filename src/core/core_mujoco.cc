@@ -176,13 +176,13 @@ void CopyDrawnState(const mjModel* m, const mjData* src, mjData* dst) {
   MJDATA_POINTERS_PREAMBLE(m)
   (void)nv;
   (void)njmax;
-#define X(type, name, nr, nc)                                                                  \
-  {                                                                                             \
-    std::size_t rows = static_cast<std::size_t>(m->nr);                                         \
-    const std::size_t cols = static_cast<std::size_t>(nc);                                      \
-    const bool constraint = std::strncmp(#name, "efc_", 4) == 0;                                \
-    if (&m->nr == &m->nconmax) rows = static_cast<std::size_t>(src->ncon);                      \
-    if (constraint && &m->nr == &m->njmax) rows = static_cast<std::size_t>(src->nefc);           \
+#define X(type, name, nr, nc)                                                                      \
+  {                                                                                                \
+    std::size_t rows = static_cast<std::size_t>(m->nr);                                            \
+    const std::size_t cols = static_cast<std::size_t>(nc);                                         \
+    const bool constraint = std::strncmp(#name, "efc_", 4) == 0;                                   \
+    if (&m->nr == &m->nconmax) rows = static_cast<std::size_t>(src->ncon);                         \
+    if (constraint && &m->nr == &m->njmax) rows = static_cast<std::size_t>(src->nefc);             \
     if (!(constraint && cols != 1)) std::memcpy(dst->name, src->name, sizeof(type) * rows * cols); \
   }
   MJDATA_POINTERS

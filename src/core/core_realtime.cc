@@ -54,7 +54,7 @@ DeviceCpus g_device_cpus;
 // the priority of the last SCHED_DEADLINE loop granted in this process (0: none)
 std::atomic<int> g_deadline_priority{0};
 
-constexpr std::uint32_t kSchedDeadline = 6;             // SCHED_DEADLINE (linux/sched.h)
+constexpr std::uint32_t kSchedDeadline = 6;            // SCHED_DEADLINE (linux/sched.h)
 constexpr std::uint64_t kSchedFlagResetOnFork = 0x01;  // SCHED_FLAG_RESET_ON_FORK
 constexpr std::uint64_t kSchedFlagReclaim = 0x02;      // SCHED_FLAG_RECLAIM
 
@@ -209,8 +209,9 @@ std::string RealtimeRefusal(int priority, int error) {
     if (::getrlimit(RLIMIT_RTPRIO, &limit) == 0) {
       have = limit.rlim_cur == RLIM_INFINITY ? "unlimited" : std::to_string(limit.rlim_cur);
     }
-    why += " (SCHED_FIFO " + std::to_string(priority) + " needs root, CAP_SYS_NICE or an rtprio limit >= " +
-           std::to_string(priority) + "; ulimit -r is " + have + ")";
+    why += " (SCHED_FIFO " + std::to_string(priority) +
+           " needs root, CAP_SYS_NICE or an rtprio limit >= " + std::to_string(priority) + "; ulimit -r is " + have +
+           ")";
   }
   return why;
 }

@@ -107,8 +107,10 @@ std::string StallRecord::Cause() const {
   }
   // where at its deadline? still at work (busy), or gone to sleep and woken late
   if (on_cpu_s + cpu_wait >= window_s - lateness_s) return "busy in the lab: it " + ran + counts;
-  return "a late wake-up: it slept past its deadline (" + ran + "; a CPU leaving deep idle, or a timer or interrupt "
-         "delivered late)" + counts;
+  return "a late wake-up: it slept past its deadline (" + ran +
+         "; a CPU leaving deep idle, or a timer or interrupt "
+         "delivered late)" +
+         counts;
 }
 
 StallProbe::~StallProbe() {

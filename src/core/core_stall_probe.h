@@ -52,10 +52,10 @@ struct StallRecord {
   long involuntary_switches = 0;
   long minor_faults = 0;
   long major_faults = 0;
-  double run_delay_s = -1;  ///< -1: unknown
-  double on_cpu_s = -1;     ///< the control thread's time on a CPU across the window; -1: unknown
-  double window_s = 0;      ///< the window's wall time (the previous period's start to this one's), s
-  double steal_s = -1;      ///< the machine's steal (all CPUs) in the window that holds the stall; -1: unknown
+  double run_delay_s = -1;    ///< -1: unknown
+  double on_cpu_s = -1;       ///< the control thread's time on a CPU across the window; -1: unknown
+  double window_s = 0;        ///< the window's wall time (the previous period's start to this one's), s
+  double steal_s = -1;        ///< the machine's steal (all CPUs) in the window that holds the stall; -1: unknown
   double steal_window_s = 0;  ///< that window's wall time (since the read of /proc/stat before it), s
   /// One line: the largest of the causes the counters show, e.g.
   /// "waited 4.1 ms for a CPU (3 involuntary switches)" (or "... after its
@@ -72,14 +72,14 @@ struct StallRecord {
 
 /// What the probe found over a run.
 struct StallReport {
-  double steal_s = -1;           ///< the machine's steal time over the run, s (all CPUs); -1: unknown
-  double wall_s = 0;             ///< the run's wall time from the first sample to the last, s
-  long voluntary_switches = 0;   ///< of the control thread over the run
+  double steal_s = -1;          ///< the machine's steal time over the run, s (all CPUs); -1: unknown
+  double wall_s = 0;            ///< the run's wall time from the first sample to the last, s
+  long voluntary_switches = 0;  ///< of the control thread over the run
   long involuntary_switches = 0;
   long minor_faults = 0;
   long major_faults = 0;
-  double run_delay_s = -1;       ///< of the control thread over the run; -1: unknown
-  StallRecord worst;             ///< the latest-starting period
+  double run_delay_s = -1;  ///< of the control thread over the run; -1: unknown
+  StallRecord worst;        ///< the latest-starting period
 };
 
 /// Samples the control thread at the start of every period (see the file comment).
@@ -108,7 +108,7 @@ class StallProbe {
   int stat_fd_ = -1;
   ThreadCounters first_, last_;
   double first_wall_s_ = 0;
-  double last_wall_s_ = 0;    // the previous sample's wall time, s
+  double last_wall_s_ = 0;  // the previous sample's wall time, s
   double first_steal_s_ = -1;
   double window_steal_s_ = -1;  // steal at the last /proc/stat read
   double window_wall_s_ = 0;    // and its wall time

@@ -31,8 +31,7 @@ std::unique_ptr<KinArm> KinArm::Create(const KinArmConfig& c) {
   }
   auto sized = [&](const std::vector<double>& v, const char* field) {
     if (v.size() != n) {
-      Fail(c, std::string(field) + " has " + std::to_string(v.size()) + " values for " + std::to_string(n) +
-                  " joints");
+      Fail(c, std::string(field) + " has " + std::to_string(v.size()) + " values for " + std::to_string(n) + " joints");
     }
   };
   sized(c.position_min, "position_min");

@@ -37,12 +37,12 @@ enum class ArmMode : int { kHold = 0, kPosition = 1, kVelocity = 2, kTorque = 3 
 
 /// A kinematic arm: joint names and limits, nothing about masses or motors.
 struct KinArmConfig {
-  std::string name = "pa10";              ///< device name (describe, messages)
-  std::vector<std::string> joints;        ///< joint names, in wire order
-  std::vector<double> position_min;       ///< rad, one per joint, finite
-  std::vector<double> position_max;       ///< rad, one per joint, finite, > position_min
-  std::vector<double> velocity_max;       ///< rad/s, |qd| bound, one per joint, finite, > 0
-  std::vector<double> initial;            ///< rad, one per joint, within the position limits
+  std::string name = "pa10";         ///< device name (describe, messages)
+  std::vector<std::string> joints;   ///< joint names, in wire order
+  std::vector<double> position_min;  ///< rad, one per joint, finite
+  std::vector<double> position_max;  ///< rad, one per joint, finite, > position_min
+  std::vector<double> velocity_max;  ///< rad/s, |qd| bound, one per joint, finite, > 0
+  std::vector<double> initial;       ///< rad, one per joint, within the position limits
 };
 
 class KinArm {

@@ -11,11 +11,11 @@
 
 #include "bridge/bridge_errors.h"
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_signals.h"
+#include "core/core_errors.h"
 #include "kinsim/kinsim.h"
 #include "kinsim/kinsim_scene.h"
 #include "kinsim/kinsim_server.h"
-#include "core/core_errors.h"
-#include "bridge/bridge_signals.h"
 
 namespace {
 
@@ -37,12 +37,14 @@ int Fail(const std::string& what) {
 
 int main(int argc, char** argv) {
   Args args;
-  CLI::App app{"vlab-kinsim: a kinematic arm simulator (no dynamics) behind the vlab arm device's UDP interface\n"
-               "(protocol v" + std::to_string(vlab::bridge::kProtocolVersion) +
-               ", the same bytes as `vlab serve`). Velocity commands are integrated and clamped at\n"
-               "the joint limits, position commands are followed at up to the velocity limit, torque commands\n"
-               "are refused. Ends after --duration or on SIGINT/SIGTERM (exit 0) and prints its counters.\n"
-               "Exit codes: 0 done; 2 bad input (scene, joint, option, address or port in use)."};
+  CLI::App app{
+      "vlab-kinsim: a kinematic arm simulator (no dynamics) behind the vlab arm device's UDP interface\n"
+      "(protocol v" +
+      std::to_string(vlab::bridge::kProtocolVersion) +
+      ", the same bytes as `vlab serve`). Velocity commands are integrated and clamped at\n"
+      "the joint limits, position commands are followed at up to the velocity limit, torque commands\n"
+      "are refused. Ends after --duration or on SIGINT/SIGTERM (exit 0) and prints its counters.\n"
+      "Exit codes: 0 done; 2 bad input (scene, joint, option, address or port in use)."};
   app.add_option("--scene", args.scene, "MJCF scene with the arm's joints (names and ranges only)")
       ->capture_default_str();
   app.add_option("--name", args.name, "Device name")->capture_default_str();

@@ -26,11 +26,11 @@ namespace vlab::kinsim {
 
 struct ServerConfig {
   std::string bind_address = "127.0.0.1";
-  int port = 50010;               ///< 0: any free port (see KinsimServer::port)
-  double rate_hz = 500;           ///< control rate, 1 to 10000 Hz
-  double duration_s = 0;          ///< run time; 0: until stopped
-  int watchdog_periods = 3;       ///< silent owner -> hold after this many periods; 0 disables
-  double owner_timeout_s = 1.0;   ///< silent owner gives the command input up after this, s (> 0)
+  int port = 50010;                    ///< 0: any free port (see KinsimServer::port)
+  double rate_hz = 500;                ///< control rate, 1 to 10000 Hz
+  double duration_s = 0;               ///< run time; 0: until stopped
+  int watchdog_periods = 3;            ///< silent owner -> hold after this many periods; 0 disables
+  double owner_timeout_s = 1.0;        ///< silent owner gives the command input up after this, s (> 0)
   double subscriber_timeout_s = 10.0;  ///< silent subscribers are dropped after this, s (> 0)
 };
 

@@ -44,8 +44,8 @@ CsvTable ReadCsvTable(const std::string& path) {
     if (line.empty()) continue;
     const std::vector<std::string> fields = SplitFields(line);
     if (fields.size() != t.columns.size()) {
-      throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(fields.size()) + " fields, the header has " +
-                       std::to_string(t.columns.size()));
+      throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(fields.size()) +
+                       " fields, the header has " + std::to_string(t.columns.size()));
     }
     std::vector<double> row(fields.size());
     for (std::size_t i = 0; i < fields.size(); ++i) {
@@ -53,7 +53,8 @@ CsvTable ReadCsvTable(const std::string& path) {
       errno = 0;
       row[i] = std::strtod(fields[i].c_str(), &end);
       if (fields[i].empty() || *end != '\0') {
-        throw InputError(path + ":" + std::to_string(number) + ": " + t.columns[i] + ": not a number: '" + fields[i] + "'");
+        throw InputError(path + ":" + std::to_string(number) + ": " + t.columns[i] + ": not a number: '" + fields[i] +
+                         "'");
       }
     }
     t.rows.push_back(std::move(row));

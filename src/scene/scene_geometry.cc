@@ -17,14 +17,22 @@ bool Visible(const mjModel* m, int geom) {
 
 const char* GeomTypeName(int type) {
   switch (type) {
-    case mjGEOM_PLANE: return "plane";
-    case mjGEOM_SPHERE: return "sphere";
-    case mjGEOM_CAPSULE: return "capsule";
-    case mjGEOM_ELLIPSOID: return "ellipsoid";
-    case mjGEOM_CYLINDER: return "cylinder";
-    case mjGEOM_BOX: return "box";
-    case mjGEOM_MESH: return "mesh";
-    default: return "other";
+    case mjGEOM_PLANE:
+      return "plane";
+    case mjGEOM_SPHERE:
+      return "sphere";
+    case mjGEOM_CAPSULE:
+      return "capsule";
+    case mjGEOM_ELLIPSOID:
+      return "ellipsoid";
+    case mjGEOM_CYLINDER:
+      return "cylinder";
+    case mjGEOM_BOX:
+      return "box";
+    case mjGEOM_MESH:
+      return "mesh";
+    default:
+      return "other";
   }
 }
 
@@ -84,13 +92,15 @@ nlohmann::json SceneGeometry(const mjModel* m, const std::vector<int>& bodies) {
   }
   nlohmann::json meshes = nlohmann::json::array();
   for (int i = 0; i < m->nmesh; ++i) {
-    meshes.push_back({{"name", NameOf(m, mjOBJ_MESH, i)}, {"vertices", m->mesh_vertnum[i]},
-                      {"faces", m->mesh_facenum[i]}});
+    meshes.push_back(
+        {{"name", NameOf(m, mjOBJ_MESH, i)}, {"vertices", m->mesh_vertnum[i]}, {"faces", m->mesh_facenum[i]}});
   }
   nlohmann::json textures = nlohmann::json::array();
   for (int i = 0; i < m->ntex; ++i) {
     const char* type = m->tex_type[i] == mjTEXTURE_2D ? "2d" : m->tex_type[i] == mjTEXTURE_CUBE ? "cube" : "skybox";
-    textures.push_back({{"name", NameOf(m, mjOBJ_TEXTURE, i)}, {"type", type}, {"width", m->tex_width[i]},
+    textures.push_back({{"name", NameOf(m, mjOBJ_TEXTURE, i)},
+                        {"type", type},
+                        {"width", m->tex_width[i]},
                         {"height", m->tex_height[i]}});
   }
   return {{"bodies", names}, {"geoms", geoms}, {"meshes", meshes}, {"textures", textures}};

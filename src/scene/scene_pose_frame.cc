@@ -6,9 +6,7 @@ namespace vlab::scene {
 
 namespace {
 
-void Put(std::string* out, std::size_t at, const void* value, std::size_t n) {
-  std::memcpy(&(*out)[at], value, n);
-}
+void Put(std::string* out, std::size_t at, const void* value, std::size_t n) { std::memcpy(&(*out)[at], value, n); }
 
 }  // namespace
 

@@ -175,9 +175,7 @@ void Start(Robot& r, Plan&& plan) {
 }
 
 // whether the running move was left for a blend: its entry sample has been handed out
-bool BlendReady(const Robot& r) {
-  return r.moving && r.blend_at >= 0 && static_cast<long>(r.next) - 1 >= r.blend_at;
-}
+bool BlendReady(const Robot& r) { return r.moving && r.blend_at >= 0 && static_cast<long>(r.next) - 1 >= r.blend_at; }
 
 // the guard option of a move: force = N (and wrench = NAME)
 void SetGuard(lua_State* L, Robot& r, int options, const char* what) {
@@ -226,7 +224,8 @@ int MoveJ(lua_State* L) {
     PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, r.planner->Ik(r.q_ref, goal), limits, t); });
     return 0;
   }
-  if (!lua_istable(L, 1)) ScriptError(L, "movej: expected a table of joint angles (deg) or a frame, got %s", luaL_typename(L, 1));
+  if (!lua_istable(L, 1))
+    ScriptError(L, "movej: expected a table of joint angles (deg) or a frame, got %s", luaL_typename(L, 1));
   const int n = r.model->dof();
   if (static_cast<int>(lua_rawlen(L, 1)) != n) {
     ScriptError(L, "movej: expected %d joint angles (deg), got %d", n, static_cast<int>(lua_rawlen(L, 1)));
@@ -278,8 +277,9 @@ int MoveL(lua_State* L) {
     // entered from the previous move's blend: its radius must fit in this segment too
     const double seg = (goal.p - r.blend_corner_W).norm();
     if (r.blend_radius_m > seg / 2 + 1e-12) {
-      ScriptError(L, "movel: the blend radius r = %g m of the move before is larger than half of this move "
-                     "(%g m from the corner): at most %g m",
+      ScriptError(L,
+                  "movel: the blend radius r = %g m of the move before is larger than half of this move "
+                  "(%g m from the corner): at most %g m",
                   r.blend_radius_m, seg, seg / 2);
     }
     if (t > 0) ScriptError(L, "movel: a move entered from a blend takes its speed (v), not a duration (t)");
@@ -387,8 +387,8 @@ int WrenchPart(lua_State* L) {
   }
   std::vector<double> v;
   const bool ok = w->Read(&v) && v.size() >= 6;
-  const Eigen::Vector3d out = ok ? Eigen::Vector3d(v[kForce ? 0 : 3], v[kForce ? 1 : 4], v[kForce ? 2 : 5])
-                                 : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d out =
+      ok ? Eigen::Vector3d(v[kForce ? 0 : 3], v[kForce ? 1 : 4], v[kForce ? 2 : 5]) : Eigen::Vector3d::Zero();
   v = std::vector<double>();
   PushVec3(L, out);
   return 1;
@@ -514,7 +514,8 @@ int Device(lua_State* L) {
   lua_createtable(L, 0, 4);
   lua_pushstring(L, name);
   lua_setfield(L, -2, "name");
-  static const luaL_Reg methods[] = {{"get", DeviceGet}, {"read", DeviceRead}, {"send", DeviceSend}, {nullptr, nullptr}};
+  static const luaL_Reg methods[] = {
+      {"get", DeviceGet}, {"read", DeviceRead}, {"send", DeviceSend}, {nullptr, nullptr}};
   luaL_setfuncs(L, methods, 0);
   return 1;
 }
@@ -667,12 +668,24 @@ int SharedIndex(lua_State* L) {
   }
   const SharedValue& v = it->second;
   switch (v.type) {
-    case SharedValue::kNumber: lua_pushnumber(L, v.number); break;
-    case SharedValue::kString: lua_pushlstring(L, v.text.data(), v.text.size()); break;
-    case SharedValue::kBoolean: lua_pushboolean(L, v.number != 0); break;
-    case SharedValue::kVec3: PushVec3(L, v.frame.p); break;
-    case SharedValue::kQuat: PushQuat(L, v.frame.q); break;
-    case SharedValue::kFrame: PushFrame(L, v.frame); break;
+    case SharedValue::kNumber:
+      lua_pushnumber(L, v.number);
+      break;
+    case SharedValue::kString:
+      lua_pushlstring(L, v.text.data(), v.text.size());
+      break;
+    case SharedValue::kBoolean:
+      lua_pushboolean(L, v.number != 0);
+      break;
+    case SharedValue::kVec3:
+      PushVec3(L, v.frame.p);
+      break;
+    case SharedValue::kQuat:
+      PushQuat(L, v.frame.q);
+      break;
+    case SharedValue::kFrame:
+      PushFrame(L, v.frame);
+      break;
   }
   return 1;
 }
@@ -753,15 +766,34 @@ void OpenApi(Program* p) {
   lua_State* L = p->L;
   lua_pushlightuserdata(L, p);
   lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
-  static const luaL_Reg functions[] = {
-      {"_movej", MoveJ},         {"_movel", MoveL},          {"_movec", MoveC},        {"_selfmove", SelfMove},
-      {"_moving", Moving},       {"_outcome", Outcome},      {"_now", Now},            {"_periods", Periods},
-      {"_signal", Signal},       {"_take_signal", TakeSignal}, {"now", Now},           {"joints", Joints},
-      {"pose", Pose},            {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
-      {"speed", SetSpeed},       {"accel", SetAccel},        {"jspeed", SetJointSpeed}, {"tool", SetTool},
-      {"base", SetBase},         {"blend", SetBlend},         {"device", Device},         {"_markers_open", MarkersOpen},
-      {"_markers_due", MarkersDue}, {"_markers_take", MarkersTake}, {"_markers_poll", MarkersPoll},
-      {"_markers_latest", MarkersLatest}, {nullptr, nullptr}};
+  static const luaL_Reg functions[] = {{"_movej", MoveJ},
+                                       {"_movel", MoveL},
+                                       {"_movec", MoveC},
+                                       {"_selfmove", SelfMove},
+                                       {"_moving", Moving},
+                                       {"_outcome", Outcome},
+                                       {"_now", Now},
+                                       {"_periods", Periods},
+                                       {"_signal", Signal},
+                                       {"_take_signal", TakeSignal},
+                                       {"now", Now},
+                                       {"joints", Joints},
+                                       {"pose", Pose},
+                                       {"force", WrenchPart<true>},
+                                       {"torque", WrenchPart<false>},
+                                       {"speed", SetSpeed},
+                                       {"accel", SetAccel},
+                                       {"jspeed", SetJointSpeed},
+                                       {"tool", SetTool},
+                                       {"base", SetBase},
+                                       {"blend", SetBlend},
+                                       {"device", Device},
+                                       {"_markers_open", MarkersOpen},
+                                       {"_markers_due", MarkersDue},
+                                       {"_markers_take", MarkersTake},
+                                       {"_markers_poll", MarkersPoll},
+                                       {"_markers_latest", MarkersLatest},
+                                       {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, functions, 0);
   lua_pop(L, 1);

@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <cstdio>
-#include <thread>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "core/core_errors.h"
 #include "task/task_udp.h"

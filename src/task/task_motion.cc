@@ -33,14 +33,13 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& r) {
 
 std::string Percent(int i, int n) { return "at " + Fmt(100.0 * (i + 1) / n, "%.0f") + "% of the path"; }
 
-
 // a speed profile over a path of length L that starts at speed v0 (m/s),
 // ramps to the peak vp at a, cruises, and stops at a (or, when it cannot stop
 // within L at a, decelerates at the rate that stops it at L)
 struct StartSpeedProfile {
   double L = 0, v0 = 0, vp = 0, a = 0, a_stop = 0;
-  double t1 = 0, t2 = 0, T = 0;   // end of the ramp, of the cruise, of the move
-  double d1 = 0, d2 = 0;          // distance at t1, t2
+  double t1 = 0, t2 = 0, T = 0;  // end of the ramp, of the cruise, of the move
+  double d1 = 0, d2 = 0;         // distance at t1, t2
   StartSpeedProfile(double length, double start_speed, double v, double accel) : L(length), v0(start_speed), a(accel) {
     if (v0 * v0 / (2 * a) >= L) {  // no room to speed up or cruise: one deceleration to rest at L
       vp = v0;
@@ -134,7 +133,8 @@ Eigen::VectorXd MotionPlanner::Solve(const Eigen::VectorXd& q_start, const Frame
     Eigen::MatrixXd J = model_->Jacobian();  // tip site, world
     const Eigen::Vector3d r = x.p - model_->TipPose().p_W;
     J.topRows(3) -= Skew(r) * J.bottomRows(3);  // the tool point: v = v_tip + ω × r
-    const Eigen::Matrix<double, 6, 6> JJt = J * J.transpose() + kDamping * kDamping * Eigen::Matrix<double, 6, 6>::Identity();
+    const Eigen::Matrix<double, 6, 6> JJt =
+        J * J.transpose() + kDamping * kDamping * Eigen::Matrix<double, 6, 6>::Identity();
     Eigen::VectorXd dq = J.transpose() * JJt.ldlt().solve(e);
     if (dq.norm() > kMaxStep_rad) dq *= kMaxStep_rad / dq.norm();
     q += dq;
@@ -175,7 +175,8 @@ Plan MotionPlanner::Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, 
   }
   CheckLimits(q1, "the target");
   double T = duration_s, frac = 0.25;
-  if (T <= 0) TrapezoidTiming((q1 - q0).cwiseAbs().maxCoeff(), limits.joint_speed_rps, limits.joint_accel_rps2, &T, &frac);
+  if (T <= 0)
+    TrapezoidTiming((q1 - q0).cwiseAbs().maxCoeff(), limits.joint_speed_rps, limits.joint_accel_rps2, &T, &frac);
   const int N = std::max(1, static_cast<int>(std::ceil(T / period_s_ - 1e-9)));
   T = N * period_s_;
   control::TimeScaling scaling{control::TimeScalingType::kTrapezoidal, std::clamp(frac, 1e-3, 0.5)};
@@ -260,7 +261,8 @@ Plan MotionPlanner::Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via, c
     throw std::invalid_argument("the start, via and goal points are on one line (or coincide): no circle through them");
   }
   // circumcentre of start, via, goal
-  const Eigen::Vector3d c = start.p + (b.squaredNorm() * n.cross(a) + a.squaredNorm() * b.cross(n)) / (2 * n.squaredNorm());
+  const Eigen::Vector3d c =
+      start.p + (b.squaredNorm() * n.cross(a) + a.squaredNorm() * b.cross(n)) / (2 * n.squaredNorm());
   const double r = (start.p - c).norm();
   const Eigen::Vector3d u = (start.p - c) / r, w = n.normalized().cross(u);
   auto angle_of = [&](const Eigen::Vector3d& p) {
@@ -304,7 +306,8 @@ Plan MotionPlanner::FromBlend(const BlendStart& b, const Frame& goal_W, const Mo
     const double s = 1 - t;
     return Eigen::Vector3d(s * s * s * P1 + 3 * s * s * t * C1 + 3 * s * t * t * C2 + t * t * t * P2);
   };
-  for (int k = 1; k <= kTable; ++k) arc[k] = arc[k - 1] + (bezier(double(k) / kTable) - bezier(double(k - 1) / kTable)).norm();
+  for (int k = 1; k <= kTable; ++k)
+    arc[k] = arc[k - 1] + (bezier(double(k) / kTable) - bezier(double(k - 1) / kTable)).norm();
   const double Lb = arc[kTable];
   const double L = Lb + (C - P2).norm();
   const Eigen::Quaterniond q1 = b.entry.q.dot(goal_W.q) < 0 ? Eigen::Quaterniond(-goal_W.q.coeffs()) : goal_W.q;
@@ -341,8 +344,12 @@ Plan MotionPlanner::FromBlend(const BlendStart& b, const Frame& goal_W, const Mo
 
 Plan MotionPlanner::Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const {
   const int n = model_->dof();
-  if (n != 7) throw std::invalid_argument("selfmove needs a chain of 7 joints (one redundant), this one has " + std::to_string(n));
-  if (joint < 0 || joint >= n) throw std::invalid_argument("joint " + std::to_string(joint + 1) + " is not a joint of the chain (1.." + std::to_string(n) + ")");
+  if (n != 7)
+    throw std::invalid_argument("selfmove needs a chain of 7 joints (one redundant), this one has " +
+                                std::to_string(n));
+  if (joint < 0 || joint >= n)
+    throw std::invalid_argument("joint " + std::to_string(joint + 1) + " is not a joint of the chain (1.." +
+                                std::to_string(n) + ")");
   if (!(duration_s > 0)) throw std::invalid_argument("t must be > 0 s");
   const Frame held = ToolPose(q0);
   const int N = std::max(1, static_cast<int>(std::ceil(duration_s / period_s_ - 1e-9)));

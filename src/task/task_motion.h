@@ -42,11 +42,11 @@ namespace vlab::task {
 
 /// Speeds and accelerations of moves (the script's speed()/accel() settings).
 struct MotionLimits {
-  double speed_mps = 0.1;          ///< tool linear speed, m/s
-  double accel_mps2 = 0.5;         ///< tool linear acceleration, m/s²
-  double rot_speed_rps = 0.7854;   ///< tool angular speed, rad/s (45°/s)
-  double rot_accel_rps2 = 3.1416;  ///< tool angular acceleration, rad/s² (180°/s²)
-  double joint_speed_rps = 0.5236;  ///< joint speed, rad/s (30°/s)
+  double speed_mps = 0.1;            ///< tool linear speed, m/s
+  double accel_mps2 = 0.5;           ///< tool linear acceleration, m/s²
+  double rot_speed_rps = 0.7854;     ///< tool angular speed, rad/s (45°/s)
+  double rot_accel_rps2 = 3.1416;    ///< tool angular acceleration, rad/s² (180°/s²)
+  double joint_speed_rps = 0.5236;   ///< joint speed, rad/s (30°/s)
   double joint_accel_rps2 = 1.5708;  ///< joint acceleration, rad/s² (90°/s²)
 };
 
@@ -62,11 +62,11 @@ struct Plan {
 /// sample of the running plan at which the tool came within the radius of
 /// the corner (the running move's target).
 struct BlendStart {
-  Eigen::VectorXd q;           ///< chain joints of that sample
-  Frame entry;                 ///< its tool pose (world): P1, within the radius of the corner
-  Eigen::Vector3d corner = Eigen::Vector3d::Zero();  ///< the running move's target point B (world)
+  Eigen::VectorXd q;                                  ///< chain joints of that sample
+  Frame entry;                                        ///< its tool pose (world): P1, within the radius of the corner
+  Eigen::Vector3d corner = Eigen::Vector3d::Zero();   ///< the running move's target point B (world)
   Eigen::Vector3d tangent = Eigen::Vector3d::Zero();  ///< unit direction of motion at P1 (a line: towards B)
-  double speed_mps = 0;        ///< the tool's path speed there
+  double speed_mps = 0;                               ///< the tool's path speed there
 };
 
 class MotionPlanner {
@@ -88,10 +88,9 @@ class MotionPlanner {
   /// Plans; every function throws std::invalid_argument naming the problem.
   Plan Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, const MotionLimits& limits,
              double duration_s = 0) const;
-  Plan Linear(const Eigen::VectorXd& q0, const Frame& goal_W, const MotionLimits& limits,
-              double duration_s = 0) const;
-  Plan Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via_W, const Frame& goal_W,
-           const MotionLimits& limits, double duration_s = 0) const;
+  Plan Linear(const Eigen::VectorXd& q0, const Frame& goal_W, const MotionLimits& limits, double duration_s = 0) const;
+  Plan Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via_W, const Frame& goal_W, const MotionLimits& limits,
+           double duration_s = 0) const;
   /// The next straight move, entered from a blend: from P1 (b.entry, |B − P1|
   /// = d ≤ r) along the cubic Bézier P1, P1 + ⅔·d·t, P2 − ⅔·d·u, P2 (t the
   /// direction of motion at P1, P2 = B + d·u, u = (C − B)/|C − B|: tangent to

@@ -26,7 +26,7 @@ struct SharedValue {
   enum Type { kNumber, kString, kBoolean, kVec3, kQuat, kFrame } type = kNumber;
   double number = 0;
   std::string text;
-  Frame frame;            ///< kFrame; kVec3 uses frame.p, kQuat frame.q
+  Frame frame;  ///< kFrame; kVec3 uses frame.p, kQuat frame.q
 };
 
 /// What every program of a runtime shares.
@@ -40,26 +40,26 @@ struct Robot {
   Channel* arm = nullptr;
   std::unique_ptr<control::RobotModel> model;
   std::unique_ptr<MotionPlanner> planner;
-  std::vector<int> arm_index;      ///< chain joint i is arm joint arm_index[i]
+  std::vector<int> arm_index;  ///< chain joint i is arm joint arm_index[i]
   int arm_dof = 0;
-  std::vector<double> state;       ///< the arm's newest state payload
-  Eigen::VectorXd q_meas, q_ref;   ///< chain joints, rad
-  std::vector<double> command;     ///< [mode, arm joints...]
-  bool started = false;            ///< q_ref set from a first state
-  Frame base_W;                    ///< world <- the script's base frame
+  std::vector<double> state;      ///< the arm's newest state payload
+  Eigen::VectorXd q_meas, q_ref;  ///< chain joints, rad
+  std::vector<double> command;    ///< [mode, arm joints...]
+  bool started = false;           ///< q_ref set from a first state
+  Frame base_W;                   ///< world <- the script's base frame
   MotionLimits limits;
   // the running move
   Plan plan;
   std::size_t next = 0;
   bool moving = false;
-  std::string outcome = "done";    ///< of the last move: "done" or "contact"
+  std::string outcome = "done";  ///< of the last move: "done" or "contact"
   // blending (movel's r, blend()): the running move may be left for the next at sample
   // blend_at (-1: it runs to its end), where the tool is within blend_radius of its target
-  double blend_setting_m = 0;      ///< blend(r)
+  double blend_setting_m = 0;  ///< blend(r)
   long blend_at = -1;
   double blend_radius_m = 0;
   Eigen::Vector3d blend_corner_W = Eigen::Vector3d::Zero();
-  double segment_m = 0;            ///< length of the running move's straight segment
+  double segment_m = 0;  ///< length of the running move's straight segment
   // guard of the running move
   Channel* guard = nullptr;
   double guard_force_N = 0;
@@ -72,17 +72,17 @@ struct Robot {
 
 struct Program {
   ProgramConfig config;
-  std::string label;               ///< robot name, or the script's file name
+  std::string label;  ///< robot name, or the script's file name
   int index = 0;
   SandboxConfig sandbox;
   lua_State* L = nullptr;
   lua_State* co = nullptr;
   bool ended = false;
-  double t_s = 0;                  ///< simulated time of the current period
+  double t_s = 0;  ///< simulated time of the current period
   double period_s = 0.002;
-  bool markers_hold = true;        ///< RuntimeConfig::markers_hold
-  double markers_wait_s = 10.0;    ///< RuntimeConfig::markers_wait_s
-  std::unique_ptr<Robot> robot;    ///< null for a program without a robot
+  bool markers_hold = true;      ///< RuntimeConfig::markers_hold
+  double markers_wait_s = 10.0;  ///< RuntimeConfig::markers_wait_s
+  std::unique_ptr<Robot> robot;  ///< null for a program without a robot
   Devices* devices = nullptr;
   Blackboard* board = nullptr;
   std::map<std::string, std::vector<double>> device_commands;  ///< re-sent every period

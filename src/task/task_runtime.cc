@@ -89,7 +89,8 @@ int WaitingLine(lua_State* co) {
 
 void CheckParamName(const std::string& name, const std::string& where) {
   const auto ident = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
-  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0])) || !std::all_of(name.begin(), name.end(), ident)) {
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0])) ||
+      !std::all_of(name.begin(), name.end(), ident)) {
     throw InputError(where + ": parameter '" + name + "': a name is letters, digits and '_', not first a digit");
   }
 }
@@ -158,7 +159,8 @@ std::unique_ptr<Runtime> Runtime::Create(const RuntimeConfig& config, const mjMo
       if (print) print(raw->label, raw->t_s, text);
     };
     for (const auto& other : impl->programs) {
-      if (!c.robot.empty() && other->config.robot == c.robot) Fail(c, "robot: '" + c.robot + "' has two programs: one owner at a time");
+      if (!c.robot.empty() && other->config.robot == c.robot)
+        Fail(c, "robot: '" + c.robot + "' has two programs: one owner at a time");
     }
     if (!c.robot.empty()) p->robot = BindRobot(c, model, devices, config.period_s);
     p->L = luaL_newstate();
@@ -175,7 +177,7 @@ std::unique_ptr<Runtime> Runtime::Create(const RuntimeConfig& config, const mjMo
     }
     prog.co = lua_newthread(prog.L);
     lua_pushvalue(prog.L, -2);
-    lua_xmove(prog.L, prog.co, 1);  // the chunk, as the coroutine's body
+    lua_xmove(prog.L, prog.co, 1);                              // the chunk, as the coroutine's body
     lua_setfield(prog.L, LUA_REGISTRYINDEX, "vlab.coroutine");  // keeps the thread alive
     lua_pop(prog.L, 1);
   }

@@ -20,9 +20,9 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
-#include <map>
 #include <utility>
 #include <vector>
 
@@ -34,12 +34,12 @@ namespace vlab::task {
 
 /// One robot program.
 struct ProgramConfig {
-  std::string script;            ///< path of the .lua file
-  std::string robot;             ///< arm device it commands ("": none, a supervisor program)
+  std::string script;               ///< path of the .lua file
+  std::string robot;                ///< arm device it commands ("": none, a supervisor program)
   std::string base_body = "world";  ///< kinematic chain from this body ...
-  std::string tip_site;          ///< ... to this site (required with a robot)
-  std::string wrench;            ///< default wrench device of guarded moves ("": the only one, if any)
-  std::string where;             ///< "FILE:LINE" of its scenario entry, for messages
+  std::string tip_site;             ///< ... to this site (required with a robot)
+  std::string wrench;               ///< default wrench device of guarded moves ("": the only one, if any)
+  std::string where;                ///< "FILE:LINE" of its scenario entry, for messages
   /// The program's parameters, the global table PARAMS: NAME -> text as given. A text
   /// that reads whole as a number becomes a number, "true" and "false" booleans, any
   /// other text a string (ParseParam).

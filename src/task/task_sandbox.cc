@@ -27,10 +27,14 @@ const SandboxConfig& Config(lua_State* L) {
 // rank of a key type in the fixed order; -1: no deterministic order
 int Rank(lua_State* L, int i) {
   switch (lua_type(L, i)) {
-    case LUA_TNUMBER: return 0;
-    case LUA_TSTRING: return 1;
-    case LUA_TBOOLEAN: return 2;
-    default: return -1;
+    case LUA_TNUMBER:
+      return 0;
+    case LUA_TSTRING:
+      return 1;
+    case LUA_TBOOLEAN:
+      return 2;
+    default:
+      return -1;
   }
 }
 
@@ -59,8 +63,10 @@ void SortedKeys(lua_State* L, int t) {
   while (lua_next(L, t)) {
     lua_pop(L, 1);
     if (Rank(L, -1) < 0) {
-      ScriptError(L, "pairs/next: a table key of type %s has no reproducible order (use numbers, strings or "
-                     "booleans as keys)", luaL_typename(L, -1));
+      ScriptError(L,
+                  "pairs/next: a table key of type %s has no reproducible order (use numbers, strings or "
+                  "booleans as keys)",
+                  luaL_typename(L, -1));
     }
     lua_pushvalue(L, -1);
     lua_rawseti(L, keys, ++n);
@@ -152,8 +158,10 @@ int Require(lua_State* L) {
     if (c == '.' && i + 1 < len && name[i + 1] == '.') ok = false;
   }
   if (!ok) {
-    ScriptError(L, "require: '%s' is not a module name of the script's folder (letters, digits, _ and -; dots for "
-                   "subfolders; no paths)", name);
+    ScriptError(L,
+                "require: '%s' is not a module name of the script's folder (letters, digits, _ and -; dots for "
+                "subfolders; no paths)",
+                name);
   }
   lua_getfield(L, LUA_REGISTRYINDEX, "vlab.loaded");
   if (lua_getfield(L, -1, name) != LUA_TNIL) return 1;
@@ -217,8 +225,10 @@ void Hook(lua_State* L, lua_Debug* ar) {
     lua_getfield(L, LUA_REGISTRYINDEX, "vlab.budget_total");
     const lua_Integer total = lua_tointeger(L, -1);
     lua_pop(L, 1);
-    ScriptError(L, "instruction budget exceeded: %lld instructions without a wait (a loop that never waits? call "
-                   "wait() or sync() in it)", static_cast<long long>(total));
+    ScriptError(L,
+                "instruction budget exceeded: %lld instructions without a wait (a loop that never waits? call "
+                "wait() or sync() in it)",
+                static_cast<long long>(total));
   }
 }
 
@@ -236,9 +246,9 @@ void OpenSandbox(lua_State* L, const SandboxConfig* config) {
   lua_setfield(L, LUA_REGISTRYINDEX, kConfigKey);
   lua_newtable(L);
   lua_setfield(L, LUA_REGISTRYINDEX, "vlab.loaded");
-  static const luaL_Reg libs[] = {{LUA_GNAME, luaopen_base},         {LUA_COLIBNAME, luaopen_coroutine},
-                                  {LUA_MATHLIBNAME, luaopen_math},   {LUA_STRLIBNAME, luaopen_string},
-                                  {LUA_TABLIBNAME, luaopen_table},   {LUA_UTF8LIBNAME, luaopen_utf8}};
+  static const luaL_Reg libs[] = {{LUA_GNAME, luaopen_base},       {LUA_COLIBNAME, luaopen_coroutine},
+                                  {LUA_MATHLIBNAME, luaopen_math}, {LUA_STRLIBNAME, luaopen_string},
+                                  {LUA_TABLIBNAME, luaopen_table}, {LUA_UTF8LIBNAME, luaopen_utf8}};
   for (const luaL_Reg& lib : libs) {
     luaL_requiref(L, lib.name, lib.func, 1);
     lua_pop(L, 1);

@@ -26,9 +26,9 @@ struct lua_State;
 namespace vlab::task {
 
 struct SandboxConfig {
-  std::string script_dir = ".";          ///< folder require() may load from
-  std::uint64_t seed = 1;                ///< math.randomseed
-  long instruction_budget = 10'000'000;  ///< VM instructions per resume (> 0)
+  std::string script_dir = ".";                   ///< folder require() may load from
+  std::uint64_t seed = 1;                         ///< math.randomseed
+  long instruction_budget = 10'000'000;           ///< VM instructions per resume (> 0)
   std::function<void(const std::string&)> print;  ///< print() output, one line (no newline)
 };
 

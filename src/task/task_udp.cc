@@ -208,9 +208,7 @@ void UdpDevices::set_time_origin(double t_s) {
   for (auto& [name, m] : impl_->markers) m->set_time_origin(t_s);
 }
 
-bool UdpDevices::realtime() const {
-  return impl_->arm && impl_->arm->describe_clock() == "realtime";
-}
+bool UdpDevices::realtime() const { return impl_->arm && impl_->arm->describe_clock() == "realtime"; }
 
 MarkerChannel* UdpDevices::FindMarkers(const std::string& name) {
   const auto it = impl_->markers.find(name);

@@ -46,9 +46,14 @@ std::string Triple(const Eigen::Vector3d& v) { return "(" + Fmt(v.x()) + ", " + 
 
 Eigen::Vector3d Axis(char c) {
   switch (c) {
-    case 'x': case 'X': return Eigen::Vector3d::UnitX();
-    case 'y': case 'Y': return Eigen::Vector3d::UnitY();
-    default: return Eigen::Vector3d::UnitZ();
+    case 'x':
+    case 'X':
+      return Eigen::Vector3d::UnitX();
+    case 'y':
+    case 'Y':
+      return Eigen::Vector3d::UnitY();
+    default:
+      return Eigen::Vector3d::UnitZ();
   }
 }
 
@@ -145,10 +150,22 @@ Eigen::Quaterniond& CheckQuat(lua_State* L, int i, const char* what) {
 int QuatIndex(lua_State* L) {
   const Eigen::Quaterniond& q = *ToQuat(L, 1);
   const char* key = luaL_checkstring(L, 2);
-  if (!std::strcmp(key, "w")) { lua_pushnumber(L, q.w()); return 1; }
-  if (!std::strcmp(key, "x")) { lua_pushnumber(L, q.x()); return 1; }
-  if (!std::strcmp(key, "y")) { lua_pushnumber(L, q.y()); return 1; }
-  if (!std::strcmp(key, "z")) { lua_pushnumber(L, q.z()); return 1; }
+  if (!std::strcmp(key, "w")) {
+    lua_pushnumber(L, q.w());
+    return 1;
+  }
+  if (!std::strcmp(key, "x")) {
+    lua_pushnumber(L, q.x());
+    return 1;
+  }
+  if (!std::strcmp(key, "y")) {
+    lua_pushnumber(L, q.y());
+    return 1;
+  }
+  if (!std::strcmp(key, "z")) {
+    lua_pushnumber(L, q.z());
+    return 1;
+  }
   luaL_getmetatable(L, kQuat);
   lua_getfield(L, -1, key);
   if (lua_isnil(L, -1)) ScriptError(L, "quat has no field '%s' (w, x, y, z, inv, slerp, angle, rpy, euler)", key);
@@ -247,7 +264,8 @@ int Trans(lua_State* L) {
   return 1;
 }
 int Rpy(lua_State* L) {
-  PushFrame(L, Rotation(EulerRotation("xyz", Num(L, 1, "rpy") * kDeg, Num(L, 2, "rpy") * kDeg, Num(L, 3, "rpy") * kDeg)));
+  PushFrame(L,
+            Rotation(EulerRotation("xyz", Num(L, 1, "rpy") * kDeg, Num(L, 2, "rpy") * kDeg, Num(L, 3, "rpy") * kDeg)));
   return 1;
 }
 int Euler(lua_State* L) {
@@ -300,9 +318,18 @@ int Rotm(lua_State* L) {
 int FrameIndex(lua_State* L) {
   const Frame& f = *ToFrame(L, 1);
   const char* key = luaL_checkstring(L, 2);
-  if (!std::strcmp(key, "pos")) { PushVec3(L, f.p); return 1; }
-  if (!std::strcmp(key, "rot")) { PushQuat(L, f.q); return 1; }
-  if (key[0] >= 'x' && key[0] <= 'z' && !key[1]) { lua_pushnumber(L, f.p[key[0] - 'x']); return 1; }
+  if (!std::strcmp(key, "pos")) {
+    PushVec3(L, f.p);
+    return 1;
+  }
+  if (!std::strcmp(key, "rot")) {
+    PushQuat(L, f.q);
+    return 1;
+  }
+  if (key[0] >= 'x' && key[0] <= 'z' && !key[1]) {
+    lua_pushnumber(L, f.p[key[0] - 'x']);
+    return 1;
+  }
   luaL_getmetatable(L, kFrame);
   lua_getfield(L, -1, key);
   if (lua_isnil(L, -1)) ScriptError(L, "frame has no field '%s' (pos, rot, x, y, z, inv, rpy, euler, matrix)", key);
@@ -433,24 +460,24 @@ const Eigen::Vector3d& CheckVec3(lua_State* L, int i, const char* what) {
 }
 
 void OpenValues(lua_State* L) {
-  static const luaL_Reg vec3[] = {{"__index", Vec3Index}, {"__add", Vec3Add},   {"__sub", Vec3Sub},
-                                  {"__unm", Vec3Unm},     {"__mul", Vec3Mul},   {"__div", Vec3Div},
+  static const luaL_Reg vec3[] = {{"__index", Vec3Index}, {"__add", Vec3Add},         {"__sub", Vec3Sub},
+                                  {"__unm", Vec3Unm},     {"__mul", Vec3Mul},         {"__div", Vec3Div},
                                   {"__eq", Vec3Eq},       {"__tostring", Vec3String}, {"norm", Vec3Norm},
-                                  {"dot", Vec3Dot},       {"cross", Vec3Cross}, {"normalized", Vec3Normalized},
+                                  {"dot", Vec3Dot},       {"cross", Vec3Cross},       {"normalized", Vec3Normalized},
                                   {nullptr, nullptr}};
   static const luaL_Reg quat[] = {{"__index", QuatIndex}, {"__mul", QuatMul},   {"__tostring", QuatString},
                                   {"inv", QuatInv},       {"slerp", QuatSlerp}, {"angle", QuatAngle},
                                   {"rpy", QuatRpy},       {"euler", QuatEuler}, {nullptr, nullptr}};
-  static const luaL_Reg frame[] = {{"__index", FrameIndex}, {"__mul", FrameMul},     {"__tostring", FrameString},
-                                   {"inv", FrameInv},       {"rpy", FrameRpy},       {"euler", FrameEuler},
+  static const luaL_Reg frame[] = {{"__index", FrameIndex}, {"__mul", FrameMul}, {"__tostring", FrameString},
+                                   {"inv", FrameInv},       {"rpy", FrameRpy},   {"euler", FrameEuler},
                                    {"matrix", FrameMatrix}, {nullptr, nullptr}};
   Metatable(L, kVec3, vec3);
   Metatable(L, kQuat, quat);
   Metatable(L, kFrame, frame);
-  static const luaL_Reg globals[] = {{"vec3", Vec3New},           {"quat", QuatNew},          {"frame", FrameNew},
-                                     {"trans", Trans},            {"rpy", Rpy},               {"euler", Euler},
-                                     {"rotx", RotAxis<'x'>},      {"roty", RotAxis<'y'>},     {"rotz", RotAxis<'z'>},
-                                     {"angleaxis", AngleAxis},    {"rotm", Rotm},             {nullptr, nullptr}};
+  static const luaL_Reg globals[] = {{"vec3", Vec3New},        {"quat", QuatNew},      {"frame", FrameNew},
+                                     {"trans", Trans},         {"rpy", Rpy},           {"euler", Euler},
+                                     {"rotx", RotAxis<'x'>},   {"roty", RotAxis<'y'>}, {"rotz", RotAxis<'z'>},
+                                     {"angleaxis", AngleAxis}, {"rotm", Rotm},         {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, globals, 0);
   lua_pop(L, 1);

@@ -81,9 +81,12 @@ bool HostAllowed(const AccessPolicy& policy, const std::string& host) {
 bool OriginAllowed(const AccessPolicy& policy, const std::string& origin) {
   const std::string o = Lower(origin);
   std::string rest;
-  if (o.compare(0, 7, "http://") == 0) rest = o.substr(7);
-  else if (o.compare(0, 8, "https://") == 0) rest = o.substr(8);
-  else return false;  // "null" (a sandboxed frame, a file:// page) and any other scheme
+  if (o.compare(0, 7, "http://") == 0)
+    rest = o.substr(7);
+  else if (o.compare(0, 8, "https://") == 0)
+    rest = o.substr(8);
+  else
+    return false;  // "null" (a sandboxed frame, a file:// page) and any other scheme
   if (rest.find_first_of("/?#@") != std::string::npos) return false;
   return HostAllowed(policy, rest);
 }

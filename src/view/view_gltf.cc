@@ -21,7 +21,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kFloat = 5126, kUint = 5125;                    // glTF componentType
+constexpr int kFloat = 5126, kUint = 5125;                   // glTF componentType
 constexpr int kArrayBuffer = 34962, kElementBuffer = 34963;  // bufferView targets
 
 struct Triangles {
@@ -72,7 +72,8 @@ Triangles Box(double x, double y, double z) {
         p[n] = sign * h[n];
         p[u] = c[0] * h[u] * sign;
         p[v] = c[1] * h[v];
-        t.positions.insert(t.positions.end(), {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])});
+        t.positions.insert(t.positions.end(),
+                           {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])});
       }
       t.indices.insert(t.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
     }
@@ -168,7 +169,8 @@ void PutU32(std::string* out, std::uint32_t v) { out->append(reinterpret_cast<co
 }  // namespace
 
 GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, const std::string& model_path) {
-  if (fs::exists(glb_path)) throw InputError("vlab export: '" + glb_path + "' exists: it is not overwritten (remove it first)");
+  if (fs::exists(glb_path))
+    throw InputError("vlab export: '" + glb_path + "' exists: it is not overwritten (remove it first)");
   const fs::path scene_path = fs::path(run_dir) / "scene.json", poses_path = fs::path(run_dir) / "poses.bin";
   const json info = json::parse(ReadFile(scene_path), nullptr, false);
   if (info.is_discarded() || !info.contains("bodies") || !info.contains("geoms")) {
@@ -182,7 +184,8 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
   }
   const long frames = static_cast<long>(poses.size() / frame_bytes);
   std::unique_ptr<ViewModel> model;
-  const bool meshes = std::any_of(info["geoms"].begin(), info["geoms"].end(), [](const json& g) { return g["type"] == "mesh"; });
+  const bool meshes =
+      std::any_of(info["geoms"].begin(), info["geoms"].end(), [](const json& g) { return g["type"] == "mesh"; });
   if (meshes) model = ViewModel::Load(model_path.empty() ? info.value("model", std::string()) : model_path);
 
   // times and each body's translations and rotations (glTF quaternions are x, y, z, w)
@@ -206,8 +209,10 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
   for (std::size_t b = 0; b < bodies; ++b) {
     const std::vector<float>& tr = translation[b];
     const std::vector<float>& ro = rotation[b];
-    nodes.push_back({{"name", info["bodies"][b]}, {"translation", {tr[0], tr[1], tr[2]}},
-                     {"rotation", {ro[0], ro[1], ro[2], ro[3]}}, {"children", json::array()}});
+    nodes.push_back({{"name", info["bodies"][b]},
+                     {"translation", {tr[0], tr[1], tr[2]}},
+                     {"rotation", {ro[0], ro[1], ro[2], ro[3]}},
+                     {"children", json::array()}});
     roots.push_back(b);
   }
   int geoms = 0;
@@ -219,22 +224,28 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
     const std::uint32_t top = *std::max_element(t.indices.begin(), t.indices.end());
     const int index = buffer.Accessor(view, kUint, t.indices.size(), "SCALAR", {0}, {top});
     const json& c = g["rgba"];
-    json material = {{"name", g.value("name", "")},
-                     {"pbrMetallicRoughness",
-                      {{"baseColorFactor", {c[0], c[1], c[2], c[3]}}, {"metallicFactor", 0.0}, {"roughnessFactor", 0.8}}},
-                     {"doubleSided", g["type"] == "plane"}};
+    json material = {
+        {"name", g.value("name", "")},
+        {"pbrMetallicRoughness",
+         {{"baseColorFactor", {c[0], c[1], c[2], c[3]}}, {"metallicFactor", 0.0}, {"roughnessFactor", 0.8}}},
+        {"doubleSided", g["type"] == "plane"}};
     if (c[3].get<double>() < 1) material["alphaMode"] = "BLEND";
     materials.push_back(material);
-    meshes_json.push_back({{"name", g.value("name", "")},
-                           {"primitives", {{{"attributes", {{"POSITION", position}}}, {"indices", index},
-                                            {"material", materials.size() - 1}}}}});
-    json node = {{"name", g.value("name", "")}, {"mesh", meshes_json.size() - 1},
-                 {"translation", g["pos"]}, {"rotation", {g["quat"][1], g["quat"][2], g["quat"][3], g["quat"][0]}}};
+    meshes_json.push_back(
+        {{"name", g.value("name", "")},
+         {"primitives",
+          {{{"attributes", {{"POSITION", position}}}, {"indices", index}, {"material", materials.size() - 1}}}}});
+    json node = {{"name", g.value("name", "")},
+                 {"mesh", meshes_json.size() - 1},
+                 {"translation", g["pos"]},
+                 {"rotation", {g["quat"][1], g["quat"][2], g["quat"][3], g["quat"][0]}}};
     if (g["type"] == "ellipsoid") node["scale"] = g["size"];
     nodes.push_back(node);
     const int body = g["body"];
-    if (body >= 0) nodes[body]["children"].push_back(nodes.size() - 1);
-    else roots.push_back(nodes.size() - 1);
+    if (body >= 0)
+      nodes[body]["children"].push_back(nodes.size() - 1);
+    else
+      roots.push_back(nodes.size() - 1);
     ++geoms;
   }
   for (json& n : nodes) {
@@ -244,8 +255,8 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
   const int input = buffer.Floats(times, 1, "SCALAR", 0, true);
   json samplers = json::array(), channels = json::array();
   for (std::size_t b = 0; b < bodies; ++b) {
-    for (const auto& [path, values, type, n] : {std::tuple{"translation", &translation[b], "VEC3", 3},
-                                                std::tuple{"rotation", &rotation[b], "VEC4", 4}}) {
+    for (const auto& [path, values, type, n] :
+         {std::tuple{"translation", &translation[b], "VEC3", 3}, std::tuple{"rotation", &rotation[b], "VEC4", 4}}) {
       const int output = buffer.Floats(*values, n, type, 0, false);
       samplers.push_back({{"input", input}, {"output", output}, {"interpolation", "LINEAR"}});
       channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", b}, {"path", path}}}});

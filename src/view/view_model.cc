@@ -2,9 +2,9 @@
 
 #include <cstring>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
@@ -15,9 +15,7 @@ namespace vlab::view {
 
 namespace {
 
-void PutBytes(std::string* out, const void* data, std::size_t n) {
-  out->append(static_cast<const char*>(data), n);
-}
+void PutBytes(std::string* out, const void* data, std::size_t n) { out->append(static_cast<const char*>(data), n); }
 
 }  // namespace
 
@@ -80,10 +78,11 @@ nlohmann::json ViewModel::Cameras() const {
   for (int c = 0; c < m_->ncam; ++c) {
     if (m_->cam_bodyid[c] != 0) continue;
     const char* name = mj_id2name(m_, mjOBJ_CAMERA, c);
-    cameras.push_back({{"name", name ? name : ""},
-                       {"pos", {m_->cam_pos[3 * c], m_->cam_pos[3 * c + 1], m_->cam_pos[3 * c + 2]}},
-                       {"quat", {m_->cam_quat[4 * c], m_->cam_quat[4 * c + 1], m_->cam_quat[4 * c + 2], m_->cam_quat[4 * c + 3]}},
-                       {"fovy", m_->cam_fovy[c]}});
+    cameras.push_back(
+        {{"name", name ? name : ""},
+         {"pos", {m_->cam_pos[3 * c], m_->cam_pos[3 * c + 1], m_->cam_pos[3 * c + 2]}},
+         {"quat", {m_->cam_quat[4 * c], m_->cam_quat[4 * c + 1], m_->cam_quat[4 * c + 2], m_->cam_quat[4 * c + 3]}},
+         {"fovy", m_->cam_fovy[c]}});
   }
   return cameras;
 }

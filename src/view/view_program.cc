@@ -11,9 +11,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
-#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"
@@ -71,9 +71,7 @@ int IdAfter(const std::string& path, const std::string& prefix) {
   return std::stoi(digits);
 }
 
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 // the WebSocket channels (ViewServerConfig::channels)
 constexpr int kPoseChannel = 0, kCameraChannel = 1, kPlotChannel = 2;
@@ -155,7 +153,8 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   for (const std::string& h : o.server.allowed_hosts) {
     if (h.empty() || h.find_first_of(" /:@?#") != std::string::npos || h == "*") {
       if (!(h.size() > 2 && h.front() == '[' && h.back() == ']')) {
-        throw InputError("vlab view: --allow-host '" + h + "': expected a host name or address, without port or scheme");
+        throw InputError("vlab view: --allow-host '" + h +
+                         "': expected a host name or address, without port or scheme");
       }
     }
   }
@@ -181,17 +180,21 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     scene_device = std::make_unique<bridge::Device>(
         bridge::Device::Connect(bridge::DeviceKind::kScene, host, port, o.connect_timeout_s));
     const nlohmann::json& d = scene_device->describe();
-    for (const char* key : {"bodies", "geoms", "meshes", "textures", "rate_hz"}) info[key] = d.value(key, nlohmann::json());
+    for (const char* key : {"bodies", "geoms", "meshes", "textures", "rate_hz"})
+      info[key] = d.value(key, nlohmann::json());
     const std::string path = o.model.empty() ? d.value("model", std::string()) : o.model;
-    if (!o.model.empty() || (!path.empty() && fs::is_regular_file(path))) model = ViewModel::Load(path);
-    else if (!o.quiet) std::printf("vlab view: no model '%s' here: drawing primitives only (give --model)\n", path.c_str());
+    if (!o.model.empty() || (!path.empty() && fs::is_regular_file(path)))
+      model = ViewModel::Load(path);
+    else if (!o.quiet)
+      std::printf("vlab view: no model '%s' here: drawing primitives only (give --model)\n", path.c_str());
     info["mode"] = "live";
     source = "scene device '" + scene_device->name() + "' at " + o.scene;
     scene_pose_values = 7 * info["bodies"].size();
     const std::vector<std::string> sent = d.value("signals", std::vector<std::string>());
     if (static_cast<std::size_t>(scene_device->state_length()) != scene_pose_values + sent.size()) {
       throw bridge::ProtocolError("vlab view: scene device '" + scene_device->name() + "': its layout has " +
-                                  std::to_string(scene_device->state_length()) + " values, not 7 per body and one per signal");
+                                  std::to_string(scene_device->state_length()) +
+                                  " values, not 7 per body and one per signal");
     }
     for (const std::string& p : plots) {
       const auto at = std::find(sent.begin(), sent.end(), p);
@@ -242,22 +245,25 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     options.timeout_s = o.connect_timeout_s;
     options.decode = false;  // relayed as sent (raw frames: as PNG)
     camera = std::make_unique<bridge::CameraClient>(bridge::CameraClient::Connect(host, port, options));
-    info["camera"] = {{"name", camera->name()}, {"width", camera->width()}, {"height", camera->height()},
-                      {"fps", camera->fps()}, {"address", o.camera}};
+    info["camera"] = {{"name", camera->name()},
+                      {"width", camera->width()},
+                      {"height", camera->height()},
+                      {"fps", camera->fps()},
+                      {"address", o.camera}};
     source += "; camera '" + camera->name() + "' at " + o.camera;
   }
   if (!plots.empty()) {
     info["plots"] = plots;
     info["plot_source"] = !o.replay.empty() ? std::string("log.csv")
-                          : arm                ? "arm '" + arm->name() + "'"
-                                               : "scene device '" + scene_device->name() + "'";
+                          : arm             ? "arm '" + arm->name() + "'"
+                                            : "scene device '" + scene_device->name() + "'";
     source += "; plotting " + o.plot;
   }
   info["cameras"] = model ? model->Cameras() : nlohmann::json::array();
   const std::string info_text = info.dump();
   const ViewModel* m = model.get();
   auto resources = [m, info_text, &recording, &plot_rows](const std::string& path, std::string* type,
-                                                         std::string* body) {
+                                                          std::string* body) {
     if (path == "/scene.json") {
       *type = "application/json";
       *body = info_text;
@@ -343,12 +349,14 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
       last_keepalive = Now();
     }
   }
-  const long camera_frames = camera_feed ? camera_feed->count() : 0, camera_errors = camera_feed ? camera_feed->errors() : 0;
+  const long camera_frames = camera_feed ? camera_feed->count() : 0,
+             camera_errors = camera_feed ? camera_feed->errors() : 0;
   camera_feed.reset();  // joins: nothing publishes from here on
   if (camera && !o.quiet) {
-    std::printf("vlab view: camera: %ld frames relayed, %ld receive errors, %ld incomplete frames dropped, %ld chunks "
-                "refused\n",
-                camera_frames, camera_errors, camera->counters().frames_dropped, camera->counters().refused);
+    std::printf(
+        "vlab view: camera: %ld frames relayed, %ld receive errors, %ld incomplete frames dropped, %ld chunks "
+        "refused\n",
+        camera_frames, camera_errors, camera->counters().frames_dropped, camera->counters().refused);
   }
   if (!plots.empty() && o.replay.empty() && !o.quiet) std::printf("vlab view: plots: %ld samples sent\n", plot_samples);
   const ViewServerCounters c = server->counters();

@@ -11,14 +11,14 @@
 namespace vlab::view {
 
 struct ViewOptions {
-  std::string scene;   ///< HOST:PORT of a scene device (live)
-  std::string arm;     ///< HOST:PORT of an arm device (live, poses by MuJoCo kinematics of `model`)
-  std::string replay;  ///< a run's output folder with scene.json and poses.bin
-  std::string model;   ///< MJCF for meshes, textures, cameras (--arm: required; --scene: default the describe reply's)
+  std::string scene;    ///< HOST:PORT of a scene device (live)
+  std::string arm;      ///< HOST:PORT of an arm device (live, poses by MuJoCo kinematics of `model`)
+  std::string replay;   ///< a run's output folder with scene.json and poses.bin
+  std::string model;    ///< MJCF for meshes, textures, cameras (--arm: required; --scene: default the describe reply's)
   double rate_hz = 30;  ///< --arm: pose frames and plot samples per second
   std::string camera;   ///< HOST:PORT of a camera device: its pictures in a panel (live only)
   std::string plot;     ///< signals to plot, comma-separated log.csv names ("pa10.q.S1,pa10.q.E1")
-  std::string web;     ///< the page's folder (default: view_web beside the executable)
+  std::string web;      ///< the page's folder (default: view_web beside the executable)
   ViewServerConfig server;
   double connect_timeout_s = 10;
   double duration_s = 0;  ///< stop after this long (0: until a signal)

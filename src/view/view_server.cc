@@ -34,8 +34,10 @@ void ViewServer::Impl::Accept() {
     if (address_full || http_open >= config.max_http) {
       const auto victim = std::find_if(waiting.begin(), waiting.end(),
                                        [&](const Waiting* w) { return !address_full || w->address == address; });
-      if (victim != waiting.end()) (*victim)->Evict();
-      else admitted = false;
+      if (victim != waiting.end())
+        (*victim)->Evict();
+      else
+        admitted = false;
     }
     StartHttpSession(*this, std::move(socket), address, admitted);
     Accept();

@@ -62,10 +62,10 @@ using Resources = std::function<bool(const std::string& path, std::string* conte
 
 struct ViewServerConfig {
   std::string bind = "127.0.0.1";
-  int port = 8080;                          ///< 0: any free port
-  int max_connections = 64;                 ///< WebSocket sessions at once (a tab takes 1-3)
-  int max_http = 128;                       ///< HTTP connections at once (see the file comment)
-  int max_per_address = 32;                 ///< WebSocket sessions, and HTTP connections, from one address
+  int port = 8080;           ///< 0: any free port
+  int max_connections = 64;  ///< WebSocket sessions at once (a tab takes 1-3)
+  int max_http = 128;        ///< HTTP connections at once (see the file comment)
+  int max_per_address = 32;  ///< WebSocket sessions, and HTTP connections, from one address
   /// names allowed in Host and Origin beside loopback and the bound address (view_access.h)
   std::vector<std::string> allowed_hosts;
   std::size_t max_header_bytes = 8192;      ///< a request's start line and headers
@@ -82,17 +82,17 @@ struct ViewServerConfig {
 };
 
 struct ViewServerCounters {
-  long requests = 0;        ///< HTTP requests answered (any status)
-  long errors = 0;          ///< answered with a 4xx or 5xx status
-  long refused = 0;         ///< connections and WebSocket upgrades refused: too many
-  long evicted = 0;         ///< HTTP connections closed for a newer one while waiting for a request head
-  long header_timeouts = 0; ///< HTTP connections closed: no whole request head in time
-  long bad_host = 0;        ///< requests refused for their Host (421) or Origin (403)
-  long ws_sessions = 0;     ///< WebSocket sessions opened
-  long frames_sent = 0;     ///< WebSocket messages sent (all channels)
-  long frames_skipped = 0;  ///< frames a client did not get because a newer one came first
-  long ws_closed_bad = 0;   ///< WebSocket sessions closed for a bad or oversized message
-  long ws_closed_slow = 0;  ///< WebSocket sessions closed: a write not done in send_timeout_s, or no pong
+  long requests = 0;         ///< HTTP requests answered (any status)
+  long errors = 0;           ///< answered with a 4xx or 5xx status
+  long refused = 0;          ///< connections and WebSocket upgrades refused: too many
+  long evicted = 0;          ///< HTTP connections closed for a newer one while waiting for a request head
+  long header_timeouts = 0;  ///< HTTP connections closed: no whole request head in time
+  long bad_host = 0;         ///< requests refused for their Host (421) or Origin (403)
+  long ws_sessions = 0;      ///< WebSocket sessions opened
+  long frames_sent = 0;      ///< WebSocket messages sent (all channels)
+  long frames_skipped = 0;   ///< frames a client did not get because a newer one came first
+  long ws_closed_bad = 0;    ///< WebSocket sessions closed for a bad or oversized message
+  long ws_closed_slow = 0;   ///< WebSocket sessions closed: a write not done in send_timeout_s, or no pong
 };
 
 class ViewServer {

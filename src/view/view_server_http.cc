@@ -71,9 +71,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession>, public Imp
     in_waiting_ = server_.waiting.insert(server_.waiting.end(), this);
     waiting_ = true;
     stream_.expires_after(Seconds(server_.config.header_timeout_s));  // the whole head (and the small body)
-    http::async_read(stream_, buffer_, *parser_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
-      self->OnRead(ec);
-    });
+    http::async_read(stream_, buffer_, *parser_,
+                     [self = shared_from_this()](beast::error_code ec, std::size_t) { self->OnRead(ec); });
   }
 
   void OnRead(beast::error_code ec) {
@@ -163,17 +162,18 @@ class HttpSession : public std::enable_shared_from_this<HttpSession>, public Imp
     response->set("X-Content-Type-Options", "nosniff");
     // an error's body: its status line, and why when there is more to say
     const std::string why = status == http::status::service_unavailable ? "server full" : body;
-    response->body() = error ? std::to_string(static_cast<int>(status)) + " " + std::string(http::obsolete_reason(status)) +
-                                   (why.empty() ? "" : ": " + why) + "\n"
+    response->body() = error ? std::to_string(static_cast<int>(status)) + " " +
+                                   std::string(http::obsolete_reason(status)) + (why.empty() ? "" : ": " + why) + "\n"
                              : body;
     response->prepare_payload();
     if (head) response->body().clear();  // Content-Length stays the GET's
     response->keep_alive(keep);
     stream_.expires_after(Seconds(server_.config.response_timeout_s));
-    http::async_write(stream_, *response, [self = shared_from_this(), response, keep](beast::error_code ec, std::size_t) {
-      if (ec || !keep) return self->Close();
-      self->Read();
-    });
+    http::async_write(stream_, *response,
+                      [self = shared_from_this(), response, keep](beast::error_code ec, std::size_t) {
+                        if (ec || !keep) return self->Close();
+                        self->Read();
+                      });
   }
 
   void Close() {

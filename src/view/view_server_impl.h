@@ -94,7 +94,7 @@ void StartHttpSession(ViewServer::Impl& server, tcp::socket socket, std::string 
 /// Takes over an upgraded connection as a WebSocket session of `channel`
 /// (counted in the WebSocket table); with a `refusal`, accepts it only to
 /// close it at once with code 1013 and that reason.
-void StartWebSocket(ViewServer::Impl& server, tcp::socket socket, int channel, std::string address,
-                    std::string refusal, http::request<http::string_body> request);
+void StartWebSocket(ViewServer::Impl& server, tcp::socket socket, int channel, std::string address, std::string refusal,
+                    http::request<http::string_body> request);
 
 }  // namespace vlab::view

@@ -53,8 +53,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       // the browser cannot read an HTTP status of a failed upgrade, only a close's code and reason
       ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
         if (ec) return;
-        self->ws_.async_close({websocket::close_code::try_again_later, self->refusal_},
-                              [self](beast::error_code) {});
+        self->ws_.async_close({websocket::close_code::try_again_later, self->refusal_}, [self](beast::error_code) {});
       });
       return;
     }
@@ -132,8 +131,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 
 }  // namespace
 
-void StartWebSocket(ViewServer::Impl& server, tcp::socket socket, int channel, std::string address,
-                    std::string refusal, http::request<http::string_body> request) {
+void StartWebSocket(ViewServer::Impl& server, tcp::socket socket, int channel, std::string address, std::string refusal,
+                    http::request<http::string_body> request) {
   std::make_shared<WsSession>(server, std::move(socket), channel, std::move(address), std::move(refusal))
       ->Start(std::move(request));
 }

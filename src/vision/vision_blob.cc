@@ -45,8 +45,8 @@ Blob FindBlob(const cv::Mat& rgb, const BlobConfig& config, cv::Mat* hsv, cv::Ma
   // the filled outer contour: holes inside it (the spin mark) count as the blob
   const cv::Rect box = cv::boundingRect(contours[best]);
   cv::Mat filled = cv::Mat::zeros(box.height, box.width, CV_8U);
-  cv::drawContours(filled, contours, static_cast<int>(best), cv::Scalar(255), cv::FILLED, cv::LINE_8, cv::noArray(),
-                   0, cv::Point(-box.x, -box.y));
+  cv::drawContours(filled, contours, static_cast<int>(best), cv::Scalar(255), cv::FILLED, cv::LINE_8, cv::noArray(), 0,
+                   cv::Point(-box.x, -box.y));
   const cv::Moments m = cv::moments(filled, true);
   const double max_area = config.max_area_fraction * rgb.cols * rgb.rows;
   if (m.m00 < config.min_area_px || m.m00 > max_area) return blob;
@@ -100,7 +100,7 @@ const double* YoyoTracker::Track(const cv::Mat& rgb, const CameraModel& camera,
   state_[bridge::kYoyoZ] = p->z();
   state_[bridge::kYoyoVz] = vz;
   state_[bridge::kYoyoStringForce] = 0;  // not measured by vision
-  state_[bridge::kYoyoSpin] = 0;          // not measured by vision
+  state_[bridge::kYoyoSpin] = 0;         // not measured by vision
   ever_seen_ = true;
   last_z_ = p->z();
   last_time_s_ = time_s;

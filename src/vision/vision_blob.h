@@ -41,7 +41,7 @@ struct BlobConfig {
   /// saturation, value floors (0..255): the discs' rim facing away from the lights is dark
   /// (V ~20) but as saturated; leaving it out moves the centroid to the near face (4 mm at 0.5 m)
   int s_min = 150, v_min = 15;
-  double min_area_px = 20;        ///< smaller regions are not the yo-yo (noise)
+  double min_area_px = 20;          ///< smaller regions are not the yo-yo (noise)
   double max_area_fraction = 0.25;  ///< larger regions are not the yo-yo (a red wall)
 };
 

@@ -35,9 +35,9 @@ struct CubeSetConfig {
   /// CubeFace order; no two entries alike. Empty: one cube per letter of
   /// `letters`, the letter on every face.
   std::vector<std::string> faces;
-  double size_m = 0.05;            ///< cube edge, m
-  int dictionary = 0;              ///< MarkerDictionary::code (0: 4X4_50)
-  int first_id = 0;                ///< marker id of the first cube's first face
+  double size_m = 0.05;  ///< cube edge, m
+  int dictionary = 0;    ///< MarkerDictionary::code (0: 4X4_50)
+  int first_id = 0;      ///< marker id of the first cube's first face
   /// Beech wood, dried: 650-750 kg/m3 [EST: typical handbook range; no
   /// datasheet for the lab's blocks]; mass = density * size^3.
   double density_kg_m3 = 700;

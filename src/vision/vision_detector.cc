@@ -90,7 +90,7 @@ void MarkerDetector::Detect(const cv::Mat& grey, int dictionary, std::vector<Mar
   cv::aruco::detectMarkers(grey, dict, impl_->corners, impl_->ids, impl_->parameters);
   for (std::size_t i = 0; i < impl_->ids.size(); ++i) {
     MarkerDetection d = MakeDetection(dictionary, impl_->ids[i], impl_->corners[i], -0.5);  // AprilTag: pixel corners
-    if (config_.refine_edges) RefineMarkerEdges(grey, info->bits + 2, &d.corners);  // kept as found if it fails
+    if (config_.refine_edges) RefineMarkerEdges(grey, info->bits + 2, &d.corners);          // kept as found if it fails
     found->push_back(d);
   }
   if (!config_.refine_edges) return;

@@ -30,8 +30,8 @@ FacePixels Pixels(const FaceLayout& layout, int bits) {
   if (p < 64 || p > 4096 || !(layout.marker_fraction > 0 && layout.marker_fraction < 1) ||
       !(layout.margin_fraction >= 0 && layout.margin_fraction < 0.25)) {
     throw vlab::InputError("face layout: image " + std::to_string(p) + " px (64..4096), marker fraction " +
-                          std::to_string(layout.marker_fraction) + " (0..1), margin fraction " +
-                          std::to_string(layout.margin_fraction) + " (0..0.25)");
+                           std::to_string(layout.marker_fraction) + " (0..1), margin fraction " +
+                           std::to_string(layout.margin_fraction) + " (0..0.25)");
   }
   FacePixels f;
   const int cells = bits + 2;
@@ -48,7 +48,7 @@ FacePixels Pixels(const FaceLayout& layout, int bits) {
   f.letter_box = cv::Rect(margin, band_top, p - 2 * margin, band_bottom - band_top);
   if (f.cell < 2 || white_top < margin || f.letter_box.height < p / 10) {
     throw vlab::InputError("face layout: marker fraction " + std::to_string(layout.marker_fraction) +
-                          " leaves no room for the letter on a " + std::to_string(p) + " px face");
+                           " leaves no room for the letter on a " + std::to_string(p) + " px face");
   }
   return f;
 }
@@ -98,7 +98,7 @@ cv::Mat DrawFace(const FaceSpec& face, const FaceLayout& layout) {
     throw vlab::InputError("face: unknown marker dictionary code " + std::to_string(face.dictionary));
   if (face.id < 0 || face.id >= dictionary->markers) {
     throw vlab::InputError("face: marker id " + std::to_string(face.id) + " outside dictionary " + dictionary->name +
-                          " (0.." + std::to_string(dictionary->markers - 1) + ")");
+                           " (0.." + std::to_string(dictionary->markers - 1) + ")");
   }
   const bool letter_ok = (face.letter >= 'A' && face.letter <= 'Z') || (face.letter >= '0' && face.letter <= '9');
   if (!letter_ok) throw vlab::InputError(std::string("face: letter '") + face.letter + "' is not A-Z or 0-9");

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <optional>
 
-#include <opencv2/imgproc.hpp>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
 
@@ -50,21 +50,21 @@ long WholeNumber(const std::string& text, const std::string& what) {
 
 json CameraDescribe(const bridge::CameraClient& camera, const CameraModel& m, const std::string& address, int port) {
   const json& cd = camera.describe();
-  return {{"name", camera.name()},
-          {"address", address},
-          {"port", port},
-          {"server", cd.value("server", json())},
-          {"width", m.width},
-          {"height", m.height},
-          {"fps", camera.fps()},
-          // the camera's schedule, as its describe reply gives it (null when it does not): a
-          // client that holds a lockstep clock for a frame's markers needs it (docs/tasks.md)
-          {"exposure_s", cd.value("exposure_s", json())},
-          {"latency_s", cd.value("latency_s", json())},
-          {"intrinsics",
-           {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
-          {"distortion", camera.calibration().distortion},
-          {"pose", cd.value("pose", json())}};
+  return {
+      {"name", camera.name()},
+      {"address", address},
+      {"port", port},
+      {"server", cd.value("server", json())},
+      {"width", m.width},
+      {"height", m.height},
+      {"fps", camera.fps()},
+      // the camera's schedule, as its describe reply gives it (null when it does not): a
+      // client that holds a lockstep clock for a frame's markers needs it (docs/tasks.md)
+      {"exposure_s", cd.value("exposure_s", json())},
+      {"latency_s", cd.value("latency_s", json())},
+      {"intrinsics", {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
+      {"distortion", camera.calibration().distortion},
+      {"pose", cd.value("pose", json())}};
 }
 
 bool ReceiveFrame(bridge::CameraClient& camera, double wait_s, const CameraModel& model,
@@ -112,7 +112,7 @@ std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& t
   const std::size_t a = text.find(':'), b = text.rfind(':');
   if (a == std::string::npos || a == b) {
     throw vlab::InputError("--marker '" + text +
-                          "': expected DICT:ID:SIDE or DICT:FIRST-LAST:SIDE, e.g. 4X4_50:0-35:0.03");
+                           "': expected DICT:ID:SIDE or DICT:FIRST-LAST:SIDE, e.g. 4X4_50:0-35:0.03");
   }
   const bridge::MarkerDictionary* d = bridge::FindMarkerDictionary(text.substr(0, a));
   if (d == nullptr) throw vlab::InputError("--marker '" + text + "': unknown dictionary '" + text.substr(0, a) + "'");
@@ -122,7 +122,7 @@ std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& t
   const long last = dash == std::string::npos ? first : WholeNumber(ids.substr(dash + 1), text);
   if (last < first || last >= d->markers) {
     throw vlab::InputError("--marker '" + text + "': ids must lie in 0.." + std::to_string(d->markers - 1) + " of " +
-                          d->name + ", first <= last");
+                           d->name + ", first <= last");
   }
   double side = 0;
   std::size_t used = 0;
@@ -155,7 +155,7 @@ VisionProgram::VisionProgram(bridge::CameraClient camera, const VisionConfig& co
   server_ = MarkersServer::Create(server);
   if (!server_->Describe(config.markers)) {
     throw vlab::InputError("--marker: " + std::to_string(config.markers.size()) + " markers exceed the table's " +
-                          std::to_string(server.max_markers));
+                           std::to_string(server.max_markers));
   }
   state_.markers.reserve(bridge::kMaxMarkersPerState);
 }

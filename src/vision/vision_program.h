@@ -97,8 +97,8 @@ bool ReceiveFrame(bridge::CameraClient& camera, double wait_s, const CameraModel
 
 /// What a vision device's describe reply says of the camera it reads (its
 /// "camera" entry): name, endpoint, server, size, rate, intrinsics, distortion, pose.
-nlohmann::json CameraDescribe(const bridge::CameraClient& camera, const CameraModel& model,
-                              const std::string& address, int port);
+nlohmann::json CameraDescribe(const bridge::CameraClient& camera, const CameraModel& model, const std::string& address,
+                              int port);
 
 /// The camera's pose in the world that travels with a frame (nullopt: unknown).
 std::optional<Eigen::Isometry3d> CameraPoseOf(const bridge::CameraClient::Frame& frame);

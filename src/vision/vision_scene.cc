@@ -19,12 +19,18 @@ double Uniform(sensors::Xoshiro256pp& rng) { return static_cast<double>(rng() >>
 Eigen::Quaterniond FaceDown(int face) {
   const double half_pi = M_PI / 2;
   switch (face) {
-    case kFacePlusX: return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitY()));
-    case kFaceMinusX: return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitY()));
-    case kFacePlusY: return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitX()));
-    case kFaceMinusY: return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitX()));
-    case kFacePlusZ: return Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
-    default: return Eigen::Quaterniond::Identity();
+    case kFacePlusX:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitY()));
+    case kFaceMinusX:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitY()));
+    case kFacePlusY:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitX()));
+    case kFaceMinusY:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitX()));
+    case kFacePlusZ:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+    default:
+      return Eigen::Quaterniond::Identity();
   }
 }
 
@@ -56,7 +62,7 @@ std::vector<CubePlacement> PlaceCubes(const CubeSetConfig& cubes, const CubeScen
   const int available = CubeCount(cubes);
   if (s.count < 1 || s.count > available) {
     throw vlab::InputError("cube scene: --count " + std::to_string(s.count) + " outside 1.." +
-                          std::to_string(available) + " (one cube per letter of --letters, or per block of --faces)");
+                           std::to_string(available) + " (one cube per letter of --letters, or per block of --faces)");
   }
   const double radius = cubes.size_m * std::sqrt(0.5);  // circumscribed circle of the footprint
   const double x_lo = s.x_min + radius, x_hi = s.x_max - radius;
@@ -79,7 +85,7 @@ std::vector<CubePlacement> PlaceCubes(const CubeSetConfig& cubes, const CubeScen
     }
     if (!found) {
       throw vlab::InputError("cube scene: " + std::to_string(s.count) + " cubes of " + MjcfNumber(cubes.size_m) +
-                            " m do not fit the table's free area (seed " + std::to_string(s.seed) + ")");
+                             " m do not fit the table's free area (seed " + std::to_string(s.seed) + ")");
     }
     p.face_down = static_cast<int>(Uniform(rng) * kCubeFaces);
     p.yaw_deg = 360 * Uniform(rng);

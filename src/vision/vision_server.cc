@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
-#include <opencv2/core/version.hpp>
 #include <nlohmann/json.hpp>
+#include <opencv2/core/version.hpp>
 
 namespace vlab::vision {
 
@@ -38,8 +38,7 @@ bridge::SessionConfig MarkersServer::Sessions(const MarkersServerConfig& config,
   return s;
 }
 
-MarkersServer::MarkersServer(const MarkersServerConfig& config)
-    : config_(config), table_(config.max_markers) {
+MarkersServer::MarkersServer(const MarkersServerConfig& config) : config_(config), table_(config.max_markers) {
   packet_.reserve(bridge::kMaxPacketValues * sizeof(double));
 }
 

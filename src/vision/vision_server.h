@@ -47,14 +47,14 @@ struct MarkersServerConfig {
 };
 
 struct MarkersServerCounters {
-  long received = 0;           ///< datagrams received
-  long describes = 0;          ///< describe requests answered
-  long accepted = 0;           ///< marker-description commands applied
-  long refused = 0;            ///< all refusals
-  long refused_malformed = 0;  ///< framing, kind, type, layout, domain
-  long refused_limits = 0;     ///< the table would exceed max_markers
-  long refused_not_subscribed = 0;  ///< commands from a source that is no subscriber
-  long states = 0;             ///< states published (frames)
+  long received = 0;                 ///< datagrams received
+  long describes = 0;                ///< describe requests answered
+  long accepted = 0;                 ///< marker-description commands applied
+  long refused = 0;                  ///< all refusals
+  long refused_malformed = 0;        ///< framing, kind, type, layout, domain
+  long refused_limits = 0;           ///< the table would exceed max_markers
+  long refused_not_subscribed = 0;   ///< commands from a source that is no subscriber
+  long states = 0;                   ///< states published (frames)
   bridge::SessionCounters sessions;  ///< handshakes, subscriptions, rate limits
 };
 

@@ -1,8 +1,8 @@
 #include "vision/vision_yoyo_program.h"
 
 #include <algorithm>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "vision/vision_program.h"
 

@@ -5,8 +5,8 @@
 #include <string_view>
 
 #include "bridge/bridge_layouts.h"
-#include "bridge/bridge_yoyo.h"
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_yoyo.h"
 #include "core/core_errors.h"
 
 namespace vlab::yoyosim {

@@ -39,7 +39,7 @@ using Vec3 = std::array<double, 3>;
 
 struct SimConfig {
   std::string scene = "mjcf/yoyo/yoyo_moving_hand.xml";  ///< MJCF path
-  double period_s = 0.01;  ///< control period, s: a whole number of the scene's timesteps
+  double period_s = 0.01;                                ///< control period, s: a whole number of the scene's timesteps
 };
 
 /// The yo-yo as the compiled scene has it (SI units), for describe replies and tests.
@@ -77,13 +77,13 @@ class YoyoSim {
   /// (rad/s, about the hand's +y)].
   void SampleYoyo(double* out7) const;
 
-  const Vec3& start() const { return start_W_; }  ///< the hand's start, m, world
+  const Vec3& start() const { return start_W_; }                  ///< the hand's start, m, world
   const Vec3& workspace_min() const { return workspace_min_W_; }  ///< m, world
   const Vec3& workspace_max() const { return workspace_max_W_; }  ///< m, world
-  const Vec3& target() const { return target_W_; }  ///< the set-point in force, m, world
+  const Vec3& target() const { return target_W_; }                ///< the set-point in force, m, world
   const YoyoParams& yoyo() const { return yoyo_; }
   double period_s() const { return period_s_; }
-  long periods() const { return periods_; }  ///< Steps done
+  long periods() const { return periods_; }                                  ///< Steps done
   double time() const { return static_cast<double>(periods_) * period_s_; }  ///< s
   bool diverged() const { return diverged_; }
   /// The MuJoCo warning that ended the run ("badqacc", ...), "" if none.

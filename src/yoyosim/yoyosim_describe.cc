@@ -28,7 +28,9 @@ std::string PointDescribeJson(const bridge::DeviceDescription& d, const YoyoSim&
                  {"workspace_max", Vector(sim.workspace_max())},
                  {"speed_max", facts.speed_max}};
   j["start"] = Vector(sim.start());
-  j["command_meaning"] = "hand position set-point for the end of the next period: the servo reference moves to it linearly over the period";
+  j["command_meaning"] =
+      "hand position set-point for the end of the next period: the servo reference moves to it linearly over the "
+      "period";
   j["watchdog_periods"] = facts.watchdog_periods;
   j["owner_timeout_s"] = facts.owner_timeout_s;
   return bridge::DescribeJson(d, "point", j.dump());
@@ -38,8 +40,8 @@ std::string YoyoDescribeJson(const bridge::DeviceDescription& d, const YoyoSim& 
   const YoyoParams& y = sim.yoyo();
   json j;
   j["layout"] = bridge::LayoutJson(bridge::DeviceKind::kYoyo);
-  j["units"] = {{"x", "m"},      {"y", "m"}, {"z", "m"}, {"vz", "m/s"}, {"string_force", "N"}, {"spin", "rad/s"},
-                {"frame", "world"}};
+  j["units"] = {{"x", "m"},        {"y", "m"},        {"z", "m"}, {"vz", "m/s"}, {"string_force", "N"},
+                {"spin", "rad/s"}, {"frame", "world"}};
   j["status_bits"] = {{"not_seen", bridge::kYoyoNotSeen}};
   j["yoyo"] = {{"mass", y.mass},
                {"spin_inertia", y.spin_inertia},

@@ -12,8 +12,8 @@
 #include <CLI/CLI.hpp>
 
 #include "bridge/bridge_errors.h"
-#include "core/core_errors.h"
 #include "bridge/bridge_signals.h"
+#include "core/core_errors.h"
 #include "yoyosim/yoyosim.h"
 #include "yoyosim/yoyosim_server.h"
 
@@ -29,11 +29,12 @@ int Fail(const std::string& what) {
 int main(int argc, char** argv) {
   vlab::yoyosim::SimConfig sim_config;
   vlab::yoyosim::ServerConfig server_config;
-  CLI::App app{"vlab-yoyosim: a yo-yo on a string hanging from a moving hand (MuJoCo), behind two vlab devices:\n"
-               "`point` (kind 10: command [x, y, z] = the hand's set-point, m, world; state [status, x, y, z,\n"
-               "vx, vy, vz] of the hand) and `yoyo` (kind 11: state [status, x, y, z, vz, string_force, spin]).\n"
-               "Protocol v1 (docs/protocol.md). Ends after --duration or on SIGINT/SIGTERM and prints its counters.\n"
-               "Exit codes: 0 done; 1 the simulation diverged; 2 bad input (option, scene, address, port)."};
+  CLI::App app{
+      "vlab-yoyosim: a yo-yo on a string hanging from a moving hand (MuJoCo), behind two vlab devices:\n"
+      "`point` (kind 10: command [x, y, z] = the hand's set-point, m, world; state [status, x, y, z,\n"
+      "vx, vy, vz] of the hand) and `yoyo` (kind 11: state [status, x, y, z, vz, string_force, spin]).\n"
+      "Protocol v1 (docs/protocol.md). Ends after --duration or on SIGINT/SIGTERM and prints its counters.\n"
+      "Exit codes: 0 done; 1 the simulation diverged; 2 bad input (option, scene, address, port)."};
   app.add_option("--scene", sim_config.scene, "MJCF scene (a hand on slides hand_x/y/z with servos, the yo-yo)")
       ->capture_default_str();
   app.add_option("--bind", server_config.bind_address, "Address to bind (numeric IPv4/IPv6)")->capture_default_str();
@@ -51,7 +52,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--timeout", server_config.timeout_s, "lockstep: wait for each period's command, s")
       ->capture_default_str();
-  app.add_option("--max-speed", server_config.speed_max, "Hand set-point speed limit, m/s (a far set-point is approached at this speed)")
+  app.add_option("--max-speed", server_config.speed_max,
+                 "Hand set-point speed limit, m/s (a far set-point is approached at this speed)")
       ->capture_default_str();
   app.add_flag("--quiet", server_config.quiet, "Print only the start line (no messages, no counters at exit)");
   try {

@@ -26,7 +26,6 @@ static_assert(bridge::CommandIndex(kPoint, "x") == 0 && bridge::CommandIndex(kPo
                   bridge::CommandIndex(kPoint, "z") == 2 && kPointCommandValues == 3,
               "a point command is the set-point [x, y, z] YoyoSim takes");
 
-
 void Require(bool ok, const std::string& what) {
   if (!ok) throw vlab::InputError(what);
 }
@@ -35,7 +34,8 @@ void Require(bool ok, const std::string& what) {
 
 std::unique_ptr<YoyoSimServer> YoyoSimServer::Create(const ServerConfig& c, std::unique_ptr<YoyoSim> sim) {
   Require(sim != nullptr, "yoyosim: no simulation");
-  Require(c.clock == "lockstep" || c.clock == "realtime", "--clock must be lockstep or realtime, not '" + c.clock + "'");
+  Require(c.clock == "lockstep" || c.clock == "realtime",
+          "--clock must be lockstep or realtime, not '" + c.clock + "'");
   Require(c.duration_s >= 0 && std::isfinite(c.duration_s), "--duration must be >= 0 s");
   Require(c.start_timeout_s >= 0 && std::isfinite(c.start_timeout_s), "--start-timeout must be >= 0 s");
   Require(c.timeout_s > 0 && std::isfinite(c.timeout_s), "--timeout must be > 0 s");
@@ -171,7 +171,8 @@ void YoyoSimServer::BeginPeriod(long k, vlab::PeriodStart start) {
 }
 
 void YoyoSimServer::Publish(long k) {
-  static_assert(sizeof(values_) / sizeof(values_[0]) >= static_cast<std::size_t>(std::max(kPointValues, bridge::kYoyoValues)));
+  static_assert(sizeof(values_) / sizeof(values_[0]) >=
+                static_cast<std::size_t>(std::max(kPointValues, bridge::kYoyoValues)));
   const double seq = static_cast<double>(k), time = static_cast<double>(k) * sim_->period_s();
   sim_->SamplePoint(values_);
   const std::uint32_t status = static_cast<std::uint32_t>(values_[kPointStatus]) | point_->endpoint().status_bits();
@@ -211,8 +212,8 @@ std::string YoyoSimServer::StartLine() const {
   char text[512];
   std::snprintf(text, sizeof(text), "vlab-yoyosim: point on %s, yoyo on %s, %s, %g Hz, scene %s",
                 bridge::EndpointText(point_->local_endpoint()).c_str(),
-                bridge::EndpointText(yoyo_->local_endpoint()).c_str(), config_.clock.c_str(),
-                1.0 / sim_->period_s(), sim_->scene().c_str());
+                bridge::EndpointText(yoyo_->local_endpoint()).c_str(), config_.clock.c_str(), 1.0 / sim_->period_s(),
+                sim_->scene().c_str());
   return text;
 }
 
@@ -227,10 +228,9 @@ std::string YoyoSimServer::ReportText() const {
                 "vlab-yoyosim: point: received %ld, describes %ld, accepted %ld, refused %ld (malformed %ld, "
                 "limits %ld, not owner %ld), stale %ld, duplicate %ld, watchdog holds %ld\n"
                 "vlab-yoyosim: yoyo: received %ld, describes %ld, refused %ld",
-                s.periods, sim_->time(), s.applied, s.timeouts, s.releases, s.missed_deadlines,
-                s.max_lateness_s * 1e3, p.received, p.describes, p.accepted, p.refused, p.refused_malformed,
-                p.refused_limits, p.refused_not_owner, p.stale, p.duplicate, p.watchdog_holds, y.received,
-                y.describes, y.refused);
+                s.periods, sim_->time(), s.applied, s.timeouts, s.releases, s.missed_deadlines, s.max_lateness_s * 1e3,
+                p.received, p.describes, p.accepted, p.refused, p.refused_malformed, p.refused_limits,
+                p.refused_not_owner, p.stale, p.duplicate, p.watchdog_holds, y.received, y.describes, y.refused);
   return text;
 }
 

@@ -51,15 +51,15 @@ struct ServerConfig {
   int watchdog_periods = 3;        ///< 0 disables
   double owner_timeout_s = 1.0;    ///< silent owner gives the input up after this, s
   double subscriber_timeout_s = 10.0;
-  bool quiet = false;              ///< no messages while running (timeouts, releases)
+  bool quiet = false;  ///< no messages while running (timeouts, releases)
 };
 
 /// What the loop counted besides the endpoints' counters.
 struct ServerCounters {
-  long periods = 0;      ///< periods simulated
-  long applied = 0;      ///< set-points the hand took
-  long timeouts = 0;     ///< lockstep periods run without their command
-  long releases = 0;     ///< owners released after release_after timeouts
+  long periods = 0;           ///< periods simulated
+  long applied = 0;           ///< set-points the hand took
+  long timeouts = 0;          ///< lockstep periods run without their command
+  long releases = 0;          ///< owners released after release_after timeouts
   long missed_deadlines = 0;  ///< realtime
   double max_lateness_s = 0;  ///< realtime
 };
@@ -105,8 +105,8 @@ class YoyoSimServer final : public vlab::CommandSource {
   std::unique_ptr<vlab::Clock> clock_;
   ServerCounters counters_;
   bridge::StopCheck stopped_;
-  long period_ = 0;              // the period being waited for or run
-  bool pending_ = false;         // an accepted set-point not yet reached by the set-point in force
+  long period_ = 0;       // the period being waited for or run
+  bool pending_ = false;  // an accepted set-point not yet reached by the set-point in force
   Vec3 pending_W_{};
   bool watchdog_hold_ = false;
   int consecutive_timeouts_ = 0;

@@ -49,9 +49,8 @@ std::string Describe(const std::string& kind, const json& layout) {
 
 // connects a Device of `kind` to the peer, which answers with `describe`
 std::future<Device> Connect(Peer& peer, DeviceKind kind, const std::string& describe) {
-  auto future = std::async(std::launch::async, [kind, port = peer.port()] {
-    return Device::Connect(kind, "127.0.0.1", port, kPatience_s);
-  });
+  auto future = std::async(
+      std::launch::async, [kind, port = peer.port()] { return Device::Connect(kind, "127.0.0.1", port, kPatience_s); });
   EXPECT_EQ(peer.Handshake(kind), 3) << "describe, then describe and subscribe with the cookie";
   peer.Send(describe);
   return future;
@@ -136,16 +135,18 @@ TEST(ClientDeviceTest, FeetValuesAreNamedAfterTheirSensors) {
   SendState(peer, DeviceKind::kFeet, 0, {10, 20, 30, 40});
   const Device::State s = feet.Read(kPatience_s);
   EXPECT_EQ(feet.Field(s, "lf_front"), 30.0);
-  EXPECT_TRUE(Contains(ThrownMessage<std::invalid_argument>([&] { feet.WriteFields({{"x", 1}}, 0); }),
+  EXPECT_TRUE(Contains(ThrownMessage<std::invalid_argument>([&] {
+                         feet.WriteFields({{"x", 1}}, 0);
+                       }),
                        "this device takes no commands"));
 }
 
 TEST(ClientDeviceTest, CameraAndMarkersHaveTheirOwnClients) {
   EXPECT_EQ(ThrownMessage<std::invalid_argument>([] { Device::Connect(DeviceKind::kCamera, "127.0.0.1", 50013); }),
             "camera devices are not float64 arrays (frames in chunks: docs/protocol_camera.md): use their own client");
-  EXPECT_TRUE(Contains(
-      ThrownMessage<std::invalid_argument>([] { Device::Connect(DeviceKind::kMarkers, "127.0.0.1", 50013); }),
-      "markers devices are not float64 arrays"));
+  EXPECT_TRUE(
+      Contains(ThrownMessage<std::invalid_argument>([] { Device::Connect(DeviceKind::kMarkers, "127.0.0.1", 50013); }),
+               "markers devices are not float64 arrays"));
 }
 
 }  // namespace

@@ -236,7 +236,7 @@ TEST(ClientTest, RefusedAndNotOwnerShowInTheStatus) {
   Arm::State s = owner.ReadLatest(kPatience_s);
   Eigen::VectorXd too_fast = Eigen::VectorXd::Constant(7, 0.1);
   owner.Write(ArmMode::kVelocity, too_fast, s.seq);  // accepted: the client owns the arm
-  too_fast[0] = 5;  // beyond S1's 1 rad/s
+  too_fast[0] = 5;                                   // beyond S1's 1 rad/s
   owner.Write(ArmMode::kVelocity, too_fast, owner.Read(kPatience_s).seq);
   other.Write(ArmMode::kVelocity, Eigen::VectorXd::Zero(7), other.ReadLatest(kPatience_s).seq);
 

@@ -69,7 +69,8 @@ TEST(DescribeLayoutsTest, EveryShippedScenariosDevicesDescribeTheTablesLayouts) 
   testing::TempDir dir;
   testing::WriteFile(dir / "served.yaml",
                      "name: served_layouts\n"
-                     "scene: " VLAB_SOURCE_DIR "/scenes/pa10_gripper.xml\n"
+                     "scene: " VLAB_SOURCE_DIR
+                     "/scenes/pa10_gripper.xml\n"
                      "duration: 1\ncontrol_period: 0.002\nseed: 1\nclock: lockstep\n"
                      "devices:\n"
                      "  - {name: gripper, kind: gripper, port: 50099}\n"
@@ -81,8 +82,8 @@ TEST(DescribeLayoutsTest, EveryShippedScenariosDevicesDescribeTheTablesLayouts) 
                      "  - {name: tool, kind: tool, arm: pa10, port: 50095}\n");
   CheckScenario(dir / "served.yaml", &kinds);
   // every float64 kind the lab serves was seen
-  const std::set<std::string> lab = {"arm",  "wrench", "sim",  "base",  "gripper", "feet",
-                                     "imu",  "point",  "yoyo", "gaze",  "pose", "scene", "word", "tool"};
+  const std::set<std::string> lab = {"arm",   "wrench", "sim",  "base", "gripper", "feet", "imu",
+                                     "point", "yoyo",   "gaze", "pose", "scene",   "word", "tool"};
   EXPECT_EQ(kinds, lab);
 }
 

@@ -32,12 +32,12 @@ TEST_F(EndpointTest, BaseCommandsAreCheckedAndTaken) {
   EXPECT_EQ(taken, (std::vector<double>{0, 0.5, -0.2, 0.1}));
   EXPECT_FALSE(e.TakeCommand(&taken));  // taken once
 
-  EXPECT_FALSE(Send(e, *client_, base, 2, {2, 0, 0, 0}, 2));        // unknown frame
-  EXPECT_FALSE(Send(e, *client_, base, 3, {0, 1.5, 0, 0}, 3));      // beyond a limit
-  EXPECT_FALSE(Send(e, *client_, base, 4, {0, 0, 0}, 4));           // wrong length
+  EXPECT_FALSE(Send(e, *client_, base, 2, {2, 0, 0, 0}, 2));                          // unknown frame
+  EXPECT_FALSE(Send(e, *client_, base, 3, {0, 1.5, 0, 0}, 3));                        // beyond a limit
+  EXPECT_FALSE(Send(e, *client_, base, 4, {0, 0, 0}, 4));                             // wrong length
   EXPECT_FALSE(Send(e, *client_, static_cast<int>(DeviceKind::kArm), 5, {0, 0}, 5));  // wrong kind
-  EXPECT_FALSE(Send(e, *client_, base, 0, {0, 0, 0, 0}, 6));        // stale
-  EXPECT_FALSE(Send(e, *other_, base, 9, {0, 0, 0, 0}, 6));         // not the owner
+  EXPECT_FALSE(Send(e, *client_, base, 0, {0, 0, 0, 0}, 6));                          // stale
+  EXPECT_FALSE(Send(e, *other_, base, 9, {0, 0, 0, 0}, 6));                           // not the owner
   const EndpointCounters& n = e.counters();
   EXPECT_EQ(n.accepted, 1);
   EXPECT_EQ(n.refused_malformed, 3);
@@ -45,7 +45,7 @@ TEST_F(EndpointTest, BaseCommandsAreCheckedAndTaken) {
   EXPECT_EQ(n.refused_not_owner, 1);
   EXPECT_EQ(n.stale, 1);
   EXPECT_TRUE(e.status_bits() & kStatusRefused);  // the owner's last command was refused
-  EXPECT_FALSE(e.TakeCommand(&taken));  // refusals leave nothing to take
+  EXPECT_FALSE(e.TakeCommand(&taken));            // refusals leave nothing to take
 
   EXPECT_TRUE(Send(e, *client_, base, 10, {1, 0, 0, 2}, 7));
   EXPECT_EQ(e.status_bits(), 0u);
@@ -270,7 +270,7 @@ TEST_F(EndpointTest, ACommandMustAnswerAPublishedStateWithinTheWindow) {
   EXPECT_EQ(e.counters().future, 3);
   EXPECT_FALSE(Send(e, *client_, base, 200 - kSeqWindow - 1, {0, 0, 0, 0}, 0));  // older than the window
   EXPECT_EQ(e.counters().stale, 1);
-  EXPECT_TRUE(Send(e, *client_, base, 200 - kSeqWindow, {0, 0, 0, 0}, 0));      // the oldest it takes
+  EXPECT_TRUE(Send(e, *client_, base, 200 - kSeqWindow, {0, 0, 0, 0}, 0));  // the oldest it takes
   EXPECT_TRUE(Send(e, *client_, base, 200, {0, 0, 0, 0}, 0));
   EXPECT_FALSE(Send(e, *client_, base, 200, {0, 0, 0, 0}, 0));
   EXPECT_EQ(e.counters().duplicate, 1);

@@ -4,8 +4,8 @@
 // wire. The page (docs/protocol.md) is checked by protocol_doc_test.cc.
 #include "bridge/bridge_layouts.h"
 
-#include <stdexcept>
 #include <iterator>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -40,8 +40,8 @@ std::string ThrownBy(void (*f)()) {
 
 TEST(LayoutsTest, KindNamesAndCodesGoBothWays) {
   // the published codes: a kind's code never changes
-  const char* names[] = {"arm",  "wrench", "sim",   "camera", "markers", "base", "gripper",
-                         "feet", "imu",    "point", "yoyo",   "gaze",    "pose", "counter", "scene", "word", "tool"};
+  const char* names[] = {"arm",   "wrench", "sim",  "camera", "markers", "base",  "gripper", "feet", "imu",
+                         "point", "yoyo",   "gaze", "pose",   "counter", "scene", "word",    "tool"};
   for (int kind = 1; kind <= static_cast<int>(std::size(names)); ++kind) {
     EXPECT_STREQ(KindName(kind), names[kind - 1]);
     EXPECT_EQ(KindFromName(names[kind - 1]), kind);
@@ -60,14 +60,14 @@ TEST(LayoutsTest, UnknownOrUnfixedFieldsThrowNamingTheKindAndField) {
   EXPECT_EQ(ThrownBy([] { CommandIndex(DeviceKind::kYoyo, "x"); }), "yoyo: no command field 'x'");
   EXPECT_NE(ThrownBy([] { StateIndex(DeviceKind::kArm, "qd"); }).find("arm: state field 'qd' has no fixed index"),
             std::string::npos);
-  EXPECT_EQ(ThrownBy([] { LayoutOf(static_cast<DeviceKind>(kMaxDeviceKind + 1)); }),
-            "device kind " + std::to_string(kMaxDeviceKind + 1) + " is not one of 1.." + std::to_string(kMaxDeviceKind));
+  EXPECT_EQ(
+      ThrownBy([] { LayoutOf(static_cast<DeviceKind>(kMaxDeviceKind + 1)); }),
+      "device kind " + std::to_string(kMaxDeviceKind + 1) + " is not one of 1.." + std::to_string(kMaxDeviceKind));
   EXPECT_EQ(StateLength(DeviceKind::kPose), 7);
   EXPECT_EQ(CommandLength(DeviceKind::kWrench), 0);
   EXPECT_NE(ThrownBy([] { StateLength(DeviceKind::kFeet); }).find("feet: the state length depends on the device"),
             std::string::npos);
-  EXPECT_NE(ThrownBy([] { StateLength(DeviceKind::kCamera); }).find("camera: not a float64 layout"),
-            std::string::npos);
+  EXPECT_NE(ThrownBy([] { StateLength(DeviceKind::kCamera); }).find("camera: not a float64 layout"), std::string::npos);
 }
 
 // what each device kind's describe reply said before the table
@@ -102,14 +102,14 @@ TEST(LayoutsTest, DescribeLayoutsAreTheOnesOnTheWire) {
 }
 
 TEST(LayoutsTest, LayoutJsonRefusesTheWrongOverload) {
-  EXPECT_NE(ThrownBy([] { LayoutJson(DeviceKind::kArm); }).find("arm: the layout depends on the device; give its "
-                                                                "joint count"),
+  EXPECT_NE(ThrownBy([] { LayoutJson(DeviceKind::kArm); })
+                .find("arm: the layout depends on the device; give its "
+                      "joint count"),
             std::string::npos);
   EXPECT_NE(ThrownBy([] { LayoutJson(DeviceKind::kFeet); }).find("give its sensor value names"), std::string::npos);
   EXPECT_EQ(ThrownBy([] { LayoutJson(DeviceKind::kArm, 0); }), "arm: 0 joints");
   EXPECT_EQ(ThrownBy([] { LayoutJson(DeviceKind::kBase, 3); }), "base: no per-joint layout");
-  EXPECT_EQ(ThrownBy([] { LayoutJson(DeviceKind::kArm, std::vector<std::string>{"a"}); }),
-            "arm: no per-sensor layout");
+  EXPECT_EQ(ThrownBy([] { LayoutJson(DeviceKind::kArm, std::vector<std::string>{"a"}); }), "arm: no per-sensor layout");
   EXPECT_EQ(ThrownBy([] { LayoutJson(DeviceKind::kImu, std::vector<std::string>{}); }), "imu: no sensor values");
   EXPECT_NE(ThrownBy([] { LayoutJson(DeviceKind::kMarkers); }).find("markers: not a float64 layout"),
             std::string::npos);

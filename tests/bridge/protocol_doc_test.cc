@@ -21,8 +21,8 @@
 #include <gtest/gtest.h>
 
 #include "bridge/bridge_layouts.h"
-#include "bridge/bridge_session.h"
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
 
 namespace vlab::bridge {
 namespace {
@@ -102,7 +102,7 @@ std::string Describe(const LayoutField& f) {
 struct PageField {
   std::string name;
   FieldGroup group = FieldGroup::kOne;
-  std::string unit;  // "" for "–"
+  std::string unit;   // "" for "–"
   std::string index;  // the row's index cell
   int row = 0;        // position of the field in its row
   int line = 0;
@@ -243,8 +243,8 @@ class PageChecker {
         Problem(have.line, field + " is '" + label + "', the code says " + Describe(want));
       }
       if (have.unit != want.unit) {
-        Problem(have.line, field + " (" + want.name + ") has unit '" + have.unit + "', the code says '" + want.unit +
-                               "'");
+        Problem(have.line,
+                field + " (" + want.name + ") has unit '" + have.unit + "', the code says '" + want.unit + "'");
       }
       const std::string letter = want.group == FieldGroup::kOne ? "n" : Letter(want.group);
       const std::string at = Linear(groups, singles, letter);
@@ -260,8 +260,8 @@ class PageChecker {
       }
       const bool row_ends = f + 1 >= page.size() || page[f + 1].line != have.line;
       if (row_ends && have.index != row_index) {
-        Problem(have.line, section + ": payload index '" + have.index + "', the code's fields are at '" + row_index +
-                               "'");
+        Problem(have.line,
+                section + ": payload index '" + have.index + "', the code's fields are at '" + row_index + "'");
       }
     }
   }
@@ -326,31 +326,57 @@ TEST(ProtocolDocTest, EachMistakeInThePageIsReported) {
   const std::string page = ReadPage();
   const std::string e = kEllipsis;
   const std::vector<Mistake> mistakes = {
-      {"a renamed field", "| 4 | grasped: ", "| 4 | grasp: ",
+      {"a renamed field",
+       "| 4 | grasped: ",
+       "| 4 | grasp: ",
        {"Gripper state: field 5 is 'grasp', the code says 'grasped'"}},
-      {"two fields swapped", "| 4, 5 | vx, vy: measured velocity", "| 4, 5 | vy, vx: measured velocity",
+      {"two fields swapped",
+       "| 4, 5 | vx, vy: measured velocity",
+       "| 4, 5 | vy, vx: measured velocity",
        {"Base state: field 5 is 'vy', the code says 'vx'"}},
-      {"a wrong unit", "| 6 | wz: measured yaw rate | rad/s |", "| 6 | wz: measured yaw rate | deg/s |",
+      {"a wrong unit",
+       "| 6 | wz: measured yaw rate | rad/s |",
+       "| 6 | wz: measured yaw rate | deg/s |",
        {"Base state: field 7 (wz) has unit 'deg/s', the code says 'rad/s'"}},
-      {"a pure number given a unit", "else 0 | " + kDash + " |\n\n### Pose", "else 0 | px |\n\n### Pose",
+      {"a pure number given a unit",
+       "else 0 | " + kDash + " |\n\n### Pose",
+       "else 0 | px |\n\n### Pose",
        {"Gaze state: field 4 (visible) has unit 'px', the code says ''"}},
-      {"a renamed per-joint group", "tau_1 " + e + " tau_n", "torque_1 " + e + " torque_n",
+      {"a renamed per-joint group",
+       "tau_1 " + e + " tau_n",
+       "torque_1 " + e + " torque_n",
        {"Arm state: field 4 is 'torque_1 " + e + " torque_n', the code says 'tau_1 " + e + " tau_n'"}},
-      {"a group written as one value", "| 1 " + e + " n | value_1 " + e + " value_n:", "| 1 " + e + " n | value:",
+      {"a group written as one value",
+       "| 1 " + e + " n | value_1 " + e + " value_n:",
+       "| 1 " + e + " n | value:",
        {"Arm command: field 2 is 'value', the code says 'value_1 " + e + " value_n'"}},
-      {"a wrong count", "### Wrench state (kind 2, type 1): 8 values", "### Wrench state (kind 2, type 1): 9 values",
+      {"a wrong count",
+       "### Wrench state (kind 2, type 1): 8 values",
+       "### Wrench state (kind 2, type 1): 9 values",
        {"Wrench state: '9 values', the code has 8 values"}},
-      {"a wrong kind code", "### Pose state (kind 13, type 1)", "### Pose state (kind 12, type 1)",
+      {"a wrong kind code",
+       "### Pose state (kind 13, type 1)",
+       "### Pose state (kind 12, type 1)",
        {"Pose state: kind 12, the code says 13"}},
-      {"a missing row", "| 6 | spin: spin rate about the axle (signed) | rad/s |\n", "",
+      {"a missing row",
+       "| 6 | spin: spin rate about the axle (signed) | rad/s |\n",
+       "",
        {"Yoyo state: the table has 6 fields, the code 7"}},
-      {"a wrong payload index", "| 5 | string_force:", "| 6 | string_force:",
+      {"a wrong payload index",
+       "| 5 | string_force:",
+       "| 6 | string_force:",
        {"Yoyo state: payload index '6', the code's fields are at '5'"}},
-      {"a missing section", "### Point command (kind 10, type 2): 3 values", "### Point order: 3 values",
+      {"a missing section",
+       "### Point command (kind 10, type 2): 3 values",
+       "### Point order: 3 values",
        {"point: no command section"}},
-      {"a command for an output-only kind", "### Gaze state (kind 12, type 1)", "### Gaze command (kind 12, type 2)",
+      {"a command for an output-only kind",
+       "### Gaze state (kind 12, type 1)",
+       "### Gaze command (kind 12, type 2)",
        {"Gaze command: the code's gaze takes no commands"}},
-      {"a wrong code in the kinds table", "| gaze | 12 |", "| gaze | 14 |",
+      {"a wrong code in the kinds table",
+       "| gaze | 12 |",
+       "| gaze | 14 |",
        {"Devices and ports: row 12 is 'gaze | 14', the code says 'gaze | 12'"}},
   };
   for (const Mistake& m : mistakes) {

@@ -60,20 +60,20 @@ TEST(ProtocolTest, DoublesAreLittleEndianWhateverTheHost) {
 // docs/protocol.md, "A worked example", value by value (protocol_doc_test reads the page's hex)
 TEST(ProtocolTest, WorkedExampleOfTheDocsMatchesEncodePacket) {
   const std::string documented =
-      "000080501093d541"  // magic 1447838018
-      "0000000000000040"  // version 2
-      "000000000000f03f"  // kind 1 (arm)
-      "0000000000000040"  // type 2 (command)
-      "0000000000004540"  // seq 42
-      "000000000000f83f"  // time 1.5
-      "0000000000002040"  // length 8
-      "0000000000000040"  // mode 2 (velocity)
-      "000000000000e03f"  // 0.5
-      "000000000000d0bf"  // -0.25
-      "000000000000c03f"  // 0.125
-      "0000000000000000"  // 0
-      "000000000000f03f"  // 1
-      "000000000000f0bf"  // -1
+      "000080501093d541"   // magic 1447838018
+      "0000000000000040"   // version 2
+      "000000000000f03f"   // kind 1 (arm)
+      "0000000000000040"   // type 2 (command)
+      "0000000000004540"   // seq 42
+      "000000000000f83f"   // time 1.5
+      "0000000000002040"   // length 8
+      "0000000000000040"   // mode 2 (velocity)
+      "000000000000e03f"   // 0.5
+      "000000000000d0bf"   // -0.25
+      "000000000000c03f"   // 0.125
+      "0000000000000000"   // 0
+      "000000000000f03f"   // 1
+      "000000000000f0bf"   // -1
       "000000000000b03f";  // 0.0625
   ArmCommandMsg m;
   m.mode = 2;
@@ -206,7 +206,7 @@ TEST(ProtocolTest, FramingErrors) {
 
   EXPECT_EQ(Decode(Bytes()), DecodeError::kTooShort);
   EXPECT_EQ(Decode(Bytes(good.begin(), good.begin() + 48)), DecodeError::kTooShort);  // 6 values
-  EXPECT_EQ(Decode(Bytes(good.begin(), good.end() - 1)), DecodeError::kTooShort);   // odd size
+  EXPECT_EQ(Decode(Bytes(good.begin(), good.end() - 1)), DecodeError::kTooShort);     // odd size
   Bytes longer = good;
   longer.push_back(0);
   EXPECT_EQ(Decode(longer), DecodeError::kTooShort);
@@ -231,13 +231,13 @@ TEST(ProtocolTest, FramingErrors) {
   EXPECT_EQ(with(0, kNaN), DecodeError::kBadMagic);
   EXPECT_EQ(with(1, 1), DecodeError::kBadVersion);  // version 1: no sessions
   EXPECT_EQ(with(1, 3), DecodeError::kBadVersion);
-  EXPECT_EQ(with(2, -1), DecodeError::kBadKind);   // (0 frames: a describe request to any kind)
+  EXPECT_EQ(with(2, -1), DecodeError::kBadKind);  // (0 frames: a describe request to any kind)
   EXPECT_EQ(with(2, 1.5), DecodeError::kBadKind);
   EXPECT_EQ(with(2, 256), DecodeError::kBadKind);
   EXPECT_EQ(with(3, 0), DecodeError::kBadType);
   EXPECT_EQ(with(3, 6), DecodeError::kBadType);
-  EXPECT_EQ(with(4, -1), DecodeError::kBadValue);   // seq below 0
-  EXPECT_EQ(with(4, 2.5), DecodeError::kBadValue);  // seq not whole
+  EXPECT_EQ(with(4, -1), DecodeError::kBadValue);    // seq below 0
+  EXPECT_EQ(with(4, 2.5), DecodeError::kBadValue);   // seq not whole
   EXPECT_EQ(with(4, 1e17), DecodeError::kBadValue);  // seq beyond 2^53
   EXPECT_EQ(with(6, 7), DecodeError::kBadLength);
   EXPECT_EQ(with(6, 9), DecodeError::kBadLength);

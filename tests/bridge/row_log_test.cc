@@ -19,9 +19,7 @@
 namespace vlab::bridge::program {
 namespace {
 
-std::string TempPath(const char* name) {
-  return ::testing::TempDir() + name + std::to_string(::getpid());
-}
+std::string TempPath(const char* name) { return ::testing::TempDir() + name + std::to_string(::getpid()); }
 
 TEST(RowLog, WritesTheHeaderAndEveryRowWithItsColumnsDecimals) {
   const std::string path = TempPath("row_log_rows_");

@@ -17,9 +17,9 @@
 //   counters received=R accepted=A refused=F stale=S duplicate=D describes=N
 //                                                 at the end (SECONDS, SIGTERM or SIGINT)
 // Limits: velocity |qd| <= 2 rad/s, torque |tau| <= 50 N m, position +-3 rad.
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>

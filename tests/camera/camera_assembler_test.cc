@@ -147,7 +147,7 @@ TEST(FrameAssemblerTest, AllSlotsBusyEvictsTheOldest) {
   const auto f1 = FrameChunks(1), f2 = FrameChunks(2), f3 = FrameChunks(3), f0 = FrameChunks(0);
   Add(a, f2[0]);
   Add(a, f3[0]);
-  EXPECT_EQ(Add(a, f1[0]), Result::kLate);  // older than all in progress and no room
+  EXPECT_EQ(Add(a, f1[0]), Result::kLate);             // older than all in progress and no room
   for (const Datagram& d : FrameChunks(4)) Add(a, d);  // evicts 2, completes 4, drops 3
   ExpectFrame(a, 4);
   EXPECT_EQ(a.counters().dropped_evicted, 1);

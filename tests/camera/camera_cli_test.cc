@@ -11,9 +11,9 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
-#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "test_util.h"
@@ -87,8 +87,8 @@ cv::Mat FileFrame(int i) {
   cv::Mat bgr(kH, kW, CV_8UC3);
   for (int y = 0; y < kH; ++y) {
     for (int x = 0; x < kW; ++x) {
-      bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(x / 2 + 10 * i), static_cast<uchar>(y * 2),
-                                          static_cast<uchar>(20 * i));
+      bgr.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<uchar>(x / 2 + 10 * i), static_cast<uchar>(y * 2), static_cast<uchar>(20 * i));
     }
   }
   cv::rectangle(bgr, cv::Rect(10 + 8 * i, 40, 24, 24), cv::Scalar(255, 255, 255), cv::FILLED);
@@ -158,8 +158,8 @@ TEST(CameraCliTest, ServesAVideoFileThatAClientReceives) {
     EXPECT_EQ(f.pose.p_WC, Eigen::Vector3d(0.5, 0, 1.2));
     EXPECT_EQ(f.pose.q_WC.x(), 1.0);
   }
-  std::printf("vlab camera: %d frames compared with the file's, worst mean |error| %.2f grey levels\n",
-              kFileFrames + 6, worst_mean);
+  std::printf("vlab camera: %d frames compared with the file's, worst mean |error| %.2f grey levels\n", kFileFrames + 6,
+              worst_mean);
   camera.Signal(SIGINT);
   EXPECT_EQ(camera.Wait(), 0) << camera.Errors();
   EXPECT_NE(camera.Output().find("interrupted"), std::string::npos) << camera.Output();

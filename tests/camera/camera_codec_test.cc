@@ -162,9 +162,9 @@ TEST(CameraCodecTest, RefusesFraming) {
 }
 
 TEST(CameraCodecTest, RefusesNonFiniteValues) {
-  EXPECT_EQ(Decode(With(5, kNaN)), ChunkError::kNotFinite);   // time
+  EXPECT_EQ(Decode(With(5, kNaN)), ChunkError::kNotFinite);  // time
   EXPECT_EQ(Decode(With(5, kInf)), ChunkError::kNotFinite);
-  EXPECT_EQ(Decode(With(16, kNaN)), ChunkError::kNotFinite);  // px
+  EXPECT_EQ(Decode(With(16, kNaN)), ChunkError::kNotFinite);   // px
   EXPECT_EQ(Decode(With(22, -kInf)), ChunkError::kNotFinite);  // qz
 }
 
@@ -172,24 +172,24 @@ TEST(CameraCodecTest, RefusesBadImages) {
   EXPECT_EQ(Decode(With(9, 0)), ChunkError::kBadImage);       // width
   EXPECT_EQ(Decode(With(10, 16385)), ChunkError::kBadImage);  // height
   EXPECT_EQ(Decode(With(9, 4.5)), ChunkError::kBadImage);
-  EXPECT_EQ(Decode(With(11, 2)), ChunkError::kBadImage);      // encoding
+  EXPECT_EQ(Decode(With(11, 2)), ChunkError::kBadImage);  // encoding
   EXPECT_EQ(Decode(With(11, -1)), ChunkError::kBadImage);
-  EXPECT_EQ(Decode(With(12, 0)), ChunkError::kBadImage);      // frame_bytes
-  ChunkHeader h = Example();  // raw frame_bytes must be w*h*3
+  EXPECT_EQ(Decode(With(12, 0)), ChunkError::kBadImage);  // frame_bytes
+  ChunkHeader h = Example();                              // raw frame_bytes must be w*h*3
   h.frame_bytes = 25;
   h.chunk_bytes = 9;
   EXPECT_EQ(Decode(Encode(h)), ChunkError::kBadImage);
 }
 
 TEST(CameraCodecTest, RefusesBadLayouts) {
-  EXPECT_EQ(Decode(With(7, 2)), ChunkError::kBadLayout);    // index >= count
+  EXPECT_EQ(Decode(With(7, 2)), ChunkError::kBadLayout);  // index >= count
   EXPECT_EQ(Decode(With(7, -1)), ChunkError::kBadLayout);
-  EXPECT_EQ(Decode(With(8, 0)), ChunkError::kBadLayout);    // count 0
+  EXPECT_EQ(Decode(With(8, 0)), ChunkError::kBadLayout);  // count 0
   EXPECT_EQ(Decode(With(8, 1.5)), ChunkError::kBadLayout);
   EXPECT_EQ(Decode(With(13, 15)), ChunkError::kBadLayout);  // last chunk does not end at frame_bytes
   EXPECT_EQ(Decode(With(13, 24)), ChunkError::kBadLayout);  // offset beyond the frame
   EXPECT_EQ(Decode(With(14, 0)), ChunkError::kBadLayout);   // empty chunk
-  ChunkHeader h = Example();  // a full chunk at the wrong offset
+  ChunkHeader h = Example();                                // a full chunk at the wrong offset
   h.chunk_index = 0;
   h.offset = 8;
   h.chunk_bytes = 16;
@@ -212,10 +212,10 @@ TEST(CameraCodecTest, RefusesBadLayouts) {
 }
 
 TEST(CameraCodecTest, RefusesBadPoses) {
-  EXPECT_EQ(Decode(With(15, 2)), ChunkError::kBadPose);     // pose_valid
+  EXPECT_EQ(Decode(With(15, 2)), ChunkError::kBadPose);  // pose_valid
   EXPECT_EQ(Decode(With(15, 0.5)), ChunkError::kBadPose);
-  EXPECT_EQ(Decode(With(19, 0.9)), ChunkError::kBadPose);   // |q| != 1
-  ChunkHeader h = Example();  // an invalid pose carries anything finite
+  EXPECT_EQ(Decode(With(19, 0.9)), ChunkError::kBadPose);  // |q| != 1
+  ChunkHeader h = Example();                               // an invalid pose carries anything finite
   h.pose.valid = false;
   Bytes b = Encode(h);
   PutDouble(5, b.data() + 8 * 19);

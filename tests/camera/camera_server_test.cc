@@ -14,8 +14,8 @@
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_camera_server.h"
-#include "bridge/bridge_session.h"
 #include "bridge/bridge_protocol.h"
+#include "bridge/bridge_session.h"
 #include "camera_test_util.h"
 #include "wait_until.h"
 
@@ -65,8 +65,8 @@ struct Peer {
     std::vector<double> p;
     SessionResult r;
     double c = 0;
-    if (!IsSessionReply(reply.data(), reply.size()) || DecodePacket(reply.data(), reply.size(), &h, &p) != DecodeError::kNone ||
-        !ParseSessionReply(h, p, &c, &r)) {
+    if (!IsSessionReply(reply.data(), reply.size()) ||
+        DecodePacket(reply.data(), reply.size(), &h, &p) != DecodeError::kNone || !ParseSessionReply(h, p, &c, &r)) {
       return -1;
     }
     if (cookie) *cookie = c;

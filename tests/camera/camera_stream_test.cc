@@ -167,14 +167,16 @@ TEST(CameraStreamTest, Vga30HzFor10sRawAndJpegNoFrameLostOrTorn) {
 
   std::printf("10 s at 30 Hz, 640x480 over loopback (%.2f s), client SO_RCVBUF %d bytes:\n", elapsed,
               raw.receive_buffer);
-  std::printf("  raw:  %ld/%d frames whole, %ld lost, %ld torn, %ld dropped incomplete, %ld chunks sent, "
-              "%ld send failures\n",
-              raw.frames, kFrames, raw.lost, raw.torn, raw.dropped, raw_server->counters().chunks_sent,
-              raw_server->counters().send_failures);
-  std::printf("  jpeg: %ld/%d frames whole, %ld lost, %ld torn, %ld dropped incomplete; up to %zu bytes a frame; "
-              "decoded vs original: mean |error| %.2f, worst %.0f grey levels\n",
-              jpeg.frames, kFrames, jpeg.lost, jpeg.torn, jpeg.dropped, jpeg.jpeg_bytes, jpeg.mean_jpeg_error,
-              jpeg.worst_jpeg_error);
+  std::printf(
+      "  raw:  %ld/%d frames whole, %ld lost, %ld torn, %ld dropped incomplete, %ld chunks sent, "
+      "%ld send failures\n",
+      raw.frames, kFrames, raw.lost, raw.torn, raw.dropped, raw_server->counters().chunks_sent,
+      raw_server->counters().send_failures);
+  std::printf(
+      "  jpeg: %ld/%d frames whole, %ld lost, %ld torn, %ld dropped incomplete; up to %zu bytes a frame; "
+      "decoded vs original: mean |error| %.2f, worst %.0f grey levels\n",
+      jpeg.frames, kFrames, jpeg.lost, jpeg.torn, jpeg.dropped, jpeg.jpeg_bytes, jpeg.mean_jpeg_error,
+      jpeg.worst_jpeg_error);
   for (const Received* r : {&raw, &jpeg}) {
     EXPECT_EQ(r->frames, kFrames) << r->first_problem;
     EXPECT_EQ(r->lost, 0) << r->first_problem;
@@ -230,11 +232,11 @@ TEST(CameraStreamTest, InjectedChunkLossDropsExactlyTheDamagedFrames) {
   }
   sender.join();
   const long damaged = frames - static_cast<long>(whole.size());
-  std::printf("loss: %ld chunks dropped at the server, %ld of %d frames damaged; client: %zu frames whole, "
-              "%ld dropped incomplete (%ld superseded, %ld timed out), %ld torn\n",
-              server->counters().test_dropped_chunks, damaged, frames, received.size(),
-              client.counters().frames_dropped, client.counters().dropped_superseded,
-              client.counters().dropped_timeout, torn);
+  std::printf(
+      "loss: %ld chunks dropped at the server, %ld of %d frames damaged; client: %zu frames whole, "
+      "%ld dropped incomplete (%ld superseded, %ld timed out), %ld torn\n",
+      server->counters().test_dropped_chunks, damaged, frames, received.size(), client.counters().frames_dropped,
+      client.counters().dropped_superseded, client.counters().dropped_timeout, torn);
   EXPECT_EQ(torn, 0);
   EXPECT_EQ(received, whole) << "exactly the frames sent whole arrive";
   ASSERT_GT(damaged, 5) << "the hook must damage some frames for this test to mean anything";

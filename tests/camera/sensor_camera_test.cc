@@ -197,8 +197,8 @@ TEST(CameraLensTest, DistortedImageMatchesProjectPointsWithinATenthOfAPixel) {
       worst = std::max(worst, std::hypot(su / sum - b.x, sv / sum - b.y));
     }
     EXPECT_LT(worst, 0.1) << "k1 = " << dist[0];
-    std::printf("lens k1=%g k2=%g: %zu blobs, worst centroid offset from cv::projectPoints %.4f px\n", dist[0],
-                dist[1], used.size(), worst);
+    std::printf("lens k1=%g k2=%g: %zu blobs, worst centroid offset from cv::projectPoints %.4f px\n", dist[0], dist[1],
+                used.size(), worst);
   }
 }
 

@@ -29,14 +29,22 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string option = argv[i];
     const char* value = argv[i + 1];
-    if (option == "--frames") frames = std::atoi(value);
-    else if (option == "--width") width = std::atoi(value);
-    else if (option == "--height") height = std::atoi(value);
-    else if (option == "--encoding") encoding = value;
-    else if (option == "--fps") fps = std::atof(value);
-    else if (option == "--drop") drop = std::atof(value);
-    else if (option == "--seed") seed = std::strtoul(value, nullptr, 10);
-    else if (option == "--chunk-bytes") chunk_bytes = std::atoi(value);
+    if (option == "--frames")
+      frames = std::atoi(value);
+    else if (option == "--width")
+      width = std::atoi(value);
+    else if (option == "--height")
+      height = std::atoi(value);
+    else if (option == "--encoding")
+      encoding = value;
+    else if (option == "--fps")
+      fps = std::atof(value);
+    else if (option == "--drop")
+      drop = std::atof(value);
+    else if (option == "--seed")
+      seed = std::strtoul(value, nullptr, 10);
+    else if (option == "--chunk-bytes")
+      chunk_bytes = std::atoi(value);
     else {
       std::fprintf(stderr, "test_camera_server: unknown option %s\n", option.c_str());
       return 2;

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "bridge/bridge_client.h"
 #include "kinsim/kinsim_process.h"
@@ -46,8 +46,8 @@ int RunCapture(const std::string& command, std::string* output) {
 
 // vlab follow from one kinsim to another, waiting for its start line
 std::unique_ptr<TestProcess> StartFollow(int from, int to, std::vector<std::string> more = {}) {
-  std::vector<std::string> args = {kVlab, "follow", "--from", Address(from), "--to", Address(to),
-                                   "--connect-timeout", "5"};
+  std::vector<std::string> args = {kVlab, "follow", "--from", Address(from), "--to", Address(to), "--connect-timeout",
+                                   "5"};
   args.insert(args.end(), more.begin(), more.end());
   return std::make_unique<TestProcess>(args, 20);
 }
@@ -141,10 +141,10 @@ TEST(Follow, RefusesArmsWithOtherJoints) {
   EXPECT_NE(out.find("arm 'pa10' at " + Address(source.port()) + " has 7 joints"), std::string::npos) << out;
   EXPECT_NE(out.find("arm 'pa10' at " + Address(six.port()) + " has 6"), std::string::npos) << out;
   out.clear();
-  EXPECT_EQ(RunCapture(std::string(kVlab) + " follow --from " + Address(source.port()) + " --to " +
-                           Address(swapped.port()),
-                       &out),
-            2);
+  EXPECT_EQ(
+      RunCapture(std::string(kVlab) + " follow --from " + Address(source.port()) + " --to " + Address(swapped.port()),
+                 &out),
+      2);
   EXPECT_NE(out.find("E2, W2, W1"), std::string::npos) << out;
   EXPECT_NE(out.find("same joints in the same order"), std::string::npos) << out;
 }

@@ -21,13 +21,12 @@ TEST(JointPdTest, EqualsFormulaOnRandomInputs) {
   for (int trial = 0; trial < 50; ++trial) {
     const int n = 1 + trial % 7;
     JointPdGains gains{Random(rng, n).cwiseAbs() * 100.0, Random(rng, n).cwiseAbs() * 10.0};
-    const Eigen::VectorXd q = Random(rng, n), qd = Random(rng, n), q_des = Random(rng, n),
-                          qd_des = Random(rng, n), g = Random(rng, n);
+    const Eigen::VectorXd q = Random(rng, n), qd = Random(rng, n), q_des = Random(rng, n), qd_des = Random(rng, n),
+                          g = Random(rng, n);
     const Eigen::VectorXd tau = JointPdGravityTorque(gains, q, qd, q_des, qd_des, g);
     ASSERT_EQ(tau.size(), n);
     for (int i = 0; i < n; ++i) {
-      const double expected =
-          gains.kp[i] * (q_des[i] - q[i]) + gains.kd[i] * (qd_des[i] - qd[i]) + g[i];
+      const double expected = gains.kp[i] * (q_des[i] - q[i]) + gains.kd[i] * (qd_des[i] - qd[i]) + g[i];
       EXPECT_NEAR(tau[i], expected, 1e-12);
     }
   }
@@ -49,9 +48,8 @@ TEST(JointPdTest, SizeMismatchNamesArgument) {
     Eigen::VectorXd qd, q_des, qd_des, g;
   };
   const Case cases[] = {
-      {"kp", {v2, v3}, v3, v3, v3, v3},   {"kd", {v3, v2}, v3, v3, v3, v3},
-      {"qd", good, v2, v3, v3, v3},       {"q_des", good, v3, v2, v3, v3},
-      {"qd_des", good, v3, v3, v2, v3},   {"g", good, v3, v3, v3, v2},
+      {"kp", {v2, v3}, v3, v3, v3, v3}, {"kd", {v3, v2}, v3, v3, v3, v3}, {"qd", good, v2, v3, v3, v3},
+      {"q_des", good, v3, v2, v3, v3},  {"qd_des", good, v3, v3, v2, v3}, {"g", good, v3, v3, v3, v2},
   };
   for (const Case& c : cases) {
     try {

@@ -7,8 +7,8 @@
 #include <stdexcept>
 #include <string>
 
-#include <Eigen/SVD>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 #include "control/trajectory.h"
 #include "control_test_models.h"
@@ -55,8 +55,7 @@ class TaskSpaceTest : public vlab::test::MujocoTest {
     return robot_->TipPose();
   }
   // one kinematic Euler step q ← q + q̇_cmd·dt
-  const TaskSpaceOutput& Step(TaskSpaceController& c, Eigen::VectorXd& q,
-                              const TaskSpaceTarget& target, double dt) {
+  const TaskSpaceOutput& Step(TaskSpaceController& c, Eigen::VectorXd& q, const TaskSpaceTarget& target, double dt) {
     robot_->SetState(q, Eigen::VectorXd::Zero(q.size()));
     const TaskSpaceOutput& out = c.Update(*robot_, q, target);
     q += dt * out.qd_cmd;
@@ -65,8 +64,7 @@ class TaskSpaceTest : public vlab::test::MujocoTest {
 
   // maximum tracking error |e| (6-vector norm) following `traj` from q0 with
   // kinematic steps of dt, with or without the trajectory's twist fed forward
-  double TrackingError(const CartesianTrajectory& traj, const Eigen::VectorXd& q0, double dt,
-                       bool feed_forward) {
+  double TrackingError(const CartesianTrajectory& traj, const Eigen::VectorXd& q0, double dt, bool feed_forward) {
     auto c = TaskSpaceController::Create(TaskSpaceConfig{}, *robot_);
     Eigen::VectorXd q = q0;
     double worst = 0.0;
@@ -162,8 +160,7 @@ TEST_F(TaskSpaceTest, TracksMovingTargetWithErrorScalingWithDt) {
   EXPECT_GT(e2 / e1, 1.6);  // first order in dt
   EXPECT_LT(e2 / e1, 2.4);
   EXPECT_LT(e1, 0.1 * e_no_ff);  // the feed-forward is what keeps the error small
-  std::cout << "tracking error: dt 1 ms " << e1 << ", dt 2 ms " << e2
-            << ", no feed-forward " << e_no_ff << "\n";
+  std::cout << "tracking error: dt 1 ms " << e1 << ", dt 2 ms " << e2 << ", no feed-forward " << e_no_ff << "\n";
 }
 
 TEST_F(TaskSpaceTest, NullSpaceTermDoesNotChangeTaskVelocity) {
@@ -216,8 +213,7 @@ TEST_F(TaskSpaceTest, MatchesClosedFormWithDampingAndLimitTerm) {
   qd0[3] += 4.0 * ((-2.5 + 0.1 * 5.0) - q[3]);
   const Eigen::MatrixXd Jp = DampedPseudoInverse(J, 0.05);
   const Eigen::VectorXd expected = Jp * x_ref + (Eigen::MatrixXd::Identity(7, 7) - Jp * J) * qd0;
-  EXPECT_LT((out.qd_cmd - expected).norm(), 1e-9) << out.qd_cmd.transpose() << "\n"
-                                                  << expected.transpose();
+  EXPECT_LT((out.qd_cmd - expected).norm(), 1e-9) << out.qd_cmd.transpose() << "\n" << expected.transpose();
   EXPECT_DOUBLE_EQ(out.damping, 0.05);
   EXPECT_EQ(out.speed_scale, 1.0);
   EXPECT_TRUE(out.ok);
@@ -241,8 +237,7 @@ TEST_F(TaskSpaceTest, PostureMovesTowardRestWhileHoldingPose) {
     EXPECT_LE(distance, previous + 1e-12) << "step " << k;
     previous = distance;
   }
-  std::cout << "posture distance " << initial << " -> " << previous << ", worst task error "
-            << worst_task << "\n";
+  std::cout << "posture distance " << initial << " -> " << previous << ", worst task error " << worst_task << "\n";
   EXPECT_LT(previous, initial - 0.01);
   EXPECT_LT(worst_task, 1e-4);
   // converged to a posture where the rest-pull has no null-space component left
@@ -321,8 +316,7 @@ TEST_F(TaskSpaceTest, AdaptiveDampingRisesNearSingularity) {
   target.pose = PoseAt(q_goal_);
   for (const Eigen::VectorXd& q : {Eigen::VectorXd(Eigen::VectorXd::Zero(7)), q_start_}) {
     robot_->SetState(q, Eigen::VectorXd::Zero(7));
-    const double sigma_min =
-        Eigen::JacobiSVD<Eigen::MatrixXd>(robot_->Jacobian()).singularValues()[5];
+    const double sigma_min = Eigen::JacobiSVD<Eigen::MatrixXd>(robot_->Jacobian()).singularValues()[5];
     double lambda2 = 1e-6;
     if (sigma_min < 0.05) lambda2 += 0.01 * (1.0 - std::pow(sigma_min / 0.05, 2));
     const TaskSpaceOutput& out = c->Update(*robot_, q, target);
@@ -396,8 +390,7 @@ TEST_F(TaskSpaceTest, ConfigAndSizeErrorsNameTheField) {
   expect_error(config, "singular_value_threshold");
 
   auto c = TaskSpaceController::Create(TaskSpaceConfig{}, *robot_);
-  EXPECT_THROW(c->Update(*robot_, Eigen::VectorXd::Zero(6), TaskSpaceTarget{}),
-               std::invalid_argument);
+  EXPECT_THROW(c->Update(*robot_, Eigen::VectorXd::Zero(6), TaskSpaceTarget{}), std::invalid_argument);
 }
 
 }  // namespace

@@ -40,8 +40,7 @@ void ExpectBoundaries(const TimeScaling& sc, double T) {
 }
 
 // ṡ and s̈ against central differences of s (and of ṡ), away from switches
-void ExpectDerivativesMatchFiniteDifferences(const TimeScaling& sc, double T,
-                                             const std::vector<double>& switches) {
+void ExpectDerivativesMatchFiniteDifferences(const TimeScaling& sc, double T, const std::vector<double>& switches) {
   const double h = 1e-5;
   for (int k = 1; k < 200; ++k) {
     const double t = T * k / 200.0;
@@ -81,9 +80,7 @@ TEST(TimeScalingTest, QuinticClosedForm) {
   EXPECT_NEAR(PeakScalingSpeed(Quintic(), T), 15.0 / (8.0 * T), 1e-15);
 }
 
-TEST(TimeScalingTest, QuinticDerivatives) {
-  ExpectDerivativesMatchFiniteDifferences(Quintic(), 1.3, {});
-}
+TEST(TimeScalingTest, QuinticDerivatives) { ExpectDerivativesMatchFiniteDifferences(Quintic(), 1.3, {}); }
 
 TEST(TimeScalingTest, TrapezoidalBoundariesAndDerivatives) {
   for (double a : {0.1, 0.25, 0.5}) {

@@ -53,8 +53,7 @@ TEST(RotationVectorTest, MatchesAngleAxisIncludingLargeAngles) {
 
 JointTrajectoryConfig ThreeWaypoints() {
   JointTrajectoryConfig c;
-  c.waypoints = {Eigen::Vector3d(0.0, 1.0, -0.5), Eigen::Vector3d(0.8, 0.2, 0.1),
-                 Eigen::Vector3d(-0.3, 0.4, 0.9)};
+  c.waypoints = {Eigen::Vector3d(0.0, 1.0, -0.5), Eigen::Vector3d(0.8, 0.2, 0.1), Eigen::Vector3d(-0.3, 0.4, 0.9)};
   c.segments = {SegmentTiming{1.2, {TimeScalingType::kQuintic, 0.25}},
                 SegmentTiming{0.7, {TimeScalingType::kTrapezoidal, 0.3}}};
   return c;
@@ -140,8 +139,7 @@ TEST(JointTrajectoryTest, ValidationNamesWaypointOrSegment) {
 
 CartesianTrajectoryConfig TwoSegments() {
   CartesianTrajectoryConfig c;
-  c.waypoints = {MakePose({0.4, 0.0, 0.5}, Rot(0.3, {1, 0, 0})),
-                 MakePose({0.5, 0.2, 0.3}, Rot(2.5, {0.2, 1, -0.4})),
+  c.waypoints = {MakePose({0.4, 0.0, 0.5}, Rot(0.3, {1, 0, 0})), MakePose({0.5, 0.2, 0.3}, Rot(2.5, {0.2, 1, -0.4})),
                  MakePose({0.3, -0.1, 0.6}, Rot(-1.0, {1, 1, 1}))};
   c.segments = {SegmentTiming{1.0, {TimeScalingType::kQuintic, 0.25}},
                 SegmentTiming{1.5, {TimeScalingType::kTrapezoidal, 0.2}}};
@@ -216,8 +214,7 @@ TEST(CartesianTrajectoryTest, SlerpTakesShortWayForEitherQuaternionSign) {
     c.segments = {SegmentTiming{}};
     auto traj = CartesianTrajectory::Create(c);
     const CartesianSample mid = traj->Evaluate(0.5);
-    EXPECT_LT(AngleBetween(mid.pose.R_W, Rot(85.0 * kPi / 180.0, {0, 0, 1}) * R0), 1e-9)
-        << "sign " << sign;
+    EXPECT_LT(AngleBetween(mid.pose.R_W, Rot(85.0 * kPi / 180.0, {0, 0, 1}) * R0), 1e-9) << "sign " << sign;
     EXPECT_GT(mid.w_W.z(), 0.0);
     EXPECT_LT(mid.w_W.head<2>().norm(), 1e-12);
     // the rotation swept over the segment is 170°, not 190°

@@ -59,7 +59,9 @@ mjvScene Draw(const mjModel* m, mjData* d) {
                       g.category == h.category && std::memcmp(g.size, h.size, sizeof g.size) == 0 &&
                       std::memcmp(g.pos, h.pos, sizeof g.pos) == 0 && std::memcmp(g.mat, h.mat, sizeof g.mat) == 0 &&
                       std::memcmp(g.rgba, h.rgba, sizeof g.rgba) == 0 && std::strcmp(g.label, h.label) == 0;
-    if (!same) return ::testing::AssertionFailure() << "geom " << i << " (type " << g.type << ", object " << g.objid << ") differs";
+    if (!same)
+      return ::testing::AssertionFailure()
+             << "geom " << i << " (type " << g.type << ", object " << g.objid << ") differs";
   }
   if (a.nlight != b.nlight) return ::testing::AssertionFailure() << a.nlight << " lights vs " << b.nlight;
   for (int i = 0; i < a.nlight; ++i) {

@@ -161,7 +161,7 @@ TEST(Realtime, AThreadsSliceIsSetReadBackAndKeepsItsNiceValue) {
 }
 
 TEST(Realtime, AThreadsPriorityIsReadBackPerProcess) {
-  EXPECT_EQ(ProcessRealtimePriority(0), 0);  // this process's main thread: normal priority
+  EXPECT_EQ(ProcessRealtimePriority(0), 0);            // this process's main thread: normal priority
   EXPECT_EQ(ProcessRealtimePriority(0x7ffffff0), -1);  // no such process
 }
 

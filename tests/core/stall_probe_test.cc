@@ -66,8 +66,8 @@ TEST(StallProbe, CountsTheThreadsPageFaultsAndWaits) {
   // 1024 fresh pages, one fault each (no huge pages for this mapping)
   const long page = sysconf(_SC_PAGESIZE);
   const std::size_t pages = 1024;
-  char* memory = static_cast<char*>(
-      mmap(nullptr, pages * page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
+  char* memory =
+      static_cast<char*>(mmap(nullptr, pages * page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
   ASSERT_NE(memory, MAP_FAILED);
   madvise(memory, pages * page, MADV_NOHUGEPAGE);
   for (std::size_t i = 0; i < pages; ++i) memory[i * page] = 1;
@@ -164,8 +164,8 @@ TEST(StallProbe, KeepsTheLatestPeriodWithItsCounters) {
   probe.Sample(1, 0.0002, 0.001, 10.001);
   // period 2 starts 5 ms late after 256 fresh pages were touched
   const long page = sysconf(_SC_PAGESIZE);
-  char* memory = static_cast<char*>(
-      mmap(nullptr, 256 * page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
+  char* memory =
+      static_cast<char*>(mmap(nullptr, 256 * page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
   ASSERT_NE(memory, MAP_FAILED);
   madvise(memory, 256 * page, MADV_NOHUGEPAGE);
   for (int i = 0; i < 256; ++i) memory[i * page] = 1;
@@ -177,9 +177,9 @@ TEST(StallProbe, KeepsTheLatestPeriodWithItsCounters) {
   EXPECT_DOUBLE_EQ(r.worst.lateness_s, 0.005);
   EXPECT_GE(r.worst.minor_faults, 256);
   EXPECT_GE(r.minor_faults, 256);
-  EXPECT_NEAR(r.wall_s, 0.008, 1e-12);  // first sample to last
+  EXPECT_NEAR(r.wall_s, 0.008, 1e-12);          // first sample to last
   EXPECT_NEAR(r.worst.window_s, 0.006, 1e-12);  // period 1's start to period 2's
-  EXPECT_GT(r.worst.on_cpu_s, 0.0);  // (touching 256 pages took CPU time)
+  EXPECT_GT(r.worst.on_cpu_s, 0.0);             // (touching 256 pages took CPU time)
   // a late period reads the steal at once: known wherever /proc/stat is
   const int stat = open("/proc/stat", O_RDONLY | O_CLOEXEC);
   if (ReadStealSeconds(stat) >= 0) {

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "mujoco_fixture.h"
 
@@ -68,8 +68,8 @@ TEST_P(CubesSceneTest, SlotsSpellAlongTheReadingFrame) {
     const int slot = Id(mjOBJ_SITE, ("slot_" + std::to_string(k)).c_str());
     const Eigen::Vector3d p(d_->site_xpos + 3 * slot);
     const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> R(d_->site_xmat + 9 * slot);
-    EXPECT_NEAR(p.z(), kTableTop + kHalfEdge, 1e-9);              // a resting cube's centre
-    EXPECT_NEAR(p.y(), (k - 2.5) * kPitch, 1e-9);                  // 70 mm apart, centred on y = 0
+    EXPECT_NEAR(p.z(), kTableTop + kHalfEdge, 1e-9);                 // a resting cube's centre
+    EXPECT_NEAR(p.y(), (k - 2.5) * kPitch, 1e-9);                    // 70 mm apart, centred on y = 0
     EXPECT_LT((R.col(0) - Eigen::Vector3d(0, 1, 0)).norm(), 1e-6);   // reading direction: world +y
     EXPECT_LT((R.col(1) - Eigen::Vector3d(-1, 0, 0)).norm(), 1e-6);  // the letter's up: toward the arm
   }
@@ -85,8 +85,8 @@ TEST_P(CubesSceneTest, WebcamReadsTheWordLeftToRightAndUpright) {
     ASSERT_TRUE(Project(p, &uv));
     ASSERT_TRUE(Project(p + 0.02 * R.col(1), &up_uv));
     EXPECT_LT(uv.cwiseAbs().maxCoeff(), 1.0) << "slot " << k << " outside the image";
-    EXPECT_GT(uv.x(), previous_u);   // slot k right of slot k - 1
-    EXPECT_GT(up_uv.y(), uv.y());    // the letter's up points up in the image
+    EXPECT_GT(uv.x(), previous_u);  // slot k right of slot k - 1
+    EXPECT_GT(up_uv.y(), uv.y());   // the letter's up points up in the image
     previous_u = uv.x();
   }
   // a placement area that holds cases/cubes' (stage1.yaml: x 0.45 .. 0.80, y -0.33 .. 0.33):
@@ -94,8 +94,8 @@ TEST_P(CubesSceneTest, WebcamReadsTheWordLeftToRightAndUpright) {
   // 0.78 m of the base axis: the top faces' outer edges at the extreme centres are in the picture
   // (in the picture, not necessarily with a valid marker: see cases/cubes/stage1.yaml)
   const double inset = kHalfEdge * std::sqrt(2.0);
-  for (const Eigen::Vector2d& centre : {Eigen::Vector2d(0.40 + inset, 0.35 - inset), Eigen::Vector2d(0.70, 0.35 - inset),
-                                        Eigen::Vector2d(0.765, 0.15)}) {
+  for (const Eigen::Vector2d& centre : {Eigen::Vector2d(0.40 + inset, 0.35 - inset),
+                                        Eigen::Vector2d(0.70, 0.35 - inset), Eigen::Vector2d(0.765, 0.15)}) {
     ASSERT_LE(centre.norm(), 0.78);
     for (const double side : {-1.0, 1.0}) {
       for (const Eigen::Vector2d& edge : {Eigen::Vector2d(0, side * kHalfEdge), Eigen::Vector2d(kHalfEdge, 0)}) {

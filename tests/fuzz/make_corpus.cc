@@ -58,12 +58,10 @@ Seeds MakeSeeds() {
   add("arm_command_torque_7", [](Bytes* b) { EncodeArmCommand(4, 100.003, ArmCommand(3, kJoints, 10.0), b); });
   add("arm_command_position_1", [](Bytes* b) { EncodeArmCommand(5, 0.5, ArmCommand(1, 1, -1.0), b); });
   // the largest datagram: 7 header + 1 mode + 1016 values = kMaxPacketValues
-  add("arm_command_max_length", [](Bytes* b) {
-    EncodeArmCommand(6, 1.0, ArmCommand(2, kMaxPacketValues - kHeaderValues - 1, 0.125), b);
-  });
-  add("arm_state_max_joints", [](Bytes* b) {
-    EncodeArmState(7, 2.0, ArmState((kMaxPacketValues - kHeaderValues - 1) / 3), b);
-  });
+  add("arm_command_max_length",
+      [](Bytes* b) { EncodeArmCommand(6, 1.0, ArmCommand(2, kMaxPacketValues - kHeaderValues - 1, 0.125), b); });
+  add("arm_state_max_joints",
+      [](Bytes* b) { EncodeArmState(7, 2.0, ArmState((kMaxPacketValues - kHeaderValues - 1) / 3), b); });
   // framing-valid, but an arm command without a mode
   add("arm_command_empty", [](Bytes* b) {
     Header h;
@@ -98,8 +96,9 @@ Seeds MakeSeeds() {
   add("sim_command_pause", [](Bytes* b) { EncodeSimCommand(2, 10.1, {static_cast<int>(SimOp::kPause), 0}, b); });
   add("sim_command_resume", [](Bytes* b) { EncodeSimCommand(3, 10.2, {static_cast<int>(SimOp::kResume), 0}, b); });
   add("sim_command_step", [](Bytes* b) { EncodeSimCommand(4, 10.3, {static_cast<int>(SimOp::kStep), 10}, b); });
-  add("sim_command_set_realtime_factor",
-      [](Bytes* b) { EncodeSimCommand(5, 10.4, {static_cast<int>(SimOp::kSetRealtimeFactor), 0.5}, b); });
+  add("sim_command_set_realtime_factor", [](Bytes* b) {
+    EncodeSimCommand(5, 10.4, {static_cast<int>(SimOp::kSetRealtimeFactor), 0.5}, b);
+  });
   // describe and subscribe requests: [cookie, arg]; cookie 1 stands for the sender's real
   // cookie (the fuzzer puts it in), 0 asks for a challenge
   add("describe_arm", [](Bytes* b) { EncodeDescribeRequest(static_cast<int>(DeviceKind::kArm), 1, b); });

@@ -91,9 +91,9 @@ void CheckArmRoundTrips(const Header& h, const std::vector<double>& p, int joint
     Check(joints < 0 || c.value.size() == static_cast<std::size_t>(joints), "arm command: joint count not honoured");
     EncodeArmCommand(h.seq, h.time, c, &bytes);
     DecodeAgain(bytes, h, &h2, &p2);
-    Check(ParseArmCommand(h2, p2, joints, &c2) == DecodeError::kNone && c2.mode == c.mode &&
-              SameBits(c2.value, c.value),
-          "arm command round trip");
+    Check(
+        ParseArmCommand(h2, p2, joints, &c2) == DecodeError::kNone && c2.mode == c.mode && SameBits(c2.value, c.value),
+        "arm command round trip");
   }
 }
 
@@ -115,8 +115,8 @@ void CheckRoundTrips(const unsigned char* data, std::size_t size, const Header& 
   if (ParseWrenchState(h, p, &w) == DecodeError::kNone) {
     EncodeWrenchState(h.seq, h.time, w, &bytes);
     DecodeAgain(bytes, h, &h2, &p2);
-    bool same = ParseWrenchState(h2, p2, &w2) == DecodeError::kNone && w2.filter == w.filter &&
-                w2.saturated == w.saturated;
+    bool same =
+        ParseWrenchState(h2, p2, &w2) == DecodeError::kNone && w2.filter == w.filter && w2.saturated == w.saturated;
     for (int i = 0; i < 6; ++i) same = same && SameBits(w2.wrench[i], w.wrench[i]);
     Check(same, "wrench state round trip");
   }
@@ -124,8 +124,8 @@ void CheckRoundTrips(const unsigned char* data, std::size_t size, const Header& 
   if (ParseSimState(h, p, &s) == DecodeError::kNone) {
     EncodeSimState(h.seq, h.time, s, &bytes);
     DecodeAgain(bytes, h, &h2, &p2);
-    Check(ParseSimState(h2, p2, &s2) == DecodeError::kNone && SameBits(s2.sim_time, s.sim_time) &&
-              s2.mode == s.mode && s2.clock == s.clock && SameBits(s2.periods, s.periods) &&
+    Check(ParseSimState(h2, p2, &s2) == DecodeError::kNone && SameBits(s2.sim_time, s.sim_time) && s2.mode == s.mode &&
+              s2.clock == s.clock && SameBits(s2.periods, s.periods) &&
               SameBits(s2.refused_packets, s.refused_packets) && SameBits(s2.missed_deadlines, s.missed_deadlines) &&
               SameBits(s2.realtime_factor, s.realtime_factor) && SameBits(s2.max_lateness, s.max_lateness),
           "sim state round trip");
@@ -247,8 +247,8 @@ const unsigned char* WithCookie(const DeviceEndpoint& ep, const unsigned char* d
   return patched->data();
 }
 
-DeviceEndpoint::Received HandleAs(DeviceEndpoint& ep, const unsigned char* data, std::size_t size,
-                                  const Endpoint& from, long period, UdpSocket& device) {
+DeviceEndpoint::Received HandleAs(DeviceEndpoint& ep, const unsigned char* data, std::size_t size, const Endpoint& from,
+                                  long period, UdpSocket& device) {
   std::vector<unsigned char> patched;
   const unsigned char* bytes = WithCookie(ep, data, size, from, &patched);
   const DeviceEndpoint::Received r = ep.Handle(bytes, size, from, period, device);
@@ -308,7 +308,9 @@ std::vector<unsigned char> StatePacket(const DeviceEndpoint& ep, long period) {
       EncodeArmState(seq, time, s, &out);
       break;
     }
-    case DeviceKind::kWrench: EncodeWrenchState(seq, time, WrenchStateMsg{}, &out); break;
+    case DeviceKind::kWrench:
+      EncodeWrenchState(seq, time, WrenchStateMsg{}, &out);
+      break;
     case DeviceKind::kSim: {
       SimStateMsg s;
       s.sim_time = time;

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "head_track_eyes.h"
 
@@ -47,8 +47,9 @@ TEST(HeadTrackEyesTest, BallCentroidIsTheDiscCentre) {
 // camera with the eye at (pan, tilt): the eye's rotation is Ry(tilt) Rz(-pan),
 // its camera looks along the eye's x with image x = -y, image y = -z.
 Eigen::Vector2d PixelOf(const Eigen::Vector3d& d_head, double pan, double tilt, const Intrinsics& k) {
-  const Eigen::Matrix3d r = (Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(-pan, Eigen::Vector3d::UnitZ())).toRotationMatrix();
+  const Eigen::Matrix3d r =
+      (Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-pan, Eigen::Vector3d::UnitZ()))
+          .toRotationMatrix();
   const Eigen::Vector3d e = r.transpose() * d_head;
   return {k.cx + k.fx * (-e.y() / e.x()), k.cy + k.fy * (-e.z() / e.x())};
 }
@@ -87,7 +88,7 @@ TEST(HeadTrackEyesTest, NewestSentFrameFollowsTheWebcamSchedule) {
   EXPECT_EQ(NewestSentFrame(1.0 / 30 + 0.032 - 1e-5, s), 0);
   EXPECT_EQ(NewestSentFrame(1.0 / 30 + 0.032 + 1e-5, s), 1);
   EXPECT_EQ(NewestSentFrame(10.0, s), 299);  // (10 - 0.032) 30 = 299.04
-  s.exposure_s = 0.01;  // stamps move by half the exposure
+  s.exposure_s = 0.01;                       // stamps move by half the exposure
   EXPECT_EQ(NewestSentFrame(0.036, s), -1);
   EXPECT_EQ(NewestSentFrame(0.038, s), 0);
 }

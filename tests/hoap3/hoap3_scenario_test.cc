@@ -10,8 +10,8 @@
 #include <iostream>
 #include <string>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
@@ -52,8 +52,9 @@ TEST(Hoap3ScenarioTest, StartsFromTheStandKeyframe) {
     EXPECT_TRUE(Has(columns, c)) << c;
   }
   // 28 joints x (q, qd, tau) + limit_violation + following_error
-  EXPECT_EQ(std::count_if(columns.begin(), columns.end(), [](const std::string& c) { return c.rfind("hoap3.", 0) == 0; }),
-            28 * 3 + 2);
+  EXPECT_EQ(
+      std::count_if(columns.begin(), columns.end(), [](const std::string& c) { return c.rfind("hoap3.", 0) == 0; }),
+      28 * 3 + 2);
 }
 
 TEST(Hoap3ScenarioTest, AnUnknownKeyframeNamesTheFileLineAndKey) {
@@ -97,8 +98,8 @@ TEST(Hoap3ScenarioTest, TheArmServoHoldsTheStandOnTheFsrs) {
   ASSERT_FALSE(r.checks.empty());
   for (const CheckResult& c : r.checks) {
     EXPECT_TRUE(c.pass) << c.config.name << " = " << c.value;
-    std::cout << "  " << c.config.name << " (" << ReduceName(c.config.reduce) << " " << c.config.signal << ") = " << c.value
-              << "\n";
+    std::cout << "  " << c.config.name << " (" << ReduceName(c.config.reduce) << " " << c.config.signal
+              << ") = " << c.value << "\n";
   }
   EXPECT_TRUE(r.warnings.empty());
   // the last row of the log against the last state observed

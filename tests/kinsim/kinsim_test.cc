@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "kinsim/kinsim_scene.h"
 #include "core/core_errors.h"
+#include "kinsim/kinsim_scene.h"
 
 namespace vlab::kinsim {
 namespace {
@@ -155,7 +155,7 @@ TEST(KinArmTest, InvalidCommandsAreRefusedToo) {
   EXPECT_FALSE(arm->Command(Cmd(ArmMode::kVelocity, {nan, 0, 0})));
   EXPECT_FALSE(arm->Command(Cmd(ArmMode::kVelocity, {1.5, 0, 0})));  // beyond 1 rad/s
   EXPECT_FALSE(arm->Command(Cmd(ArmMode::kPosition, {0, 2.5, 0})));  // beyond 2 rad
-  EXPECT_FALSE(arm->Command(Cmd(ArmMode::kVelocity, {0, 0})));  // wrong size
+  EXPECT_FALSE(arm->Command(Cmd(ArmMode::kVelocity, {0, 0})));       // wrong size
   EXPECT_EQ(arm->refused(), 4);
   EXPECT_EQ(arm->refused_torque(), 0);
   EXPECT_EQ(arm->mode(), ArmMode::kHold);

@@ -12,9 +12,9 @@
 
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_udp.h"
-#include "wire_session.h"
 #include "kinsim_process.h"
 #include "test_util.h"
+#include "wire_session.h"
 
 namespace vlab::bridge {
 namespace {
@@ -117,8 +117,8 @@ bool Has(std::uint32_t status, std::uint32_t bit) { return (status & bit) != 0; 
 
 TEST_F(KinsimUdpTest, StartLineAndDescribe) {
   Start({"--rate", "500"});
-  EXPECT_EQ(process_->start_line(), "vlab-kinsim: arm 'pa10' (7 joints) on 127.0.0.1:" +
-                                        std::to_string(process_->port()) + ", 500 Hz");
+  EXPECT_EQ(process_->start_line(),
+            "vlab-kinsim: arm 'pa10' (7 joints) on 127.0.0.1:" + std::to_string(process_->port()) + ", 500 Hz");
   Client c(process_->port());
   c.Subscribe();
   const std::string text = c.NextJson(5);

@@ -181,7 +181,8 @@ TEST_F(ArmDeviceTest, TorqueModeAppliesCommandExactly) {
   EXPECT_FALSE(s.status & bridge::kArmTorqueSaturated);
   EXPECT_FALSE(s.status & bridge::kArmHolding);
   // the commanded torque is what acts on the joint: actuator force = ctrl (gear 1)
-  for (int i = 0; i < 7; ++i) EXPECT_EQ(d()->actuator_force[mj_name2id(m(), mjOBJ_ACTUATOR, kJoints[i].c_str())], tau[i]);
+  for (int i = 0; i < 7; ++i)
+    EXPECT_EQ(d()->actuator_force[mj_name2id(m(), mjOBJ_ACTUATOR, kJoints[i].c_str())], tau[i]);
   // the extremes of the motor range are accepted as is
   ASSERT_TRUE(arm_->Command(Cmd(ArmMode::kTorque, {200, -200, 80, -80, 15, -15, 10})));
   Run(kPeriod);
@@ -242,7 +243,8 @@ TEST_F(ArmDeviceCreateTest, ErrorsNameDeviceAndElement) {
   EXPECT_NE(e.find("no actuator 'W2_motor'"), std::string::npos) << e;
 
   c = ArmConfig();
-  std::swap(c.EditParams<ArmParams>().actuators[0], c.EditParams<ArmParams>().actuators[1]);  // motors exist, but on the wrong joints
+  std::swap(c.EditParams<ArmParams>().actuators[0],
+            c.EditParams<ArmParams>().actuators[1]);  // motors exist, but on the wrong joints
   e = CreateError(model, c);
   EXPECT_NE(e.find("actuator 'S2' is not a motor on joint 'S1'"), std::string::npos) << e;
 

@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
@@ -94,7 +94,8 @@ struct ArmDriverRig {
 /// 10 ms periods) with the arm device pa10 and then the device lines `rest`,
 /// written into `dir`; "" when it raises none.
 inline std::string Pa10ScenarioError(const vlab::testing::TempDir& dir, const std::string& rest) {
-  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\nduration: 0.1\n"
+  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR +
+                           "/scenes/pa10.xml\nduration: 0.1\n"
                            "control_period: 0.01\ndevices:\n"
                            "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n";
   vlab::testing::WriteFile(dir.path() + "/s.yaml", head + rest);

@@ -16,11 +16,11 @@
 
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
-#include "lab/devices/device_kinds.h"
-#include "lab/devices/device_base.h"
-#include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "lab/devices/device_base.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_sensors.h"
 #include "lab/run/lab_runner.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
@@ -139,7 +139,7 @@ TEST_F(BaseDeviceTest, TracksABaseFrameCommandWithinTheAccelerationLimit) {
   rig.base->command_input()->Command({0, 0.5, 0, 0});
   rig.Period();  // 10 ms at 1 m/s^2: at most 0.01 m/s
   EXPECT_LE(rig.State()[kVx], 0.0101);
-  EXPECT_GT(rig.State()[kVx], 0.002);  // moving, behind the reference by the servo lag (10 ms)
+  EXPECT_GT(rig.State()[kVx], 0.002);          // moving, behind the reference by the servo lag (10 ms)
   for (int k = 0; k < 100; ++k) rig.Period();  // 1 s: long reached 0.5 m/s
   const std::vector<double> s = rig.State();
   EXPECT_EQ(s[kStatus], 0.0);
@@ -246,8 +246,8 @@ TEST_F(SensorDeviceTest, FeetCarryTheWeightAndTheImuReadsGravity) {
   auto f = MakeDevice({model, 0.002, 1, ""}, feet);
   auto i = MakeDevice({model, 0.002, 1, ""}, imu);
   EXPECT_EQ(f->Columns().size(), 4u);
-  EXPECT_EQ(i->Columns(), (std::vector<std::string>{"imu.gyro.x", "imu.gyro.y", "imu.gyro.z", "imu.acc.x",
-                                                     "imu.acc.y", "imu.acc.z"}));
+  EXPECT_EQ(i->Columns(), (std::vector<std::string>{"imu.gyro.x", "imu.gyro.y", "imu.gyro.z", "imu.acc.x", "imu.acc.y",
+                                                    "imu.acc.z"}));
   for (int k = 0; k < 2000; ++k) mj_step(model, data);
   f->Sample(*data, data->time);
   i->Sample(*data, data->time);

@@ -37,7 +37,8 @@ constexpr const char* kSceneXml = R"(
 
 std::string Scenario(const std::string& camera = "top", int width = 320) {
   return "scene: scene.xml\nduration: 1.5\ncontrol_period: 0.002\nclock: realtime\ndevices:\n"
-         "  - {name: webcam, kind: camera, camera: " + camera + ", width: " + std::to_string(width) +
+         "  - {name: webcam, kind: camera, camera: " +
+         camera + ", width: " + std::to_string(width) +
          ", height: 240, fps: 25, latency: 0.04, encoding: raw, port: 0}\n";
 }
 
@@ -195,9 +196,9 @@ TEST(CameraDeviceTest, ProfileIsDraftFastOrQuality) {
     vlab::testing::WriteFile(dir / "camera.yaml", yaml);
     return dir / "camera.yaml";
   };
-  for (const auto& [name, profile] : {std::pair{"draft", render::Profile::kDraft},
-                                      std::pair{"fast", render::Profile::kFast},
-                                      std::pair{"quality", render::Profile::kQuality}}) {
+  for (const auto& [name, profile] :
+       {std::pair{"draft", render::Profile::kDraft}, std::pair{"fast", render::Profile::kFast},
+        std::pair{"quality", render::Profile::kQuality}}) {
     const auto scenario = LoadScenario(with_profile(name));
     ASSERT_EQ(scenario.devices.size(), 1u);
     EXPECT_EQ(scenario.devices[0].ParamsAs<CameraParams>().profile, profile) << name;

@@ -9,8 +9,8 @@
 // - realtime: every frame goes out, in order, with the same pixels; the control
 //   thread never waits for the worker, and a frame sent after its period is
 //   counted late (checked against what the test saw after each period).
-#include <sys/resource.h>
 #include <sched.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -92,7 +92,7 @@ struct Harness {
 };
 
 struct Sent {
-  std::vector<long> frames_after_period;  // server frames counter after each period's Deliver
+  std::vector<long> frames_after_period;             // server frames counter after each period's Deliver
   std::vector<std::vector<std::uint8_t>> reference;  // the test thread's render of each frame's state
   std::vector<bridge::CameraClient::Frame> received;
 };
@@ -155,7 +155,9 @@ Sent Drive(Harness& h, int periods, bool paced = false) {
 }
 
 // the period index whose end is the first at or after stamp + latency
-long DuePeriod(double stamp, double latency) { return static_cast<long>(std::ceil((stamp + latency) / kPeriod - 1e-9)); }
+long DuePeriod(double stamp, double latency) {
+  return static_cast<long>(std::ceil((stamp + latency) / kPeriod - 1e-9));
+}
 
 void ExpectFramesAreTheRendersOfTheirStates(const Sent& s) {
   ASSERT_GE(s.received.size(), 10u);

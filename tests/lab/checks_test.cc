@@ -95,14 +95,14 @@ TEST(CheckSetTest, BoundsDecidePassInclusively) {
     c.max = max;
     checks.push_back(c);
   };
-  add("max", -kInf, 6.0);     // value 6 at the bound: pass
-  add("max", -kInf, 5.999);   // fail
-  add("min", -9.0, kInf);     // at the bound: pass
-  add("min", -8.999, kInf);   // fail
-  add("mean", 1.0, 1.25);     // 1.125 inside: pass
-  add("mean", 1.13, 1.25);    // below min: fail
-  add("mean", 1.0, 1.12);     // above max: fail
-  add("max_abs", 0.0, 8.5);   // 9: fail
+  add("max", -kInf, 6.0);    // value 6 at the bound: pass
+  add("max", -kInf, 5.999);  // fail
+  add("min", -9.0, kInf);    // at the bound: pass
+  add("min", -8.999, kInf);  // fail
+  add("mean", 1.0, 1.25);    // 1.125 inside: pass
+  add("mean", 1.13, 1.25);   // below min: fail
+  add("mean", 1.0, 1.12);    // above max: fail
+  add("max_abs", 0.0, 8.5);  // 9: fail
   const auto r = Evaluate(checks, kSeries);
   const std::vector<bool> expected = {true, false, true, false, true, false, false, false};
   ASSERT_EQ(r.size(), expected.size());
@@ -205,8 +205,8 @@ TEST(CheckSetTest, WindowedReductionsFailWithoutAWholeWindowOrWithNaN) {
   EXPECT_FALSE(gaps[0].pass);
   std::vector<double> series = kSeries;
   series[2] = kNaN;  // in the second window
-  const auto r = Evaluate({Windowed("tops", "min_of_window_max", 2), Windowed("bottoms", "max_of_window_min", 2)},
-                          series);
+  const auto r =
+      Evaluate({Windowed("tops", "min_of_window_max", 2), Windowed("bottoms", "max_of_window_min", 2)}, series);
   for (const auto& c : r) {
     EXPECT_TRUE(std::isnan(c.value)) << c.config.name;
     EXPECT_FALSE(c.pass) << c.config.name;

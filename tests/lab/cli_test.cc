@@ -24,8 +24,8 @@ using vlab::testing::Entries;
 using vlab::testing::ExpectInterruptedOutput;
 using vlab::testing::Lines;
 using vlab::testing::ReadFile;
-using vlab::testing::SplitCsv;
 using vlab::testing::RunVlab;
+using vlab::testing::SplitCsv;
 using vlab::testing::TempDir;
 using vlab::testing::WriteFile;
 
@@ -163,18 +163,21 @@ struct BindingCases {
   BindingCases() {
     const std::string bad_signal = DefaultScenarioWith(
         dir, "bad_signal", "  - {name: tracking, signal: controller.postion_error, reduce: max, max: 1}\n");
-    const std::string bad_joint =
-        DefaultScenarioWith(dir, "bad_joint", "  - {name: t, signal: time, max: 100}\n", "[S1, S2, S3, E1, E7, W1, W2]");
+    const std::string bad_joint = DefaultScenarioWith(dir, "bad_joint", "  - {name: t, signal: time, max: 100}\n",
+                                                      "[S1, S2, S3, E1, E7, W1, W2]");
     const std::string text = ReadFile(bad_signal);
     const auto line = 1 + std::count(text.begin(), text.begin() + text.find("{name: tracking"), '\n');
     std::string period = ReadFile(DefaultScenarioWith(dir, "period", "  - {name: t, signal: time, max: 100}\n"));
     period.replace(period.find("control_period: 0.002"), 21, "control_period: 0.0015");
     WriteFile(dir / "period.yaml", period);
     cases = {
-        {"unknown signal", "run '" + bad_signal + "'",
-         {"bad_signal.yaml:" + std::to_string(line) + ": ", "check 'tracking'", "unknown signal 'controller.postion_error'"}},
+        {"unknown signal",
+         "run '" + bad_signal + "'",
+         {"bad_signal.yaml:" + std::to_string(line) + ": ", "check 'tracking'",
+          "unknown signal 'controller.postion_error'"}},
         {"unknown joint", "run '" + bad_joint + "'", {"bad_joint.yaml:", "device 'pa10'", "no joint 'E7'"}},
-        {"control period", "run '" + (dir / "period.yaml") + "'",
+        {"control period",
+         "run '" + (dir / "period.yaml") + "'",
          {"period.yaml", "control_period 0.0015", "not a whole multiple", "0.001"}},
     };
   }
@@ -207,7 +210,8 @@ TEST(CliTest, BadOptionsExit2WithOneLine) {
       {"negative duration", "run scenes/pa10_reach --duration -1", {"--duration"}},
       {"infinite duration", "run scenes/pa10_reach --duration inf", {"--duration", "at most 1e6 s"}},
       {"huge duration", "run scenes/pa10_reach --duration 1e300", {"--duration", "at most 1e6 s"}},
-      {"shorter than half a period", "run scenes/pa10_reach --duration 0.0009",
+      {"shorter than half a period",
+       "run scenes/pa10_reach --duration 0.0009",
        {"pa10_reach.yaml", "is shorter than half a control period (0.002 s): nothing would be simulated"}},
       {"huge duration served", "serve scenes/pa10_serve --duration 1e300", {"--duration", "at most 1e6 s"}},
       {"unknown option", "run scenes/pa10_reach --durration 1", {"--durration"}},
@@ -317,10 +321,10 @@ TEST(CliTest, WarningsFailUnlessAllowed) {
 
 TEST(CliTest, FailedCheckExits1AndWritesCompleteOutput) {
   TempDir tmp;
-  const std::string scenario = DefaultScenarioWith(
-      tmp, "strict",
-      "  - {name: loose, signal: controller.position_error, reduce: max, max: 1.0}\n"
-      "  - {name: impossible, signal: controller.position_error, reduce: max, max: 1e-12}\n");
+  const std::string scenario =
+      DefaultScenarioWith(tmp, "strict",
+                          "  - {name: loose, signal: controller.position_error, reduce: max, max: 1.0}\n"
+                          "  - {name: impossible, signal: controller.position_error, reduce: max, max: 1e-12}\n");
   const auto r = RunVlab("run '" + scenario + "' -q --out '" + (tmp / "out") + "'");
   ASSERT_EQ(r.exit_code, 1) << r.err;
   EXPECT_TRUE(Has(r.err, "check 'impossible' failed")) << r.err;

@@ -190,7 +190,8 @@ TEST(CounterScenario, KeysAreReadAndCheckedByTheKindsReader) {
     return std::string("no error");
   };
   EXPECT_NE(error("{name: rpm, kind: counter}").find("joint"), std::string::npos);
-  EXPECT_NE(error("{name: rpm, kind: counter, joint: spin, rate: -1}").find("rate: must be >= 0 Hz"), std::string::npos);
+  EXPECT_NE(error("{name: rpm, kind: counter, joint: spin, rate: -1}").find("rate: must be >= 0 Hz"),
+            std::string::npos);
   EXPECT_NE(error("{name: rpm, kind: counter, joint: spin, gate: 1}").find("gate: unknown key"), std::string::npos);
 }
 

@@ -32,7 +32,8 @@ std::string Scenario(const std::string& command, double duration = 6.5) {
   return R"(
 name: external
 scene: )" VLAB_SOURCE_DIR R"(/scenes/pa10.xml
-duration: )" + std::to_string(duration) + R"(
+duration: )" +
+         std::to_string(duration) + R"(
 control_period: 0.002
 seed: 5
 clock: fast
@@ -46,7 +47,8 @@ devices:
   - {name: jr3, kind: wrench, port: 50011, force_sensor: jr3_force, torque_sensor: jr3_torque}
 controller:
   type: external
-  command: )" + command + R"(
+  command: )" +
+         command + R"(
 checks:
   - {name: joint_limits, signal: pa10.limit_violation, reduce: max, max: 0.0}
 )";
@@ -99,7 +101,8 @@ with vlab_client.Arm(host, int(port), timeout=5.0) as arm, open(sys.argv[2], "w"
         rows.flush()
         arm.write(vlab_client.HOLD, [], state.seq)
 )");
-  WriteFile(dir / "s.yaml", Scenario(R"(["python3", ")" + (dir / "slow.py") + R"(", "{pa10}", "{out}/rows.txt"])", 0.1));
+  WriteFile(dir / "s.yaml",
+            Scenario(R"(["python3", ")" + (dir / "slow.py") + R"(", "{pa10}", "{out}/rows.txt"])", 0.1));
   for (const char* run : {"a", "b"}) {
     const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / run));
     ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
@@ -141,8 +144,7 @@ TEST(ExternalController, FilesWrittenIntoOutArriveWithTheLog) {
 TEST(ExternalController, PlotsOfItsCsv) {
   TempDir dir;
   const std::string plot = "\noutputs:\n  plots:\n    - {file: c.png, csv: c.csv, x: t, y: [v]}\n";
-  WriteFile(dir / "writes.yaml",
-            Scenario(R"(["sh", "-c", "printf 't,v\\n0,1\\n1,2\\n' > {out}/c.csv"])", 0.1) + plot);
+  WriteFile(dir / "writes.yaml", Scenario(R"(["sh", "-c", "printf 't,v\\n0,1\\n1,2\\n' > {out}/c.csv"])", 0.1) + plot);
   ProcessResult r = RunVlab("run " + (dir / "writes.yaml") + " -q --out " + (dir / "a"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("plot: " + (dir / "a/c.png")), std::string::npos) << r.out;
@@ -170,14 +172,17 @@ TEST(ExternalController, PlotsOfItsCsv) {
 TEST(ExternalController, ItsVerdictAfterTheEndOfTheRunCounts) {
   TempDir dir;
   // joint_control answers every period; the shell around it traps SIGTERM and says no
-  WriteFile(dir / "fails.yaml",
-            Scenario(R"(["sh", "-c", "trap 'echo my check failed; exit 1' TERM; {bin}/examples/joint_control --arm {pa10} --duration 100 & wait"])",
-                     0.1));
+  WriteFile(
+      dir / "fails.yaml",
+      Scenario(
+          R"(["sh", "-c", "trap 'echo my check failed; exit 1' TERM; {bin}/examples/joint_control --arm {pa10} --duration 100 & wait"])",
+          0.1));
   ProcessResult r = RunVlab("run " + (dir / "fails.yaml") + " -q --out " + (dir / "a"));
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("ended with exit status 1"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("my check failed"), std::string::npos) << r.err;
-  WriteFile(dir / "ends.yaml", Scenario(R"(["{bin}/examples/joint_control", "--arm", "{pa10}", "--duration", "100"])", 0.1));
+  WriteFile(dir / "ends.yaml",
+            Scenario(R"(["{bin}/examples/joint_control", "--arm", "{pa10}", "--duration", "100"])", 0.1));
   r = RunVlab("run " + (dir / "ends.yaml") + " -q --out " + (dir / "b"));
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
@@ -197,10 +202,9 @@ TEST(ExternalController, WithHelperEndsItsHelperAndReportsItsFailure) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ReadFile(dir / "a/helper.txt"), "helper ended\n");
   // the helper fails at once; the controller is done (status 0) at the end of the run
-  WriteFile(dir / "fails.yaml",
-            Scenario(with + R"("sh", "-c", "exit 4", "--", "sh", "-c",
+  WriteFile(dir / "fails.yaml", Scenario(with + R"("sh", "-c", "exit 4", "--", "sh", "-c",
                      "trap 'exit 0' TERM; {bin}/examples/joint_control --arm {pa10} --duration 100 & wait"])",
-                     0.1));
+                                         0.1));
   r = RunVlab("run " + (dir / "fails.yaml") + " -q --out " + (dir / "b"));
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("ended with exit status 4"), std::string::npos) << r.err;
@@ -218,10 +222,15 @@ TEST(ExternalController, WithHelperEndsItsHelperAndReportsItsFailure) {
 // and reaped
 TEST(ExternalController, SigtermKeepsTheRunAndStopsTheController) {
   TempDir dir;
-  const std::string plots = "\noutputs:\n  plots:\n    - {file: q.png, y: [pa10.q.S1]}\n"
-                            "    - {file: c.png, csv: c.csv, x: t, y: [v]}\n";
-  WriteFile(dir / "s.yaml", Scenario(R"(["sh", "-c", "echo $$ > {out}/controller.pid; exec {bin}/examples/joint_control --arm {pa10} --duration 100000 --quiet"])",
-                                     100000) + plots);
+  const std::string plots =
+      "\noutputs:\n  plots:\n    - {file: q.png, y: [pa10.q.S1]}\n"
+      "    - {file: c.png, csv: c.csv, x: t, y: [v]}\n";
+  WriteFile(
+      dir / "s.yaml",
+      Scenario(
+          R"(["sh", "-c", "echo $$ > {out}/controller.pid; exec {bin}/examples/joint_control --arm {pa10} --duration 100000 --quiet"])",
+          100000) +
+          plots);
   const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"), 2, "TERM");
   ASSERT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("vlab: interrupted by SIGTERM at t = "), std::string::npos) << r.err;
@@ -249,8 +258,9 @@ TEST(ExternalController, SigtermKeepsTheRunAndStopsTheController) {
 TEST(ExternalController, GetsOnlyItsOwnDescriptors) {
   TempDir dir;
   // the shell's own descriptors and their targets, into controller.log (find runs beside it)
-  const std::string images = "\noutputs:\n  images:\n    - {camera: overview, every: 0.05, width: 64, height: 48, "
-                             "profile: fast, video: o.mp4}\n";
+  const std::string images =
+      "\noutputs:\n  images:\n    - {camera: overview, every: 0.05, width: 64, height: 48, "
+      "profile: fast, video: o.mp4}\n";
   WriteFile(dir / "s.yaml",
             Scenario(R"(["sh", "-c", "find /proc/$$/fd -mindepth 1 -printf '%f %l\\n'; true"])", 0.1) + images);
   const ProcessResult r = RunVlab("run " + (dir / "s.yaml") + " -q --out " + (dir / "out"));
@@ -302,9 +312,11 @@ TEST(ExternalController, RunsAtItsRealtimePriorityWhenPermittedAndTheRunRecordsI
   EXPECT_EQ(rt["lab"]["requested"], 9);
   EXPECT_EQ(rt["lab"]["granted"], permitted) << rt.dump();
   // printed once each, on stderr
-  const std::string lab_line = permitted ? "vlab: realtime priority 9 granted (SCHED_FIFO" : "vlab: realtime priority 9 not granted: ";
+  const std::string lab_line =
+      permitted ? "vlab: realtime priority 9 granted (SCHED_FIFO" : "vlab: realtime priority 9 not granted: ";
   EXPECT_NE(r.err.find(lab_line), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find(permitted ? "vlab: controller: realtime priority 7 granted" : "vlab: controller: realtime priority 7 not granted"),
+  EXPECT_NE(r.err.find(permitted ? "vlab: controller: realtime priority 7 granted"
+                                 : "vlab: controller: realtime priority 7 not granted"),
             std::string::npos)
       << r.err;
   if (!permitted) {
@@ -343,8 +355,7 @@ TEST(ExternalController, BadCommandsAreBadInput) {
 TEST(ExpandCommand, PlaceholdersAnywhereInAnArgument) {
   const std::map<std::string, std::string> values = {{"pa10", "127.0.0.1:4000"}, {"bin", "/opt/vlab"}};
   EXPECT_EQ(lab::ExpandCommand({"{bin}/x", "--arm={pa10}", "{pa10}{pa10}", "plain"}, values, "s.yaml:3"),
-            (std::vector<std::string>{"/opt/vlab/x", "--arm=127.0.0.1:4000", "127.0.0.1:4000127.0.0.1:4000",
-                                      "plain"}));
+            (std::vector<std::string>{"/opt/vlab/x", "--arm=127.0.0.1:4000", "127.0.0.1:4000127.0.0.1:4000", "plain"}));
   try {
     lab::ExpandCommand({"{bin"}, values, "s.yaml:3");
     FAIL() << "an unclosed brace must be refused";

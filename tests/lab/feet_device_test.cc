@@ -17,12 +17,12 @@
 
 #include <gtest/gtest.h>
 
-#include "lab/devices/device_kinds.h"
-#include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
-#include "lab/run/lab_runner.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_sensors.h"
 #include "lab/devices/support_polygon.h"
+#include "lab/run/lab_runner.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
@@ -41,18 +41,22 @@ std::string BlockXml(double cx, double cy, double raise = 0.0, double height = 0
   <option timestep="0.001" gravity="0 0 -9.81"/>
   <worldbody>
     <geom name="floor" type="plane" size="2 2 0.1"/>
-    <body name="block" pos="0 0 )" + std::to_string(height) + R"(">
+    <body name="block" pos="0 0 )" +
+         std::to_string(height) + R"(">
       <freejoint/>
-      <inertial pos=")" + c + R"( 0" mass="4" diaginertia="0.02 0.02 0.03"/>
+      <inertial pos=")" +
+         c + R"( 0" mass="4" diaginertia="0.02 0.02 0.03"/>
       <geom type="box" size="0.12 0.1 0.03" contype="0" conaffinity="0"/>
       <geom type="sphere" size="0.01" pos=" 0.1  0.08 -0.05"/>
       <geom type="sphere" size="0.01" pos="-0.1  0.08 -0.05"/>
       <geom type="sphere" size="0.01" pos="-0.1 -0.08 -0.05"/>
-      <geom type="sphere" size="0.01" pos=" 0.1 -0.08 )" + z4 + R"("/>
+      <geom type="sphere" size="0.01" pos=" 0.1 -0.08 )" +
+         z4 + R"("/>
       <site name="p1" type="sphere" size="0.015" pos=" 0.1  0.08 -0.05"/>
       <site name="p2" type="sphere" size="0.015" pos="-0.1  0.08 -0.05"/>
       <site name="p3" type="sphere" size="0.015" pos="-0.1 -0.08 -0.05"/>
-      <site name="p4" type="sphere" size="0.015" pos=" 0.1 -0.08 )" + z4 + R"("/>
+      <site name="p4" type="sphere" size="0.015" pos=" 0.1 -0.08 )" +
+         z4 + R"("/>
     </body>
   </worldbody>
   <sensor> <touch name="t1" site="p1"/> <touch name="t2" site="p2"/> <touch name="t3" site="p3"/> <touch name="t4" site="p4"/> </sensor>
@@ -89,9 +93,9 @@ class FeetDeviceTest : public test::MujocoTest {
 TEST_F(FeetDeviceTest, ColumnsAreLogOnlyAndTheWireKeepsTheSensorValues) {
   mjModel* model = LoadModelFromString("block.xml", BlockXml(0, 0));
   std::unique_ptr<Device> feet = MakeDevice({model, 0.002, 1, ""}, FeetConfig());
-  EXPECT_EQ(feet->Columns(), (std::vector<std::string>{"feet.t1", "feet.t2", "feet.t3", "feet.t4", "feet.sum",
-                                                        "feet.sum_error", "feet.cop_x", "feet.cop_y",
-                                                        "feet.cop_margin"}));
+  EXPECT_EQ(feet->Columns(),
+            (std::vector<std::string>{"feet.t1", "feet.t2", "feet.t3", "feet.t4", "feet.sum", "feet.sum_error",
+                                      "feet.cop_x", "feet.cop_y", "feet.cop_margin"}));
   EXPECT_EQ(feet->ColumnCount(), 9);
   DeviceConfig weight_only = FeetConfig();
   weight_only.EditParams<SensorParams>().pads.clear();
@@ -150,9 +154,9 @@ TEST(SupportPolygonTest, HullAndSignedDistance) {
   }
   EXPECT_NEAR(SignedDistanceToHull(hull, {0.5, 0.5}), 0.5, 1e-15);
   EXPECT_NEAR(SignedDistanceToHull(hull, {0.2, 0.6}), 0.2, 1e-15);
-  EXPECT_NEAR(SignedDistanceToHull(hull, {1.5, 0.5}), -0.5, 1e-15);          // beside an edge
-  EXPECT_NEAR(SignedDistanceToHull(hull, {2, 2}), -std::sqrt(2.0), 1e-15);   // beyond a corner
-  EXPECT_EQ(SignedDistanceToHull(hull, {1, 0.3}), 0.0);                      // on an edge
+  EXPECT_NEAR(SignedDistanceToHull(hull, {1.5, 0.5}), -0.5, 1e-15);         // beside an edge
+  EXPECT_NEAR(SignedDistanceToHull(hull, {2, 2}), -std::sqrt(2.0), 1e-15);  // beyond a corner
+  EXPECT_EQ(SignedDistanceToHull(hull, {1, 0.3}), 0.0);                     // on an edge
   // collinear points: a segment, which has no inside
   points = {{0, 0}, {2, 0}, {1, 0}};
   ConvexHull(points, &hull);
@@ -191,10 +195,10 @@ class FeetScenarioTest : public ::testing::Test {
 };
 
 TEST_F(FeetScenarioTest, RunsWithChecksOnTheSupportColumns) {
-  const std::string file = Write(
-      "{name: feet, kind: feet, sensors: [t1, t2, t3, t4], pads: [p1, p2, p3, p4], weight_of: block}",
-      "  - {name: weight, signal: feet.sum_error, reduce: max_abs, max: 0.002, from: 0.5}\n"
-      "  - {name: margin, signal: feet.cop_margin, reduce: final, min: 0.0598, max: 0.0602}\n");
+  const std::string file =
+      Write("{name: feet, kind: feet, sensors: [t1, t2, t3, t4], pads: [p1, p2, p3, p4], weight_of: block}",
+            "  - {name: weight, signal: feet.sum_error, reduce: max_abs, max: 0.002, from: 0.5}\n"
+            "  - {name: margin, signal: feet.cop_margin, reduce: final, min: 0.0598, max: 0.0602}\n");
   std::unique_ptr<Lab> lab = Lab::Create(LoadScenario(file));
   const RunResult r = lab->Run(RunOptions{});
   EXPECT_EQ(r.exit_code, 0) << r.failure;

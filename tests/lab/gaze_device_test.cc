@@ -10,10 +10,10 @@
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_layouts.h"
-#include "lab/devices/device_kinds.h"
-#include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "lab/devices/device_gaze.h"
+#include "lab/devices/device_kinds.h"
 #include "lab/run/lab_runner.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"

@@ -83,8 +83,10 @@ TEST(GoldenTest, PlantedDampingChangeOfOneJointIsCaughtUnchangedRunPasses) {
 TEST(GoldenTest, CompareOptionsAndBadInput) {
   TempDir dir;
   ASSERT_EQ(RunVlab("run scenes/pa10_reach -q --duration 1 --out " + (dir / "a")).exit_code, 0);
-  ASSERT_EQ(RunVlab("run scenes/pa10_reach -q --duration 1 --out " + (dir / "b") +
-                    " --set controller.gains.position=19").exit_code, 0);
+  ASSERT_EQ(
+      RunVlab("run scenes/pa10_reach -q --duration 1 --out " + (dir / "b") + " --set controller.gains.position=19")
+          .exit_code,
+      0);
   // different gains: positions differ; --ignore and a loose --tol make it pass
   EXPECT_EQ(RunVlab("compare " + (dir / "b") + " " + (dir / "a")).exit_code, 1);
   EXPECT_EQ(RunVlab("compare " + (dir / "b") + " " + (dir / "a") + " --tol '*=1e6'").exit_code, 0);
@@ -94,8 +96,8 @@ TEST(GoldenTest, CompareOptionsAndBadInput) {
   ASSERT_EQ(RunVlab("run scenes/pa10_reach -q --duration 2 --out " + (dir / "long")).exit_code, 0);
   const auto short_run = RunVlab("compare " + (dir / "a") + " " + (dir / "long"));
   EXPECT_EQ(short_run.exit_code, 1);
-  EXPECT_NE(short_run.out.find("the run's log covers t = 0 .. 1 s, the golden's window is 0 .. 2 s"),
-            std::string::npos) << short_run.out;
+  EXPECT_NE(short_run.out.find("the run's log covers t = 0 .. 1 s, the golden's window is 0 .. 2 s"), std::string::npos)
+      << short_run.out;
   const auto bad = RunVlab("compare " + (dir / "a") + " " + (dir / "a") + " --tol 'q.*=abc'");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--tol q.*=abc: ABS: expected a number >= 0, got 'abc'"), std::string::npos) << bad.err;
@@ -106,8 +108,9 @@ TEST(GoldenTest, UpdateWritesOnlyWhenAskedAndSaysWhatChanged) {
   TempDir dir;
   const std::string golden = dir / "g";
   fs::create_directories(golden);
-  WriteFile(golden + "/golden.yaml", "scenario: " + kSource + "/scenes/pa10_reach.yaml\nduration: 1\nevery: 50\n"
-                                     "tolerances: [{columns: 'jr3.*', ignore: true}]\n");
+  WriteFile(golden + "/golden.yaml", "scenario: " + kSource +
+                                         "/scenes/pa10_reach.yaml\nduration: 1\nevery: 50\n"
+                                         "tolerances: [{columns: 'jr3.*', ignore: true}]\n");
   // no golden log yet: checking says how to write one, and writes nothing
   const auto none = RunVlab("golden " + golden);
   EXPECT_EQ(none.exit_code, 2);
@@ -152,8 +155,8 @@ TEST(GoldenTest, ScenarioGoldenCheckPassesFailsAndSkipsLikeAnyCheck) {
   EXPECT_NE(same.out.find("pass  matches"), std::string::npos) << same.out;
   EXPECT_NE(ReadFile(dir / "same/golden_matches.txt").find("result: pass (37 columns"), std::string::npos);
   // other gains: the scenario's own checks still pass, the golden check does not
-  const auto other = RunVlab("run " + (dir / "s.yaml") + " --out " + (dir / "other") +
-                             " --set controller.gains.position=19");
+  const auto other =
+      RunVlab("run " + (dir / "s.yaml") + " --out " + (dir / "other") + " --set controller.gains.position=19");
   EXPECT_EQ(other.exit_code, 1) << other.out << other.err;
   EXPECT_NE(other.out.find("FAIL  matches"), std::string::npos) << other.out;
   EXPECT_NE(other.out.find("pass  position_tracking"), std::string::npos) << other.out;

@@ -17,11 +17,11 @@
 #include <gtest/gtest.h>
 
 #include "bridge/bridge_layouts.h"
-#include "lab/devices/device_kinds.h"
-#include "lab/devices/device_gripper.h"
-#include "lab/devices/device_pose.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "lab/devices/device_gripper.h"
+#include "lab/devices/device_kinds.h"
+#include "lab/devices/device_pose.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
@@ -50,23 +50,27 @@ std::string SceneXml(const std::string& dir) {
   return R"(
 <mujoco>
   <option timestep="0.001" integrator="Euler"/>
-  <include file=")" + g + R"(/gripper_defaults.xml"/>
+  <include file=")" +
+         g + R"(/gripper_defaults.xml"/>
   <worldbody>
     <!-- the gripper fixed 0.5 m up, approach direction (z) pointing down -->
     <body name="gripper" childclass="gripper" pos="0 0 0.5" quat="0 1 0 0">
-      <include file=")" + g + R"(/gripper.xml"/>
+      <include file=")" +
+         g + R"(/gripper.xml"/>
     </body>
     <!-- a 5 cm cube centred between the pads (the TCP is 0.133 m from the mount) -->
     <body name="cube" pos="0 0 0.367">
       <freejoint/>
-      <geom type="box" size="0.025 0.025 0.025" mass=")" + std::to_string(kCubeMass) + R"(" friction="1 0.005 0.0001"/>
+      <geom type="box" size="0.025 0.025 0.025" mass=")" +
+         std::to_string(kCubeMass) + R"(" friction="1 0.005 0.0001"/>
       <site name="cube_centre"/>
     </body>
     <!-- a pedestal under the cube until the test takes it away (its contacts switched off) -->
     <geom name="pedestal" type="box" size="0.02 0.02 0.01" pos="0 0 0.332"/>
     <site name="below" pos="0 0 0.2"/>
   </worldbody>
-  <include file=")" + g + R"(/gripper_actuators.xml"/>
+  <include file=")" +
+         g + R"(/gripper_actuators.xml"/>
 </mujoco>)";
 }
 
@@ -77,7 +81,8 @@ class GripperDeviceTest : public test::MujocoTest {
     m_ = LoadModel(dir_ / "scene.xml");
     d_ = MakeData(m_);
     // the jaws wide open around the cube
-    for (const char* jaw : {"gripper_left", "gripper_right"}) d_->qpos[m_->jnt_qposadr[mj_name2id(m_, mjOBJ_JOINT, jaw)]] = 0.034;
+    for (const char* jaw : {"gripper_left", "gripper_right"})
+      d_->qpos[m_->jnt_qposadr[mj_name2id(m_, mjOBJ_JOINT, jaw)]] = 0.034;
     mj_forward(m_, d_);
     DeviceConfig c;
     c.name = "gripper";
@@ -130,9 +135,9 @@ TEST_F(GripperDeviceTest, OpensAtItsSpeedAndRefusesWhatItCannotDo) {
   EXPECT_EQ(gripper_->command_input()->CheckCommand({2, 0}), bridge::CommandCheck::kMalformed);
   ASSERT_EQ(gripper_->command_input()->CheckCommand({0, 0.052}), bridge::CommandCheck::kAccept);
   const double start = State()[kOpening];
-  EXPECT_NEAR(start, 0.068, 1e-6);  // wide open, as set up
-  gripper_->command_input()->Command({0, 0.052});    // close to 1 mm from the cube on each side
-  Run(0.1);                         // 0.1 s at 83 mm/s: 8.3 mm of set-point travel
+  EXPECT_NEAR(start, 0.068, 1e-6);                 // wide open, as set up
+  gripper_->command_input()->Command({0, 0.052});  // close to 1 mm from the cube on each side
+  Run(0.1);                                        // 0.1 s at 83 mm/s: 8.3 mm of set-point travel
   std::vector<double> row(gripper_->ColumnCount());
   gripper_->Row(*d_, row.data());
   const int setpoint = ColumnOf(*gripper_, "gripper.setpoint");
@@ -163,7 +168,8 @@ TEST_F(GripperDeviceTest, GripsWithTheCommandedForceAndHoldsTheCube) {
   const double z1 = PoseRow()[2];
   Run(1.0);
   const double z2 = PoseRow()[2];
-  std::printf("cube along the gripper's z: on the pedestal %.6f m, gripped %.6f m, 1 s without it %.6f m\n", z0, z1, z2);
+  std::printf("cube along the gripper's z: on the pedestal %.6f m, gripped %.6f m, 1 s without it %.6f m\n", z0, z1,
+              z2);
   // held: a cube that slipped would have fallen metres in that second; the soft
   // contacts let it creep a fraction of a millimetre
   EXPECT_LT(std::abs(z2 - z1), 1e-3);
@@ -185,17 +191,18 @@ TEST_F(GripperDeviceTest, GripsWithTheCommandedForceAndHoldsTheCube) {
 TEST_F(GripperDeviceTest, PoseDeviceReportsTheFrameAndTheTarget) {
   // the cube's centre in the gripper frame, the target 0.167 m below it in the world
   const std::vector<double> row = PoseRow();
-  ASSERT_EQ(pose_->Columns(), (std::vector<std::string>{"cube.x", "cube.y", "cube.z", "cube.drift",
-                                                        "cube.rot_drift", "cube.error"}));
+  ASSERT_EQ(pose_->Columns(),
+            (std::vector<std::string>{"cube.x", "cube.y", "cube.z", "cube.drift", "cube.rot_drift", "cube.error"}));
   EXPECT_NEAR(row[0], 0, 1e-12);
   EXPECT_NEAR(row[1], 0, 1e-12);
-  EXPECT_NEAR(row[2], 0.133, 1e-12);   // along the gripper's (downward) z
-  EXPECT_NEAR(row[3], 0, 1e-12);       // no drift at the start
-  EXPECT_NEAR(row[5], 0.167, 1e-12);   // |(0, 0, 0.367) - (0, 0, 0.2)|
+  EXPECT_NEAR(row[2], 0.133, 1e-12);  // along the gripper's (downward) z
+  EXPECT_NEAR(row[3], 0, 1e-12);      // no drift at the start
+  EXPECT_NEAR(row[5], 0.167, 1e-12);  // |(0, 0, 0.367) - (0, 0, 0.2)|
   std::vector<double> state;
   pose_->State(&state);
   ASSERT_EQ(state.size(), 7u);
-  EXPECT_NEAR(std::abs(state[kPoseQx]), 1.0, 1e-12);  // the gripper is the world turned 180 deg about x: q = (0, 1, 0, 0)
+  EXPECT_NEAR(std::abs(state[kPoseQx]), 1.0,
+              1e-12);  // the gripper is the world turned 180 deg about x: q = (0, 1, 0, 0)
 }
 
 TEST_F(GripperDeviceTest, BadBindingsNameTheElement) {

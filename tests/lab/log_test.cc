@@ -1,8 +1,8 @@
 // CsvLog: what is appended reads back bit for bit, across many writer blocks;
 // FormatDouble round-trips; write failures name the file and the error, and
 // show in failed() as soon as the writer meets them. (OutputDir: output_test.cc.)
-#include "lab/outputs/lab_log.h"
 #include "core/core_errors.h"
+#include "lab/outputs/lab_log.h"
 
 #include <gtest/gtest.h>
 
@@ -51,9 +51,21 @@ double Parse(const std::string& text) {
 TEST(CsvLogTest, HeaderAndManyRowsReadBackExactly) {
   const std::vector<std::string> columns = {"time", "a.q", "b.tau", "c"};
   // awkward values: shortest decimals that are not exact, tiny and huge, signed zero, denormals
-  const std::vector<double> awkward = {0.1, 1.0 / 3.0, 1e-300, -0.0, 1e300, 4.9406564584124654e-324,
-                                       2.2250738585072009e-308, -1.7976931348623157e308, 42.0, -7.0, 0.0,
-                                       9007199254740993.0, 123456789.0, 2.0 / 3.0, -1e-5};
+  const std::vector<double> awkward = {0.1,
+                                       1.0 / 3.0,
+                                       1e-300,
+                                       -0.0,
+                                       1e300,
+                                       4.9406564584124654e-324,
+                                       2.2250738585072009e-308,
+                                       -1.7976931348623157e308,
+                                       42.0,
+                                       -7.0,
+                                       0.0,
+                                       9007199254740993.0,
+                                       123456789.0,
+                                       2.0 / 3.0,
+                                       -1e-5};
   std::mt19937_64 rng(20240611);
   std::normal_distribution<double> normal(0.0, 1e3);
   constexpr int kRows = 5000;  // 19 full blocks of 256 rows and a partial one of 136

@@ -12,12 +12,12 @@
 // 200 MB; `vlab --version` alone measured 121 MB of that (its libraries mapped).
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
 #include <sys/wait.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -142,10 +142,11 @@ void MakeGenerated(const TempDir& tmp) {
 
 std::vector<Case> Cases() {
   const std::string out = "--out=@O/out";
-  const std::string bomb = "[&a [x,x,x,x,x,x,x,x,x,x], &b [*a,*a,*a,*a,*a,*a,*a,*a,*a,*a], "
-                           "&c [*b,*b,*b,*b,*b,*b,*b,*b,*b,*b], &d [*c,*c,*c,*c,*c,*c,*c,*c,*c,*c], "
-                           "&e [*d,*d,*d,*d,*d,*d,*d,*d,*d,*d], &f [*e,*e,*e,*e,*e,*e,*e,*e,*e,*e], "
-                           "&g [*f,*f,*f,*f,*f,*f,*f,*f,*f,*f], &h [*g,*g,*g,*g,*g,*g,*g,*g,*g,*g]]";
+  const std::string bomb =
+      "[&a [x,x,x,x,x,x,x,x,x,x], &b [*a,*a,*a,*a,*a,*a,*a,*a,*a,*a], "
+      "&c [*b,*b,*b,*b,*b,*b,*b,*b,*b,*b], &d [*c,*c,*c,*c,*c,*c,*c,*c,*c,*c], "
+      "&e [*d,*d,*d,*d,*d,*d,*d,*d,*d,*d], &f [*e,*e,*e,*e,*e,*e,*e,*e,*e,*e], "
+      "&g [*f,*f,*f,*f,*f,*f,*f,*f,*f,*f], &h [*g,*g,*g,*g,*g,*g,*g,*g,*g,*g]]";
   auto run = [&](const std::string& file, std::vector<std::string> expect) {
     return Case{file, {"run", file, "-q", out}, std::move(expect)};
   };
@@ -153,7 +154,8 @@ std::vector<Case> Cases() {
     return Case{name, {"run", "scenes/pa10_reach", "-q", out, "--set", kv}, std::move(expect)};
   };
   auto seed = [&](const std::string& value) {
-    return Case{"--seed " + value, {"run", "scenes/pa10_reach", "-q", out, "--seed=" + value},
+    return Case{"--seed " + value,
+                {"run", "scenes/pa10_reach", "-q", out, "--seed=" + value},
                 {"--seed: must be an integer from 0 to 9007199254740992 (2^53), got '" + value + "'"}};
   };
   auto sweep = [&](const std::string& file, std::vector<std::string> expect) {
@@ -210,13 +212,19 @@ std::vector<Case> Cases() {
           {"@T/scene_include_fifo.yaml:2: scene: scene '@T/include_fifo.xml': include 'fifo.xml': a FIFO"}),
       run("@D/scene_non_utf8.yaml", {"@D/scene_non_utf8.yaml:2: scene:", "@D/scene_non_utf8.xml:1:19: byte 0xE9"}),
       // --seed
-      seed("99999999999999999999999"), seed("9007199254740993"), seed("-1"), seed("1.5"), seed("0x10"),
+      seed("99999999999999999999999"),
+      seed("9007199254740993"),
+      seed("-1"),
+      seed("1.5"),
+      seed("0x10"),
       Case{"--seed ''", {"run", "scenes/pa10_reach", "-q", out, "--seed="}, {"--seed"}},
       seed("1e3"),
-      Case{"cubes --seed", {"cubes", out, "--scene=@O/s.xml", "--seed=18446744073709551616"},
+      Case{"cubes --seed",
+           {"cubes", out, "--scene=@O/s.xml", "--seed=18446744073709551616"},
            {"--seed: must be an integer from 0 to 9007199254740992 (2^53), got '18446744073709551616'"}},
-      Case{"task --seed", {"task", "@T/none.lua", "--arm=127.0.0.1:9", "--scene=scenes/pa10.xml", "--tip=tool",
-                                "--seed=9007199254740993"},
+      Case{"task --seed",
+           {"task", "@T/none.lua", "--arm=127.0.0.1:9", "--scene=scenes/pa10.xml", "--tip=tool",
+            "--seed=9007199254740993"},
            {"--seed: must be an integer from 0 to 9007199254740992 (2^53), got '9007199254740993'"}},
       // --set
       set("--set seed=2^53+1", "seed=9007199254740993", {"pa10_reach.yaml", "seed:", "got '9007199254740993'"}),

@@ -35,7 +35,7 @@ using vlab::testing::RunVlab;
 using vlab::testing::TempDir;
 using vlab::testing::WriteFile;
 
-constexpr double kPeriod_s = 0.002;  // scenes/pa10_reach.yaml's control_period
+constexpr double kPeriod_s = 0.002;   // scenes/pa10_reach.yaml's control_period
 constexpr double kDuration_s = 13.0;  // and its duration
 
 bool Has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }

@@ -3,9 +3,9 @@
 // the path during the run is kept and the run's files go to a sibling; any
 // name the file system takes works (a short staging name); staging folders of
 // dead runs are removed, those of live runs never.
+#include "core/core_errors.h"
 #include "lab/outputs/lab_output.h"
 #include "lab/outputs/lab_output_fs.h"
-#include "core/core_errors.h"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -106,7 +106,10 @@ TEST(OutputDirTest, DestructionWithoutCommitLeavesPreviousResult) {
 
   // and with no previous result, nothing at all remains
   TempDir fresh;
-  { auto out = OutputDir::Create(fresh / "run"); WriteFile(out->File("log.csv"), "x"); }
+  {
+    auto out = OutputDir::Create(fresh / "run");
+    WriteFile(out->File("log.csv"), "x");
+  }
   EXPECT_TRUE(Entries(fresh.path()).empty());
 }
 
@@ -146,8 +149,9 @@ TEST(OutputDirTest, FilesAddedToAVlabFolderAreNeverDeleted) {
   WriteFile(run + "/analysis/fig.py", "plot()");
   WriteFile(run + "/cam/mine.txt", "in a folder vlab wrote");
   const std::string error = InputErrorOf(run);
-  EXPECT_TRUE(Has(error, "output folder '" + run + "': holds entries vlab did not write: analysis/fig.py, "
-                         "cam/mine.txt, my_notes.txt; vlab replaces only what it wrote"))
+  EXPECT_TRUE(Has(error, "output folder '" + run +
+                             "': holds entries vlab did not write: analysis/fig.py, "
+                             "cam/mine.txt, my_notes.txt; vlab replaces only what it wrote"))
       << error;
   EXPECT_EQ(Entries(tmp.path()), std::set<std::string>{"run"});  // nothing written
   // the user's files go: the folder is vlab's again
@@ -204,8 +208,10 @@ TEST(OutputDirTest, AFolderPutThereDuringTheRunIsKept) {
   WriteFile(third->File("log.csv"), "third");
   EXPECT_EQ(second->Commit(), dir);
   EXPECT_EQ(first->Commit(), dir + ".2");
-  EXPECT_TRUE(Has(first->note(), "output folder '" + dir + "': another run put its folder there while this one ran; "
-                                  "this run's files are in '" + dir + ".2'"))
+  EXPECT_TRUE(Has(first->note(), "output folder '" + dir +
+                                     "': another run put its folder there while this one ran; "
+                                     "this run's files are in '" +
+                                     dir + ".2'"))
       << first->note();
   EXPECT_EQ(third->Commit(), dir + ".3");
   EXPECT_EQ(ReadFile(dir + "/log.csv"), "second");
@@ -279,8 +285,9 @@ TEST(OutputDirTest, StagingFoldersOfDeadRunsAreRemoved) {
   fs::create_directory(tmp / ".vlab-2-5");   // the name, but no marker and a file: not vlab's
   WriteFile(tmp / ".vlab-2-5/x", "x");
   auto other = OutputDir::Create(tmp / "c");  // removes the dead runs' folders, not the live one's
-  EXPECT_EQ(Entries(tmp.path()), (std::set<std::string>{live_staging, fs::path(other->staging_dir()).filename().string(),
-                                                         ".vlab-notes", ".vlab-2-5"}));
+  EXPECT_EQ(Entries(tmp.path()),
+            (std::set<std::string>{live_staging, fs::path(other->staging_dir()).filename().string(), ".vlab-notes",
+                                   ".vlab-2-5"}));
   EXPECT_EQ(output_fs::RemoveStaleStaging(tmp.path()), std::vector<std::string>{});
 }
 

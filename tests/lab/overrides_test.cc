@@ -1,10 +1,10 @@
 // --set KEY=VALUE (lab_overrides.h): dotted paths reach map keys and list items by
 // name or index; values get the scenario file's typing and errors, and an error
 // on an overridden key names the --set; `vlab run --set` records them in summary.json.
-#include "lab/scenario/lab_overrides.h"
-#include "lab/scenario/lab_scenario.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_wrench.h"
+#include "lab/scenario/lab_overrides.h"
+#include "lab/scenario/lab_scenario.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -122,19 +122,19 @@ TEST(OverridesTest, TheFileOnDiskIsNotChanged) {
 TEST(OverridesCliTest, RunRecordsOverridesInSummary) {
   TempDir dir;
   const std::string out = dir / "o";
-  const auto r = vlab::testing::RunVlab("run " + std::string(VLAB_SOURCE_DIR) +
-                                        "/scenes/pa10_reach --duration 0.1 -q --out " + out +
-                                        " --set devices.jr3.filter=2 --set controller.gains.position=15");
+  const auto r =
+      vlab::testing::RunVlab("run " + std::string(VLAB_SOURCE_DIR) + "/scenes/pa10_reach --duration 0.1 -q --out " +
+                             out + " --set devices.jr3.filter=2 --set controller.gains.position=15");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto summary = nlohmann::json::parse(vlab::testing::ReadFile(out + "/summary.json"));
   EXPECT_EQ(summary.at("overrides"),
             (nlohmann::json{{"devices.jr3.filter", "2"}, {"controller.gains.position", "15"}}));
-  const auto bad = vlab::testing::RunVlab("run " + std::string(VLAB_SOURCE_DIR) +
-                                          "/scenes/pa10_reach --duration 0.1 -q --out " + dir / "bad" +
-                                          " --set devices.jr3.filter=abc");
+  const auto bad =
+      vlab::testing::RunVlab("run " + std::string(VLAB_SOURCE_DIR) + "/scenes/pa10_reach --duration 0.1 -q --out " +
+                             dir / "bad" + " --set devices.jr3.filter=abc");
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
   EXPECT_NE(bad.err.find("pa10_reach.yaml: devices[1].filter: expected an integer, got 'abc' (from --set "
-                            "devices.jr3.filter=abc)"),
+                         "devices.jr3.filter=abc)"),
             std::string::npos)
       << bad.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "bad")) << "nothing written on bad input";

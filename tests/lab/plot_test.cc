@@ -46,7 +46,7 @@ TEST(PlotTest, DrawsTheCurveWhereTheAxesPutIt) {
   // y spans [0, 10] padded by 5 %: [-0.5, 10.5]; the plot area is x 80..980, y 50..460
   auto px = [](double x) { return 80 + static_cast<int>(std::lround(x / 10 * 900)); };
   auto py = [](double y) { return 50 + 410 - static_cast<int>(std::lround((y + 0.5) / 11 * 410)); };
-  const cv::Vec3b first = img.at<cv::Vec3b>(py(7.0), px(7.0));  // on the line a
+  const cv::Vec3b first = img.at<cv::Vec3b>(py(7.0), px(7.0));   // on the line a
   const cv::Vec3b second = img.at<cv::Vec3b>(py(5.0), px(2.0));  // on the constant b
   EXPECT_EQ(first, cv::Vec3b(200, 80, 20));
   EXPECT_EQ(second, cv::Vec3b(30, 30, 220));

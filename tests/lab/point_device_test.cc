@@ -114,7 +114,8 @@ TEST_F(PointDeviceTest, RefusesNonFiniteAndOutOfWorkspaceCommands) {
   EXPECT_EQ(rig.point->command_input()->CheckCommand({0.7, INFINITY, 0.5}), bridge::CommandCheck::kMalformed);
   EXPECT_EQ(rig.point->command_input()->CheckCommand({0.7, 0.0, 0.81}), bridge::CommandCheck::kLimits);
   EXPECT_EQ(rig.point->command_input()->CheckCommand({0.49, 0.0, 0.5}), bridge::CommandCheck::kLimits);
-  EXPECT_EQ(rig.point->command_input()->CheckCommand({0.9, 0.3, 0.8}), bridge::CommandCheck::kAccept);  // the box's corner
+  EXPECT_EQ(rig.point->command_input()->CheckCommand({0.9, 0.3, 0.8}),
+            bridge::CommandCheck::kAccept);  // the box's corner
 }
 
 TEST_F(PointDeviceTest, HoldsOnTheWatchdogAndResumesFromWhereItIs) {
@@ -155,8 +156,10 @@ TEST(PointScenarioTest, ScenarioRules) {
   auto error_of = [&](const std::string& rest) { return Pa10ScenarioError(dir, rest); };
   EXPECT_NE(error_of("  - {name: hand, kind: point, arm: nope}\n").find("no arm device 'nope'"), std::string::npos);
   // a second driver: the claim table names both claimants, the second at its own line
-  const std::string two = error_of("  - {name: hand, kind: point, arm: pa10}\n  - {name: hand2, kind: point, arm: pa10}\n");
-  EXPECT_NE(two.find("s.yaml:7: point device 'hand2': device 'pa10' is driven by point device 'hand' ("), std::string::npos)
+  const std::string two =
+      error_of("  - {name: hand, kind: point, arm: pa10}\n  - {name: hand2, kind: point, arm: pa10}\n");
+  EXPECT_NE(two.find("s.yaml:7: point device 'hand2': device 'pa10' is driven by point device 'hand' ("),
+            std::string::npos)
       << two;
   EXPECT_NE(two.find("s.yaml:6) already: one owner at a time"), std::string::npos) << two;
   EXPECT_NE(error_of("  - {name: hand, kind: point, arm: pa10, site: nope}\n").find("nope"), std::string::npos);
@@ -171,8 +174,9 @@ TEST(PointScenarioTest, OneClaimantPerArmWhateverTheSources) {
   vlab::testing::TempDir dir;
   auto error_of = [&](const std::string& rest) { return Pa10ScenarioError(dir, rest); };
   const std::string hand = "  - {name: hand, kind: point, arm: pa10}\n";
-  const std::string builtin = "controller: {type: joint_pd, arm: pa10, tip_site: tool, waypoints: [{q: [0, 0, 0, 0, 0, 0, 0], "
-                              "duration: 1}]}\n";
+  const std::string builtin =
+      "controller: {type: joint_pd, arm: pa10, tip_site: tool, waypoints: [{q: [0, 0, 0, 0, 0, 0, 0], "
+      "duration: 1}]}\n";
   const std::string task = std::string("controller: {type: task, programs: [{robot: pa10, script: ") + VLAB_SOURCE_DIR +
                            "/scenes/tasks/square.lua, tip_site: tool}]}\n";
   // each alone is fine
@@ -186,7 +190,8 @@ TEST(PointScenarioTest, OneClaimantPerArmWhateverTheSources) {
       << with_builtin;
   const std::string with_task = error_of(hand + task);
   EXPECT_NE(with_task.find(": task program '"), std::string::npos) << with_task;
-  EXPECT_NE(with_task.find("square.lua': device 'pa10' is driven by point device 'hand'"), std::string::npos) << with_task;
+  EXPECT_NE(with_task.find("square.lua': device 'pa10' is driven by point device 'hand'"), std::string::npos)
+      << with_task;
   // two programs on one robot: the same rule, the same message
   const std::string square = std::string(VLAB_SOURCE_DIR) + "/scenes/tasks/square.lua";
   const std::string two = error_of("controller: {type: task, programs: [{robot: pa10, script: " + square +
@@ -200,12 +205,14 @@ TEST(PointScenarioTest, OneClaimantPerArmWhateverTheSources) {
 // device holds its claim, and its own clients only read it).
 TEST(PointScenarioTest, TheWireClaimsServedDevicesWhenItBinds) {
   vlab::testing::TempDir dir;
-  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\nduration: 0.1\n"
+  const std::string head = std::string("scene: ") + VLAB_SOURCE_DIR +
+                           "/scenes/pa10.xml\nduration: 0.1\n"
                            "control_period: 0.01\ndevices:\n"
                            "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2], port: auto}\n";
   vlab::testing::WriteFile(dir.path() + "/builtin.yaml",
-                           head + "controller: {type: joint_pd, arm: pa10, tip_site: tool, waypoints: [{q: [0, 0, 0, 0, "
-                                  "0, 0, 0], duration: 1}]}\n");
+                           head +
+                               "controller: {type: joint_pd, arm: pa10, tip_site: tool, waypoints: [{q: [0, 0, 0, 0, "
+                               "0, 0, 0], duration: 1}]}\n");
   std::unique_ptr<Lab> lab = Lab::Create(LoadScenario(dir.path() + "/builtin.yaml"));  // nothing served yet
   try {
     lab->Describe(BridgeOptions{}, std::nullopt);
@@ -232,8 +239,9 @@ TEST(ClaimTableTest, RefusesASecondClaimantByName) {
     table.Add(Claim{"pa10", "the built-in controller", "a.yaml:12"});
     ADD_FAILURE() << "a second claim was taken";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), "a.yaml:12: the built-in controller: device 'pa10' is driven by point device "
-                                     "'hand' (a.yaml:6) already: one owner at a time");
+    EXPECT_EQ(std::string(e.what()),
+              "a.yaml:12: the built-in controller: device 'pa10' is driven by point device "
+              "'hand' (a.yaml:6) already: one owner at a time");
   }
   EXPECT_EQ(table.Holder("pa10")->who, "point device 'hand'");  // the first claim stays
 }

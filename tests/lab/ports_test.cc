@@ -33,9 +33,11 @@ lockstep: {timeout: 1.0, start_timeout: 120.0}
 devices:
   - name: pa10
     kind: arm
-    port: )" + arm_port + R"(
+    port: )" +
+         arm_port + R"(
     joints: [S1, S2, S3, E1, E2, W1, W2]
-  - {name: jr3, kind: wrench, port: )" + wrench_port + R"(, force_sensor: jr3_force, torque_sensor: jr3_torque}
+  - {name: jr3, kind: wrench, port: )" +
+         wrench_port + R"(, force_sensor: jr3_force, torque_sensor: jr3_torque}
   - {name: sim, kind: sim}
 )" + rest;
 }
@@ -111,7 +113,8 @@ with open(sys.argv[-1], "w") as f:
 )");
   const std::string command = R"(controller:
   type: external
-  command: ["python3", ")" + (dir / "helper.py") + R"(", "{port:helper}", "{port:helper}", "{port:pa10}", "{jr3}",
+  command: ["python3", ")" + (dir / "helper.py") +
+                              R"(", "{port:helper}", "{port:helper}", "{port:pa10}", "{jr3}",
             "{out}/given.txt"]
 )";
   WriteFile(dir / "s.yaml", Scenario("50010", "auto", command));

@@ -24,8 +24,8 @@ using vlab::testing::TempDir;
 using vlab::testing::WriteFile;
 
 const std::string kScene = VLAB_SOURCE_DIR "/scenes/pa10_cubes_gripper.xml";
-constexpr double kHalfEdge = 0.025;                         // m, mjcf/cubes: 50 mm cubes
-const double kFootprint = kHalfEdge * std::sqrt(2.0);       // m, circumscribed circle of a face
+constexpr double kHalfEdge = 0.025;                    // m, mjcf/cubes: 50 mm cubes
+const double kFootprint = kHalfEdge * std::sqrt(2.0);  // m, circumscribed circle of a face
 constexpr const char* kCubes = "[cube_A, cube_B, cube_C, cube_D, cube_E, cube_F]";
 
 // a scenario on the cube scene with this randomize block (indented two spaces)
@@ -87,22 +87,29 @@ TEST(RandomizeTest, ReadsEveryKey) {
 TEST(RandomizeTest, BadKeysNameFileLineAndKey) {
   const std::string ok = std::string("  bodies: ") + kCubes + "\n  surface: 0.2\n";
   const std::string region = "  region: {x: [0.4, 0.8], y: [-0.4, 0.4]}\n";
-  EXPECT_NE(LoadError(ScenarioText(ok + region + "  clearence: 0.04\n")).find("s.yaml:9: randomize.clearence: unknown key"),
-            std::string::npos);
+  EXPECT_NE(
+      LoadError(ScenarioText(ok + region + "  clearence: 0.04\n")).find("s.yaml:9: randomize.clearence: unknown key"),
+      std::string::npos);
   EXPECT_NE(LoadError(ScenarioText(ok)).find("randomize.region: required"), std::string::npos);
-  EXPECT_NE(LoadError(ScenarioText(ok + "  region: {x: [0.8, 0.4], y: [-0.4, 0.4]}\n")).find("randomize.region.x: expected [min, max]"),
+  EXPECT_NE(LoadError(ScenarioText(ok + "  region: {x: [0.8, 0.4], y: [-0.4, 0.4]}\n"))
+                .find("randomize.region.x: expected [min, max]"),
             std::string::npos);
-  EXPECT_NE(LoadError(ScenarioText(ok + region + "  resting_face: 6\n")).find("randomize.resting_face: expected any, or a face 0-5"),
+  EXPECT_NE(LoadError(ScenarioText(ok + region + "  resting_face: 6\n"))
+                .find("randomize.resting_face: expected any, or a face 0-5"),
             std::string::npos);
-  EXPECT_NE(LoadError(ScenarioText(ok + region + "  resting_face: top\n")).find("randomize.resting_face: expected any, or a face 0-5"),
+  EXPECT_NE(LoadError(ScenarioText(ok + region + "  resting_face: top\n"))
+                .find("randomize.resting_face: expected any, or a face 0-5"),
             std::string::npos);
   EXPECT_NE(LoadError(ScenarioText(ok + region + "  yaw: [10]\n")).find("randomize.yaw: expected any, or [min, max]"),
             std::string::npos);
-  EXPECT_NE(LoadError(ScenarioText(ok + region + "  exclude: [{x: [0, 1]}]\n")).find("randomize.exclude[0].y: expected [min, max]"),
+  EXPECT_NE(LoadError(ScenarioText(ok + region + "  exclude: [{x: [0, 1]}]\n"))
+                .find("randomize.exclude[0].y: expected [min, max]"),
             std::string::npos);
-  EXPECT_NE(LoadError(ScenarioText(ok + region + "  within: {center: [0, 0], radius: -1}\n")).find("randomize.within.radius: must be > 0"),
+  EXPECT_NE(LoadError(ScenarioText(ok + region + "  within: {center: [0, 0], radius: -1}\n"))
+                .find("randomize.within.radius: must be > 0"),
             std::string::npos);
-  EXPECT_NE(LoadError(ScenarioText("  bodies: [cube_A, cube_A]\n  surface: 0.2\n" + region)).find("body 'cube_A' named twice"),
+  EXPECT_NE(LoadError(ScenarioText("  bodies: [cube_A, cube_A]\n  surface: 0.2\n" + region))
+                .find("body 'cube_A' named twice"),
             std::string::npos);
   EXPECT_NE(LoadError(ScenarioText(std::string("  bodies: ") + kCubes + "\n" + region)).find("randomize.surface"),
             std::string::npos);
@@ -116,14 +123,16 @@ TEST(RandomizeTest, BindingErrorsNameTheBody) {
     Randomizer::Create(m.get(), c, 1);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("test: randomize: bodies: the scene has no body 'cube_Z'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("test: randomize: bodies: the scene has no body 'cube_Z'"), std::string::npos)
+        << e.what();
   }
   c.bodies = {"pa10_link2"};  // a body on a hinge, not a free body
   try {
     Randomizer::Create(m.get(), c, 1);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("body 'pa10_link2' must have one joint, a free joint"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("body 'pa10_link2' must have one joint, a free joint"), std::string::npos)
+        << e.what();
   }
   c = StageOne();
   c.clearance_m = 0.3;  // six cubes 0.37 m apart cannot share a 0.4 x 0.8 m region

@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
 namespace vlab::lab {
 namespace {

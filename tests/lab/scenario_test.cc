@@ -1,8 +1,8 @@
 // Scenario loading: valid files parse into the right values; every kind of bad
 // input is an InputError naming the file, the line and the key.
-#include "lab/scenario/lab_scenario.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_wrench.h"
+#include "lab/scenario/lab_scenario.h"
 
 #include <gtest/gtest.h>
 
@@ -123,8 +123,9 @@ TEST(ScenarioTest, RejectsBadValues) {
   EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\nclock: warp\n").find("unknown clock 'warp'"), std::string::npos);
   EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\nallow_warnings: [badqacc]\n").find("non-allowable warning 'badqacc'"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\ndevices: [{name: a, kind: lidar}]\n").find("unknown device kind 'lidar'"),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf("scene: x.xml\nduration: 1\ndevices: [{name: a, kind: lidar}]\n").find("unknown device kind 'lidar'"),
+      std::string::npos);
   EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\nchecks: [{name: c, signal: time}]\n").find("a check needs a bound"),
             std::string::npos);
   EXPECT_NE(ErrorOf("scene: x.xml\nduration: 1\nchecks: [{name: c, signal: t, reduce: median, max: 1}]\n")
@@ -143,7 +144,8 @@ TEST(ScenarioTest, RejectsBadValues) {
 
 TEST(ScenarioTest, DuplicateDeviceNames) {
   const std::string e = ErrorOf(
-      "scene: x.xml\nduration: 1\ndevices:\n  - {name: a, kind: arm, joints: [j]}\n  - {name: a, kind: arm, joints: [k]}\n");
+      "scene: x.xml\nduration: 1\ndevices:\n  - {name: a, kind: arm, joints: [j]}\n  - {name: a, kind: arm, joints: "
+      "[k]}\n");
   EXPECT_NE(e.find("duplicate device name 'a'"), std::string::npos) << e;
 }
 

@@ -37,7 +37,8 @@ std::vector<std::string> ShippedScenarios() {
 TEST(ShippedScenarios, EveryDeviceBindsToItsScene) {
   InstallMujocoHandlers();
   const std::vector<std::string> files = ShippedScenarios();
-  ASSERT_GE(files.size(), 7u);  // pa10_reach, pa10_joint_pd, pa10_serve, pa10_cubes, pa10_nomad_reach, hoap3_stand, head_track, ...
+  ASSERT_GE(files.size(),
+            7u);  // pa10_reach, pa10_joint_pd, pa10_serve, pa10_cubes, pa10_nomad_reach, hoap3_stand, head_track, ...
   ASSERT_TRUE(std::any_of(files.begin(), files.end(), [](const std::string& f) {
     return f.find("/cases/yoyo/stage1.yaml") != std::string::npos;
   }));  // and the case studies' (cases/yoyo/stage1.yaml, ...)

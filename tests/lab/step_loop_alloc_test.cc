@@ -12,13 +12,13 @@
 #include <malloc.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <future>
-#include <thread>
-#include <cstdlib>
 #include <new>
 #include <ostream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -191,7 +191,8 @@ INSTANTIATE_TEST_SUITE_P(Clocks, ServedPeriodAllocation, ::testing::Values(Clock
                          [](const ::testing::TestParamInfo<ClockMode>& info) { return ClockModeName(info.param); });
 
 INSTANTIATE_TEST_SUITE_P(ShippedScenarios, PeriodAllocation,
-                         ::testing::Values(Case{"scenes/pa10_reach.yaml", 1.0, true}, Case{"scenes/pa10_reach.yaml", 1.0, false},
+                         ::testing::Values(Case{"scenes/pa10_reach.yaml", 1.0, true},
+                                           Case{"scenes/pa10_reach.yaml", 1.0, false},
                                            Case{"scenes/pa10_joint_pd.yaml", 1.0, true},
                                            Case{"scenes/pa10_cubes.yaml", 0.5, true},
                                            Case{"scenes/pa10_view.yaml", 1.0, true}),

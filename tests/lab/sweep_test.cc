@@ -50,8 +50,8 @@ TEST(SweepTest, GridExpandsLastKeyFastestSeedsInnermost) {
   EXPECT_EQ(s.runs[1].id, "p00_s5");
   EXPECT_EQ(s.runs[2].id, "p01_s4");
   EXPECT_EQ(s.runs[11].id, "p05_s5");
-  EXPECT_EQ(s.runs[2].sets, (std::vector<std::string>{"devices.jr3.filter=2", "controller.gains.position=10",
-                                                      "controller.start=0.5"}));
+  EXPECT_EQ(s.runs[2].sets,
+            (std::vector<std::string>{"devices.jr3.filter=2", "controller.gains.position=10", "controller.start=0.5"}));
   // one record per override set; a run's record is its set's with its seed
   ASSERT_EQ(s.records.size(), 6u);
   EXPECT_EQ(RecordOfRun(s, s.runs[3]).seed, 5u);
@@ -65,7 +65,8 @@ TEST(SweepTest, GridExpandsLastKeyFastestSeedsInnermost) {
 
 TEST(SweepTest, ListEntriesAndNoSeedsUseTheScenariosSeed) {
   TempDir dir;
-  WriteFile(dir / "s.yaml", "name: l\nscenario: " + kScenario + "\nduration: 2\n"
+  WriteFile(dir / "s.yaml", "name: l\nscenario: " + kScenario +
+                                "\nduration: 2\n"
                                 "list:\n  - {controller.gains.position: 5, devices.jr3.filter: 3}\n"
                                 "  - {'devices.pa10.initial': [0, 0.5, 0, 1, 0, 1.5, 0]}\n");
   const Sweep s = LoadSweep(dir / "s.yaml");
@@ -89,12 +90,14 @@ TEST(SweepTest, BadSweepsNameFileKeyAndOverrideSetBeforeAnyRun) {
   const std::string e = SweepError(head + "grid: {devices.jr3.filter: [2, abc]}\n");
   EXPECT_NE(e.find("override set 1: "), std::string::npos) << e;
   EXPECT_NE(e.find("devices[1].filter: expected an integer, got 'abc' (from --set devices.jr3.filter=abc)"),
-            std::string::npos) << e;
+            std::string::npos)
+      << e;
 }
 
 TEST(SweepTest, ValuesWithControlCharactersGoInDoubleQuotesOnOneLine) {
   TempDir dir;
-  WriteFile(dir / "s.yaml", "scenario: " + kScenario + "\nset: [\"description=a\\tb\"]\n"
+  WriteFile(dir / "s.yaml", "scenario: " + kScenario +
+                                "\nset: [\"description=a\\tb\"]\n"
                                 "grid:\n  description: [\"a\\nb\", \"$(c) `d` 'e'\"]\n");
   const Sweep s = LoadSweep(dir / "s.yaml");
   ASSERT_EQ(s.runs.size(), 2u);
@@ -125,15 +128,17 @@ TEST(CollectTest, OneRowPerRunFolderColumnsFromSummaries) {
   WriteFile(dir / "b/summary.json",
             R"({"scenario":"x","seed":2,"result":"fail","exit_code":1,"overrides":{"k":"20"},
                 "checks":[{"name":"c","value":0.5,"pass":false}],"timings":{"sim_time_s":1,"loop_wall_s":0.25}})");
-  WriteFile(dir / "a/summary.json",
-            R"({"scenario":"x","seed":1,"duration_s":2.5,"result":"pass","exit_code":0,"overrides":{"k":"10","m":"[1, 2]"},
+  WriteFile(
+      dir / "a/summary.json",
+      R"({"scenario":"x","seed":1,"duration_s":2.5,"result":"pass","exit_code":0,"overrides":{"k":"10","m":"[1, 2]"},
                 "checks":[{"name":"c","value":0.1,"pass":true},{"name":"d","value":null,"pass":true,"skipped":"s"}]})");
   const CollectedTable t = CollectRuns(dir.path(), false);
   EXPECT_EQ(t.columns, (std::vector<std::string>{"id", "scenario", "seed", "duration_s", "result", "exit_code", "set:k",
                                                  "set:m", "c", "c.verdict", "d", "d.verdict"}));
-  EXPECT_EQ(CollectedCsv(t), "id,scenario,seed,duration_s,result,exit_code,set:k,set:m,c,c.verdict,d,d.verdict\n"
-                             "a,x,1,2.5,pass,0,10,\"[1, 2]\",0.1,pass,nan,skip\n"
-                             "b,x,2,nan,fail,1,20,,0.5,fail,,\n");
+  EXPECT_EQ(CollectedCsv(t),
+            "id,scenario,seed,duration_s,result,exit_code,set:k,set:m,c,c.verdict,d,d.verdict\n"
+            "a,x,1,2.5,pass,0,10,\"[1, 2]\",0.1,pass,nan,skip\n"
+            "b,x,2,nan,fail,1,20,,0.5,fail,,\n");
   EXPECT_EQ(t.pass, 1);
   EXPECT_EQ(t.failed, 1);
   EXPECT_EQ(CollectRuns(dir.path(), true).Column("loop_wall_s"), 13);
@@ -190,7 +195,9 @@ TEST(SweepCliTest, RunsResumesCollectsAndPlots) {
   const std::vector<std::string> rows = Lines(collect.out);
   ASSERT_EQ(rows.size(), 5u) << collect.out;
   const std::vector<std::string> header = SplitCsv(rows[0]);
-  const auto col = [&](const std::string& name) { return std::find(header.begin(), header.end(), name) - header.begin(); };
+  const auto col = [&](const std::string& name) {
+    return std::find(header.begin(), header.end(), name) - header.begin();
+  };
   ASSERT_LT(col("position_tracking"), static_cast<long>(header.size()));
   ASSERT_LT(col("loop_wall_s"), static_cast<long>(header.size()));
   // a stiffer task-space gain tracks closer: the table shows it per seed
@@ -199,18 +206,21 @@ TEST(SweepCliTest, RunsResumesCollectsAndPlots) {
   EXPECT_EQ(p01[col("set:controller.gains.position")], "40");
   EXPECT_LT(std::stod(p01[col("position_tracking")]), std::stod(p00[col("position_tracking")]));
   EXPECT_GT(fs::file_size(dir / "g.png"), 1000u);
-  EXPECT_EQ(vlab::testing::Entries(dir.path()).count("g.png.data-" ), 0u);
-  const auto bad = RunVlab("collect " + (dir / "out") + " --plot " + (dir / "h.png") + " --x nope --y position_tracking");
+  EXPECT_EQ(vlab::testing::Entries(dir.path()).count("g.png.data-"), 0u);
+  const auto bad =
+      RunVlab("collect " + (dir / "out") + " --plot " + (dir / "h.png") + " --x nope --y position_tracking");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--x nope: no run overrides it"), std::string::npos) << bad.err;
 }
 
 // A scenario of a falling ball, 0.2 s: a sweep of six runs takes a few seconds.
 void WriteTinyScenario(const TempDir& dir) {
-  WriteFile(dir / "ball.xml", "<mujoco><worldbody><body pos='0 0 1'><freejoint/><geom size='0.1'/></body>"
-                              "</worldbody></mujoco>\n");
-  WriteFile(dir / "tiny.yaml", "scene: ball.xml\nduration: 0.5\ncontrol_period: 0.01\n"
-                               "checks:\n  - {name: ran, signal: time, reduce: final, min: 0}\n");
+  WriteFile(dir / "ball.xml",
+            "<mujoco><worldbody><body pos='0 0 1'><freejoint/><geom size='0.1'/></body>"
+            "</worldbody></mujoco>\n");
+  WriteFile(dir / "tiny.yaml",
+            "scene: ball.xml\nduration: 0.5\ncontrol_period: 0.01\n"
+            "checks:\n  - {name: ran, signal: time, reduce: final, min: 0}\n");
 }
 
 std::string TinySweep(const std::string& duration, const std::string& mins) {
@@ -261,12 +271,15 @@ TEST(SweepCliTest, AnEditedSweepRunsAgainWhatChangedAndSaysWhy) {
   const auto shorter = RunVlab("sweep " + sweep + " -j 2 --out " + out);
   ASSERT_EQ(shorter.exit_code, 0) << shorter.out << shorter.err;
   EXPECT_TRUE(Has(shorter.out, "4 runs, 0 complete already (skipped), 4 to run")) << shorter.out;
-  EXPECT_TRUE(Has(shorter.out, "p00_s1 (checks.ran.min=0): runs again: the duration changed since it ran (0.2 s -> 0.1 s)\n"))
+  EXPECT_TRUE(
+      Has(shorter.out, "p00_s1 (checks.ran.min=0): runs again: the duration changed since it ran (0.2 s -> 0.1 s)\n"))
       << shorter.out;
-  EXPECT_TRUE(Has(shorter.out, "p01_s1 (checks.ran.min=0.08): runs again: the scenario changed since it ran; the "
-                               "duration changed since it ran (0.2 s -> 0.1 s)"))
+  EXPECT_TRUE(Has(shorter.out,
+                  "p01_s1 (checks.ran.min=0.08): runs again: the scenario changed since it ran; the "
+                  "duration changed since it ran (0.2 s -> 0.1 s)"))
       << shorter.out;
-  EXPECT_TRUE(Has(shorter.out, "p02_s1: not a run of this sweep (left as it is; vlab collect lists it)")) << shorter.out;
+  EXPECT_TRUE(Has(shorter.out, "p02_s1: not a run of this sweep (left as it is; vlab collect lists it)"))
+      << shorter.out;
 
   fs::remove_all(out + "/p02_s1");
   fs::remove_all(out + "/p02_s2");
@@ -275,7 +288,9 @@ TEST(SweepCliTest, AnEditedSweepRunsAgainWhatChangedAndSaysWhy) {
   const std::vector<std::string> rows = Lines(table.out);
   ASSERT_EQ(rows.size(), 5u) << table.out;
   const std::vector<std::string> header = SplitCsv(rows[0]);
-  const auto col = [&](const std::string& name) { return std::find(header.begin(), header.end(), name) - header.begin(); };
+  const auto col = [&](const std::string& name) {
+    return std::find(header.begin(), header.end(), name) - header.begin();
+  };
   for (int i = 1; i <= 4; ++i) {
     const std::vector<std::string> row = SplitCsv(rows[i]);
     EXPECT_EQ(row[col("duration_s")], "0.1") << rows[i];

@@ -18,7 +18,9 @@ namespace {
 std::vector<std::string> HostileStrings() {
   std::vector<std::string> all;
   for (int c = 1; c < 0x20; ++c) all.push_back("a" + std::string(1, static_cast<char>(c)) + "b");
-  all.push_back("a\x7f" "b");
+  all.push_back(
+      "a\x7f"
+      "b");
   all.push_back("\n");
   all.push_back("x\ntouch CANARY\n");
   all.push_back("it's \"quoted\"");
@@ -61,7 +63,8 @@ TEST(SweepTextTest, PlainValuesAreWrittenAsBefore) {
   EXPECT_EQ(ValueText(YAML::Load("10"), "w"), "10");
   EXPECT_EQ(ValueText(YAML::Load("0.50"), "w"), "0.50");
   EXPECT_EQ(ValueText(YAML::Load("[0, 0.5, 1]"), "w"), "[0, 0.5, 1]");
-  EXPECT_EQ(ValueText(YAML::Load("{bandwidth_hz: 8, damping_ratio: 0.9}"), "w"), "{bandwidth_hz: 8, damping_ratio: 0.9}");
+  EXPECT_EQ(ValueText(YAML::Load("{bandwidth_hz: 8, damping_ratio: 0.9}"), "w"),
+            "{bandwidth_hz: 8, damping_ratio: 0.9}");
   // a string YAML would read as something else is quoted (it used to be written bare)
   EXPECT_EQ(YAML::Load(ValueText(YAML::Load("'a: b'"), "w")).as<std::string>(), "a: b");
 }

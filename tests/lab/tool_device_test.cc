@@ -9,8 +9,8 @@
 // scenario keys.
 #include <cmath>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "arm_driver_fixture.h"
 #include "bridge/bridge_layouts.h"
@@ -155,8 +155,10 @@ TEST_F(ToolDeviceTest, RefusesMalformedAndOutOfLimitCommands) {
   EXPECT_EQ(rig.tool->command_input()->command_length(), 7);
   EXPECT_EQ(check(p, down), bridge::CommandCheck::kAccept);
   EXPECT_EQ(rig.tool->command_input()->CheckCommand({NAN, 0, 0.5, 1, 0, 0, 0}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.tool->command_input()->CheckCommand({0.7, 0, 0.5, 0, INFINITY, 0, 0}), bridge::CommandCheck::kMalformed);
-  EXPECT_EQ(rig.tool->command_input()->CheckCommand({0.7, 0, 0.5, 0, 1}), bridge::CommandCheck::kMalformed);  // 5 values
+  EXPECT_EQ(rig.tool->command_input()->CheckCommand({0.7, 0, 0.5, 0, INFINITY, 0, 0}),
+            bridge::CommandCheck::kMalformed);
+  EXPECT_EQ(rig.tool->command_input()->CheckCommand({0.7, 0, 0.5, 0, 1}),
+            bridge::CommandCheck::kMalformed);  // 5 values
   // |q| within 1 +- 0.001
   EXPECT_EQ(check(p, Eigen::Quaterniond(down.coeffs() * 1.0009)), bridge::CommandCheck::kAccept);
   EXPECT_EQ(check(p, Eigen::Quaterniond(down.coeffs() * 1.0011)), bridge::CommandCheck::kMalformed);
@@ -193,8 +195,8 @@ TEST_F(ToolDeviceTest, ByDefaultRefusesWhatNoPostureReaches) {
   mjData* d = MakeData(m);
   mj_forward(m, d);
   const Eigen::Vector3d anchor(0, 0, 0.2);
-  const double length = (Eigen::Map<const Eigen::Vector3d>(d->site_xpos + 3 * mj_name2id(m, mjOBJ_SITE, "tool")) -
-                         anchor).norm();
+  const double length =
+      (Eigen::Map<const Eigen::Vector3d>(d->site_xpos + 3 * mj_name2id(m, mjOBJ_SITE, "tool")) - anchor).norm();
   DeviceConfig c = ToolConfig(1.0);
   c.EditParams<ToolParams>().reach = ToolParams::Reach::kAuto;
   c.EditParams<ToolParams>().workspace_min = {-2, -2, -2};
@@ -247,17 +249,20 @@ TEST(ToolScenarioTest, ScenarioKeysAndRules) {
   EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: nope}\n").find("no arm device 'nope'"), std::string::npos);
   EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, reach: {radius: 0}}\n").find("reach.radius: must be > 0"),
             std::string::npos);
-  EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, reach: {centre: [0, 0]}}\n").find("reach.centre: needs 3"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of("  - {name: tool, kind: tool, arm: pa10, reach: {centre: [0, 0]}}\n").find("reach.centre: needs 3"),
+      std::string::npos);
   EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, tilt: {max_deg: 200}}\n").find("tilt.max_deg: must be"),
             std::string::npos);
-  EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, tilt: {axis: [0, 0, 0]}}\n").find("tilt.axis: must not be zero"),
+  EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, tilt: {axis: [0, 0, 0]}}\n")
+                .find("tilt.axis: must not be zero"),
             std::string::npos);
-  EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, max_angular_speed: 0}\n").find("max_angular_speed: must be > 0"),
+  EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10, max_angular_speed: 0}\n")
+                .find("max_angular_speed: must be > 0"),
             std::string::npos);
-  EXPECT_NE(error_of("  - {name: tool, kind: tool, arm: pa10}\n  - {name: hand, kind: point, arm: pa10}\n")
-                .find("driven by"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of("  - {name: tool, kind: tool, arm: pa10}\n  - {name: hand, kind: point, arm: pa10}\n").find("driven by"),
+      std::string::npos);
 }
 
 }  // namespace

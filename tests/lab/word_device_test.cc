@@ -239,7 +239,8 @@ TEST_F(WordDeviceTest, AnAlphabetBlockCountsOnlyWithItsLetterOnTop) {
 TEST_F(WordDeviceTest, SpelledNeedsEveryLetter) {
   const DeviceConfig c = Word("FE", {"slot_1", "slot_2"}, {"cube_F", "block"});
   Place(0, slot1_, Eigen::Quaterniond::Identity());
-  Place(1, Eigen::Vector3d(0.5, 0.2, 0.425), About(Eigen::Vector3d::UnitZ(), 90) * About(Eigen::Vector3d::UnitX(), -90));
+  Place(1, Eigen::Vector3d(0.5, 0.2, 0.425),
+        About(Eigen::Vector3d::UnitZ(), 90) * About(Eigen::Vector3d::UnitX(), -90));
   EXPECT_EQ(ScoreOf(c).spelled, 1);
   Place(0, slot1_ + Eigen::Vector3d(0.02, 0, 0), Eigen::Quaterniond::Identity());
   EXPECT_EQ(ScoreOf(c).spelled, 0);
@@ -287,7 +288,9 @@ TEST_F(WordDeviceTest, ReadsTheCommittedBlocksFaceLetters) {
                                                    "cubes_assets.xml\"/>\n  <worldbody>\n"
                                                    "    <site name=\"slot\" pos=\"0.5 0 0.425\"/>\n"
                                                    "    <body name=\"cube_EKQW28\" pos=\"0.5 0 0.425\">\n"
-                                                   "      <include file=\"" + blocks + "cube_EKQW28.xml\"/>\n"
+                                                   "      <include file=\"" +
+                                                   blocks +
+                                                   "cube_EKQW28.xml\"/>\n"
                                                    "    </body>\n  </worldbody>\n</mujoco>\n");
   m_ = LoadModel(dir / "blocks.xml");
   d_ = MakeData(m_);
@@ -335,11 +338,14 @@ TEST(WordScenario, KeysAreReadAndCheckedByTheKindsReader) {
             std::string::npos);
   EXPECT_NE(error("{name: w, kind: word, word: F-, slots: [a, b]}").find("word: '-' is not A-Z or 0-9"),
             std::string::npos);
-  EXPECT_NE(error("{name: w, kind: word, word: FE, slots: [a]}").find("slots: needs one site per letter of 'FE' (2), got 1"),
-            std::string::npos);
-  EXPECT_NE(error("{name: w, kind: word, word: FE, slots: [a, b], letters: {X: cube_X}}").find("letters.X: unknown key"),
-            std::string::npos);
-  EXPECT_NE(error("{name: w, kind: word, word: FE, slots: [a, b], bounds: {angle_deg: 0}}").find("bounds.angle_deg: must be > 0"),
+  EXPECT_NE(
+      error("{name: w, kind: word, word: FE, slots: [a]}").find("slots: needs one site per letter of 'FE' (2), got 1"),
+      std::string::npos);
+  EXPECT_NE(
+      error("{name: w, kind: word, word: FE, slots: [a, b], letters: {X: cube_X}}").find("letters.X: unknown key"),
+      std::string::npos);
+  EXPECT_NE(error("{name: w, kind: word, word: FE, slots: [a, b], bounds: {angle_deg: 0}}")
+                .find("bounds.angle_deg: must be > 0"),
             std::string::npos);
 }
 

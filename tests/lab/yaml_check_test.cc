@@ -51,16 +51,18 @@ TEST(YamlCheck, ExpandedNodesAreBoundedExactly) {
   const std::string a = "a: &a " + FlatList(1000) + "\n";
   std::string uses = "b: [*a";
   for (int i = 1; i < 100; ++i) uses += ", *a";
-  EXPECT_EQ(ErrorOf(a + uses + "]\n"), "f.yaml:2: b[98]: the document expands to more than 100000 nodes (each "
-                                       "alias counts the nodes it names; an alias bomb?)");
+  EXPECT_EQ(ErrorOf(a + uses + "]\n"),
+            "f.yaml:2: b[98]: the document expands to more than 100000 nodes (each "
+            "alias counts the nodes it names; an alias bomb?)");
   EXPECT_EQ(ErrorOf(a + "b: [*a, *a]\n"), "");
 }
 
 TEST(YamlCheck, CyclesDepthAndDocuments) {
   EXPECT_EQ(ErrorOf("a: &a [1, *a]\n"), "f.yaml:1: a[1]: an alias inside the node it names (a cycle)");
   EXPECT_EQ(ErrorOf(std::string(kMaxYamlDepth, '[') + std::string(kMaxYamlDepth, ']')), "");
-  EXPECT_NE(ErrorOf(std::string(kMaxYamlDepth + 1, '[') + std::string(kMaxYamlDepth + 1, ']')).find("nested more than 64"),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf(std::string(kMaxYamlDepth + 1, '[') + std::string(kMaxYamlDepth + 1, ']')).find("nested more than 64"),
+      std::string::npos);
   EXPECT_EQ(ErrorOf("a: 1\n---\na: 2\n"), "f.yaml:2: a second YAML document ('---'); a file holds one");
   EXPECT_EQ(ErrorOf("a: [1\n").find("f.yaml:2: malformed YAML"), 0u);
 }
@@ -91,7 +93,8 @@ TEST(InputFile, OnlyRegularFilesUpToTheCap) {
   };
   WriteFile(tmp / "ten", "0123456789");
   EXPECT_EQ(ReadInputFile(tmp / "ten", "ten", 10), "0123456789");
-  EXPECT_EQ(error(tmp / "ten", 9), "'" + (tmp / "ten") + "': 10 bytes, over the 9 bytes an input file of this kind may have");
+  EXPECT_EQ(error(tmp / "ten", 9),
+            "'" + (tmp / "ten") + "': 10 bytes, over the 9 bytes an input file of this kind may have");
   ASSERT_EQ(::mkfifo((tmp / "fifo").c_str(), 0644), 0);
   EXPECT_EQ(error(tmp / "fifo", 10), "'" + (tmp / "fifo") + "': a FIFO (named pipe), not a regular file");
   EXPECT_EQ(error("/dev/zero", 10), "'/dev/zero': a character device, not a regular file");

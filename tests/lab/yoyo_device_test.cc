@@ -14,10 +14,10 @@
 #include "bridge/bridge_client_device.h"
 #include "bridge/bridge_layouts.h"
 #include "bridge/bridge_yoyo.h"
+#include "core/core_mujoco.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/devices/device_yoyo.h"
-#include "core/core_mujoco.h"
 #include "lab/run/lab_runner.h"
 #include "mujoco_fixture.h"
 #include "test_util.h"
@@ -111,7 +111,8 @@ TEST_F(YoyoDeviceTest, ValuesAreTheModelsStateAndTheDescentsClosedForms) {
   // centre = hand origin - d along the hand frame's z (the string's line)
   const int hand = rig.Id(mjOBJ_BODY, "yoyo_hand");
   const Eigen::Vector3d p_hand = Eigen::Map<const Eigen::Vector3d>(rig.data->xpos + 3 * hand);
-  const Eigen::Vector3d z_hand(rig.data->xmat[9 * hand + 2], rig.data->xmat[9 * hand + 5], rig.data->xmat[9 * hand + 8]);
+  const Eigen::Vector3d z_hand(rig.data->xmat[9 * hand + 2], rig.data->xmat[9 * hand + 5],
+                               rig.data->xmat[9 * hand + 8]);
   const double d = rig.Drop();
   const Eigen::Vector3d centre = p_hand - d * z_hand;
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(s[kX + i], centre[i], 1e-12);
@@ -124,14 +125,14 @@ TEST_F(YoyoDeviceTest, ValuesAreTheModelsStateAndTheDescentsClosedForms) {
   const double r = std::abs(m->wrap_prm[m->tendon_adr[plus] + 1]);
   const double g = 9.81;
   const double a = g * mass * r * r / (mass * r * r + J);
-  EXPECT_NEAR(s[kVz], -a * 0.5, 2e-3);                                   // falling from rest at a
+  EXPECT_NEAR(s[kVz], -a * 0.5, 2e-3);                                    // falling from rest at a
   EXPECT_NEAR(s[kStringForce], mass * g * J / (J + mass * r * r), 1e-4);  // T = 0.444 N
   EXPECT_DOUBLE_EQ(s[kStringForce], rig.Sensor("yoyo_string_plus_force") + rig.Sensor("yoyo_string_minus_force"));
   EXPECT_DOUBLE_EQ(s[kSpin], rig.data->qvel[m->jnt_dofadr[rig.Id(mjOBJ_JOINT, "yoyo_spin")]]);
   std::vector<double> row(rig.yoyo->ColumnCount());
   rig.yoyo->Row(*rig.data, row.data());
-  EXPECT_EQ(rig.yoyo->Columns(), (std::vector<std::string>{"yoyo.z", "yoyo.vz", "yoyo.string_force", "yoyo.spin",
-                                                            "yoyo.depth"}));
+  EXPECT_EQ(rig.yoyo->Columns(),
+            (std::vector<std::string>{"yoyo.z", "yoyo.vz", "yoyo.string_force", "yoyo.spin", "yoyo.depth"}));
   EXPECT_EQ(row[0], s[kZ]);
   EXPECT_EQ(row[4], d);
   // d0 + a (t^2 + t h) / 2: constant acceleration under semi-implicit Euler, step h = 1 ms
@@ -155,14 +156,16 @@ TEST_F(YoyoDeviceTest, Jr3ReadsTheToolSideAndTheYoyoHangingAtRest) {
   const double g = 9.81;
   const double yoyo = m->body_mass[rig.Id(mjOBJ_BODY, "yoyo")];
   double beyond = 0;  // what hangs beyond the JR3's measuring plane
-  for (const char* b : {"jr3_tool_side", "tool_body", "yoyo_hand", "yoyo"}) beyond += m->body_mass[rig.Id(mjOBJ_BODY, b)];
+  for (const char* b : {"jr3_tool_side", "tool_body", "yoyo_hand", "yoyo"})
+    beyond += m->body_mass[rig.Id(mjOBJ_BODY, b)];
   EXPECT_NEAR(beyond, 0.085 + 0.3416 + 0.05, 1e-12);
   EXPECT_NEAR(rig.State()[kStringForce], yoyo * g, 1e-4);  // the string carries the yo-yo: m g = 0.4905 N
   const int adr = m->sensor_adr[rig.Id(mjOBJ_SENSOR, "jr3_force")];
   const Eigen::Vector3d f_S(rig.data->sensordata[adr], rig.data->sensordata[adr + 1], rig.data->sensordata[adr + 2]);
   EXPECT_NEAR(f_S.norm(), beyond * g, 1e-4);  // 4.6754 N
   const int site = rig.Id(mjOBJ_SITE, "jr3");
-  const Eigen::Matrix3d R_WS = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rig.data->site_xmat + 9 * site);
+  const Eigen::Matrix3d R_WS =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rig.data->site_xmat + 9 * site);
   EXPECT_NEAR(std::abs((R_WS * f_S).z()), beyond * g, 1e-4);  // vertical
 }
 
@@ -251,8 +254,10 @@ devices:
   auto hand = bridge::Device::Connect(bridge::DeviceKind::kPoint, "127.0.0.1", devices[1].port, 5.0);
   auto yoyo = bridge::Device::Connect(bridge::DeviceKind::kYoyo, "127.0.0.1", devices[2].port, 5.0);
   EXPECT_EQ(hand.command_length(), 3);
-  EXPECT_EQ(hand.state_names(), (std::vector<std::string>(bridge::kPointStateLayout.begin(), bridge::kPointStateLayout.end())));
-  EXPECT_EQ(yoyo.state_names(), (std::vector<std::string>(bridge::kYoyoStateLayout.begin(), bridge::kYoyoStateLayout.end())));
+  EXPECT_EQ(hand.state_names(),
+            (std::vector<std::string>(bridge::kPointStateLayout.begin(), bridge::kPointStateLayout.end())));
+  EXPECT_EQ(yoyo.state_names(),
+            (std::vector<std::string>(bridge::kYoyoStateLayout.begin(), bridge::kYoyoStateLayout.end())));
   EXPECT_EQ(yoyo.command_length(), 0);
   bridge::Device::State s = hand.Read(5.0);
   EXPECT_EQ(s.values[kPointStatus], static_cast<double>(bridge::kStatusHolding));
@@ -274,9 +279,9 @@ devices:
   EXPECT_GE(y.seq, 119);
   EXPECT_NEAR(y.values[kX], s.values[kPointX], 1e-3);
   EXPECT_LT(y.values[kZ], s.values[kPointZ] - 0.5);
-  EXPECT_LT(y.values[kVz], -0.5);                  // m/s
+  EXPECT_LT(y.values[kVz], -0.5);                    // m/s
   EXPECT_NEAR(y.values[kStringForce], 0.444, 0.01);  // the descent's tension, N
-  EXPECT_LT(y.values[kSpin], 0.0);                 // spinning (unwinding: theta decreases)
+  EXPECT_LT(y.values[kSpin], 0.0);                   // spinning (unwinding: theta decreases)
 }
 
 }  // namespace

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "control/joint_pd.h"
 #include "control/robot_model.h"

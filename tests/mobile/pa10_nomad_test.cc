@@ -16,9 +16,9 @@
 #include <iostream>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 #include "control/task_space.h"
 #include "control/time_scaling.h"

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 namespace vlab::models::testing {
 
@@ -18,8 +18,7 @@ Eigen::Vector3d OpticalAxis(const mjData* d, int camera) {
 }
 
 Eigen::Vector3d Direction(const mjData* d, int camera, const Eigen::Vector3d& target_W) {
-  return (target_W - Eigen::Vector3d(d->cam_xpos[3 * camera], d->cam_xpos[3 * camera + 1],
-                                     d->cam_xpos[3 * camera + 2]))
+  return (target_W - Eigen::Vector3d(d->cam_xpos[3 * camera], d->cam_xpos[3 * camera + 1], d->cam_xpos[3 * camera + 2]))
       .normalized();
 }
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 namespace vlab::models::testing {
 

@@ -11,8 +11,8 @@
 #include <random>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "models/head_gaze.h"
 #include "models/model_test_util.h"
@@ -47,12 +47,12 @@ struct SimoxJoint {
 };
 
 std::vector<SimoxJoint> SimoxHead() {
-  const Pose base = Dh(90, 0, 0, 90);                 // Head Base (fixed)
-  const Pose pitch = base * Dh(90, 0, 0, 90);         // after Neck_1_Pitch
-  const Pose roll = pitch * Dh(90, 0, 0, 90);         // after Neck_2_Roll
-  const Pose yaw = roll * Dh(90, 120, 0, 90);         // after Neck_3_Yaw (120 mm up)
+  const Pose base = Dh(90, 0, 0, 90);                                // Head Base (fixed)
+  const Pose pitch = base * Dh(90, 0, 0, 90);                        // after Neck_1_Pitch
+  const Pose roll = pitch * Dh(90, 0, 0, 90);                        // after Neck_2_Roll
+  const Pose yaw = roll * Dh(90, 120, 0, 90);                        // after Neck_3_Yaw (120 mm up)
   const Pose centre = yaw * Dh(0, 0, 0, -90) * Dh(0, 54.5, 0, -90);  // Head_Tilt, Head Center
-  const Pose cameras = centre * Translate(100);       // eye tilt ("Cameras") pre-joint transform
+  const Pose cameras = centre * Translate(100);                      // eye tilt ("Cameras") pre-joint transform
   return {{"neck_pitch", base, -45, 45},
           {"neck_roll", pitch, -45, 45},
           {"neck_yaw", roll, -45, 45},
@@ -153,9 +153,8 @@ TEST_F(Head, EachEyeCanBeDrivenToLookAtAPoint) {
     mj_kinematics(m(), probe);
     const Eigen::Matrix3d head_R = Mat3(probe->xmat + 9 * Id(m(), mjOBJ_BODY, "head"));
     const Eigen::Vector3d centre = Vec3(probe->site_xpos + 3 * Id(m(), mjOBJ_SITE, "head_center"));
-    const Eigen::Vector3d direction =
-        Eigen::AngleAxisd(off(rng), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(off(rng), Eigen::Vector3d::UnitY()) *
-        Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d direction = Eigen::AngleAxisd(off(rng), Eigen::Vector3d::UnitZ()) *
+                                      Eigen::AngleAxisd(off(rng), Eigen::Vector3d::UnitY()) * Eigen::Vector3d::UnitX();
     const Eigen::Vector3d target = centre + range(rng) * (head_R * direction);
     double ik_error = 0;
     const Eigen::VectorXd q_ref = solver.Solve(q, target, &ik_error);

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "models/support_polygon.h"
 

@@ -17,16 +17,16 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 namespace vlab::models::testing {
 
 /// What the feet measure, world frame.
 struct FootReading {
-  double force_sum_N = 0;               ///< sum of the 8 FSRs
+  double force_sum_N = 0;                           ///< sum of the 8 FSRs
   Eigen::Vector2d cop_W = Eigen::Vector2d::Zero();  ///< centre of pressure (x, y), m
-  double margin_m = 0;                  ///< CoP distance inside the support polygon
+  double margin_m = 0;                              ///< CoP distance inside the support polygon
 };
 
 class Hoap3Balance {
@@ -57,7 +57,7 @@ class Hoap3Balance {
   int right_sole_ = -1, left_sole_ = -1;
   std::vector<int> fsr_sensors_, fsr_sites_;
   // work arrays, sized once
-  Eigen::MatrixXd jac_feet_;           // 12 x nv: right then left, position rows then rotation rows
+  Eigen::MatrixXd jac_feet_;  // 12 x nv: right then left, position rows then rotation rows
   std::vector<mjtNum> jacp_, jacr_;
 };
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "models/hoap3_reference.h"
 #include "models/model_test_util.h"

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "models/hoap3_fixture.h"
 
@@ -106,9 +106,9 @@ TEST_F(Hoap3Model, EveryElementTheDevicesBindToExists) {
                          "B_J",   "H_J1",  "H_J2",  "H_J3",  "RA_J5", "RA_J6", "LA_J5", "LA_J6"};
   // DATASHEET 3.1 torque limits (larger value of each pair), N m
   const std::map<std::string, double> torque = {
-      {"RL_J1", 3},   {"RL_J3", 3},   {"RL_J6", 3},   {"LL_J1", 3},   {"LL_J3", 3},   {"LL_J6", 3},
-      {"RA_J1", 3},   {"RA_J2", 3},   {"RA_J3", 3},   {"RA_J4", 3},   {"LA_J1", 3},   {"LA_J2", 3},
-      {"LA_J3", 3},   {"LA_J4", 3},   {"RL_J2", 4.5}, {"RL_J4", 4.5}, {"RL_J5", 4.5}, {"LL_J2", 4.5},
+      {"RL_J1", 3},   {"RL_J3", 3},   {"RL_J6", 3},   {"LL_J1", 3},    {"LL_J3", 3},   {"LL_J6", 3},
+      {"RA_J1", 3},   {"RA_J2", 3},   {"RA_J3", 3},   {"RA_J4", 3},    {"LA_J1", 3},   {"LA_J2", 3},
+      {"LA_J3", 3},   {"LA_J4", 3},   {"RL_J2", 4.5}, {"RL_J4", 4.5},  {"RL_J5", 4.5}, {"LL_J2", 4.5},
       {"LL_J4", 4.5}, {"LL_J5", 4.5}, {"B_J", 4.5},   {"RA_J5", 0.36}, {"LA_J5", 0.36}};
   ASSERT_EQ(m()->nu, 28);
   for (int i = 0; i < 28; ++i) {
@@ -158,10 +158,9 @@ TEST_F(Hoap3Model, EveryElementTheDevicesBindToExists) {
 // The SL default posture (rokv/hoap-sl SensorOffset.cf "default" column; legs only) is a
 // mirror-symmetric stance with level soles. That holds only with the SL joint signs.
 TEST_F(Hoap3Model, SlDefaultPostureHasLevelMirroredFeet) {
-  const std::map<std::string, double> posture = {{"RL_J2", -0.09}, {"RL_J3", 0.16}, {"RL_J4", 0.52},
-                                                 {"RL_J5", -0.35}, {"RL_J6", -0.09}, {"LL_J2", 0.09},
-                                                 {"LL_J3", -0.16}, {"LL_J4", -0.52}, {"LL_J5", 0.35},
-                                                 {"LL_J6", 0.09}};
+  const std::map<std::string, double> posture = {{"RL_J2", -0.09}, {"RL_J3", 0.16}, {"RL_J4", 0.52},  {"RL_J5", -0.35},
+                                                 {"RL_J6", -0.09}, {"LL_J2", 0.09}, {"LL_J3", -0.16}, {"LL_J4", -0.52},
+                                                 {"LL_J5", 0.35},  {"LL_J6", 0.09}};
   for (const auto& [joint, q] : posture) d()->qpos[QposAdr(m(), joint)] = q;
   mj_kinematics(m(), d());
   const Eigen::Matrix3d mirror = Eigen::Vector3d(1, -1, 1).asDiagonal();

@@ -15,8 +15,8 @@
 #include <cstdio>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "models/hoap3_fixture.h"
 
@@ -156,9 +156,10 @@ TEST_F(Hoap3Model, LinkMassPropertiesAreTheManufacturerValues) {
     // README: within 1 % (of the largest diagonal element)
     EXPECT_LT((left.inertia - mirror * inertia * mirror).cwiseAbs().maxCoeff(), 0.01 * inertia.diagonal().maxCoeff());
   }
-  std::printf("mass error max %.1e kg; right COM and inertia at most %.2f and %.2f of their bounds; left vs mirror: "
-              "COM %.3f mm, inertia %.2f %%\n", worst_mass, worst_com, worst_inertia, 1e3 * worst_left_com,
-              100 * worst_left_inertia);
+  std::printf(
+      "mass error max %.1e kg; right COM and inertia at most %.2f and %.2f of their bounds; left vs mirror: "
+      "COM %.3f mm, inertia %.2f %%\n",
+      worst_mass, worst_com, worst_inertia, 1e3 * worst_left_com, 100 * worst_left_inertia);
 }
 
 TEST_F(Hoap3Model, TotalMassIsTheDatasheetSum) {

@@ -89,8 +89,8 @@ class Hoap3Stand : public vlab::test::MujocoTest {
   }
 
   void Report(const RunStats& s) {
-    std::cout << "  FSR sum error max " << 100 * s.worst_force_error << " % of m g = " << weight_N_ << " N ("
-              << mass_ << " kg); CoP margin min " << 1000 * s.min_margin_m << " mm; |CoP - COM| at rest max "
+    std::cout << "  FSR sum error max " << 100 * s.worst_force_error << " % of m g = " << weight_N_ << " N (" << mass_
+              << " kg); CoP margin min " << 1000 * s.min_margin_m << " mm; |CoP - COM| at rest max "
               << 1000 * s.max_cop_com_m << " mm; " << s.steps_per_s << " steps/s (with the servo)\n";
     RecordProperty("fsr_sum_error_percent", std::to_string(100 * s.worst_force_error));
     RecordProperty("cop_margin_mm", std::to_string(1000 * s.min_margin_m));
@@ -162,14 +162,17 @@ TEST_F(Hoap3Stand, SquatsAndWavesWithTheCopInsideTheSupportPolygon) {
   EXPECT_NEAR(balance_->Positions(*d())[rk], knee0 + 0.8, 0.05);
   EXPECT_GT(squat_depth, 0.025) << "2 x 0.105 m x (cos 0.2 - cos 0.6) = 0.033 m";
   double elbow_min = 1e9, elbow_max = -1e9;
-  const RunStats tail = Run(13.0, [&](double t) {
-    const Eigen::VectorXd q = reference(t);
-    if (t > 9 && t < 10) {
-      elbow_min = std::min(elbow_min, d()->qpos[QposAdr(m(), "RA_J4")]);
-      elbow_max = std::max(elbow_max, d()->qpos[QposAdr(m(), "RA_J4")]);
-    }
-    return q;
-  }, at_rest);
+  const RunStats tail = Run(
+      13.0,
+      [&](double t) {
+        const Eigen::VectorXd q = reference(t);
+        if (t > 9 && t < 10) {
+          elbow_min = std::min(elbow_min, d()->qpos[QposAdr(m(), "RA_J4")]);
+          elbow_max = std::max(elbow_max, d()->qpos[QposAdr(m(), "RA_J4")]);
+        }
+        return q;
+      },
+      at_rest);
   s.worst_force_error = std::max(s.worst_force_error, tail.worst_force_error);
   s.min_margin_m = std::min(s.min_margin_m, tail.min_margin_m);
   s.max_cop_com_m = std::max(s.max_cop_com_m, tail.max_cop_com_m);

@@ -4,10 +4,10 @@
 
 #include <string>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace vlab::models::testing {
 
@@ -19,9 +19,7 @@ inline void ResetToKey(const mjModel* m, mjData* d, const char* key) {
   mj_forward(m, d);
 }
 
-inline int Id(const mjModel* m, mjtObj type, const std::string& name) {
-  return mj_name2id(m, type, name.c_str());
-}
+inline int Id(const mjModel* m, mjtObj type, const std::string& name) { return mj_name2id(m, type, name.c_str()); }
 
 inline Eigen::Vector3d Vec3(const mjtNum* v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
 

@@ -18,11 +18,11 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
-#include <mujoco/mujoco.h>
 
 #include "control/robot_model.h"
 #include "mujoco_fixture.h"
@@ -150,8 +150,7 @@ class Pa10Dynamics : public vlab::test::MujocoTest {
   Eigen::VectorXd RandomQ() {
     Eigen::VectorXd q(kDof);
     for (int i = 0; i < kDof; ++i) {
-      q[i] = std::uniform_real_distribution<double>(robot_->lower_limits()[i],
-                                                    robot_->upper_limits()[i])(rng_);
+      q[i] = std::uniform_real_distribution<double>(robot_->lower_limits()[i], robot_->upper_limits()[i])(rng_);
     }
     return q;
   }
@@ -169,11 +168,13 @@ class Pa10Dynamics : public vlab::test::MujocoTest {
 
 TEST_F(Pa10Dynamics, MassesAndComHeightsAreTheDatasheetValues) {
   // DATASHEET 1.3: mass (kg) and OpenHRP centerOfMass z = world height in the zero pose (m)
-  struct Row { const char* body; double mass, com_z; };
-  const Row rows[] = {{"pa10_base", 3.04, 0.075},    {"pa10_link1", 9.78, 0.14818},
-                      {"pa10_link2", 8.41, 0.37675}, {"pa10_link3", 3.52, 0.672141},
-                      {"pa10_link4", 4.31, 0.809590}, {"pa10_link5", 3.45, 1.09875},
-                      {"pa10_link6", 1.46, 1.2335},  {"pa10_link7", 0.24, 1.3145}};
+  struct Row {
+    const char* body;
+    double mass, com_z;
+  };
+  const Row rows[] = {{"pa10_base", 3.04, 0.075},     {"pa10_link1", 9.78, 0.14818},  {"pa10_link2", 8.41, 0.37675},
+                      {"pa10_link3", 3.52, 0.672141}, {"pa10_link4", 4.31, 0.809590}, {"pa10_link5", 3.45, 1.09875},
+                      {"pa10_link6", 1.46, 1.2335},   {"pa10_link7", 0.24, 1.3145}};
   own_->Forward(Eigen::VectorXd::Zero(kDof));
   double total = 0;
   for (const Row& row : rows) {
@@ -239,8 +240,8 @@ TEST_F(Pa10Dynamics, GravityEqualsIndependentSum) {
     const Eigen::VectorXd g_own = own_->Gravity(q);
     ASSERT_GT(g_own.norm(), 1.0) << "a random pose carries a gravity load";
     worst = std::max(worst, (g - g_own).norm() / g_own.norm());
-    ASSERT_LT((g - g_own).norm() / g_own.norm(), 1e-9) << "k=" << k << "\nmujoco " << g.transpose()
-                                                      << "\nown    " << g_own.transpose();
+    ASSERT_LT((g - g_own).norm() / g_own.norm(), 1e-9)
+        << "k=" << k << "\nmujoco " << g.transpose() << "\nown    " << g_own.transpose();
   }
   std::cout << "g: worst relative error " << worst << "\n";
 }
@@ -257,8 +258,8 @@ TEST_F(Pa10Dynamics, CoriolisEqualsChristoffelTermOfIndependentH) {
     const Eigen::VectorXd c = robot_->Bias() - robot_->Gravity();
     const Eigen::VectorXd c_own = own_->Coriolis(q, qd, 1e-5);
     worst = std::max(worst, (c - c_own).norm() / c_own.norm());
-    ASSERT_LT((c - c_own).norm() / c_own.norm(), 1e-7) << "k=" << k << "\nmujoco " << c.transpose()
-                                                      << "\nown    " << c_own.transpose();
+    ASSERT_LT((c - c_own).norm() / c_own.norm(), 1e-7)
+        << "k=" << k << "\nmujoco " << c.transpose() << "\nown    " << c_own.transpose();
   }
   std::cout << "c: worst relative error " << worst << "\n";
 }
@@ -270,7 +271,10 @@ using Pa10Scene = vlab::test::MujocoTest;
 // public and the lab adds its own servo; a damping of 0.2 N m s/rad, 10x the scenario's
 // measured orientation error, was caught by no unit test before this one).
 TEST_F(Pa10Scene, JointArmatureDampingAndFrictionAreTheReadmeValues) {
-  struct Row { const char* joint; double armature; };
+  struct Row {
+    const char* joint;
+    double armature;
+  };
   const Row rows[] = {{"S1", 0.75},    {"S2", 0.75},    {"S3", 0.2125}, {"E1", 0.2125},
                       {"E2", 0.00575}, {"W1", 0.00575}, {"W2", 0.00575}};
   for (const char* scene : {"scenes/pa10.xml", "scenes/pa10_yoyo.xml"}) {

@@ -20,9 +20,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Geometry>
 
 #include "mujoco_fixture.h"
 #include "sensors/sensor_wrench.h"
@@ -31,8 +31,8 @@ namespace vlab::sensors {
 namespace {
 
 constexpr int kDof = 7;
-constexpr double kStep = 0.001;       // physics step, s
-constexpr int kStepsPerRun = 1000;    // 1 s
+constexpr double kStep = 0.001;         // physics step, s
+constexpr int kStepsPerRun = 1000;      // 1 s
 constexpr double kJr3HalfMass = 0.085;  // kg, mjcf/pa10/README.md "JR3 67M25A sensor"
 constexpr double kToolMass = 0.3416;    // kg, README: adapter 0.1428 + pointer 0.1988
 
@@ -50,9 +50,9 @@ Eigen::Matrix3d RotFromXmat(const mjtNum* xmat) {
 
 // what the test computes from the model arrays for one configuration
 struct AnalyticLoad {
-  Wrench load;              // [F; M] in the sensor frame, the load of the subtree on the sensor
-  Eigen::Matrix3d R_WS;     // sensor frame in world, own composition
-  Eigen::Vector3d com_S;    // subtree COM in the sensor frame
+  Wrench load;            // [F; M] in the sensor frame, the load of the subtree on the sensor
+  Eigen::Matrix3d R_WS;   // sensor frame in world, own composition
+  Eigen::Vector3d com_S;  // subtree COM in the sensor frame
   double mass = 0;
 };
 
@@ -132,7 +132,8 @@ class Pa10Jr3 : public vlab::test::MujocoTest {
     // COMs in the jr3_tool_side frame B; tool_body is a rigid child of B (asserted in the test)
     const double m1 = m->body_mass[tool_side_], m2 = m->body_mass[tool_];
     const Eigen::Vector3d com1_B = Vec(m->body_ipos + 3 * tool_side_);
-    const Eigen::Vector3d com2_B = Vec(m->body_pos + 3 * tool_) + Rot(m->body_quat + 4 * tool_) * Vec(m->body_ipos + 3 * tool_);
+    const Eigen::Vector3d com2_B =
+        Vec(m->body_pos + 3 * tool_) + Rot(m->body_quat + 4 * tool_) * Vec(m->body_ipos + 3 * tool_);
     const Eigen::Vector3d com_B = (m1 * com1_B + m2 * com2_B) / (m1 + m2);
     out.com_S = Rot(m->site_quat + 4 * site_).transpose() * (com_B - Vec(m->site_pos + 3 * site_));
     out.mass = m1 + m2;
@@ -171,8 +172,8 @@ class Pa10Jr3 : public vlab::test::MujocoTest {
   // 1 s of 1 ms physics steps at the held pose, each step re-running mj_forward and feeding the
   // sensor reading to the JR3; returns the max |reading - expected| per axis over the readings
   // from `from_step` on, and the last reading
-  Wrench RunSensor(const WrenchSensorModel& jr3, const Eigen::VectorXd& q, const Wrench& expected,
-                   int from_step, Wrench& last_reading) {
+  Wrench RunSensor(const WrenchSensorModel& jr3, const Eigen::VectorXd& q, const Wrench& expected, int from_step,
+                   Wrench& last_reading) {
     WrenchSensorState state;
     Reset(jr3, state);  // switched on (and tared) unloaded; the filters settle within the run
     Wrench worst = Wrench::Zero();
@@ -202,8 +203,8 @@ TEST_F(Pa10Jr3, SubtreeBeyondTheMeasuringPlaneIsTheToolSideHalfAndTheTool) {
   // README "JR3 67M25A sensor": the JR3 is a child of link 7 at the flange face
   const int jr3_body = mj_name2id(m, mjOBJ_BODY, "jr3_body");
   ASSERT_GE(jr3_body, 0);
-  EXPECT_EQ(m->body_parentid[jr3_body], mj_name2id(m, mjOBJ_BODY, "pa10_link7")) << "the JR3 is mounted on "
-      << mj_id2name(m, mjOBJ_BODY, m->body_parentid[jr3_body]);
+  EXPECT_EQ(m->body_parentid[jr3_body], mj_name2id(m, mjOBJ_BODY, "pa10_link7"))
+      << "the JR3 is mounted on " << mj_id2name(m, mjOBJ_BODY, m->body_parentid[jr3_body]);
   std::vector<int> subtree;
   for (int b = 1; b < m->nbody; ++b) {
     for (int a = b; a > 0; a = m->body_parentid[a]) {
@@ -227,8 +228,10 @@ TEST_F(Pa10Jr3, SubtreeBeyondTheMeasuringPlaneIsTheToolSideHalfAndTheTool) {
     const Eigen::Matrix3d R_WF = RotFromXmat(data_->site_xmat + 9 * flange);
     const Eigen::Matrix3d R_WS = RotFromXmat(data_->site_xmat + 9 * site_);
     EXPECT_LT((R_WS - R_WF).norm(), 1e-12);
-    EXPECT_LT((Vec(data_->site_xpos + 3 * site_) - Vec(data_->site_xpos + 3 * flange) -
-               R_WF * Eigen::Vector3d(0, 0, 0.0125)).norm(), 1e-12);
+    EXPECT_LT(
+        (Vec(data_->site_xpos + 3 * site_) - Vec(data_->site_xpos + 3 * flange) - R_WF * Eigen::Vector3d(0, 0, 0.0125))
+            .norm(),
+        1e-12);
   }
 }
 
@@ -241,8 +244,9 @@ TEST_F(Pa10Jr3, OwnKinematicsAgreeWithMujoco) {
     const mjData* d = data_;
     const Eigen::Matrix3d R_WS = RotFromXmat(d->site_xmat + 9 * site_);
     EXPECT_LT((a.R_WS - R_WS).norm(), 1e-12) << q.transpose();
-    const Eigen::Vector3d com_W = (m->body_mass[tool_side_] * Vec(d->xipos + 3 * tool_side_) +
-                                   m->body_mass[tool_] * Vec(d->xipos + 3 * tool_)) / a.mass;
+    const Eigen::Vector3d com_W =
+        (m->body_mass[tool_side_] * Vec(d->xipos + 3 * tool_side_) + m->body_mass[tool_] * Vec(d->xipos + 3 * tool_)) /
+        a.mass;
     const Eigen::Vector3d com_S = R_WS.transpose() * (com_W - Vec(d->site_xpos + 3 * site_));
     EXPECT_LT((a.com_S - com_S).norm(), 1e-12) << q.transpose();
   }
@@ -267,8 +271,8 @@ TEST_F(Pa10Jr3, IdealSensorReadsTheStaticLoadExactly) {
     RunSensor(*jr3, q, a.load, 0, last);
     const Wrench fraction = (last - a.load).cwiseQuotient(jr3->full_scale()).cwiseAbs();
     worst_fraction = std::max(worst_fraction, fraction.maxCoeff());
-    EXPECT_LT(fraction.maxCoeff(), 1e-9) << "q " << q.transpose() << "\nread     " << last.transpose()
-                                         << "\nanalytic " << a.load.transpose();
+    EXPECT_LT(fraction.maxCoeff(), 1e-9) << "q " << q.transpose() << "\nread     " << last.transpose() << "\nanalytic "
+                                         << a.load.transpose();
     // the load is not trivially small: it would show any error
     EXPECT_NEAR(a.load.head<3>().norm(), a.mass * 9.81, 1e-12);
   }
@@ -311,8 +315,8 @@ TEST_F(Pa10Jr3, DefaultSensorReadsTheStaticLoadWithinNoiseBiasAndQuantisation) {
     const Wrench worst = RunSensor(*jr3, q, a.load, kStepsPerRun / 2, last);
     worst_fraction_of_bound = worst_fraction_of_bound.cwiseMax(worst.cwiseQuotient(bound));
     for (int i = 0; i < 6; ++i) {
-      EXPECT_LT(worst[i], bound[i]) << "axis " << i << ", q " << q.transpose() << "\nread     "
-                                    << last.transpose() << "\nanalytic " << a.load.transpose();
+      EXPECT_LT(worst[i], bound[i]) << "axis " << i << ", q " << q.transpose() << "\nread     " << last.transpose()
+                                    << "\nanalytic " << a.load.transpose();
     }
     // the reading is quantised to whole counts
     const Wrench counts = last.cwiseQuotient(jr3->lsb());

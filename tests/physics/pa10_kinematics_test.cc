@@ -24,9 +24,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Geometry>
 
 #include "control/robot_model.h"
 #include "mujoco_fixture.h"
@@ -41,8 +41,7 @@ constexpr int kDof = 7;
 // standard DH, variant A (DATASHEET 1.2)
 constexpr double kD[kDof] = {0.315, 0.0, 0.450, 0.0, 0.500, 0.0, 0.080};
 constexpr double kA[kDof] = {0, 0, 0, 0, 0, 0, 0};
-constexpr double kAlpha[kDof] = {-90 * kDeg, 90 * kDeg, -90 * kDeg, 90 * kDeg,
-                                 -90 * kDeg, 90 * kDeg, 0.0};
+constexpr double kAlpha[kDof] = {-90 * kDeg, 90 * kDeg, -90 * kDeg, 90 * kDeg, -90 * kDeg, 90 * kDeg, 0.0};
 // theta_i = kSign[i] * q_i + kOffset[i] (see the file comment)
 constexpr double kSign[kDof] = {1, 1, 1, 1, 1, 1, 1};
 constexpr double kOffset[kDof] = {0, 0, 0, 0, 0, 0, 0};

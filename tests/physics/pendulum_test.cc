@@ -45,9 +45,7 @@ double ArithmeticGeometricMean(double a, double b) {
 
 // K(k) = pi / (2 AGM(1, k')), k' = sqrt(1 - k^2) written as sqrt((1 - k)(1 + k)) so that
 // k near 1 keeps its digits
-double EllipticK(double k) {
-  return kPi / (2.0 * ArithmeticGeometricMean(1.0, std::sqrt((1.0 - k) * (1.0 + k))));
-}
+double EllipticK(double k) { return kPi / (2.0 * ArithmeticGeometricMean(1.0, std::sqrt((1.0 - k) * (1.0 + k)))); }
 
 TEST(EllipticK, AgmEqualsStandardLibraryAndClosedForms) {
   EXPECT_DOUBLE_EQ(EllipticK(0.0), kPi / 2);
@@ -68,9 +66,9 @@ TEST(EllipticK, AgmEqualsStandardLibraryAndClosedForms) {
 
 // pivot 2 m above the floor, hinge about +y, COM kLength below the pivot; the central
 // inertia is anisotropic so that picking the wrong component would change the period
-constexpr double kMass = 1.3;               // kg
-constexpr double kLength = 0.5;             // pivot to COM, m
-constexpr double kInertiaAxis = 0.012;      // central inertia about the hinge (y), kg m^2
+constexpr double kMass = 1.3;           // kg
+constexpr double kLength = 0.5;         // pivot to COM, m
+constexpr double kInertiaAxis = 0.012;  // central inertia about the hinge (y), kg m^2
 constexpr double kInertiaPivot = kInertiaAxis + kMass * kLength * kLength;  // 0.337 kg m^2
 
 // Timestep: the small-angle rate w0 = sqrt(m g L / I_pivot) = 4.35 rad/s bounds the local
@@ -103,8 +101,7 @@ std::string SimplePendulumXml(const char* integrator, double timestep) {
 double HermiteRoot(double y0, double d0, double y1, double d1) {
   const auto p = [&](double s) {
     const double s2 = s * s, s3 = s2 * s;
-    return (2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * y1 +
-           (s3 - s2) * d1;
+    return (2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * y1 + (s3 - s2) * d1;
   };
   double lo = 0.0, hi = 1.0;
   for (int i = 0; i < 200 && hi - lo > 1e-17; ++i) {
@@ -115,8 +112,7 @@ double HermiteRoot(double y0, double d0, double y1, double d1) {
 }
 
 // mean time between downward zero crossings of theta over `periods` periods
-double MeasurePeriod(const mjModel* model, mjData* data, double theta0, int periods,
-                     double expected_period) {
+double MeasurePeriod(const mjModel* model, mjData* data, double theta0, int periods, double expected_period) {
   mj_resetData(model, data);
   data->qpos[0] = theta0;
   const double h = model->opt.timestep;
@@ -133,8 +129,8 @@ double MeasurePeriod(const mjModel* model, mjData* data, double theta0, int peri
     }
   }
   if (static_cast<int>(crossings.size()) != periods + 1) {
-    ADD_FAILURE() << "theta0 " << theta0 / kDeg << " deg: " << crossings.size()
-                  << " downward crossings, expected " << periods + 1;
+    ADD_FAILURE() << "theta0 " << theta0 / kDeg << " deg: " << crossings.size() << " downward crossings, expected "
+                  << periods + 1;
     return 0.0;
   }
   return (crossings.back() - crossings.front()) / periods;
@@ -157,8 +153,7 @@ TEST_F(SimplePendulum, PeriodEqualsEllipticIntegralClosedForm) {
   const double small_angle_period = 2 * kPi * std::sqrt(kInertiaPivot / (kMass * kG * kLength));
   for (double theta0_deg : {10.0, 90.0, 170.0}) {
     const double theta0 = theta0_deg * kDeg;
-    const double exact = 4.0 * std::sqrt(kInertiaPivot / (kMass * kG * kLength)) *
-                         EllipticK(std::sin(0.5 * theta0));
+    const double exact = 4.0 * std::sqrt(kInertiaPivot / (kMass * kG * kLength)) * EllipticK(std::sin(0.5 * theta0));
     const double measured = MeasurePeriod(model, data, theta0, 6, exact);
     const double relative_error = (measured - exact) / exact;
     std::cout << "theta0 " << theta0_deg << " deg: T exact " << exact << " s (" << exact / small_angle_period
@@ -198,8 +193,8 @@ std::string DoublePendulumXml(const char* integrator, double timestep) {
     </body>
   </worldbody>
 </mujoco>)",
-                timestep, integrator, -kG, kPivotHeight, -kUpper.com, kUpper.mass, kUpper.inertia_y,
-                -kUpperLength, -kLower.com, kLower.mass, kLower.inertia_y);
+                timestep, integrator, -kG, kPivotHeight, -kUpper.com, kUpper.mass, kUpper.inertia_y, -kUpperLength,
+                -kLower.com, kLower.mass, kLower.inertia_y);
   return xml;
 }
 
@@ -227,7 +222,7 @@ Energy OwnEnergy(double th1, double th2, double w1, double w2) {
 }
 
 struct EnergyRecord {
-  std::vector<double> total;   // MuJoCo's energy[0] + energy[1] at every step start
+  std::vector<double> total;     // MuJoCo's energy[0] + energy[1] at every step start
   double max_gravity_power = 0;  // max |dV/dt| along the run, W
   double max_own_mismatch = 0;   // max |MuJoCo - own| / (|T| + |V|) at the sample instants
 };
@@ -257,19 +252,19 @@ EnergyRecord DoublePendulum::RunDoublePendulum(const char* integrator, double ti
     record.total.push_back(data->energy[0] + data->energy[1]);
     const double *q = data->qpos, *v = data->qvel;
     // dV/dt = g (m1 dz1/dt + m2 dz2/dt)
-    const double power = kG * (kUpper.mass * kUpper.com * std::sin(q[0]) * v[0] +
-                               kLower.mass * (kUpperLength * std::sin(q[0]) * v[0] +
-                                              kLower.com * std::sin(q[0] + q[1]) * (v[0] + v[1])));
+    const double power =
+        kG *
+        (kUpper.mass * kUpper.com * std::sin(q[0]) * v[0] +
+         kLower.mass * (kUpperLength * std::sin(q[0]) * v[0] + kLower.com * std::sin(q[0] + q[1]) * (v[0] + v[1])));
     record.max_gravity_power = std::max(record.max_gravity_power, std::abs(power));
     if (step % sample_every == 0) {
       const Energy own = OwnEnergy(q[0], q[1], v[0], v[1]);
       const double scale = std::abs(own.kinetic) + std::abs(own.potential);
-      const double mismatch = std::max(std::abs(data->energy[0] - own.potential),
-                                       std::abs(data->energy[1] - own.kinetic)) / scale;
+      const double mismatch =
+          std::max(std::abs(data->energy[0] - own.potential), std::abs(data->energy[1] - own.kinetic)) / scale;
       record.max_own_mismatch = std::max(record.max_own_mismatch, mismatch);
-      EXPECT_LT(mismatch, 1e-10) << integrator << " t=" << data->time << ": MuJoCo T "
-                                 << data->energy[1] << " V " << data->energy[0] << ", own T "
-                                 << own.kinetic << " V " << own.potential;
+      EXPECT_LT(mismatch, 1e-10) << integrator << " t=" << data->time << ": MuJoCo T " << data->energy[1] << " V "
+                                 << data->energy[0] << ", own T " << own.kinetic << " V " << own.potential;
     }
     if (step < steps) mj_step(model, data);
   }
@@ -294,9 +289,8 @@ TEST_F(DoublePendulum, Rk4ConservesEnergyToFourthOrder) {
   ASSERT_EQ(run.total.size(), 20001u);
   const double e0 = run.total.front();
   const double drift = MaxDeviation(run.total, 0, run.total.size()) / std::abs(e0);
-  std::cout << "RK4 h=1ms: E0 " << e0 << " J, max |E - E0| / |E0| over 20 s " << drift
-            << ", max gravity power " << run.max_gravity_power << " W, own-energy mismatch "
-            << run.max_own_mismatch << "\n";
+  std::cout << "RK4 h=1ms: E0 " << e0 << " J, max |E - E0| / |E0| over 20 s " << drift << ", max gravity power "
+            << run.max_gravity_power << " W, own-energy mismatch " << run.max_own_mismatch << "\n";
   EXPECT_LT(drift, 1e-6);
   // chaotic, not a quiet swing: the links exchange a lot of energy with gravity
   EXPECT_GT(run.max_gravity_power, 10.0);
@@ -307,8 +301,8 @@ TEST_F(DoublePendulum, Rk4ConservesEnergyToFourthOrder) {
   const EnergyRecord half = RunDoublePendulum("RK4", h / 2, 1.0);
   const double first_second_half = MaxDeviation(half.total, 0, half.total.size());
   const double ratio = first_second / first_second_half;
-  std::cout << "RK4 max |E - E0| over the first 1 s: h=1ms " << first_second << " J, h=0.5ms "
-            << first_second_half << " J, ratio " << ratio << " (4th order: 16)\n";
+  std::cout << "RK4 max |E - E0| over the first 1 s: h=1ms " << first_second << " J, h=0.5ms " << first_second_half
+            << " J, ratio " << ratio << " (4th order: 16)\n";
   EXPECT_GT(ratio, 12.0);
   EXPECT_LT(ratio, 20.0);
 }
@@ -347,9 +341,8 @@ TEST_F(SimplePendulum, SemiImplicitEulerOscillatesAroundModifiedEnergy) {
     if (i >= deviation.size() - 5001) last = std::max(last, std::abs(deviation[i]));
   }
   const double amplitude = 0.5 * h * max_power;
-  std::cout << "simple pendulum, Euler h=1ms, 120 deg: max |E - E0| first 5 s " << first << " J, last 5 s "
-            << last << " J, (h/2) max|P| " << amplitude << " J, |E - E0 - (h/2)(P - P0)| <= " << max_residual
-            << " J\n";
+  std::cout << "simple pendulum, Euler h=1ms, 120 deg: max |E - E0| first 5 s " << first << " J, last 5 s " << last
+            << " J, (h/2) max|P| " << amplitude << " J, |E - E0 - (h/2)(P - P0)| <= " << max_residual << " J\n";
   // the first-order modified energy explains the oscillation; the O(h^2) rest is of relative
   // size ~ (w0 h)^2 ~ 2e-5 per unit of energy swing (m g L = 6.4 J): ~1e-4 J, well below 10 %
   EXPECT_LT(max_residual, 0.1 * amplitude);
@@ -376,9 +369,9 @@ TEST_F(DoublePendulum, SemiImplicitEulerNeverGainsAndLosesAtFirstOrder) {
   const double first = MaxDeviation(run.total, 0, 5001);
   const double last = MaxDeviation(run.total, run.total.size() - 5001, run.total.size());
   const double oscillation = 0.5 * h * run.max_gravity_power;
-  std::cout << "double pendulum, Euler h=1ms: E0 " << e0 << " J, max gain " << max_gain
-            << " J, max |E - E0| first 5 s " << first << " J, last 5 s " << last << " J (" << last / std::abs(e0)
-            << " of E0), (h/2) max|P| " << oscillation << " J, own-energy mismatch " << run.max_own_mismatch << "\n";
+  std::cout << "double pendulum, Euler h=1ms: E0 " << e0 << " J, max gain " << max_gain << " J, max |E - E0| first 5 s "
+            << first << " J, last 5 s " << last << " J (" << last / std::abs(e0) << " of E0), (h/2) max|P| "
+            << oscillation << " J, own-energy mismatch " << run.max_own_mismatch << "\n";
   EXPECT_LE(max_gain, oscillation);
   EXPECT_LT(last, 4.0 * first);
 
@@ -386,8 +379,8 @@ TEST_F(DoublePendulum, SemiImplicitEulerNeverGainsAndLosesAtFirstOrder) {
   for (double divisor : {2.0, 4.0}) {
     const EnergyRecord finer = RunDoublePendulum("Euler", h / divisor, 1.0);
     const double loss = MaxDeviation(finer.total, 0, finer.total.size());
-    std::cout << "Euler max |E - E0| over the first 1 s at h = " << h / divisor << ": " << loss
-              << " J, ratio " << previous / loss << " (1st order: 2)\n";
+    std::cout << "Euler max |E - E0| over the first 1 s at h = " << h / divisor << ": " << loss << " J, ratio "
+              << previous / loss << " (1st order: 2)\n";
     EXPECT_GT(previous / loss, 1.8) << "h / " << divisor;
     EXPECT_LT(previous / loss, 2.2) << "h / " << divisor;
     previous = loss;

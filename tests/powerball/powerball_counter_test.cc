@@ -35,8 +35,9 @@ std::vector<std::string> Split(const std::string& line) {
 // tilted ring's share), couple I_s omega nu = 0.0390 N m (mjcf/powerball/README.md)
 TEST(PowerballCounter, LogsTheBallsTruthBesideTheReading) {
   vlab::testing::TempDir dir;
-  vlab::testing::WriteFile(dir / "s.yaml", Scenario(std::string(VLAB_SOURCE_DIR) + "/mjcf/powerball/powerball_gimbal.xml",
-                                                    "keyframe: spin2000\n"));
+  vlab::testing::WriteFile(
+      dir / "s.yaml",
+      Scenario(std::string(VLAB_SOURCE_DIR) + "/mjcf/powerball/powerball_gimbal.xml", "keyframe: spin2000\n"));
   std::unique_ptr<Lab> lab = Lab::Create(LoadScenario(dir / "s.yaml"));
   RunOptions options;
   options.out_dir = dir / "out";

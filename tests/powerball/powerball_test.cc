@@ -79,8 +79,10 @@ class PowerballRig : public vlab::test::MujocoTest {
     GimbalAngles(alpha, psi - h, &xm, &ym);
     const double ax = (xp - 2.0 * x0 + xm) / (h * h) * psi_dot * psi_dot;
     const double ay = (yp - 2.0 * y0 + ym) / (h * h) * psi_dot * psi_dot;
-    data_->ctrl[0] = kInertia * ax + kp * Wrap(x0 - data_->qpos[gimbal_x_]) + kd * ((x1 - x0) / h - data_->qvel[gimbal_x_]);
-    data_->ctrl[1] = kInertia * ay + kp * Wrap(y0 - data_->qpos[gimbal_y_]) + kd * ((y1 - y0) / h - data_->qvel[gimbal_y_]);
+    data_->ctrl[0] =
+        kInertia * ax + kp * Wrap(x0 - data_->qpos[gimbal_x_]) + kd * ((x1 - x0) / h - data_->qvel[gimbal_x_]);
+    data_->ctrl[1] =
+        kInertia * ay + kp * Wrap(y0 - data_->qpos[gimbal_y_]) + kd * ((y1 - y0) / h - data_->qvel[gimbal_y_]);
   }
 
   // the cone locked to the axle, as a wrist would do it: a phase oscillator psi turning at
@@ -196,7 +198,10 @@ TEST_F(PowerballRig, SpinUpFollowsTheRateLawFrom2000To8000Rpm) {
   const double n = double(times.size());
   // least-squares slope of 1/nu against t
   double mean_t = 0.0, mean_y = 0.0;
-  for (size_t i = 0; i < times.size(); ++i) { mean_t += times[i] / n; mean_y += inverse_nu[i] / n; }
+  for (size_t i = 0; i < times.size(); ++i) {
+    mean_t += times[i] / n;
+    mean_y += inverse_nu[i] / n;
+  }
   double stt = 0.0, sty = 0.0;
   for (size_t i = 0; i < times.size(); ++i) {
     stt += (times[i] - mean_t) * (times[i] - mean_t);

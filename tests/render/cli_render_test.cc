@@ -40,9 +40,10 @@ void ExpectPng(const std::string& path, int type, int width, int height) {
 
 TEST(CliRender, WritesFramesAndVideo) {
   TempDir dir;
-  const ProcessResult r =
-      RunVlab("render scenes/pa10_reach --camera overview --frames 4 --every 0.05 --width 320 --height 240 "
-              "--profile fast --depth --segmentation -q --out " + (dir / "frames") + " --video " + (dir / "v.mp4"));
+  const ProcessResult r = RunVlab(
+      "render scenes/pa10_reach --camera overview --frames 4 --every 0.05 --width 320 --height 240 "
+      "--profile fast --depth --segmentation -q --out " +
+      (dir / "frames") + " --video " + (dir / "v.mp4"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("4 frames 320x240 of camera 'overview' (fast)"), std::string::npos) << r.out;
   EXPECT_EQ(r.err, "");  // quiet: no renderer line
@@ -77,9 +78,10 @@ TEST(CliRender, InterruptKeepsTheFramesRendered) {
   WriteFile(dir / "s.yaml", std::string("scene: ") + VLAB_SOURCE_DIR +
                                 "/scenes/pa10.xml\nduration: 1000\ncontrol_period: 0.002\ndevices:\n"
                                 "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n");
-  const ProcessResult r = RunVlab("render " + (dir / "s.yaml") + " --camera overview --every 0.002 --width 64 "
-                                  "--height 48 --profile fast -q --out " + (dir / "frames") + " --video " +
-                                  (dir / "frames/v.mp4"),
+  const ProcessResult r = RunVlab("render " + (dir / "s.yaml") +
+                                      " --camera overview --every 0.002 --width 64 "
+                                      "--height 48 --profile fast -q --out " +
+                                      (dir / "frames") + " --video " + (dir / "frames/v.mp4"),
                                   2, "INT");
   ASSERT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("vlab: interrupted by SIGINT at t = "), std::string::npos) << r.err;
@@ -103,8 +105,10 @@ TEST(CliRender, InterruptKeepsTheFramesRendered) {
 
 TEST(CliRender, ReplacesTheOutputFolderWhole) {
   TempDir dir;
-  const std::string base = "render scenes/pa10_reach --camera overview --every 0.02 --width 160 --height 120 "
-                           "--profile fast -q --out " + (dir / "frames");
+  const std::string base =
+      "render scenes/pa10_reach --camera overview --every 0.02 --width 160 --height 120 "
+      "--profile fast -q --out " +
+      (dir / "frames");
   ASSERT_EQ(RunVlab(base + " --frames 3").exit_code, 0);
   ASSERT_EQ(RunVlab(base + " --frames 2").exit_code, 0);
   EXPECT_EQ(Entries(dir / "frames"),
@@ -115,9 +119,9 @@ TEST(CliRender, ReplacesTheOutputFolderWhole) {
 // a video named inside the output folder moves into place with the frames
 TEST(CliRender, VideoInsideTheOutputFolderIsKept) {
   TempDir dir;
-  const ProcessResult r =
-      RunVlab("render scenes/pa10_reach --camera overview --frames 3 --width 160 --height 120 --profile fast -q --out " +
-              (dir / "frames") + " --video " + (dir / "frames/clip.mp4"));
+  const ProcessResult r = RunVlab(
+      "render scenes/pa10_reach --camera overview --frames 3 --width 160 --height 120 --profile fast -q --out " +
+      (dir / "frames") + " --video " + (dir / "frames/clip.mp4"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(VideoFrames(dir / "frames/clip.mp4", 160, 120), 3);
   EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"frames"}));  // nothing staged left beside it
@@ -125,13 +129,14 @@ TEST(CliRender, VideoInsideTheOutputFolderIsKept) {
 
 TEST(CliRender, RendersWhatFitsTheScenario) {
   TempDir dir;
-  const ProcessResult r = RunVlab("render scenes/pa10_reach --camera overview --every 5 --frames 5 --width 160 "
-                                  "--height 120 --profile fast --out " + (dir / "frames"));
+  const ProcessResult r = RunVlab(
+      "render scenes/pa10_reach --camera overview --every 5 --frames 5 --width 160 "
+      "--height 120 --profile fast --out " +
+      (dir / "frames"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("3 of the 5 frames asked for fit"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("vlab: render: "), std::string::npos) << "the GL renderer is logged";
-  EXPECT_EQ(Lines(ReadFile(dir / "frames/frames.csv")),
-            (std::vector<std::string>{"frame,time", "0,0", "1,5", "2,10"}));
+  EXPECT_EQ(Lines(ReadFile(dir / "frames/frames.csv")), (std::vector<std::string>{"frame,time", "0,0", "1,5", "2,10"}));
 }
 
 // a frame that cannot be written (here: larger than the file size limit, SIGXFSZ ignored, so
@@ -141,8 +146,8 @@ TEST(CliRender, AFrameThatCannotBeWrittenIsReportedAndNothingHalfWrittenIsLeft) 
   TempDir dir;
   const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && trap '' XFSZ && ulimit -f 8 && '" VLAB_BINARY_DIR
                           "/vlab' render scenes/pa10_reach --camera overview --frames 3 --width 160 --height 120 "
-                          "--profile fast -q --out '" + (dir / "frames") + "' >'" + (dir / "out") + "' 2>'" +
-                          (dir / "err") + "' </dev/null";
+                          "--profile fast -q --out '" +
+                          (dir / "frames") + "' >'" + (dir / "out") + "' 2>'" + (dir / "err") + "' </dev/null";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   const std::string err = ReadFile(dir / "err");
@@ -235,7 +240,8 @@ TEST(CliRun, BadImageOutputsAreInputErrorsBeforeAnythingIsWritten) {
     WriteFile(dir / "bad.yaml", "name: bad\nscene: " + scene +
                                     "\nduration: 0.1\ncontrol_period: 0.002\n"
                                     "devices:\n  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n"
-                                    "outputs:\n  images:\n    - " + c.args + "\n");
+                                    "outputs:\n  images:\n    - " +
+                                    c.args + "\n");
     const ProcessResult r = RunVlab("run " + (dir / "bad.yaml") + " -q --out " + (dir / "run"));
     EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;

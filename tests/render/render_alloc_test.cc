@@ -30,7 +30,8 @@ using vlab::testing::TempDir;
 TEST(RenderAllocTest, ImageOutputsDoNotAllocateBetweenFrames) {
   TempDir dir;
   vlab::testing::WriteFile(dir / "images.yaml",
-                           "name: images\nscene: " VLAB_SOURCE_DIR "/scenes/pa10.xml\nduration: 0.3\n"
+                           "name: images\nscene: " VLAB_SOURCE_DIR
+                           "/scenes/pa10.xml\nduration: 0.3\n"
                            "devices:\n  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2]}\n"
                            "outputs:\n  images:\n"
                            "    - {camera: overview, every: 0.1, width: 160, height: 120, depth: true,\n"

@@ -32,8 +32,8 @@ TEST(WrenchSensorTest, StepResponseMatchesIndependentDifferenceEquations) {
     reference.Step(1.0);
     for (int k = 0; k <= 6; ++k) {
       for (int i = 0; i < 6; ++i) {
-        worst = std::max(worst, std::abs(reading.all_filters[k][i] -
-                                         amplitude[i] * reference.out[k]) / std::abs(amplitude[i]));
+        worst = std::max(
+            worst, std::abs(reading.all_filters[k][i] - amplitude[i] * reference.out[k]) / std::abs(amplitude[i]));
       }
     }
   }
@@ -58,8 +58,7 @@ TEST(WrenchSensorTest, Filter1StepFollowsContinuousButterworth) {
     const WrenchReading reading = Update(*model, state, Wrench::Ones(), kTs);
     const double t = m * kTs + 0.5 * kTs;
     const double expected =
-        1.0 - std::exp(-zeta * wa * t) *
-                  (std::cos(wd * t) + zeta / std::sqrt(1.0 - zeta * zeta) * std::sin(wd * t));
+        1.0 - std::exp(-zeta * wa * t) * (std::cos(wd * t) + zeta / std::sqrt(1.0 - zeta * zeta) * std::sin(wd * t));
     ASSERT_NEAR(reading.all_filters[1][0], expected, tolerance) << "sample " << m;
   }
 }
@@ -93,8 +92,7 @@ double SineGain(int k, double frequency_hz, double settle_s, double measure_s) {
   long count = 0;
   for (long n = 1; n <= total; ++n) {
     const double t = n * kTs;
-    const WrenchReading reading =
-        Update(*model, state, Wrench::Constant(std::sin(2.0 * kPi * frequency_hz * t)), kTs);
+    const WrenchReading reading = Update(*model, state, Wrench::Constant(std::sin(2.0 * kPi * frequency_hz * t)), kTs);
     if (n > settle && n % decimation == 0) {
       sum_sin += reading.all_filters[k][0] * std::sin(2.0 * kPi * frequency_hz * t);
       sum_cos += reading.all_filters[k][0] * std::cos(2.0 * kPi * frequency_hz * t);

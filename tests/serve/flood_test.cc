@@ -26,7 +26,7 @@
 namespace vlab::testing {
 namespace {
 
-constexpr long kPeriods = 3000;    // scenes/pa10_serve.yaml: 500 Hz, 6 s
+constexpr long kPeriods = 3000;  // scenes/pa10_serve.yaml: 500 Hz, 6 s
 constexpr int kFloodPorts = 64;
 constexpr double kFloodRound_s = 0.004;  // each flood port sends one datagram per round: up to 16000 per second
 
@@ -75,9 +75,15 @@ void RunFlood(int arm_port, const std::atomic<bool>& stop, Flood* out) {
   for (long round = 0; !stop; ++round) {
     for (int i = 0; i < kFloodPorts; ++i) {
       switch ((round + i) % 3) {
-        case 0: bridge::EncodeDescribeRequest(static_cast<int>(bridge::DeviceKind::kArm), 0, &packet); break;
-        case 1: bridge::EncodeSubscribeRequest(bridge::DeviceKind::kArm, 1000 + round, 1, &packet); break;
-        default: bridge::EncodeArmCommand(static_cast<double>(round), 0, command, &packet); break;
+        case 0:
+          bridge::EncodeDescribeRequest(static_cast<int>(bridge::DeviceKind::kArm), 0, &packet);
+          break;
+        case 1:
+          bridge::EncodeSubscribeRequest(bridge::DeviceKind::kArm, 1000 + round, 1, &packet);
+          break;
+        default:
+          bridge::EncodeArmCommand(static_cast<double>(round), 0, command, &packet);
+          break;
       }
       ((round + i) % 3 == 2 ? out->commands : out->requests) += 1;
       ++out->sent;
@@ -172,20 +178,21 @@ TEST(ServeFloodTest, AControllerKeepsItsArmThroughAFloodOf64Ports) {
   EXPECT_LE(challenged, f.requests);
   EXPECT_EQ(a.at("describes"), q.at("describes")) << "no describe reply to an unproven source";
   EXPECT_EQ(a.at("sessions").at("subscribed"), 1) << "only the controller subscribed";
-  EXPECT_EQ(a.at("received").get<long>(),
-            a.at("accepted").get<long>() + a.at("requests").get<long>() + a.at("refused").get<long>() +
-                a.at("stale").get<long>() + a.at("duplicate").get<long>() + a.at("future").get<long>());
+  EXPECT_EQ(a.at("received").get<long>(), a.at("accepted").get<long>() + a.at("requests").get<long>() +
+                                              a.at("refused").get<long>() + a.at("stale").get<long>() +
+                                              a.at("duplicate").get<long>() + a.at("future").get<long>());
 
   // the flood's sources got back challenges only, as large as their requests: amplification 1
   EXPECT_EQ(f.not_challenges, 0) << "a flood source received a state or a describe reply";
   EXPECT_EQ(f.received, challenged);
   EXPECT_EQ(f.received_bytes, 72 * challenged);
   EXPECT_LE(f.received_bytes, f.sent_bytes);
-  std::printf("flood: %ld datagrams (%ld bytes) from %d ports, %ld commands, %ld requests, %ld dropped by the "
-              "kernel; back: %ld datagrams (%ld bytes), amplification %.3f (requests alone: %.3f)\n",
-              f.sent, f.sent_bytes, kFloodPorts, f.commands, f.requests, flooded.drops, f.received,
-              f.received_bytes, static_cast<double>(f.received_bytes) / static_cast<double>(f.sent_bytes),
-              static_cast<double>(f.received_bytes) / (72.0 * static_cast<double>(challenged)));
+  std::printf(
+      "flood: %ld datagrams (%ld bytes) from %d ports, %ld commands, %ld requests, %ld dropped by the "
+      "kernel; back: %ld datagrams (%ld bytes), amplification %.3f (requests alone: %.3f)\n",
+      f.sent, f.sent_bytes, kFloodPorts, f.commands, f.requests, flooded.drops, f.received, f.received_bytes,
+      static_cast<double>(f.received_bytes) / static_cast<double>(f.sent_bytes),
+      static_cast<double>(f.received_bytes) / (72.0 * static_cast<double>(challenged)));
 }
 
 }  // namespace

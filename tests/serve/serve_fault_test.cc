@@ -24,14 +24,14 @@ bool Has(std::uint32_t status, std::uint32_t bit) { return (status & bit) != 0; 
 TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
   TempDir tmp;
   const int arm_port = FreeUdpPort(), sim_port = FreeUdpPort();
-  ServeProcess serve("tests/data/serve_faults --port pa10=" + std::to_string(arm_port) + " --port sim=" +
-                         std::to_string(sim_port) + " --out '" + (tmp / "out") + "'",
+  ServeProcess serve("tests/data/serve_faults --port pa10=" + std::to_string(arm_port) +
+                         " --port sim=" + std::to_string(sim_port) + " --out '" + (tmp / "out") + "'",
                      tmp.path());
   ASSERT_TRUE(serve.WaitStarted()) << serve.Output() << serve.Errors();
 
   auto peer = std::make_unique<Peer>(arm_port);  // the controller
-  Peer second(arm_port);                           // a second controller
-  std::unique_ptr<Peer> restarted;                 // the controller after its restart
+  Peer second(arm_port);                         // a second controller
+  std::unique_ptr<Peer> restarted;               // the controller after its restart
   peer->Describe(bridge::DeviceKind::kArm);
   second.Describe(bridge::DeviceKind::kArm);  // a subscriber: its commands reach the ownership check
   const std::vector<double> v = {0.1, 0, 0, 0, 0, 0, 0};
@@ -71,9 +71,9 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
       bad = p;
       bad.resize(bad.size() - 8);  // one joint short: the length field no longer matches
       peer->Send(bad);
-      peer->Command(k, 2, {10, 0, 0, 0, 0, 0, 0});       // beyond max_velocity
-      peer->Command(k, 1, {0, 3, 0, 1, 0, 1.5, 0});      // S2 beyond its range
-      peer->Command(k, 3, {500, 0, 0, 0, 0, 0, 0});      // beyond the S1 motor
+      peer->Command(k, 2, {10, 0, 0, 0, 0, 0, 0});   // beyond max_velocity
+      peer->Command(k, 1, {0, 3, 0, 1, 0, 1.5, 0});  // S2 beyond its range
+      peer->Command(k, 3, {500, 0, 0, 0, 0, 0, 0});  // beyond the S1 motor
       peer->Command(k, 2, v);
     } else if (k == 30) {
       peer->Command(k, 2, {10, 0, 0, 0, 0, 0, 0});  // refused, and nothing valid: lockstep times out
@@ -92,9 +92,10 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
       second.Command(k, 2, {-0.1, 0, 0, 0, 0, 0, 0});  // not the owner: refused
       ArmStateMsg s2;
       Header h2;
-      if (second.ReadArm(&h2, &s2, 1)) second_saw_not_owner = second_saw_not_owner || Has(s2.status, bridge::kStatusNotOwner);
+      if (second.ReadArm(&h2, &s2, 1))
+        second_saw_not_owner = second_saw_not_owner || Has(s2.status, bridge::kStatusNotOwner);
     } else if (k == 200) {
-      peer.reset();  // the controller dies...
+      peer.reset();                                  // the controller dies...
       restarted = std::make_unique<Peer>(arm_port);  // ...and a new one starts
       restarted->Describe(bridge::DeviceKind::kArm);
     } else if (restarted) {

@@ -29,7 +29,8 @@ std::string Port(int port) { return std::to_string(port); }
 std::string LockstepScenario(double start_timeout_s, double duration_s) {
   return std::string("name: lifecycle\nscene: ") + VLAB_SOURCE_DIR + "/scenes/pa10.xml\n" +
          "duration: " + std::to_string(duration_s) + "\ncontrol_period: 0.002\nclock: lockstep\n" +
-         "lockstep: {timeout: 1.0, start_timeout: " + std::to_string(start_timeout_s) + ", on_timeout: hold}\n"
+         "lockstep: {timeout: 1.0, start_timeout: " + std::to_string(start_timeout_s) +
+         ", on_timeout: hold}\n"
          "devices:\n"
          "  - {name: pa10, kind: arm, port: 1, joints: [S1, S2, S3, E1, E2, W1, W2],\n"
          "     initial: [0, 0.523599, 0, 1.047198, 0, 1.570796, 0]}\n"
@@ -46,9 +47,9 @@ TEST(ServeLifecycle, SigintKeepsEveryPeriodThatRan) {
                          " --port sim=" + Port(sim) + " --out '" + (tmp / "out") + "'",
                      tmp.path());
   ASSERT_TRUE(serve.WaitStarted()) << serve.Output() << serve.Errors();
-  TestProcess controller({VLAB_BINARY_DIR "/examples/joint_control", "--arm", "127.0.0.1:" + Port(arm),
-                          "--duration", "100000", "--quiet"},
-                         0);
+  TestProcess controller(
+      {VLAB_BINARY_DIR "/examples/joint_control", "--arm", "127.0.0.1:" + Port(arm), "--duration", "100000", "--quiet"},
+      0);
   // lockstep periods go by: 250 of them (0.5 s), read from the sim device by a bystander that
   // sends no op (lockstep does not wait for it)
   bridge::Sim watch = bridge::Sim::Connect("127.0.0.1", sim, 10.0);
@@ -75,13 +76,14 @@ TEST(ServeLifecycle, SignalEndsTheWaitForAController) {
   TempDir tmp;
   WriteFile(tmp / "s.yaml", LockstepScenario(600, 10));
   const int arm = FreeUdpPort(), sim = FreeUdpPort();
-  ServeProcess serve("'" + (tmp / "s.yaml") + "' --port pa10=" + Port(arm) + " --port sim=" + Port(sim) +
-                         " --out '" + (tmp / "out") + "'",
+  ServeProcess serve("'" + (tmp / "s.yaml") + "' --port pa10=" + Port(arm) + " --port sim=" + Port(sim) + " --out '" +
+                         (tmp / "out") + "'",
                      tmp.path());
   ASSERT_TRUE(serve.WaitStarted()) << serve.Output() << serve.Errors();
   // it waits for a controller once it says so
-  ASSERT_TRUE(WaitUntil([&] { return serve.Errors().find("vlab serve: waiting for a controller") != std::string::npos; }))
-      << serve.Errors();
+  ASSERT_TRUE(WaitUntil([&] {
+    return serve.Errors().find("vlab serve: waiting for a controller") != std::string::npos;
+  })) << serve.Errors();
   serve.Signal(SIGINT);
   ASSERT_EQ(serve.Wait(30), 1) << serve.Output() << serve.Errors();  // -1: still waiting after 30 s
   EXPECT_NE(serve.Errors().find("vlab serve: waiting for a controller on pa10 127.0.0.1:" + Port(arm) +

@@ -24,8 +24,8 @@ inline int FreeUdpPort() { return bridge::UdpSocket::Bind("127.0.0.1", 0)->local
 class ServeProcess {
  public:
   ServeProcess(const std::string& args, const std::string& dir) : out_(dir + "/serve.out"), err_(dir + "/serve.err") {
-    const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && exec '" VLAB_BINARY_DIR "/vlab' serve " + args + " >'" +
-                            out_ + "' 2>'" + err_ + "' </dev/null";
+    const std::string cmd = "cd '" VLAB_SOURCE_DIR "' && exec '" VLAB_BINARY_DIR "/vlab' serve " + args + " >'" + out_ +
+                            "' 2>'" + err_ + "' </dev/null";
     pid_ = fork();
     if (pid_ == 0) {
       execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
@@ -89,7 +89,8 @@ class ServeProcess {
 /// A scripted peer: raw datagrams, no client library.
 class Peer {
  public:
-  explicit Peer(int port) : socket_(bridge::UdpSocket::Bind("127.0.0.1", 0)), to_(bridge::UdpSocket::MakeEndpoint("127.0.0.1", port)) {}
+  explicit Peer(int port)
+      : socket_(bridge::UdpSocket::Bind("127.0.0.1", 0)), to_(bridge::UdpSocket::MakeEndpoint("127.0.0.1", port)) {}
   void Send(const std::vector<unsigned char>& packet) { socket_->SendTo(packet.data(), packet.size(), to_); }
   /// Subscribes (the cookie handshake), then asks for the describe reply.
   void Describe(bridge::DeviceKind kind) {

@@ -36,7 +36,8 @@ std::string Scenario(const std::string& clock, double duration_s, const std::str
          "devices:\n"
          "  - {name: pa10, kind: arm, port: 1, joints: [S1, S2, S3, E1, E2, W1, W2],\n"
          "     initial: [0, 0.523599, 0, 1.047198, 0, 1.570796, 0]}\n"
-         "  - {name: sim, kind: sim, port: 1" + sim_keys + "}\n";
+         "  - {name: sim, kind: sim, port: 1" +
+         sim_keys + "}\n";
 }
 
 // `vlab serve` of a scenario on free ports; the ports from its start line
@@ -106,8 +107,8 @@ int Mode(const std::vector<double>& payload) {
 
 // the controller, on one socket for its arm and for the sim (so that it may operate the sim):
 // answers period 0, pauses the run and reads sim states until one shows it paused (in h, p)
-void DriveAndPause(bridge::UdpSocket& ctl, const bridge::Endpoint& arm, const bridge::Endpoint& sim,
-                   bridge::Header* h, std::vector<double>* p) {
+void DriveAndPause(bridge::UdpSocket& ctl, const bridge::Endpoint& arm, const bridge::Endpoint& sim, bridge::Header* h,
+                   std::vector<double>* p) {
   // (the sim first: a handshake drops the other datagrams, and the arm's latest state is awaited)
   ASSERT_NE(WireSubscribe(ctl, sim, DeviceKind::kSim), 0);
   ASSERT_NE(WireSubscribe(ctl, arm, DeviceKind::kArm), 0);
@@ -249,7 +250,9 @@ TEST(SimOwnership, ATableFullOfSubscribersDoesNotLockTheControllerOut) {
   double answered = -1;
   while (answered < periods - 1) {
     ASSERT_TRUE(ReadState(*ctl, arm, DeviceKind::kArm, &h, &p)) << "after state " << answered;
-    if (answered >= 0) { EXPECT_FALSE(static_cast<std::uint32_t>(p[0]) & bridge::kStatusNotOwner) << h.seq; }
+    if (answered >= 0) {
+      EXPECT_FALSE(static_cast<std::uint32_t>(p[0]) & bridge::kStatusNotOwner) << h.seq;
+    }
     SendHold(*ctl, arm, h.seq);
     answered = h.seq;
   }

@@ -45,7 +45,8 @@ TEST(TaskCli, HelloRunsAgainstKinsim) {
   KinsimProcess kinsim({"--scene", "scenes/pa10.xml"});
   ASSERT_TRUE(kinsim.ok()) << kinsim.start_line();
   const ProcessResult r = RunVlab("task scenes/tasks/hello.lua --arm 127.0.0.1:" + std::to_string(kinsim.port()) +
-                                  " --scene scenes/pa10.xml --tip tool", 60);
+                                      " --scene scenes/pa10.xml --tip tool",
+                                  60);
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("ended after"), std::string::npos) << r.out;
   kinsim.Stop();
@@ -65,7 +66,8 @@ TEST(TaskCli, ParamsReachTheScriptInProcessAndStandalone) {
     return lines;
   };
   const std::string expected =
-      "param\tletters\tinteger\t4\nparam\tpitch\tfloat\t0.07\nparam\tverify\tboolean\ttrue\nparam\tword\tstring\tFACE\n";
+      "param\tletters\tinteger\t4\nparam\tpitch\tfloat\t0."
+      "07\nparam\tverify\tboolean\ttrue\nparam\tword\tstring\tFACE\n";
   TempDir out;
   const ProcessResult in = RunVlab("run tests/data/task/params.yaml --out '" + out.path() + "/run'");
   EXPECT_EQ(in.exit_code, 0) << in.out << in.err;

@@ -63,7 +63,7 @@ void CheckRule(double fps, double exposure_s, double latency_s, double period_s)
   }
 }
 
-TEST(MarkersFrameDueTest, LabWebcamAt500Hz) { CheckRule(30, 0, 0.03, 0.002); }   // scenes/pa10_cubes.yaml
+TEST(MarkersFrameDueTest, LabWebcamAt500Hz) { CheckRule(30, 0, 0.03, 0.002); }  // scenes/pa10_cubes.yaml
 TEST(MarkersFrameDueTest, ExposureAndAnAwkwardPeriod) { CheckRule(25, 0.013, 0.071, 1.0 / 333); }
 TEST(MarkersFrameDueTest, NoLatencyAt100Hz) { CheckRule(30, 0, 0, 0.01); }
 

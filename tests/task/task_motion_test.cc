@@ -78,7 +78,8 @@ TEST_F(MotionTest, LinearIsStraightWithSlerpOrientation) {
   EXPECT_LT(Fk(plan.q.back()).q.angularDistance(goal.q), 1e-8);
   // trapezoid: T = d/v + v/a (0.2 m/s, 0.5 m/s^2), unless the rotation takes longer
   const double T_lin = d.norm() / 0.2 + 0.2 / 0.5;
-  const double T_rot = start.q.angularDistance(goal.q) / limits.rot_speed_rps + limits.rot_speed_rps / limits.rot_accel_rps2;
+  const double T_rot =
+      start.q.angularDistance(goal.q) / limits.rot_speed_rps + limits.rot_speed_rps / limits.rot_accel_rps2;
   EXPECT_NEAR(plan.duration_s, std::max(T_lin, T_rot), kPeriod);
 }
 

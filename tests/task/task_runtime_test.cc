@@ -8,12 +8,12 @@
 #include <map>
 #include <sstream>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
+#include "control/robot_model.h"
 #include "core/core_errors.h"
 #include "mujoco_fixture.h"
-#include "control/robot_model.h"
 #include "task/task_motion.h"
 #include "task/task_runtime.h"
 #include "test_util.h"
@@ -128,9 +128,8 @@ class RuntimeTest : public test::MujocoTest {
     devices_.channels = {{"pa10", arm_.get()}, {"pa10b", arm2_.get()}, {"jr3", &wrench_}, {"gripper", &gripper_}};
   }
   // a runtime of one program per script (robot "pa10", then "pa10b", then none)
-  std::unique_ptr<Runtime> Make(const std::vector<std::pair<std::string, std::string>>& scripts,
-                                std::uint64_t seed = 1, long budget = 1'000'000,
-                                const std::map<std::string, std::string>& params = {}) {
+  std::unique_ptr<Runtime> Make(const std::vector<std::pair<std::string, std::string>>& scripts, std::uint64_t seed = 1,
+                                long budget = 1'000'000, const std::map<std::string, std::string>& params = {}) {
     RuntimeConfig c;
     c.period_s = kPeriod;
     c.seed = seed;
@@ -170,10 +169,11 @@ class RuntimeTest : public test::MujocoTest {
 };
 
 TEST_F(RuntimeTest, SandboxRefusesTheMachine) {
-  auto r = Make({{"", "assert(io == nil and os == nil and dofile == nil and loadfile == nil and debug == nil)\n"
-                      "assert(string.dump == nil and package == nil)\n"
-                      "local ok, e = pcall(require, '../secret')\n"
-                      "print(ok, e)\n"}});
+  auto r = Make({{"",
+                  "assert(io == nil and os == nil and dofile == nil and loadfile == nil and debug == nil)\n"
+                  "assert(string.dump == nil and package == nil)\n"
+                  "local ok, e = pcall(require, '../secret')\n"
+                  "print(ok, e)\n"}});
   ASSERT_TRUE(RunFor(*r, 10)) << r->error();
   ASSERT_EQ(printed_.size(), 1u);
   EXPECT_NE(printed_[0].find("main.lua:3: require: '../secret' is not a module name of the script's folder"),
@@ -195,7 +195,8 @@ TEST_F(RuntimeTest, RunawayLoopIsAnErrorAtItsLine) {
             std::string::npos)
       << r->error();
   // a loop that waits is fine
-  auto ok = Make({{"", "for i = 1, 50 do\n  local x = 0\n  for j = 1, 5000 do x = x + j end\n  sync()\nend\n"}}, 1, 100'000);
+  auto ok =
+      Make({{"", "for i = 1, 50 do\n  local x = 0\n  for j = 1, 5000 do x = x + j end\n  sync()\nend\n"}}, 1, 100'000);
   EXPECT_TRUE(RunFor(*ok, 100)) << ok->error();
 }
 
@@ -224,14 +225,16 @@ TEST_F(RuntimeTest, RuntimeErrorGivesLineAndTraceback) {
 // runs (notes/task-language.md); the sandbox's pairs is sorted: this order is the
 // only one it can give, whatever the hash.
 TEST_F(RuntimeTest, PairsAndNextIterateInSortedOrder) {
-  auto r = Make({{"", "local t = {pear = 1, apple = 2, fig = 3, [10] = 4, [2] = 5, banana = 6, [true] = 7}\n"
-                      "local keys = {}\n"
-                      "for k in pairs(t) do keys[#keys + 1] = tostring(k) end\n"
-                      "local k, n = next(t), {}\n"
-                      "while k ~= nil do n[#n + 1] = tostring(k); k = next(t, k) end\n"
-                      "print(table.concat(keys, ','), table.concat(n, ','))\n"}});
+  auto r = Make({{"",
+                  "local t = {pear = 1, apple = 2, fig = 3, [10] = 4, [2] = 5, banana = 6, [true] = 7}\n"
+                  "local keys = {}\n"
+                  "for k in pairs(t) do keys[#keys + 1] = tostring(k) end\n"
+                  "local k, n = next(t), {}\n"
+                  "while k ~= nil do n[#n + 1] = tostring(k); k = next(t, k) end\n"
+                  "print(table.concat(keys, ','), table.concat(n, ','))\n"}});
   ASSERT_TRUE(RunFor(*r, 10)) << r->error();
-  EXPECT_EQ(printed_, std::vector<std::string>{"main.lua@0: 2,10,apple,banana,fig,pear,true\t2,10,apple,banana,fig,pear,true"});
+  EXPECT_EQ(printed_,
+            std::vector<std::string>{"main.lua@0: 2,10,apple,banana,fig,pear,true\t2,10,apple,banana,fig,pear,true"});
 }
 
 TEST_F(RuntimeTest, RandomIsSeededFromTheScenarioSeed) {
@@ -251,7 +254,12 @@ TEST_F(RuntimeTest, RandomIsSeededFromTheScenarioSeed) {
 // task --param): whole numbers and decimals are numbers, true/false booleans, the rest strings
 TEST_F(RuntimeTest, ParamsReachTheScriptTyped) {
   auto r = Make({{"", "for k, v in pairs(PARAMS) do print(k, type(v), v) end\n"}}, 1, 1'000'000,
-                {{"word", "FACE"}, {"gain", "2.5"}, {"n", "4"}, {"fast", "true"}, {"list", "1,2"}, {"blank", " 7"},
+                {{"word", "FACE"},
+                 {"gain", "2.5"},
+                 {"n", "4"},
+                 {"fast", "true"},
+                 {"list", "1,2"},
+                 {"blank", " 7"},
                  {"empty", ""}});
   ASSERT_TRUE(RunFor(*r, 2)) << r->error();
   EXPECT_EQ(printed_, (std::vector<std::string>{"main.lua@0: blank\tstring\t 7", "main.lua@0: empty\tstring\t",
@@ -265,9 +273,10 @@ TEST_F(RuntimeTest, ParamsReachTheScriptTyped) {
 }
 
 TEST_F(RuntimeTest, WaitCountsPeriodsAndConditionsTimeOut) {
-  auto r = Make({{"", "wait(0.1)\nprint('a')\n"
-                      "local v = wait(function() return nil end, 0.05)\nprint('b', v)\n"
-                      "local w = wait(function() return now() >= 0.2 and 'yes' end)\nprint('c', w)\n"}});
+  auto r = Make({{"",
+                  "wait(0.1)\nprint('a')\n"
+                  "local v = wait(function() return nil end, 0.05)\nprint('b', v)\n"
+                  "local w = wait(function() return now() >= 0.2 and 'yes' end)\nprint('c', w)\n"}});
   ASSERT_TRUE(RunFor(*r, 1000)) << r->error();
   // 0.1 s = 50 periods; the condition times out after 25 more; now() >= 0.2 at period 100
   EXPECT_EQ(printed_, (std::vector<std::string>{"main.lua@50: a", "main.lua@75: b\tnil", "main.lua@100: c\tyes"}));
@@ -290,9 +299,10 @@ TEST_F(RuntimeTest, LimitsAreCheckedBeforeTheMoveStarts) {
 
 // a guarded movel stops at the period after the force (tared at the start) exceeds the threshold
 TEST_F(RuntimeTest, GuardedMoveStopsOnForce) {
-  auto r = Make({{"pa10", "local start = pose()\n"
-                          "local hit = movel(start * trans(0, 0, 0.1), {force = 5, v = 0.02})\n"
-                          "print(hit, (pose().pos - start.pos):norm())\n"}});
+  auto r = Make({{"pa10",
+                  "local start = pose()\n"
+                  "local hit = movel(start * trans(0, 0, 0.1), {force = 5, v = 0.02})\n"
+                  "print(hit, (pose().pos - start.pos):norm())\n"}});
   int k = 0;
   for (; k < 5000 && !r->finished(); ++k) {
     if (k == 200) wrench_.force.z() += 6;  // contact at 0.4 s
@@ -310,8 +320,9 @@ TEST_F(RuntimeTest, GuardedMoveStopsOnForce) {
 // ended (period 250); shared values travel by value.
 TEST_F(RuntimeTest, TwoRobotProgramsSynchroniseThroughASignal) {
   auto r = Make({{"pa10", "movej({10, 30, 0, 60, 0, 90, 0}, {t = 0.5})\nshared.where = pose()\nsignal('done')\n"},
-                 {"pa10b", "wait_signal('done')\nprint('go', shared.where.pos.x > 0)\n"
-                           "movej({-10, 30, 0, 60, 0, 90, 0}, {t = 0.5})\n"}});
+                 {"pa10b",
+                  "wait_signal('done')\nprint('go', shared.where.pos.x > 0)\n"
+                  "movej({-10, 30, 0, 60, 0, 90, 0}, {t = 0.5})\n"}});
   ASSERT_TRUE(RunFor(*r, 2000)) << r->error();
   EXPECT_EQ(printed_, std::vector<std::string>{"pa10b@250: go\ttrue"});
   // pa10 reached its goal at period 249 (250 samples of 2 ms); pa10b had not moved until then
@@ -327,16 +338,17 @@ TEST_F(RuntimeTest, TwoRobotProgramsSynchroniseThroughASignal) {
 // gripper(name) and device(name): commands by field name, re-sent every period
 // until changed; states by field name
 TEST_F(RuntimeTest, GripperAndDevicesByName) {
-  auto r = Make({{"", "local g = gripper('gripper')\n"
-                      "print(g:opening(), g:grasped())\n"
-                      "g:close(20)\n"
-                      "local ok = wait(function() return g:grasped() end, 1.0)\n"
-                      "print(ok, device('gripper'):get('opening'), device('gripper'):read().grasped)\n"
-                      "device('gripper'):send{mode = 0, value = 0.07}\n"
-                      "wait(0.1)\n"
-                      "print(g:opening())\n"
-                      "local ok2, e = pcall(device, 'camera')\n"
-                      "print(e)\n"}});
+  auto r = Make({{"",
+                  "local g = gripper('gripper')\n"
+                  "print(g:opening(), g:grasped())\n"
+                  "g:close(20)\n"
+                  "local ok = wait(function() return g:grasped() end, 1.0)\n"
+                  "print(ok, device('gripper'):get('opening'), device('gripper'):read().grasped)\n"
+                  "device('gripper'):send{mode = 0, value = 0.07}\n"
+                  "wait(0.1)\n"
+                  "print(g:opening())\n"
+                  "local ok2, e = pcall(device, 'camera')\n"
+                  "print(e)\n"}});
   ASSERT_TRUE(RunFor(*r, 1000)) << r->error();
   // 0.08 -> 0.05 at 0.1 m/s: 0.3 s = 150 periods; then toward 0.07 for 0.1 s (50 periods): 0.06
   ASSERT_EQ(printed_.size(), 4u);
@@ -415,7 +427,8 @@ TEST_F(BlendTest, MovelWithRadiusPassesTheCornerWithinItWithoutStoppingAndEndsOn
   EXPECT_LT(slowest_near_b(stopped), 0.05 * v_);
   // velocity continuous: speed changes by at most the acceleration limit per period (plus rounding)
   for (std::size_t k = 2; k < blended.size(); ++k) {
-    const double v1 = (blended[k - 1] - blended[k - 2]).norm() / kPeriod, v2 = (blended[k] - blended[k - 1]).norm() / kPeriod;
+    const double v1 = (blended[k - 1] - blended[k - 2]).norm() / kPeriod,
+                 v2 = (blended[k] - blended[k - 1]).norm() / kPeriod;
     ASSERT_LE(std::abs(v2 - v1), 0.5 * kPeriod * 1.01 + 1e-9) << "period " << k;
   }
   // the final target is reached as without blend: C, to the IK tolerance (1e-9 m)
@@ -431,13 +444,14 @@ TEST_F(BlendTest, MovelWithRadiusPassesTheCornerWithinItWithoutStoppingAndEndsOn
 // movec's r: a quarter circle (radius 0.1 m, centre 0.1 m along -x of the ready pose) to B,
 // blended into a line at a right angle to the arc's end tangent
 TEST_F(BlendTest, MovecWithRadiusBlendsIntoTheNextLineAlongItsTangent) {
-  auto r = Make({{"pa10", "local a = pose()\n"
-                          "local o = a.pos + vec3(-0.1, 0, 0)\n"
-                          "B = frame(o + vec3(0, 0.1, 0), a.rot)\n"
-                          "C = frame(o + vec3(0, 0.2, 0), a.rot)\n"
-                          "movec(o + vec3(0.1 / math.sqrt(2), 0.1 / math.sqrt(2), 0), B, {r = 0.02})\n"
-                          "movel(C)\n"
-                          "print(B.x, B.y, B.z, C.x, C.y, C.z)\n"}});
+  auto r = Make({{"pa10",
+                  "local a = pose()\n"
+                  "local o = a.pos + vec3(-0.1, 0, 0)\n"
+                  "B = frame(o + vec3(0, 0.1, 0), a.rot)\n"
+                  "C = frame(o + vec3(0, 0.2, 0), a.rot)\n"
+                  "movec(o + vec3(0.1 / math.sqrt(2), 0.1 / math.sqrt(2), 0), B, {r = 0.02})\n"
+                  "movel(C)\n"
+                  "print(B.x, B.y, B.z, C.x, C.y, C.z)\n"}});
   ASSERT_TRUE(RunFor(*r, 5000)) << r->error();
   for (int k = 0; k < 1500; ++k) ASSERT_TRUE(r->Step((5000 + k) * kPeriod, nullptr));
   Eigen::Vector3d B, C;
@@ -449,7 +463,8 @@ TEST_F(BlendTest, MovecWithRadiusBlendsIntoTheNextLineAlongItsTangent) {
   for (std::size_t k = 2; k < p.size(); ++k) {
     const Eigen::Vector3d v1 = (p[k - 1] - p[k - 2]) / kPeriod, v2 = (p[k] - p[k - 1]) / kPeriod;
     if ((p[k] - B).norm() < 2 * r_) v_near = std::min(v_near, v2.norm());
-    if (v1.norm() > 0.5 * v_ && v2.norm() > 0.5 * v_) turn_max = std::max(turn_max, std::acos(std::clamp(v1.normalized().dot(v2.normalized()), -1.0, 1.0)));
+    if (v1.norm() > 0.5 * v_ && v2.norm() > 0.5 * v_)
+      turn_max = std::max(turn_max, std::acos(std::clamp(v1.normalized().dot(v2.normalized()), -1.0, 1.0)));
   }
   EXPECT_LE(d_min, r_);
   EXPECT_GT(d_min, 0.25 * r_);
@@ -459,8 +474,8 @@ TEST_F(BlendTest, MovecWithRadiusBlendsIntoTheNextLineAlongItsTangent) {
   // r / (2 R) = 0.1 rad at once; the curve's own sharpest bend is about v T / (0.35 r) = 0.03 rad
   EXPECT_LT(turn_max, 0.05);
   EXPECT_LT((p.back() - C).norm(), 1e-8);
-  std::printf("movec blend: closest %.3f mm, slowest near B %.4f m/s, sharpest turn %.4f rad per period\n",
-              d_min * 1e3, v_near, turn_max);
+  std::printf("movec blend: closest %.3f mm, slowest near B %.4f m/s, sharpest turn %.4f rad per period\n", d_min * 1e3,
+              v_near, turn_max);
 }
 
 TEST_F(BlendTest, RadiusOverHalfASegmentIsAnErrorAtItsLine) {
@@ -473,7 +488,7 @@ TEST_F(BlendTest, RadiusOverHalfASegmentIsAnErrorAtItsLine) {
       << first->error();
   // the second one, 0.05 m from B, cannot take the 0.04 m radius of the first (blend() sets it)
   auto second = Make({{"pa10b", std::string(kCorner) + "blend(0.04)\nmovel(B)\nblend(0)\n"
-                                "movel(frame(B.pos + vec3(0, 0.05, 0), B.rot))\n"}});
+                                                       "movel(frame(B.pos + vec3(0, 0.05, 0), B.rot))\n"}});
   EXPECT_FALSE(RunFor(*second, 5000));
   EXPECT_NE(second->error().find("pa10b.lua:7: movel: the blend radius r = 0.04 m of the move before is larger "
                                  "than half of this move (0.05 m from the corner): at most 0.025 m"),

@@ -24,8 +24,7 @@ class ValuesTest : public ::testing::Test {
   void TearDown() override { lua_close(L_); }
   // runs `code` as the chunk "@values.lua"; returns "" or the error message
   std::string Run(const std::string& code) {
-    if (luaL_loadbuffer(L_, code.data(), code.size(), "@values.lua") != LUA_OK ||
-        lua_pcall(L_, 0, 1, 0) != LUA_OK) {
+    if (luaL_loadbuffer(L_, code.data(), code.size(), "@values.lua") != LUA_OK || lua_pcall(L_, 0, 1, 0) != LUA_OK) {
       std::string e = lua_tostring(L_, -1);
       lua_pop(L_, 1);
       return e;
@@ -44,7 +43,9 @@ class ValuesTest : public ::testing::Test {
 };
 
 Eigen::Quaterniond Rot(char axis, double deg) {
-  const Eigen::Vector3d a = axis == 'x' ? Eigen::Vector3d::UnitX() : axis == 'y' ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d a = axis == 'x'   ? Eigen::Vector3d::UnitX()
+                            : axis == 'y' ? Eigen::Vector3d::UnitY()
+                                          : Eigen::Vector3d::UnitZ();
   return Eigen::Quaterniond(Eigen::AngleAxisd(deg * kDeg, a));
 }
 
@@ -88,9 +89,8 @@ TEST_F(ValuesTest, EveryEulerConventionAgainstEigenAndBack) {
       }
     }
     // from the script, against Eigen's own angles of the same matrix
-    const Eigen::Vector3d eigen = intrinsic.toRotationMatrix().eulerAngles(std::tolower(upper[0]) - 'x',
-                                                                           std::tolower(upper[1]) - 'x',
-                                                                           std::tolower(upper[2]) - 'x');
+    const Eigen::Vector3d eigen = intrinsic.toRotationMatrix().eulerAngles(
+        std::tolower(upper[0]) - 'x', std::tolower(upper[1]) - 'x', std::tolower(upper[2]) - 'x');
     ASSERT_EQ(Run(std::string("return euler('") + upper + "', " + std::to_string(eigen[0] / kDeg) + ", " +
                   std::to_string(eigen[1] / kDeg) + ", " + std::to_string(eigen[2] / kDeg) + ")"),
               "");

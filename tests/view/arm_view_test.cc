@@ -16,11 +16,11 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
-#include <gtest/gtest.h>
-#include <mujoco/mujoco.h>
 
 #include "bridge/bridge_client.h"
 #include "scene/scene_geometry.h"
@@ -38,8 +38,8 @@ int PortOf(const std::string& line, const std::string& label) {
 }
 
 TEST(ArmViewTest, PosesFromAnArmDevicesJointStatesByKinematics) {
-  TestProcess kinsim({VLAB_BINARY_DIR "/vlab-kinsim", "--port", "0", "--rate", "100", "--initial",
-                      "0.3,0.5,-0.2,1.0,0.4,1.2,-0.6"});
+  TestProcess kinsim(
+      {VLAB_BINARY_DIR "/vlab-kinsim", "--port", "0", "--rate", "100", "--initial", "0.3,0.5,-0.2,1.0,0.4,1.2,-0.6"});
   const int arm_port = PortOf(kinsim.start_line(), " on 127.0.0.1");
   ASSERT_GT(arm_port, 0) << kinsim.start_line();
   const std::string arm = "127.0.0.1:" + std::to_string(arm_port);

@@ -25,8 +25,8 @@
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
-#include <opencv2/imgcodecs.hpp>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "cdp_client.h"
 #include "render/renderer.h"
@@ -152,12 +152,12 @@ class Reference {
 TEST(ViewBrowserTest, ThePa10InChromiumMatchesTheOsmesaRenderAndMoves) {
   TempDir dir;
   testing::WriteFile(dir / "browser.yaml", Scenario());
-  TestProcess serve({VLAB_BINARY_DIR "/vlab", "serve", dir / "browser.yaml", "--port", "scene=0", "--out",
-                     dir / "run", "-q"});
+  TestProcess serve(
+      {VLAB_BINARY_DIR "/vlab", "serve", dir / "browser.yaml", "--port", "scene=0", "--out", dir / "run", "-q"});
   const int scene_port = PortOf(serve.start_line(), "scene (scene)");
   ASSERT_GT(scene_port, 0) << serve.start_line();
-  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--scene", "127.0.0.1:" + std::to_string(scene_port), "--http",
-                    "0", "-q"});
+  TestProcess view(
+      {VLAB_BINARY_DIR "/vlab", "view", "--scene", "127.0.0.1:" + std::to_string(scene_port), "--http", "0", "-q"});
   const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
   ASSERT_GT(http_port, 0) << view.start_line();
   const std::string page = "http://127.0.0.1:" + std::to_string(http_port) + "/";
@@ -177,11 +177,10 @@ TEST(ViewBrowserTest, ThePa10InChromiumMatchesTheOsmesaRenderAndMoves) {
       if (v.value("frames", 0) >= 3 && v.value("time", 0.0) >= after_time) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
-    return nlohmann::json::parse(
-        chromium
-            .Evaluate("vlabView.paused = true; new Promise(r => requestAnimationFrame(() => "
-                      "requestAnimationFrame(() => r(JSON.stringify(vlabView)))))")
-            .get<std::string>());
+    return nlohmann::json::parse(chromium
+                                     .Evaluate("vlabView.paused = true; new Promise(r => requestAnimationFrame(() => "
+                                               "requestAnimationFrame(() => r(JSON.stringify(vlabView)))))")
+                                     .get<std::string>());
   };
   const nlohmann::json first = wait_and_freeze(0);
   ASSERT_GE(first.value("frames", 0), 3) << first.dump();
@@ -219,8 +218,8 @@ TEST(ViewBrowserTest, ThePa10InChromiumMatchesTheOsmesaRenderAndMoves) {
   }
   const double iou1 = IoU(got1, ref1), iou2 = IoU(got2, ref2);
   const double moved_browser = IoU(got1, got2), moved_reference = IoU(ref1, ref2);
-  std::printf("t1 %.3f s: IoU %.3f; t2 %.3f s: IoU %.3f; shot 1 vs 2: %.3f (references: %.3f)\n", t1, iou1, t2,
-              iou2, moved_browser, moved_reference);
+  std::printf("t1 %.3f s: IoU %.3f; t2 %.3f s: IoU %.3f; shot 1 vs 2: %.3f (references: %.3f)\n", t1, iou1, t2, iou2,
+              moved_browser, moved_reference);
   EXPECT_GE(iou1, kMinIoU);
   EXPECT_GE(iou2, kMinIoU);
   EXPECT_LT(moved_reference, kMinIoU) << "the scenario must move the arm visibly in 1 s";

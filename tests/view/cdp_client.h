@@ -35,10 +35,19 @@ class Chromium {
   Chromium(const std::string& profile_dir, int width, int height) : ws_(io_) {
     const std::string exe = Find();
     const std::string size = "--window-size=" + std::to_string(width) + "," + std::to_string(height);
-    std::vector<std::string> args = {exe, "--headless", "--no-sandbox", "--disable-dev-shm-usage",
-                                     "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--disable-gpu-vsync",
-                                     "--hide-scrollbars", "--no-first-run", "--remote-debugging-port=0",
-                                     "--user-data-dir=" + profile_dir, size, "about:blank"};
+    std::vector<std::string> args = {exe,
+                                     "--headless",
+                                     "--no-sandbox",
+                                     "--disable-dev-shm-usage",
+                                     "--enable-unsafe-swiftshader",
+                                     "--use-angle=swiftshader",
+                                     "--disable-gpu-vsync",
+                                     "--hide-scrollbars",
+                                     "--no-first-run",
+                                     "--remote-debugging-port=0",
+                                     "--user-data-dir=" + profile_dir,
+                                     size,
+                                     "about:blank"};
     pid_ = ::fork();
     if (pid_ == 0) {
       const int null = ::open("/dev/null", O_WRONLY);
@@ -144,11 +153,16 @@ class Chromium {
     int bits = 0, value = 0;
     for (const char c : in) {
       int v = -1;
-      if (c >= 'A' && c <= 'Z') v = c - 'A';
-      else if (c >= 'a' && c <= 'z') v = c - 'a' + 26;
-      else if (c >= '0' && c <= '9') v = c - '0' + 52;
-      else if (c == '+') v = 62;
-      else if (c == '/') v = 63;
+      if (c >= 'A' && c <= 'Z')
+        v = c - 'A';
+      else if (c >= 'a' && c <= 'z')
+        v = c - 'a' + 26;
+      else if (c >= '0' && c <= '9')
+        v = c - '0' + 52;
+      else if (c == '+')
+        v = 62;
+      else if (c == '/')
+        v = 63;
       if (v < 0) continue;
       value = (value << 6) | v;
       bits += 6;

@@ -146,18 +146,19 @@ TEST_F(GltfTest, ThreeJsGltfLoaderReadsIt) {
     hex += digits[c >> 4];
     hex += digits[c & 15];
   }
-  const json r = json::parse(chromium
-                                 .Evaluate("new Promise((ok, fail) => { const h = '" + hex +
-                                           "'; const b = new Uint8Array(h.length / 2);"
-                                           " for (let i = 0; i < b.length; ++i) b[i] = parseInt(h.substr(2 * i, 2), 16);"
-                                           " new THREE.GLTFLoader().parse(b.buffer, '', g => {"
-                                           "  const clip = g.animations[0], bob = g.scene.getObjectByName('bob');"
-                                           "  const mixer = new THREE.AnimationMixer(g.scene);"
-                                           "  mixer.clipAction(clip).play(); mixer.setTime(clip.duration - 1e-6);"
-                                           "  ok(JSON.stringify({clips: g.animations.length, duration: clip.duration,"
-                                           "   tracks: clip.tracks.length, p: bob.position.toArray(), q: bob.quaternion.toArray()}));"
-                                           " }, e => fail(String(e))); })")
-                                 .get<std::string>());
+  const json r = json::parse(
+      chromium
+          .Evaluate("new Promise((ok, fail) => { const h = '" + hex +
+                    "'; const b = new Uint8Array(h.length / 2);"
+                    " for (let i = 0; i < b.length; ++i) b[i] = parseInt(h.substr(2 * i, 2), 16);"
+                    " new THREE.GLTFLoader().parse(b.buffer, '', g => {"
+                    "  const clip = g.animations[0], bob = g.scene.getObjectByName('bob');"
+                    "  const mixer = new THREE.AnimationMixer(g.scene);"
+                    "  mixer.clipAction(clip).play(); mixer.setTime(clip.duration - 1e-6);"
+                    "  ok(JSON.stringify({clips: g.animations.length, duration: clip.duration,"
+                    "   tracks: clip.tracks.length, p: bob.position.toArray(), q: bob.quaternion.toArray()}));"
+                    " }, e => fail(String(e))); })")
+          .get<std::string>());
   EXPECT_EQ(r["clips"], 1);
   EXPECT_NEAR(r["duration"].get<double>(), 1.0, 1e-6);
   EXPECT_EQ(r["tracks"], 2);

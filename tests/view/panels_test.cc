@@ -113,7 +113,8 @@ T At(const std::string& m, std::size_t offset) {
 TEST(ViewPanelsTest, CameraBytesRelayedUnchangedAndPlotSamplesEqualTheLog) {
   TempDir dir;
   testing::WriteFile(dir / "panels.yaml", Scenario());
-  TestProcess serve({VLAB_BINARY_DIR "/vlab", "serve", dir / "panels.yaml", "--port", "scene=0", "--port", "webcam=0", "--out", dir / "run", "-q"});
+  TestProcess serve({VLAB_BINARY_DIR "/vlab", "serve", dir / "panels.yaml", "--port", "scene=0", "--port", "webcam=0",
+                     "--out", dir / "run", "-q"});
   const int scene_port = PortOf(serve.start_line(), "scene (scene)");
   const int camera_port = PortOf(serve.start_line(), "webcam (camera)");
   ASSERT_GT(scene_port, 0) << serve.start_line();

@@ -53,8 +53,8 @@ constexpr int kWidth = 640, kHeight = 480;
 
 std::string Scenario(bool served) {
   std::string s = std::string("name: replay\nscene: ") + VLAB_SOURCE_DIR +
-                  "/scenes/pa10.xml\nduration: " + std::string(served ? "20.0" : "3.0") + "\ncontrol_period: 0.002\nseed: 1\nclock: " +
-                  (served ? "realtime" : "fast") +
+                  "/scenes/pa10.xml\nduration: " + std::string(served ? "20.0" : "3.0") +
+                  "\ncontrol_period: 0.002\nseed: 1\nclock: " + (served ? "realtime" : "fast") +
                   "\ndevices:\n"
                   "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2],"
                   " initial: [0, 0.523599, 0, 1.047198, 0, 1.570796, 0]}\n";
@@ -127,9 +127,9 @@ int ColourPixels(testing::Chromium& chromium, const std::string& canvas, int r, 
   return chromium
       .Evaluate("(function () { var c = document.getElementById('" + canvas +
                 "'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data, n = 0;"
-                " for (var i = 0; i < d.length; i += 4) if (Math.abs(d[i] - " + std::to_string(r) +
-                ") < 40 && Math.abs(d[i + 1] - " + std::to_string(g) + ") < 40 && Math.abs(d[i + 2] - " +
-                std::to_string(b) + ") < 40) ++n; return n; })()")
+                " for (var i = 0; i < d.length; i += 4) if (Math.abs(d[i] - " +
+                std::to_string(r) + ") < 40 && Math.abs(d[i + 1] - " + std::to_string(g) +
+                ") < 40 && Math.abs(d[i + 2] - " + std::to_string(b) + ") < 40) ++n; return n; })()")
       .get<int>();
 }
 
@@ -137,8 +137,7 @@ int ColourPixels(testing::Chromium& chromium, const std::string& canvas, int r, 
 struct ReplayPage {
   explicit ReplayPage(const testing::TempDir& dir)
       : view({VLAB_BINARY_DIR "/vlab", "view", "--replay", dir / "run", "--plot", "pa10.q.S1", "--http", "0", "-q"}),
-        http_port(PortOf(view.start_line(), "http://127.0.0.1")),
-        chromium(dir / "profile", kWidth, kHeight) {}
+        http_port(PortOf(view.start_line(), "http://127.0.0.1")), chromium(dir / "profile", kWidth, kHeight) {}
   /// Opens the page and waits until its replay and plot data are in.
   void Load() {
     chromium.Call("Page.enable");
@@ -202,7 +201,9 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
   // speed: ticks of 40 ms each from t = 0.5 s, at 0.5x, 1x and 5x (20, 20, 10 ticks: within the 3 s recorded)
   for (const double speed : {0.5, 1.0, 5.0}) {
     chromium.Evaluate("(function () { var s = document.getElementById('speed'); s.value = '" +
-                      (speed == 0.5 ? std::string("0.5") : speed == 1.0 ? std::string("1") : std::string("5")) +
+                      (speed == 0.5   ? std::string("0.5")
+                       : speed == 1.0 ? std::string("1")
+                                      : std::string("5")) +
                       "'; s.dispatchEvent(new Event('change')); })()");
     const int ticks = speed == 5.0 ? 10 : 20;
     seek(0.5);
@@ -226,8 +227,8 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
   }
 
   // the plot: log.csv's time and pa10.q.S1, and its line on the canvas
-  const nlohmann::json plots = chromium.Evaluate(
-      "fetch('plots.bin').then(r => r.arrayBuffer()).then(b => Array.from(new Float64Array(b)))");
+  const nlohmann::json plots =
+      chromium.Evaluate("fetch('plots.bin').then(r => r.arrayBuffer()).then(b => Array.from(new Float64Array(b)))");
   const scene::CsvTable log = scene::ReadCsvTable(dir / "run/log.csv");
   ASSERT_EQ(plots.size(), 2 * log.rows.size());
   const int time_col = log.Column("time"), q_col = log.Column("pa10.q.S1");
@@ -244,8 +245,8 @@ TEST(ViewReplayBrowserTest, SliderSeeksToTheRecordedFrameAndSpeedScalesPlayback)
 // a key press as Chromium's input pipeline delivers a user's (keydown, keypress, keyup)
 void PressSpace(testing::Chromium& chromium) {
   for (const char* type : {"keyDown", "keyUp"}) {
-    nlohmann::json key = {{"type", type}, {"key", " "}, {"code", "Space"}, {"windowsVirtualKeyCode", 32},
-                          {"nativeVirtualKeyCode", 32}};
+    nlohmann::json key = {
+        {"type", type}, {"key", " "}, {"code", "Space"}, {"windowsVirtualKeyCode", 32}, {"nativeVirtualKeyCode", 32}};
     if (std::string(type) == "keyDown") key["text"] = " ";
     chromium.Call("Input.dispatchKeyEvent", key);
   }
@@ -311,8 +312,8 @@ TEST(ViewReplayBrowserTest, PausedPlotFollowsTheSliderAndSpaceTogglesAfterTheBut
 TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
   TempDir dir;
   testing::WriteFile(dir / "served.yaml", Scenario(true));
-  TestProcess serve({VLAB_BINARY_DIR "/vlab", "serve", dir / "served.yaml", "--port", "scene=0", "--port",
-                     "webcam=0", "--out", dir / "run", "-q"});
+  TestProcess serve({VLAB_BINARY_DIR "/vlab", "serve", dir / "served.yaml", "--port", "scene=0", "--port", "webcam=0",
+                     "--out", dir / "run", "-q"});
   auto address = [&](const std::string& label) {
     return "127.0.0.1:" + std::to_string(PortOf(serve.start_line(), label));
   };
@@ -323,20 +324,22 @@ TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
   testing::Chromium chromium(dir / "profile", kWidth, kHeight);
   chromium.Call("Page.enable");
   chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(http_port) + "/"}});
-  const nlohmann::json s = WaitFor(chromium, "window.vlabView && vlabView.cameraFrames >= 3 && vlabView.plotSamples >= 10"
-                                             " && vlabView.plotDrawn > 0");
+  const nlohmann::json s = WaitFor(chromium,
+                                   "window.vlabView && vlabView.cameraFrames >= 3 && vlabView.plotSamples >= 10"
+                                   " && vlabView.plotDrawn > 0");
   chromium.Evaluate("vlabView.paused = true");
   TwoFrames(chromium);
   // the picture: the camera's size, and not one flat colour (the scene, drawn)
   const nlohmann::json image = nlohmann::json::parse(
       chromium
-          .Evaluate("(function () { var img = document.getElementById('camera'), c = document.createElement('canvas');"
-                    " c.width = img.naturalWidth; c.height = img.naturalHeight; var g = c.getContext('2d');"
-                    " g.drawImage(img, 0, 0); var d = g.getImageData(0, 0, c.width, c.height).data, lo = 255, hi = 0;"
-                    " for (var i = 0; i < d.length; i += 4) { lo = Math.min(lo, d[i + 1]); hi = Math.max(hi, d[i + 1]); }"
-                    " var r = img.getBoundingClientRect();"
-                    " return JSON.stringify({w: img.naturalWidth, h: img.naturalHeight, lo: lo, hi: hi,"
-                    " shown: r.width * r.height}); })()")
+          .Evaluate(
+              "(function () { var img = document.getElementById('camera'), c = document.createElement('canvas');"
+              " c.width = img.naturalWidth; c.height = img.naturalHeight; var g = c.getContext('2d');"
+              " g.drawImage(img, 0, 0); var d = g.getImageData(0, 0, c.width, c.height).data, lo = 255, hi = 0;"
+              " for (var i = 0; i < d.length; i += 4) { lo = Math.min(lo, d[i + 1]); hi = Math.max(hi, d[i + 1]); }"
+              " var r = img.getBoundingClientRect();"
+              " return JSON.stringify({w: img.naturalWidth, h: img.naturalHeight, lo: lo, hi: hi,"
+              " shown: r.width * r.height}); })()")
           .get<std::string>());
   EXPECT_EQ(image["w"], 160) << image.dump();
   EXPECT_EQ(image["h"], 120) << image.dump();
@@ -357,8 +360,9 @@ TEST(ViewReplayBrowserTest, LivePanelsShowTheCameraAndThePlots) {
   const int full_port = PortOf(full.start_line(), "http://127.0.0.1");
   ASSERT_GT(full_port, 0) << full.start_line();
   chromium.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(full_port) + "/"}});
-  WaitFor(chromium, "window.vlabView && vlabView.refused && document.getElementById('status').textContent.indexOf("
-                "'server full: 2 sessions open') >= 0");
+  WaitFor(chromium,
+          "window.vlabView && vlabView.refused && document.getElementById('status').textContent.indexOf("
+          "'server full: 2 sessions open') >= 0");
   std::printf("refused: the page shows '%s'\n",
               chromium.Evaluate("document.getElementById('status').textContent").get<std::string>().c_str());
   full.Stop();

@@ -110,10 +110,10 @@ TEST_F(SceneDeviceTest, ErrorsNameTheDeviceAndTheCause) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(error(m, Scene(200)),
-            "test.yaml:1: device 'scene': rate 200 Hz is faster than the control rate (100 Hz)");
+  EXPECT_EQ(error(m, Scene(200)), "test.yaml:1: device 'scene': rate 200 Hz is faster than the control rate (100 Hz)");
   EXPECT_EQ(error(m, Scene(100)), "no error");
-  EXPECT_EQ(error(empty, Scene(30)), "test.yaml:1: device 'scene': the scene has no body with a visible geom to stream");
+  EXPECT_EQ(error(empty, Scene(30)),
+            "test.yaml:1: device 'scene': the scene has no body with a visible geom to stream");
 
   vlab::testing::TempDir dir;
   vlab::testing::WriteFile(dir / "scene.xml", kXml);

@@ -42,8 +42,8 @@ using testing::TempDir;
 using testing::TestProcess;
 using testing::WriteFile;
 
-constexpr double kRateHz = 50;       // the scene device's rate
-constexpr double kPeriod_s = 0.002;  // the scenario's control period
+constexpr double kRateHz = 50;                // the scene device's rate
+constexpr double kPeriod_s = 0.002;           // the scenario's control period
 constexpr double kFloat32 = 1.0 / (1 << 23);  // float32's relative precision
 
 constexpr const char* kXml = R"(<mujoco>
@@ -91,8 +91,8 @@ class SceneStreamTest : public ::testing::Test {
 };
 
 TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
-  TestProcess serve({VLAB_BINARY_DIR "/vlab", "serve", dir_ / "with.yaml", "--port", "scene=0", "--out",
-                     dir_ / "served", "-q"});
+  TestProcess serve(
+      {VLAB_BINARY_DIR "/vlab", "serve", dir_ / "with.yaml", "--port", "scene=0", "--out", dir_ / "served", "-q"});
   const int port = PortOf(serve.start_line(), "scene (scene)");
   ASSERT_GT(port, 0) << serve.start_line();
   bridge::Device scene = bridge::Device::Connect(bridge::DeviceKind::kScene, "127.0.0.1", port, 5.0);
@@ -109,8 +109,8 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
   EXPECT_EQ(scene.state_length(), 7);
 
   // vlab view on the same device, and a WebSocket client of its page's stream
-  TestProcess view({VLAB_BINARY_DIR "/vlab", "view", "--scene", "127.0.0.1:" + std::to_string(port), "--http", "0",
-                    "-q"});
+  TestProcess view(
+      {VLAB_BINARY_DIR "/vlab", "view", "--scene", "127.0.0.1:" + std::to_string(port), "--http", "0", "-q"});
   const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
   ASSERT_GT(http_port, 0) << view.start_line();
   namespace asio = boost::asio;

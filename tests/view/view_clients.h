@@ -33,7 +33,8 @@ constexpr const char* kPage = "<html>vlab view test page</html>";
 /// channels as given), serving kPage at / and "{}" at /scene.json.
 inline std::unique_ptr<ViewServer> StartServer(ViewServerConfig config) {
   config.port = 0;
-  std::map<std::string, StaticFile> files{{"/index.html", {"text/html", kPage}}, {"/view.js", {"text/javascript", "//"}}};
+  std::map<std::string, StaticFile> files{{"/index.html", {"text/html", kPage}},
+                                          {"/view.js", {"text/javascript", "//"}}};
   auto resources = [](const std::string& path, std::string* type, std::string* body) {
     if (path != "/scene.json") return false;
     *type = "application/json";
@@ -93,7 +94,9 @@ inline int Status(const std::string& response) {
 
 /// GET target with Host 127.0.0.1 (and `extra` header lines), Connection: close.
 inline std::string Get(int port, const std::string& target, const std::string& extra = "") {
-  return Raw(port).Send("GET " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + extra + "Connection: close\r\n\r\n").ReadAll();
+  return Raw(port)
+      .Send("GET " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + extra + "Connection: close\r\n\r\n")
+      .ReadAll();
 }
 
 /// A WebSocket upgrade request for `path` with the given Host and extra header lines.

@@ -96,7 +96,7 @@ class Publisher {
 };
 
 constexpr int kSlow = 200, kSilent = 16, kFrames = 30;  // the attack to withstand; 1 s of poses at 30 Hz
-constexpr double kHangLimit_s = 20;                    // a guard against a hang, not a bound
+constexpr double kHangLimit_s = 20;                     // a guard against a hang, not a bound
 
 // polls `done` until it holds or kHangLimit_s pass; whether it held
 template <typename Done>
@@ -137,9 +137,10 @@ TEST(ViewServerLimitsTest, SlowConnectionsAndSilentWebSocketsDoNotLockOutAViewer
     EXPECT_TRUE(WaitUntil([&] { return server->clients() == kSilent; })) << "round " << round;
     const double took_s = LoadPageAndFrames(port);
     EXPECT_GE(server->clients(), kSilent) << "round " << round << ": still held when the viewer was done";
-    std::printf("round %d: %d slow connections (%d held by the server) and %d silent WebSockets: the viewer had "
-                "%d frames in %.3f s\n",
-                round, kSlow, server->http_connections(), kSilent, kFrames, took_s);
+    std::printf(
+        "round %d: %d slow connections (%d held by the server) and %d silent WebSockets: the viewer had "
+        "%d frames in %.3f s\n",
+        round, kSlow, server->http_connections(), kSilent, kFrames, took_s);
     for (const int fd : slow) {
       EXPECT_GE(fd, 0);
       ::close(fd);
@@ -159,7 +160,7 @@ TEST(ViewServerLimitsTest, SlowConnectionsAndSilentWebSocketsDoNotLockOutAViewer
 
 TEST(ViewServerLimitsTest, SlowConnectionsAndSilentWebSocketsAreClosed) {
   ViewServerConfig config;
-  config.header_timeout_s = 1;   // short, for a short test; vlab view's are 5 and 10 s
+  config.header_timeout_s = 1;  // short, for a short test; vlab view's are 5 and 10 s
   config.ws_idle_timeout_s = 2;
   auto server = StartServer(config);
   const int port = server->port();

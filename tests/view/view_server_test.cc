@@ -47,9 +47,10 @@ TEST(ViewServerTest, ServesItsTableAndNothingElse) {
   EXPECT_EQ(Status(Get(port, "/view.js?v=1")), 200);  // a query is not part of the path
   EXPECT_EQ(Status(Get(port, "/nothing")), 404);
   // path traversal, in the spellings that reach files elsewhere
-  for (const char* target : {"/../../../../etc/passwd", "/%2e%2e/%2e%2e/%2e%2e/etc/passwd", "/index.html/../../../etc/passwd",
-                             "/..%2f..%2f..%2fetc%2fpasswd", "//etc/passwd", "/etc/passwd", "http://x/../../etc/passwd",
-                             "/..\\..\\..\\etc\\passwd", "/index.html%00", "*", "../../etc/passwd"}) {
+  for (const char* target :
+       {"/../../../../etc/passwd", "/%2e%2e/%2e%2e/%2e%2e/etc/passwd", "/index.html/../../../etc/passwd",
+        "/..%2f..%2f..%2fetc%2fpasswd", "//etc/passwd", "/etc/passwd", "http://x/../../etc/passwd",
+        "/..\\..\\..\\etc\\passwd", "/index.html%00", "*", "../../etc/passwd"}) {
     r = Get(port, target);
     const int status = Status(r);
     EXPECT_TRUE(status == 404 || status == 400) << target << ": " << r.substr(0, 40);
@@ -57,7 +58,8 @@ TEST(ViewServerTest, ServesItsTableAndNothingElse) {
   }
   // read-only: no other method
   EXPECT_EQ(Status(Raw(port).Send("DELETE /index.html HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n").ReadAll(1)), 405);
-  EXPECT_EQ(Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 2\r\n\r\nhi").ReadAll(1)), 405);
+  EXPECT_EQ(Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 2\r\n\r\nhi").ReadAll(1)),
+            405);
   // HEAD: the headers of a GET, no body
   r = Raw(port).Send("HEAD / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n").ReadAll();
   EXPECT_EQ(Status(r), 200);
@@ -71,7 +73,9 @@ TEST(ViewServerTest, OversizedAndMalformedRequestsGetAnHttpError) {
   const std::string big(20000, 'a');
   EXPECT_EQ(Status(Raw(port).Send("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: " + big + "\r\n\r\n").ReadAll()), 431);
   EXPECT_EQ(Status(Raw(port).Send("GET /" + big + " HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n").ReadAll()), 431);
-  EXPECT_EQ(Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 100000\r\n\r\n" + big).ReadAll()), 413);
+  EXPECT_EQ(
+      Status(Raw(port).Send("POST / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 100000\r\n\r\n" + big).ReadAll()),
+      413);
   // not HTTP
   EXPECT_EQ(Status(Raw(port).Send("HELLO\r\n\r\n").ReadAll()), 400);
   EXPECT_EQ(Status(Raw(port).Send("GET / HTTP/1.1\r\nHost x\r\n\r\n").ReadAll()), 400);
@@ -82,13 +86,17 @@ TEST(ViewServerTest, OversizedAndMalformedRequestsGetAnHttpError) {
   EXPECT_EQ(Status(Raw(port).Send(garbage).ReadAll()), 400);
   // a client that connects and leaves, one that sends half a request and leaves
   { Raw gone(port); }
-  { Raw half(port); half.Send("GET / HT"); }
+  {
+    Raw half(port);
+    half.Send("GET / HT");
+  }
   // a WebSocket upgrade elsewhere than /ws: 404
-  EXPECT_EQ(Status(Raw(port)
-                       .Send("GET /index.html HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                             "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
-                       .ReadAll()),
-            404);
+  EXPECT_EQ(
+      Status(Raw(port)
+                 .Send("GET /index.html HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                       "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+                 .ReadAll()),
+      404);
   // still serving
   EXPECT_EQ(Status(Get(port, "/")), 200);
   EXPECT_GE(server->counters().errors, 9);
@@ -117,8 +125,10 @@ TEST(ViewServerTest, WebSocketGetsTheNewestFrameAndSurvivesBadFrames) {
   EXPECT_TRUE(ec) << "the session should have been closed";
 
   // malformed frames: an unmasked client frame, a reserved opcode, garbage
-  for (const std::string& bad : {std::string("\x82\x03" "abc", 5), std::string("\x83\x80\x01\x02\x03\x04", 6),
-                                 std::string(64, '\xff')}) {
+  for (const std::string& bad : {std::string("\x82\x03"
+                                             "abc",
+                                             5),
+                                 std::string("\x83\x80\x01\x02\x03\x04", 6), std::string(64, '\xff')}) {
     WsClient victim(port);
     beast::flat_buffer buffer;
     beast::error_code read_ec;
@@ -185,15 +195,16 @@ TEST(ViewServerTest, ForeignOriginAndRebindingHostAreRefused) {
     return Status(Raw(port).Send("GET / HTTP/1.1\r\n" + headers + "Connection: close\r\n\r\n").ReadAll());
   };
   // loopback names and addresses, with and without the port; a name given; no Host at all (not a browser)
-  for (const std::string& host : std::vector<std::string>{"127.0.0.1:" + p, "127.0.0.1", "localhost:" + p, "LOCALHOST", "localhost.",
-                                 "[::1]:" + p, "[::1]", "127.9.8.7:" + p, "lab-pc.example:" + p, "Lab-PC.example"}) {
+  for (const std::string& host :
+       std::vector<std::string>{"127.0.0.1:" + p, "127.0.0.1", "localhost:" + p, "LOCALHOST", "localhost.",
+                                "[::1]:" + p, "[::1]", "127.9.8.7:" + p, "lab-pc.example:" + p, "Lab-PC.example"}) {
     EXPECT_EQ(get("Host: " + host + "\r\n"), 200) << host;
   }
   EXPECT_EQ(get(""), 200) << "no Host";
   // a rebinding page's name (it resolves here, but it is not ours), other addresses, malformed values: 421
-  for (const std::string& host : std::vector<std::string>{"evil.example", "evil.example:" + p, "127.0.0.1.nip.io:" + p, "localhost.evil.example",
-                                 "10.1.2.3:" + p, "::1", "127.0.0.1:80:80", "[::1", "[127.0.0.1]", "", "127.1",
-                                 "localhost:http", "lab-pc.example.evil"}) {
+  for (const std::string& host : std::vector<std::string>{
+           "evil.example", "evil.example:" + p, "127.0.0.1.nip.io:" + p, "localhost.evil.example", "10.1.2.3:" + p,
+           "::1", "127.0.0.1:80:80", "[::1", "[127.0.0.1]", "", "127.1", "localhost:http", "lab-pc.example.evil"}) {
     EXPECT_EQ(get("Host: " + host + "\r\n"), 421) << "'" << host << "'";
   }
   EXPECT_EQ(get("Host: 127.0.0.1\r\nHost: evil.example\r\n"), 400) << "two Hosts";
@@ -202,20 +213,23 @@ TEST(ViewServerTest, ForeignOriginAndRebindingHostAreRefused) {
       << "a 421 says how to allow a name";
   // an Origin, where a request carries one: ours (any port: an ssh -L forward) or refused with 403
   const std::string host = "Host: 127.0.0.1:" + p + "\r\n";
-  for (const std::string& origin : std::vector<std::string>{"http://127.0.0.1:" + p, "http://localhost:9000", "https://[::1]:" + p}) {
+  for (const std::string& origin :
+       std::vector<std::string>{"http://127.0.0.1:" + p, "http://localhost:9000", "https://[::1]:" + p}) {
     EXPECT_EQ(get(host + "Origin: " + origin + "\r\n"), 200) << origin;
   }
-  for (const std::string& origin : std::vector<std::string>{"http://evil.example", "https://evil.example:" + p, "null", "file://",
-                                   "http://127.0.0.1.evil.example", "http://127.0.0.1:" + p + "/x",
-                                   "ftp://127.0.0.1", "http://user@127.0.0.1"}) {
+  for (const std::string& origin : std::vector<std::string>{
+           "http://evil.example", "https://evil.example:" + p, "null", "file://", "http://127.0.0.1.evil.example",
+           "http://127.0.0.1:" + p + "/x", "ftp://127.0.0.1", "http://user@127.0.0.1"}) {
     EXPECT_EQ(get(host + "Origin: " + origin + "\r\n"), 403) << origin;
   }
   // the WebSocket upgrade, as a page elsewhere would try it: refused before any frame
   server->Publish("pose");
-  EXPECT_EQ(Status(Raw(port).Send(Upgrade("/ws", "127.0.0.1:" + p, "Origin: http://evil.example\r\n")).ReadAll(1)), 403);
-  EXPECT_EQ(Status(Raw(port).Send(Upgrade("/ws", "evil.example:" + p, "Origin: http://evil.example:" + p + "\r\n"))
-                       .ReadAll(1)),
-            421);
+  EXPECT_EQ(Status(Raw(port).Send(Upgrade("/ws", "127.0.0.1:" + p, "Origin: http://evil.example\r\n")).ReadAll(1)),
+            403);
+  EXPECT_EQ(
+      Status(
+          Raw(port).Send(Upgrade("/ws", "evil.example:" + p, "Origin: http://evil.example:" + p + "\r\n")).ReadAll(1)),
+      421);
   EXPECT_THROW(WsClient(port, "/ws", "http://attacker.example"), boost::system::system_error);
   EXPECT_EQ(server->clients(), 0);
   // and accepted from the page's own origin, and from a client that sends none

@@ -153,9 +153,8 @@ TEST(Cubes, AlphabetBlocksCarryOneLetterPerFace) {
     EXPECT_GT(cv::norm(image, DrawFace(spec, c.layout), cv::NORM_INF), 0) << name;
   }
   // the assets name each block's face letters for the word device
-  const auto assets = std::find_if(files.begin(), files.end(), [](const GeneratedFile& g) {
-    return g.name == "cubes_assets.xml";
-  });
+  const auto assets =
+      std::find_if(files.begin(), files.end(), [](const GeneratedFile& g) { return g.name == "cubes_assets.xml"; });
   ASSERT_NE(assets, files.end());
   EXPECT_NE(assets->bytes.find("<text name=\"cube_AGMSY4.faces\" data=\"AGMSY4\"/>"), std::string::npos);
   EXPECT_NE(assets->bytes.find("<text name=\"cube_BHNTZ5.faces\" data=\"BHNTZ5\"/>"), std::string::npos);

@@ -141,8 +141,9 @@ TEST(MarkerDetector, FindsSmallNoisyMarkers) {
   double worst = 0;
   for (int n = 0; n < kCount; ++n) {
     const double side_px = rng.uniform(13.0, 17.0);
-    const cv::Matx33d H = Homography(side_px / kMarker, rng.uniform(-180.0, 180.0), rng.uniform(-0.003, 0.003),
-                                     rng.uniform(-0.003, 0.003), {rng.uniform(100.0, 540.0), rng.uniform(100.0, 380.0)});
+    const cv::Matx33d H =
+        Homography(side_px / kMarker, rng.uniform(-180.0, 180.0), rng.uniform(-0.003, 0.003),
+                   rng.uniform(-0.003, 0.003), {rng.uniform(100.0, 540.0), rng.uniform(100.0, 380.0)});
     cv::Mat image = Warp(source, H);
     cv::Mat noise(image.size(), CV_32FC1);
     rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
@@ -173,8 +174,9 @@ TEST(MarkerDetector, FindsSmallNoisyMarkers) {
       EXPECT_LT(e, 0.5) << n << " corner " << k;
     }
   }
-  std::printf("markers of 13-17 px with noise and JPEG: %d of %d found (AprilTag quads alone: %d), worst corner %.2f px\n",
-              found_count, kCount, apriltag_count, worst);
+  std::printf(
+      "markers of 13-17 px with noise and JPEG: %d of %d found (AprilTag quads alone: %d), worst corner %.2f px\n",
+      found_count, kCount, apriltag_count, worst);
   EXPECT_GE(found_count, kCount * 9 / 10);
 }
 

@@ -17,8 +17,8 @@
 #include "bridge/bridge_markers.h"
 #include "render/renderer.h"
 #include "sensors/sensor_random.h"
-#include "vision/vision_detector.h"
 #include "test_process.h"
+#include "vision/vision_detector.h"
 #include "vision_test_scene.h"
 
 namespace vlab::testing {
@@ -54,10 +54,10 @@ TEST_F(VisionProgramTest, ServesMarkerPosesOfACameraStreamInCameraAndWorldFrames
   pose.q_WC = Eigen::Quaterniond(X_WC.linear());
 
   // the vision program knows cube A's faces 0-2 from the command line, 3-5 come over UDP
-  TestProcess vision({VLAB_BINARY_DIR "/vlab", "vision", "--camera", "127.0.0.1:" + std::to_string(camera->port()),
-                      "--port", "0", "--name", "eyes", "--marker", "4X4_50:0-2:0.025", "--frames",
-                      std::to_string(kFrames), "--duration", "20"},
-                     0);  // its start line comes once it has the camera: below
+  TestProcess vision(
+      {VLAB_BINARY_DIR "/vlab", "vision", "--camera", "127.0.0.1:" + std::to_string(camera->port()), "--port", "0",
+       "--name", "eyes", "--marker", "4X4_50:0-2:0.025", "--frames", std::to_string(kFrames), "--duration", "20"},
+      0);  // its start line comes once it has the camera: below
   for (int i = 0; i < 5000 && camera->subscribers() == 0; ++i) camera->Poll(0.002);
   ASSERT_EQ(camera->subscribers(), 1) << "vision did not subscribe to the camera";
   const std::string start = vision.WaitForStartLine(20);

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Geometry>
 
 #include "mujoco_fixture.h"
 #include "test_util.h"
@@ -84,7 +84,7 @@ class CubeCameraScene : public vlab::test::MujocoTest {
 
   TempDir dir_;
   vision::CubeSetConfig cubes_;  // the default set: the committed mjcf/cubes
-  mjModel* m_ = nullptr;  // owned by the MuJoCo fixture
+  mjModel* m_ = nullptr;         // owned by the MuJoCo fixture
   mjData* d_ = nullptr;
   int camera_ = -1;
 };

@@ -104,9 +104,10 @@ TEST_F(WordRender, TheDevicesReadingDirectionIsTheRenderedFacesUp) {
   for (int f = 0; f < vision::kCubeFaces; ++f) {
     for (double yaw : {0.0, 30.0, 135.0, -100.0}) {
       // face f towards the camera (+z), tipped 8 deg about x so that no pose is special, turned by yaw about z
-      const Eigen::Quaterniond q = Eigen::AngleAxisd(yaw * kDeg, Eigen::Vector3d::UnitZ()) *
-                                   Eigen::AngleAxisd(8 * kDeg, Eigen::Vector3d::UnitX()) *
-                                   Eigen::Quaterniond::FromTwoVectors(vision::CubeFaceNormal(f), Eigen::Vector3d::UnitZ());
+      const Eigen::Quaterniond q =
+          Eigen::AngleAxisd(yaw * kDeg, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(8 * kDeg, Eigen::Vector3d::UnitX()) *
+          Eigen::Quaterniond::FromTwoVectors(vision::CubeFaceNormal(f), Eigen::Vector3d::UnitZ());
       d_->qpos[0] = 0, d_->qpos[1] = 0, d_->qpos[2] = -0.3;
       d_->qpos[3] = q.w(), d_->qpos[4] = q.x(), d_->qpos[5] = q.y(), d_->qpos[6] = q.z();
       mj_forward(m_, d_);

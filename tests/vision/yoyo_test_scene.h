@@ -8,9 +8,9 @@
 #include <memory>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Geometry>
 
 #include "mujoco_fixture.h"
 #include "render/renderer.h"

@@ -7,10 +7,10 @@
 // ground truth, kYoyoNotSeen with the last values on frames without the yo-yo.
 
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-#include <nlohmann/json.hpp>
 
 #include "bridge/bridge_camera_server.h"
 #include "bridge/bridge_client_device.h"
@@ -45,10 +45,10 @@ TEST_F(YoyoVisionProgramTest, ServesTheTrackedYoyoAsAYoyoDevice) {
   pose.p_WC = X_WC.translation();
   pose.q_WC = Eigen::Quaterniond(X_WC.linear());
 
-  TestProcess vision({VLAB_BINARY_DIR "/vlab", "vision", "--camera", "127.0.0.1:" + std::to_string(camera->port()),
-                      "--yoyo-port", "0", "--blob-color", "red", "--line", "0.725,0", "--frames",
-                      std::to_string(kFrames), "--duration", "30"},
-                     0);  // its start line comes once it has the camera: below
+  TestProcess vision(
+      {VLAB_BINARY_DIR "/vlab", "vision", "--camera", "127.0.0.1:" + std::to_string(camera->port()), "--yoyo-port", "0",
+       "--blob-color", "red", "--line", "0.725,0", "--frames", std::to_string(kFrames), "--duration", "30"},
+      0);  // its start line comes once it has the camera: below
   for (int i = 0; i < 5000 && camera->subscribers() == 0; ++i) camera->Poll(0.002);
   ASSERT_EQ(camera->subscribers(), 1) << "vision did not subscribe to the camera";
   const std::string start = vision.WaitForStartLine(20);

@@ -35,8 +35,8 @@ std::vector<Sample> RunFromWound(const mjModel* m, mjData* d, const Yoyo& y, dou
   std::vector<Sample> run;
   mj_resetData(m, d);
   StepFor(m, d, duration, [&](const mjData* d) {
-    run.push_back({d->time, d->qpos[y.drop_qpos], d->qpos[y.spin_qpos], d->qvel[y.drop_dof],
-                   d->qvel[y.spin_dof], Energy(y, d), Tension(y, d), Stretch(y, d)});
+    run.push_back({d->time, d->qpos[y.drop_qpos], d->qpos[y.spin_qpos], d->qvel[y.drop_dof], d->qvel[y.spin_dof],
+                   Energy(y, d), Tension(y, d), Stretch(y, d)});
   });
   return run;
 }
@@ -93,9 +93,11 @@ TEST_F(YoyoTest, EnergyLostAtTheBottomIsTheEquivalentRestitution) {
     const double v = std::sqrt(kinetic / y.RollingEnergy(1.0));
     const double lost = before - after, expected = (1 - e * e) * kinetic;
     const double tolerance = 2 * y.mass * y.gravity * v * y.timestep;
-    std::printf("bottom %zu at %.3f s: v %.4f m/s, KE- %.6f J, lost %.6f J, closed form %.6f J (error %+.2e J, "
-                "tolerance %.2e); e measured %.5f, closed form %.5f\n", k + 1, run[i].time, v, kinetic, lost,
-                expected, lost - expected, tolerance, std::sqrt((after + kinetic - before) / kinetic), e);
+    std::printf(
+        "bottom %zu at %.3f s: v %.4f m/s, KE- %.6f J, lost %.6f J, closed form %.6f J (error %+.2e J, "
+        "tolerance %.2e); e measured %.5f, closed form %.5f\n",
+        k + 1, run[i].time, v, kinetic, lost, expected, lost - expected, tolerance,
+        std::sqrt((after + kinetic - before) / kinetic), e);
     EXPECT_NEAR(lost, expected, tolerance) << "bottom " << k + 1;
   }
 }
@@ -160,8 +162,8 @@ TEST_F(YoyoTest, StringLengthHoldsWithinTheSolverSoftness) {
   for (const Sample& s : run) {
     if (s.time > 0.2 && s.time < 1.2) taut_stretch = std::max(taut_stretch, s.stretch);
   }
-  std::printf("max |d| + r|theta| - L = %.3e m at %.3f s (bound %.3e m); taut stretch %.3e m (steady %.3e m)\n",
-              worst, worst_time, bound, taut_stretch, y.steady_stretch);
+  std::printf("max |d| + r|theta| - L = %.3e m at %.3f s (bound %.3e m); taut stretch %.3e m (steady %.3e m)\n", worst,
+              worst_time, bound, taut_stretch, y.steady_stretch);
   EXPECT_LE(worst, bound);
   EXPECT_NEAR(taut_stretch, y.steady_stretch, 0.05 * y.steady_stretch);
   EXPECT_GE(min_tension, 0.0) << "the string pushed";

@@ -14,16 +14,16 @@ namespace vlab::yoyo::testing {
 
 /// The yo-yo as the compiled model has it (SI units), with the closed forms of DS §6.3.
 struct Yoyo {
-  int drop_qpos = -1, spin_qpos = -1;  // qpos addresses of d and theta
-  int drop_dof = -1, spin_dof = -1;    // their qvel addresses
+  int drop_qpos = -1, spin_qpos = -1;     // qpos addresses of d and theta
+  int drop_dof = -1, spin_dof = -1;       // their qvel addresses
   int plus_force = -1, minus_force = -1;  // sensordata addresses of the tendon limit forces
-  double mass = 0;          // m, kg
-  double spin_inertia = 0;  // J about the spin axis, kg m^2
-  double axle_radius = 0;   // r, m: the spin coefficient of the string tendons
-  double length = 0;        // L, m: the string tendons' limit
-  double gravity = 0;       // g along the descent direction, m/s^2
-  double timestep = 0;      // h, s
-  double steady_stretch = 0;  // string stretch under the yo-yo's weight, m (ReadYoyo)
+  double mass = 0;                        // m, kg
+  double spin_inertia = 0;                // J about the spin axis, kg m^2
+  double axle_radius = 0;                 // r, m: the spin coefficient of the string tendons
+  double length = 0;                      // L, m: the string tendons' limit
+  double gravity = 0;                     // g along the descent direction, m/s^2
+  double timestep = 0;                    // h, s
+  double steady_stretch = 0;              // string stretch under the yo-yo's weight, m (ReadYoyo)
 
   /// Descent acceleration on a taut string, a = g m r^2 / (m r^2 + J), m/s^2.
   double Descent() const { return gravity * MassR2() / (MassR2() + spin_inertia); }

@@ -12,9 +12,9 @@
 #include <cstdio>
 #include <vector>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <Eigen/Dense>
 
 #include "yoyo/yoyo_scene.h"
 
@@ -137,8 +137,8 @@ TEST_F(YoyoTest, StringTensionIsTheClosedForm) {
     sum += t;
   }
   const double mean = sum / run.tension.size();
-  std::printf("tension: mean %.9f N, closed form %.9f N (weight %.6f N), worst relative error %.2e\n", mean,
-              expected, yoyo_.mass * yoyo_.gravity, worst);
+  std::printf("tension: mean %.9f N, closed form %.9f N (weight %.6f N), worst relative error %.2e\n", mean, expected,
+              yoyo_.mass * yoyo_.gravity, worst);
   // closed form to 1e-4 (measured 6.3e-6 at worst: the tail of the start-up jerk)
   EXPECT_LT(worst, 1e-4);
   // and the readout is the force that decelerates the fall measured from d(t): T = m (g - d'')
@@ -169,8 +169,10 @@ TEST_F(YoyoTest, SlackStringExertsNoForceAndTakesUpPlastically) {
       EXPECT_EQ(d->qvel[y.spin_dof], 0.0) << "spin changed while slack";
     }
   });
-  std::printf("slack: %d steps with string force exactly 0, max |d'' - g| %.2e m/s^2; taut again at %.4f s "
-              "(free flight %.4f s)\n", slack_steps, worst_free_fall, taut_again, slack_time);
+  std::printf(
+      "slack: %d steps with string force exactly 0, max |d'' - g| %.2e m/s^2; taut again at %.4f s "
+      "(free flight %.4f s)\n",
+      slack_steps, worst_free_fall, taut_again, slack_time);
   EXPECT_GT(slack_steps, 150);
   EXPECT_LT(worst_free_fall, 1e-9);
   EXPECT_NEAR(taut_again, slack_time, 2 * h);
@@ -178,9 +180,10 @@ TEST_F(YoyoTest, SlackStringExertsNoForceAndTakesUpPlastically) {
   const double t = data_->time;
   const double expected = y.Descent() / y.gravity * (up + y.gravity * t);
   const double measured = data_->qvel[y.drop_dof];
-  std::printf("after take-up: d' %.6f m/s at %.3f s, closed form %.6f, relative error %.2e; tension %.6f N "
-              "(closed form %.6f)\n", measured, t, expected, (measured - expected) / expected, Tension(y, data_),
-              y.Tension());
+  std::printf(
+      "after take-up: d' %.6f m/s at %.3f s, closed form %.6f, relative error %.2e; tension %.6f N "
+      "(closed form %.6f)\n",
+      measured, t, expected, (measured - expected) / expected, Tension(y, data_), y.Tension());
   // the momentum argument holds step by step (constraint impulses along (1, r), gravity
   // exactly h m g per step), so the timing of the jerk does not matter; what is left is
   // the string's stretch rate d' + r theta', which the overdamped limit has removed

@@ -15,8 +15,8 @@
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_udp.h"
 #include "bridge/bridge_yoyo.h"
-#include "yoyosim_process.h"
 #include "wire_session.h"
+#include "yoyosim_process.h"
 
 namespace vlab::bridge {
 namespace {
@@ -192,10 +192,10 @@ TEST(YoyosimUdp, BadPacketsAreRefusedAndCountedWhileTheRunGoesOn) {
     const double z = 1.5 + 0.001 * k;
     if (k == 3) {  // malformed, six ways
       owner.Send({1, 2, 3});
-      owner.Send(10, 2, k, {0.0, 0.0});                          // wrong length
-      owner.Send(10, 2, k, {0.0, std::nan(""), z});              // NaN
-      owner.Send(1, 2, k, {0.0, 0.0, z});                        // arm kind
-      owner.Send(10, 1, k, {0.0, 0.0, z});                       // a state
+      owner.Send(10, 2, k, {0.0, 0.0});              // wrong length
+      owner.Send(10, 2, k, {0.0, std::nan(""), z});  // NaN
+      owner.Send(1, 2, k, {0.0, 0.0, z});            // arm kind
+      owner.Send(10, 1, k, {0.0, 0.0, z});           // a state
       std::vector<unsigned char> bad;
       EncodePacket(Header{10, 2, double(k), 0.0, 3}, std::vector<double>{0, 0, z}.data(), 3, &bad);
       bad[1] ^= 0xff;  // magic

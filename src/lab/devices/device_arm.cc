@@ -78,7 +78,8 @@ std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const Devic
   const mjModel* m = context.model;
   const ArmParams& p = c.ParamsAs<ArmParams>();
   if (m->opt.integrator == mjINT_RK4) {
-    throw InputError("scene '" + context.scene + "': arm devices need the Euler or implicit integrator (RK4 "
+    throw InputError("scene '" + context.scene +
+                     "': arm devices need the Euler or implicit integrator (RK4 "
                      "cannot split the step for the servo)");
   }
   std::unique_ptr<SimArm> arm(new SimArm(c));
@@ -292,7 +293,6 @@ void SimArm::Row(const mjData& d, double* out) const {
   for (int i = 0; i < n; ++i) following = std::max(following, std::abs(q_ref_[i] - d.qpos[qpos_adr_[i]]));
   out[3 * n + 1] = following;
 }
-
 
 void SimArm::Hold() {
   command_.mode = bridge::ArmMode::kHold;

@@ -31,8 +31,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 #include "bridge/bridge_messages.h"
 #include "lab/devices/device.h"
@@ -53,7 +53,7 @@ struct ArmParams : DeviceParams {
   std::vector<double> max_velocity;    ///< |qd| limits of velocity commands, rad/s (empty: none)
   ServoConfig servo;
   CommandInputConfig input;
-  bool log_following_error = false;    ///< log NAME.following_error: max |q_ref - q| of the servo, rad
+  bool log_following_error = false;  ///< log NAME.following_error: max |q_ref - q| of the servo, rad
 };
 
 /// Reads an arm entry's keys (joints, actuators, initial, max_velocity, servo,

@@ -57,8 +57,8 @@ void BindArmChain(ArmChain& chain, const ArmChainParams& params, const std::vect
   for (const std::string& joint : chain.model->joint_names()) {
     const auto it = std::find(joints.begin(), joints.end(), joint);
     if (it == joints.end()) {
-      throw InputError(who + ": chain joint '" + joint + "' (from '" + params.base_body + "' to site '" +
-                       params.site + "') is not a joint of arm '" + chain.arm->name() + "'");
+      throw InputError(who + ": chain joint '" + joint + "' (from '" + params.base_body + "' to site '" + params.site +
+                       "') is not a joint of arm '" + chain.arm->name() + "'");
     }
     chain.arm_index.push_back(static_cast<int>(it - joints.begin()));
   }
@@ -131,10 +131,14 @@ nlohmann::json ArmChainFacts(const ArmChain& chain, const ArmChainParams& params
   j["frame"] = "world";
   j["arm"] = chain.arm->name();
   j["site"] = params.site;
-  j["status_bits"] = {{"holding", bridge::kStatusHolding}, {"refused", bridge::kStatusRefused},
-                      {"watchdog", bridge::kStatusWatchdog}, {"not_owner", bridge::kStatusNotOwner}};
-  j["gains"] = {{"position", params.k_position}, {"orientation", params.k_orientation},
-                {"null_space", params.k_null}, {"damping", params.damping}};
+  j["status_bits"] = {{"holding", bridge::kStatusHolding},
+                      {"refused", bridge::kStatusRefused},
+                      {"watchdog", bridge::kStatusWatchdog},
+                      {"not_owner", bridge::kStatusNotOwner}};
+  j["gains"] = {{"position", params.k_position},
+                {"orientation", params.k_orientation},
+                {"null_space", params.k_null},
+                {"damping", params.damping}};
   j["watchdog_periods"] = params.input.watchdog_periods;
   return j;
 }

@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 
 #include "bridge/bridge_layouts.h"
@@ -110,10 +110,10 @@ void HoldArm(ArmChain& chain);
 
 /// A site's pose and velocity, world frame.
 struct SiteMotion {
-  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();        // position, m
-  Eigen::Matrix3d R_WS = Eigen::Matrix3d::Identity();   // orientation
-  Eigen::Vector3d v_W = Eigen::Vector3d::Zero();        // linear velocity, m/s
-  Eigen::Vector3d w_W = Eigen::Vector3d::Zero();        // angular velocity, rad/s
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();       // position, m
+  Eigen::Matrix3d R_WS = Eigen::Matrix3d::Identity();  // orientation
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero();       // linear velocity, m/s
+  Eigen::Vector3d w_W = Eigen::Vector3d::Zero();       // angular velocity, rad/s
 };
 
 /// The chain site's pose and velocity in `d` (positions from the last kinematics).

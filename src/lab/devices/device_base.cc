@@ -20,8 +20,8 @@
 
 #include "bridge/bridge_layouts.h"
 
-#include "lab/devices/device_base.h"
 #include "core/core_errors.h"
+#include "lab/devices/device_base.h"
 #include "lab/scenario/lab_yaml.h"
 #include "sensors/sensor_random.h"
 
@@ -62,7 +62,6 @@ class SimBase final : public Device, public CommandInput, public StepHooks {
       yaw_bias_ = config_.drift_yaw_rate * normal(rng);
     }
   }
-
 
   void Reset(const mjData& d) override {
     for (int i = 0; i < 3; ++i) {
@@ -137,12 +136,13 @@ class SimBase final : public Device, public CommandInput, public StepHooks {
   }
 
   void State(std::vector<double>* p) const override {
-    p->assign({holding_ ? static_cast<double>(bridge::kStatusHolding) : 0.0, odometry_[0], odometry_[1],
-               odometry_[2], velocity_[0], velocity_[1], velocity_[2]});
+    p->assign({holding_ ? static_cast<double>(bridge::kStatusHolding) : 0.0, odometry_[0], odometry_[1], odometry_[2],
+               velocity_[0], velocity_[1], velocity_[2]});
   }
   std::vector<std::string> Columns() const override {
     std::vector<std::string> out;
-    for (const char* c : {"x", "y", "yaw", "true_x", "true_y", "true_yaw", "vx", "vy", "wz"}) out.push_back(name() + "." + c);
+    for (const char* c : {"x", "y", "yaw", "true_x", "true_y", "true_yaw", "vx", "vy", "wz"})
+      out.push_back(name() + "." + c);
     return out;
   }
   int ColumnCount() const override { return 9; }
@@ -158,8 +158,10 @@ class SimBase final : public Device, public CommandInput, public StepHooks {
     j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"x", "m (odometry, world)"}, {"yaw", "rad"}, {"vx", "m/s (base frame)"}, {"wz", "rad/s"}};
     j["frames"] = {{"base", 0}, {"world", 1}};
-    j["status_bits"] = {{"holding", bridge::kStatusHolding}, {"refused", bridge::kStatusRefused},
-                        {"watchdog", bridge::kStatusWatchdog}, {"not_owner", bridge::kStatusNotOwner}};
+    j["status_bits"] = {{"holding", bridge::kStatusHolding},
+                        {"refused", bridge::kStatusRefused},
+                        {"watchdog", bridge::kStatusWatchdog},
+                        {"not_owner", bridge::kStatusNotOwner}};
     j["joints"] = config_.joints;
     j["limits"] = {{"velocity_max", config_.max_velocity}, {"acceleration_max", config_.max_acceleration}};
     j["odometry_drift"] = config_.odometry_drift;

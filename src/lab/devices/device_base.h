@@ -18,10 +18,10 @@ struct BaseParams : DeviceParams {
   std::vector<std::string> actuators;  ///< velocity actuators of those joints (default: the joint names)
   std::vector<double> max_velocity = {1.0, 1.0, 2.0};      ///< vx, vy (m/s), wz (rad/s)
   std::vector<double> max_acceleration = {1.0, 1.0, 2.0};  ///< m/s^2, m/s^2, rad/s^2
-  bool odometry_drift = false;  ///< seeded odometry errors (scale and yaw-rate bias)
-  double drift_scale = 0.01;    ///< std of the odometry's scale errors (fraction)
-  double drift_yaw_rate = 0.002;  ///< std of the odometry's yaw-rate bias, rad/s
-  CommandInputConfig input;  ///< watchdog_periods, owner_timeout
+  bool odometry_drift = false;                             ///< seeded odometry errors (scale and yaw-rate bias)
+  double drift_scale = 0.01;                               ///< std of the odometry's scale errors (fraction)
+  double drift_yaw_rate = 0.002;                           ///< std of the odometry's yaw-rate bias, rad/s
+  CommandInputConfig input;                                ///< watchdog_periods, owner_timeout
 };
 
 /// Reads the entry's own keys.

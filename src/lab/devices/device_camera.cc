@@ -11,8 +11,8 @@
 #include <cmath>
 #include <condition_variable>
 #include <mutex>
-#include <thread>
 #include <stdexcept>
+#include <thread>
 
 #include "bridge/bridge_errors.h"
 #include "core/core_errors.h"
@@ -48,7 +48,8 @@ std::shared_ptr<const DeviceParams> ReadCameraParams(MapReader& r) {
   c->fps = r.Number("fps", c->fps);
   if (!(c->fps > 0 && c->fps <= 1000)) r.Fail("fps", "must be > 0 and <= 1000 Hz");
   c->exposure_s = r.Number("exposure", c->exposure_s);
-  if (!(c->exposure_s >= 0 && c->exposure_s < 1 / c->fps)) r.Fail("exposure", "must be >= 0 s and shorter than a frame");
+  if (!(c->exposure_s >= 0 && c->exposure_s < 1 / c->fps))
+    r.Fail("exposure", "must be >= 0 s and shorter than a frame");
   c->latency_s = r.Number("latency", c->latency_s);
   if (!(c->latency_s >= 0 && c->latency_s <= 1)) r.Fail("latency", "must be 0 to 1 s");
   c->distortion = r.Numbers("distortion", {});
@@ -109,7 +110,8 @@ std::unique_ptr<SimCamera> SimCamera::Create(const DeviceContext& context, const
   mc.fovy_rad = m->cam_fovy[cam->camera_] * M_PI / 180.0;
   mc.exposure_s = cam->config_.exposure_s;
   mc.latency_s = cam->config_.latency_s;
-  for (std::size_t i = 0; i < cam->config_.distortion.size() && i < 4; ++i) mc.distortion[i] = cam->config_.distortion[i];
+  for (std::size_t i = 0; i < cam->config_.distortion.size() && i < 4; ++i)
+    mc.distortion[i] = cam->config_.distortion[i];
   mc.noise = cam->config_.noise;
   try {
     cam->model_ = sensors::CameraModel::Create(mc);
@@ -165,7 +167,7 @@ struct SimCamera::Worker {
   Worker() { ::sem_init(&jobs, 0, 0); }
   ~Worker() { ::sem_destroy(&jobs); }
   std::thread thread;
-  sem_t jobs;                    // to the worker: one post per frame queued, and one to stop
+  sem_t jobs;  // to the worker: one post per frame queued, and one to stop
   std::atomic<bool> stop{false};
   std::mutex mutex;
   std::condition_variable done;  // to a waiting control thread: a frame is done, or the worker is ready
@@ -291,7 +293,7 @@ void SimCamera::WorkerMain() {
 
   for (;;) {
     while (::sem_wait(&w.jobs) != 0) {
-    }  // (only EINTR: retried)
+    }                   // (only EINTR: retried)
     if (w.stop) break;  // what is still queued would not be sent: the camera is no longer served
     Pending& p = queue_[w.at];
     bool ok = false;
@@ -362,7 +364,7 @@ void SimCamera::Deliver(double t, mjData* d) {
   if (!server_) return;
   server_->Poll(0.0);
   const double t_before = t_prev_;  // the previous period end: frames due by then are late
-  if (t < t_prev_) {  // the sim device reset the time: a new schedule, ids go on increasing
+  if (t < t_prev_) {                // the sim device reset the time: a new schedule, ids go on increasing
     Drain();
     t_prev_ = -1;
     head_ = count_ = 0;
@@ -417,7 +419,8 @@ void SimCamera::QueueDue(mjData* d) {
     Eigen::Matrix3d r;
     r << x[0], -x[1], -x[2], x[3], -x[4], -x[5], x[6], -x[7], -x[8];
     slot.frame.pose.valid = true;
-    slot.frame.pose.p_WC = Eigen::Vector3d(d->cam_xpos[3 * camera_], d->cam_xpos[3 * camera_ + 1], d->cam_xpos[3 * camera_ + 2]);
+    slot.frame.pose.p_WC =
+        Eigen::Vector3d(d->cam_xpos[3 * camera_], d->cam_xpos[3 * camera_ + 1], d->cam_xpos[3 * camera_ + 2]);
     slot.frame.pose.q_WC = Eigen::Quaterniond(r).normalized();
     next_id_ = id_base_ + i + 1;
     ++count_;

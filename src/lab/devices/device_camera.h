@@ -55,17 +55,17 @@ inline constexpr const char* kWorkerThreadName = "vlab-camera";
 /// A simulated webcam: an MJCF camera rendered offscreen at the camera's own
 /// frame rate, through a lens and sensor model (sensors/sensor_camera.h).
 struct CameraParams : DeviceParams {
-  std::string camera;            ///< MJCF camera name
-  int width = 640;               ///< pixels (at most the scene's offscreen buffer)
+  std::string camera;  ///< MJCF camera name
+  int width = 640;     ///< pixels (at most the scene's offscreen buffer)
   int height = 480;
-  double fps = 30.0;             ///< frame rate, independent of the control rate
-  double exposure_s = 0.0;       ///< exposure time (0: instantaneous); the frame is stamped at its middle
-  double latency_s = 0.03;       ///< from the exposure stamp to delivery
+  double fps = 30.0;               ///< frame rate, independent of the control rate
+  double exposure_s = 0.0;         ///< exposure time (0: instantaneous); the frame is stamped at its middle
+  double latency_s = 0.03;         ///< from the exposure stamp to delivery
   std::vector<double> distortion;  ///< k1, k2, p1, p2 (Brown-Conrady); empty: none
-  double noise = 0.0;            ///< pixel noise standard deviation, 8-bit grey levels
+  double noise = 0.0;              ///< pixel noise standard deviation, 8-bit grey levels
   bridge::CameraEncoding encoding = bridge::CameraEncoding::kJpeg;  ///< frames on the wire (jpeg | raw)
-  int jpeg_quality = 90;         ///< 1-100
-  render::Profile profile = render::Profile::kFast;  ///< draft | fast | quality
+  int jpeg_quality = 90;                                            ///< 1-100
+  render::Profile profile = render::Profile::kFast;                 ///< draft | fast | quality
   // Faults injected on purpose, to test that a client survives them (frame ids as
   // sent, 0 the first): a dropped frame is rendered and never sent (counted
   // dropped), as a frame lost on the way; a late frame is held `late_by_s` past
@@ -151,7 +151,7 @@ class SimCamera final : public Device, public OwnTransport, public RenderedOutpu
   void StartWorker(mjData* d);
   void StopWorker();
   void WorkerMain();
-  void Drain();  // waits until the worker has done every queued frame
+  void Drain();                          // waits until the worker has done every queued frame
   bool WaitDone(Pending& p, bool wait);  // true when done (waiting for it when `wait`)
 
   std::string scene_;
@@ -162,7 +162,7 @@ class SimCamera final : public Device, public OwnTransport, public RenderedOutpu
   sensors::CameraNoiseState noise_;  // (the worker's; reseeded for every frame)
   std::uint64_t noise_seed_ = 1;     // the run's seed
   std::unique_ptr<bridge::CameraServer> server_;
-  bool realtime_ = false;  // served on the realtime clock: delivery never waits for the worker
+  bool realtime_ = false;       // served on the realtime clock: delivery never waits for the worker
   std::vector<Pending> queue_;  // ring of frames queued, not yet delivered
   std::size_t head_ = 0, count_ = 0;
   std::unique_ptr<Worker> worker_;

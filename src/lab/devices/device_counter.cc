@@ -25,8 +25,8 @@
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_counter.h"
-#include "lab/outputs/lab_log.h"
 #include "lab/devices/powerball_truth.h"
+#include "lab/outputs/lab_log.h"
 #include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
@@ -38,8 +38,7 @@ constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 
 class SimCounter final : public Device {
  public:
-  SimCounter(const DeviceContext& context, const DeviceConfig& c)
-      : Device(c), config_(c.ParamsAs<CounterParams>()) {
+  SimCounter(const DeviceContext& context, const DeviceConfig& c) : Device(c), config_(c.ParamsAs<CounterParams>()) {
     const mjModel* m = context.model;
     model_ = m;
     if (config_.powerball) ball_ = PowerballBinding::Bind(*m, who());

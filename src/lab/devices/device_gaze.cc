@@ -26,8 +26,8 @@
 
 #include "bridge/bridge_layouts.h"
 
-#include "lab/devices/device_gaze.h"
 #include "core/core_errors.h"
+#include "lab/devices/device_gaze.h"
 #include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
@@ -53,7 +53,6 @@ class SimGaze final : public Device {
     cx_ = 0.5 * config_.width - 0.5;
     cy_ = 0.5 * config_.height - 0.5;
   }
-
 
   /// The initial row and state: the pose after the lab's reset.
   void Reset(const mjData& d) override { Sample(d, d.time); }
@@ -103,8 +102,9 @@ class SimGaze final : public Device {
     j["width"] = config_.width;
     j["height"] = config_.height;
     j["fovy_deg"] = fovy_deg_;
-    j["intrinsics"] = {{"model", "pinhole"}, {"width", config_.width}, {"height", config_.height},
-                       {"fx", f_}, {"fy", f_}, {"cx", cx_}, {"cy", cy_}, {"source", "fovy"}};
+    j["intrinsics"] = {
+        {"model", "pinhole"}, {"width", config_.width}, {"height", config_.height}, {"fx", f_}, {"fy", f_}, {"cx", cx_},
+        {"cy", cy_},          {"source", "fovy"}};
     j["camera_frame"] = "OpenCV: x right, y down, z forward";
     j["ground_truth"] = true;
     return j.dump();

@@ -23,8 +23,8 @@
 
 #include "bridge/bridge_layouts.h"
 
-#include "lab/devices/device_gripper.h"
 #include "core/core_errors.h"
+#include "lab/devices/device_gripper.h"
 #include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
@@ -60,7 +60,6 @@ class SimGripper final : public Device, public CommandInput, public StepHooks {
     }
   }
 
-
   void Reset(const mjData& d) override {
     force_mode_ = false;
     grip_force_ = 0;
@@ -71,10 +70,11 @@ class SimGripper final : public Device, public CommandInput, public StepHooks {
 
   int command_length() const override { return 2; }
   bridge::CommandCheck CheckCommand(const std::vector<double>& p) const override {
-    if (p[0] == 0) return p[1] >= opening_min_ && p[1] <= opening_max_ ? bridge::CommandCheck::kAccept
-                                                                        : bridge::CommandCheck::kLimits;
-    if (p[0] == 1) return p[1] >= 0 && p[1] <= force_max_ ? bridge::CommandCheck::kAccept
+    if (p[0] == 0)
+      return p[1] >= opening_min_ && p[1] <= opening_max_ ? bridge::CommandCheck::kAccept
                                                           : bridge::CommandCheck::kLimits;
+    if (p[0] == 1)
+      return p[1] >= 0 && p[1] <= force_max_ ? bridge::CommandCheck::kAccept : bridge::CommandCheck::kLimits;
     return bridge::CommandCheck::kMalformed;
   }
   void Command(const std::vector<double>& p) override {
@@ -141,9 +141,13 @@ class SimGripper final : public Device, public CommandInput, public StepHooks {
     j["layout"] = bridge::LayoutJson(kind());
     j["units"] = {{"opening", "m"}, {"opening_velocity", "m/s"}, {"force", "N"}, {"value", "m (mode 0), N (mode 1)"}};
     j["modes"] = {{"position", 0}, {"force", 1}};
-    j["status_bits"] = {{"holding", bridge::kStatusHolding}, {"refused", bridge::kStatusRefused},
-                        {"watchdog", bridge::kStatusWatchdog}, {"not_owner", bridge::kStatusNotOwner}};
-    j["limits"] = {{"opening_min", opening_min_}, {"opening_max", opening_max_}, {"force_max", force_max_},
+    j["status_bits"] = {{"holding", bridge::kStatusHolding},
+                        {"refused", bridge::kStatusRefused},
+                        {"watchdog", bridge::kStatusWatchdog},
+                        {"not_owner", bridge::kStatusNotOwner}};
+    j["limits"] = {{"opening_min", opening_min_},
+                   {"opening_max", opening_max_},
+                   {"force_max", force_max_},
                    {"speed_max", config_.max_speed}};
     j["grasp_force"] = config_.grasp_force;
     j["watchdog_periods"] = config_.input.watchdog_periods;

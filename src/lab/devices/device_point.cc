@@ -53,7 +53,6 @@ class SimPoint final : public Device, public CommandInput, public CommandWriter 
   std::vector<Claim> Claims() const override { return {{config_.arm, "point device '" + name() + "'", where()}}; }
   int log_rank() const override { return 3; }  // after the other devices, as in every log written so far
 
-
   void Reset(const mjData& d) override {
     ReadArmChain(chain_, d);
     const control::Pose tip = chain_.model->TipPose();
@@ -85,7 +84,7 @@ class SimPoint final : public Device, public CommandInput, public CommandWriter 
     const mjData& d = *period.data;
     bool resumed = false;
     if (!BeginArmChainPeriod(chain_, d, &resumed)) return true;  // holding
-    if (resumed) setpoint_ = chain_.model->TipPose().p_W;  // from a hold: start where the site is
+    if (resumed) setpoint_ = chain_.model->TipPose().p_W;        // from a hold: start where the site is
     // rate limit: the set-point moves toward the command at most max_speed
     Eigen::Vector3d step = command_ - setpoint_;
     const double longest = config_.max_speed * period_s_;
@@ -107,13 +106,13 @@ class SimPoint final : public Device, public CommandInput, public CommandWriter 
   }
 
   void State(std::vector<double>* p) const override {
-    p->assign({chain_.holding ? static_cast<double>(bridge::kStatusHolding) : 0.0, p_.x(), p_.y(), p_.z(), v_.x(), v_.y(),
-               v_.z()});
+    p->assign({chain_.holding ? static_cast<double>(bridge::kStatusHolding) : 0.0, p_.x(), p_.y(), p_.z(), v_.x(),
+               v_.y(), v_.z()});
   }
   std::vector<std::string> Columns() const override {
     std::vector<std::string> out;
-    for (const char* c : {"x", "y", "z", "vx", "vy", "vz", "setpoint.x", "setpoint.y", "setpoint.z", "error",
-                          "rot_error"}) {
+    for (const char* c :
+         {"x", "y", "z", "vx", "vy", "vz", "setpoint.x", "setpoint.y", "setpoint.z", "error", "rot_error"}) {
       out.push_back(name() + "." + c);
     }
     return out;
@@ -129,7 +128,8 @@ class SimPoint final : public Device, public CommandInput, public CommandWriter 
   std::string DescribeFacts() const override {
     nlohmann::json j = ArmChainFacts(chain_, config_, kind());
     j["units"] = {{"x", "m"}, {"vx", "m/s"}};
-    j["limits"] = {{"workspace_min", config_.workspace_min}, {"workspace_max", config_.workspace_max},
+    j["limits"] = {{"workspace_min", config_.workspace_min},
+                   {"workspace_max", config_.workspace_max},
                    {"speed_max", config_.max_speed}};  // an unbounded side reads null
     return j.dump();
   }
@@ -162,7 +162,8 @@ std::shared_ptr<const DeviceParams> ReadPointParams(MapReader& r) {
   for (int i = 0; i < 3 && p->workspace_min.size() == 3 && p->workspace_max.size() == 3; ++i) {
     if (!(p->workspace_min[i] < p->workspace_max[i])) box.Fail("max", "must be > min in x, y and z");
   }
-  if (p->workspace_min.size() != 3 || p->workspace_max.size() != 3) box.Fail("min", "min and max need 3 numbers (x, y, z), m, world frame");
+  if (p->workspace_min.size() != 3 || p->workspace_max.size() != 3)
+    box.Fail("min", "min and max need 3 numbers (x, y, z), m, world frame");
   box.Finish();
   ReadCommandInput(r, &p->input);
   return p;

@@ -19,13 +19,12 @@ namespace vlab::lab {
 /// Its arm, chain and gains are ArmChainParams (device_arm_chain.h): the site is
 /// the point, and the orientation gain keeps the orientation the site had at the start.
 struct PointParams : ArmChainParams {
-  double max_speed = 1.0;           ///< m/s: the set-point ramps toward each command at most this fast
+  double max_speed = 1.0;  ///< m/s: the set-point ramps toward each command at most this fast
   /// Workspace box, world frame, m: commands outside [min, max] are refused (limits).
   std::vector<double> workspace_min = {-std::numeric_limits<double>::infinity(),
                                        -std::numeric_limits<double>::infinity(),
                                        -std::numeric_limits<double>::infinity()};
-  std::vector<double> workspace_max = {std::numeric_limits<double>::infinity(),
-                                       std::numeric_limits<double>::infinity(),
+  std::vector<double> workspace_max = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                                        std::numeric_limits<double>::infinity()};
 };
 

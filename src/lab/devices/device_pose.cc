@@ -19,8 +19,8 @@
 
 #include "bridge/bridge_layouts.h"
 
-#include "lab/devices/device_pose.h"
 #include "core/core_errors.h"
+#include "lab/devices/device_pose.h"
 #include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
@@ -34,7 +34,6 @@ class SimPose final : public Device {
     body_ = Id(m, c, mjOBJ_BODY, "body", config_.relative_to);
     if (!config_.target.empty()) target_ = Id(m, c, mjOBJ_SITE, "site", config_.target);
   }
-
 
   void Reset(const mjData& d) override {
     Measure(d, &p_start_, &q_start_);
@@ -51,7 +50,9 @@ class SimPose final : public Device {
     }
   }
 
-  void State(std::vector<double>* p) const override { p->assign({p_.x(), p_.y(), p_.z(), q_.w(), q_.x(), q_.y(), q_.z()}); }
+  void State(std::vector<double>* p) const override {
+    p->assign({p_.x(), p_.y(), p_.z(), q_.w(), q_.x(), q_.y(), q_.z()});
+  }
   std::vector<std::string> Columns() const override {
     std::vector<std::string> out;
     for (const char* c : {"x", "y", "z", "drift", "rot_drift"}) out.push_back(name() + "." + c);

@@ -14,9 +14,9 @@ namespace vlab::lab {
 /// A tracked frame (kind pose), like a motion-capture system's rigid body:
 /// an MJCF site's pose in the frame of a body, and its distance to a target.
 struct PoseParams : DeviceParams {
-  std::string site;                  ///< the tracked site
+  std::string site;                   ///< the tracked site
   std::string relative_to = "world";  ///< the body whose frame the pose is given in
-  std::string target;                ///< a site whose distance is logged ("": none)
+  std::string target;                 ///< a site whose distance is logged ("": none)
 };
 
 /// Reads the entry's own keys.

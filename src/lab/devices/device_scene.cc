@@ -31,7 +31,7 @@ namespace vlab::lab {
 namespace {
 
 constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
-using scene::kPoseValues;  // x, y, z, qw, qx, qy, qz
+using scene::kPoseValues;             // x, y, z, qw, qx, qy, qz
 
 std::string NameOf(const mjModel* m, mjtObj type, int id) {
   const char* name = mj_id2name(m, type, id);
@@ -54,8 +54,8 @@ class SimScene final : public Device, public LogReader {
     const int values = kPoseValues * static_cast<int>(bodies_.size()) + static_cast<int>(config_.signals.size());
     if (values + bridge::kHeaderValues > bridge::kMaxPacketValues) {
       throw InputError(who() + ": " + std::to_string(bodies_.size()) + " visual bodies and " +
-                       std::to_string(config_.signals.size()) + " signals need " +
-                       std::to_string(values) + " values, more than a datagram holds (" +
+                       std::to_string(config_.signals.size()) + " signals need " + std::to_string(values) +
+                       " values, more than a datagram holds (" +
                        std::to_string(bridge::kMaxPacketValues - bridge::kHeaderValues) + ")");
     }
     poses_.assign(values, 0.0);
@@ -66,7 +66,8 @@ class SimScene final : public Device, public LogReader {
     for (const std::string& signal : config_.signals) {
       const auto at = std::find(columns.begin(), columns.end(), signal);
       if (at == columns.end()) {
-        throw InputError(who() + ": signals: the log has no column '" + signal + "' (signals are log.csv columns, "
+        throw InputError(who() + ": signals: the log has no column '" + signal +
+                         "' (signals are log.csv columns, "
                          "e.g. ARM.q.JOINT)");
       }
       signal_columns_.push_back(static_cast<int>(at - columns.begin()));

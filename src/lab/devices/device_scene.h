@@ -17,7 +17,7 @@ namespace vlab::lab {
 
 /// A scene stream's keys.
 struct SceneParams : DeviceParams {
-  double rate_hz = 30.0;  ///< pose frames per second (at most the control rate)
+  double rate_hz = 30.0;             ///< pose frames per second (at most the control rate)
   std::vector<std::string> signals;  ///< log columns sent after the poses (live plots), at most kMaxSceneSignals
 };
 

@@ -20,10 +20,10 @@
 
 #include "bridge/bridge_layouts.h"
 
-#include "lab/devices/device_sensors.h"
 #include "core/core_errors.h"
-#include "lab/scenario/lab_yaml.h"
+#include "lab/devices/device_sensors.h"
 #include "lab/devices/support_polygon.h"
+#include "lab/scenario/lab_yaml.h"
 #include "sensors/sensor_random.h"
 
 namespace vlab::lab {
@@ -57,7 +57,6 @@ class SimSensorDevice final : public Device {
     values_.assign(address_.size(), 0.0);
     if (kind_ == bridge::DeviceKind::kFeet) BindSupport(m, c);
   }
-
 
   void Sample(const mjData& d, double) override {
     for (std::size_t i = 0; i < address_.size(); ++i) {
@@ -97,8 +96,8 @@ class SimSensorDevice final : public Device {
     if (kind_ == bridge::DeviceKind::kFeet) {
       j["units"] = {{"force", "N"}};
     } else {
-      j["units"] = {{"gyro", "rad/s"}, {"accelerometer", "m/s^2 (specific force, +g up at rest)"},
-                    {"frame", "sensor site"}};
+      j["units"] = {
+          {"gyro", "rad/s"}, {"accelerometer", "m/s^2 (specific force, +g up at rest)"}, {"frame", "sensor site"}};
     }
     j["sensors"] = sensors_;
     j["sensor_types"] = types_;

@@ -16,9 +16,9 @@ struct SensorParams : DeviceParams {
   std::vector<std::string> sensors;  ///< MJCF sensors, in payload order
   double noise = 0.0;                ///< Gaussian noise std added to every value (sensor units; 0: none)
   // feet only: log columns of the whole support (not on the wire)
-  std::vector<std::string> pads;     ///< one MJCF site per sensor: where it presses (empty: no CoP columns)
-  std::string weight_of;             ///< body whose subtree weight the sum is compared with ("": none)
-  double contact_threshold = 0.0;    ///< N: a pad reading more than this is in contact
+  std::vector<std::string> pads;   ///< one MJCF site per sensor: where it presses (empty: no CoP columns)
+  std::string weight_of;           ///< body whose subtree weight the sum is compared with ("": none)
+  double contact_threshold = 0.0;  ///< N: a pad reading more than this is in contact
 };
 
 /// Reads a feet entry's keys (sensors, noise, pads, weight_of, contact_threshold).

@@ -72,7 +72,7 @@ class SimControl final : public Device, public CommandInput {
   OnOwnerLost on_owner_lost_ = OnOwnerLost::kResume;
   double owner_timeout_s_ = 1.0;
   SimOps ops_ = SimOps::kDriver;
-  long states_ = 0;  // states set, i.e. published
+  long states_ = 0;                   // states set, i.e. published
   std::vector<std::string> devices_;  // every device of the scenario, in its order
   bridge::SimStateMsg state_;
   bridge::SimCommandMsg pending_;

@@ -112,7 +112,7 @@ class SimTool final : public Device, public CommandInput, public CommandWriter {
     const mjData& d = *period.data;
     bool resumed = false;
     if (!BeginArmChainPeriod(chain_, d, &resumed)) return true;  // holding
-    if (resumed) {  // from a hold: start where the tool is
+    if (resumed) {                                               // from a hold: start where the tool is
       const control::Pose tip = chain_.model->TipPose();
       p_set_ = tip.p_W;
       R_set_ = tip.R_W;
@@ -154,8 +154,8 @@ class SimTool final : public Device, public CommandInput, public CommandWriter {
   }
   std::vector<std::string> Columns() const override {
     std::vector<std::string> out;
-    for (const char* c : {"x", "y", "z", "qw", "qx", "qy", "qz", "setpoint.x", "setpoint.y", "setpoint.z", "error",
-                          "rot_error"}) {
+    for (const char* c :
+         {"x", "y", "z", "qw", "qx", "qy", "qz", "setpoint.x", "setpoint.y", "setpoint.z", "error", "rot_error"}) {
       out.push_back(name() + "." + c);
     }
     return out;
@@ -172,15 +172,18 @@ class SimTool final : public Device, public CommandInput, public CommandWriter {
     nlohmann::json j = ArmChainFacts(chain_, config_, kind());
     j["units"] = {{"x", "m"}, {"qw", ""}, {"vx", "m/s"}, {"wx", "rad/s"}};
     // an unbounded side or reach reads null
-    j["limits"] = {{"workspace_min", config_.workspace_min}, {"workspace_max", config_.workspace_max},
+    j["limits"] = {{"workspace_min", config_.workspace_min},
+                   {"workspace_max", config_.workspace_max},
                    {"reach_centre", {reach_centre_.x(), reach_centre_.y(), reach_centre_.z()}},
                    {"reach", reach_radius_},
-                   {"tilt_axis", config_.tilt_axis},         {"max_tilt_deg", config_.max_tilt_deg},
-                   {"speed_max", config_.max_speed},         {"angular_speed_max", config_.max_angular_speed},
+                   {"tilt_axis", config_.tilt_axis},
+                   {"max_tilt_deg", config_.max_tilt_deg},
+                   {"speed_max", config_.max_speed},
+                   {"angular_speed_max", config_.max_angular_speed},
                    {"quaternion_norm_tolerance", kQuaternionNormTolerance}};
     j["limits"]["reach_mode"] = config_.reach == ToolParams::Reach::kAuto    ? "auto"
                                 : config_.reach == ToolParams::Reach::kFixed ? "fixed"
-                                                                              : "off";
+                                                                             : "off";
     return j.dump();
   }
 

@@ -21,8 +21,8 @@ namespace vlab::lab {
 /// the tool frame.
 struct ToolParams : ArmChainParams {
   static constexpr double kInf = std::numeric_limits<double>::infinity();
-  double max_speed = 0.5;           ///< m/s: the position set-point ramps toward each command at most this fast
-  double max_angular_speed = 1.0;   ///< rad/s: the orientation set-point turns at most this fast
+  double max_speed = 0.5;          ///< m/s: the position set-point ramps toward each command at most this fast
+  double max_angular_speed = 1.0;  ///< rad/s: the orientation set-point turns at most this fast
   /// Workspace box, world frame, m: positions outside [min, max] are refused (limits).
   std::vector<double> workspace_min = {-kInf, -kInf, -kInf};
   std::vector<double> workspace_max = {kInf, kInf, kInf};

@@ -99,13 +99,15 @@ class SimWord final : public Device {
   std::string DescribeFacts() const override {
     nlohmann::json j;
     j["layout"] = bridge::LayoutJson(kind(), ValueNames());
-    j["units"] = {{"spelled", "1 or 0"}, {"pos_error", "m"}, {"yaw_error", "deg"}, {"tilt", "deg"},
-                  {"speed", "m/s"},      {"on_top", "1 or 0"}};
+    j["units"] = {{"spelled", "1 or 0"}, {"pos_error", "m"}, {"yaw_error", "deg"},
+                  {"tilt", "deg"},       {"speed", "m/s"},   {"on_top", "1 or 0"}};
     j["word"] = config_.word;
     j["slots"] = config_.slots;
     j["bodies"] = config_.bodies;
-    j["bounds"] = {{"position", config_.bounds.position_m}, {"angle_deg", config_.bounds.angle_deg},
-                   {"tilt_deg", config_.bounds.tilt_deg}, {"speed", config_.bounds.speed_m_s}};
+    j["bounds"] = {{"position", config_.bounds.position_m},
+                   {"angle_deg", config_.bounds.angle_deg},
+                   {"tilt_deg", config_.bounds.tilt_deg},
+                   {"speed", config_.bounds.speed_m_s}};
     j["frame"] = "world";
     j["ground_truth"] = true;
     return j.dump();

@@ -25,8 +25,8 @@
 #include "bridge/bridge_layouts.h"
 
 #include "bridge/bridge_yoyo.h"
-#include "lab/devices/device_yoyo.h"
 #include "core/core_errors.h"
+#include "lab/devices/device_yoyo.h"
 #include "lab/scenario/lab_yaml.h"
 #include "sensors/sensor_random.h"
 
@@ -41,8 +41,10 @@ class SimYoyo final : public Device {
     const std::string who = c.where + ": device '" + c.name + "': ";
     const int slide = mj_name2id(m, mjOBJ_JOINT, config_.slide.c_str());
     const int spin = mj_name2id(m, mjOBJ_JOINT, config_.spin.c_str());
-    if (slide < 0 || m->jnt_type[slide] != mjJNT_SLIDE) throw InputError(who + "the scene has no slide joint '" + config_.slide + "'");
-    if (spin < 0 || m->jnt_type[spin] != mjJNT_HINGE) throw InputError(who + "the scene has no hinge joint '" + config_.spin + "'");
+    if (slide < 0 || m->jnt_type[slide] != mjJNT_SLIDE)
+      throw InputError(who + "the scene has no slide joint '" + config_.slide + "'");
+    if (spin < 0 || m->jnt_type[spin] != mjJNT_HINGE)
+      throw InputError(who + "the scene has no hinge joint '" + config_.spin + "'");
     slide_qpos_ = m->jnt_qposadr[slide];
     spin_dof_ = m->jnt_dofadr[spin];
     centre_ = mj_name2id(m, mjOBJ_SITE, config_.centre.c_str());
@@ -55,7 +57,6 @@ class SimYoyo final : public Device {
       tension_.push_back(m->sensor_adr[id]);
     }
   }
-
 
   void Reset(const mjData& d) override {
     rng_.Seed(seed_);  // every run from a reset draws the same noise

@@ -12,7 +12,10 @@ namespace {
 int Find(const mjModel& model, mjtObj type, const char* name, const std::string& where) {
   const int id = mj_name2id(&model, type, name);
   if (id < 0) {
-    throw InputError(where + ": no " + (type == mjOBJ_BODY ? "body" : type == mjOBJ_JOINT ? "joint" : "geom") +
+    throw InputError(where + ": no " +
+                     (type == mjOBJ_BODY    ? "body"
+                      : type == mjOBJ_JOINT ? "joint"
+                                            : "geom") +
                      " '" + name + "' (a PowerBall needs mjcf/powerball/powerball.xml)");
   }
   return id;

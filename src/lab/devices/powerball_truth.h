@@ -37,13 +37,13 @@ struct PowerballBinding {
 
 /// One reading of the truth (see the file comment for definitions).
 struct PowerballTruth {
-  double omega = 0.0;                   ///< rad/s, spin about a relative to the shell
-  double nu = 0.0;                      ///< rad/s, precession relative to the shell
-  double slip = 0.0;                    ///< 1, tip slip ratio
-  std::array<double, 3> couple{};       ///< N m, wall couple on the rotor (world)
-  std::array<double, 3> axle{};         ///< a in the world
-  std::array<double, 3> normal{};       ///< e3 in the world
-  int contacts = 0;                     ///< tip-wall contacts in the data
+  double omega = 0.0;              ///< rad/s, spin about a relative to the shell
+  double nu = 0.0;                 ///< rad/s, precession relative to the shell
+  double slip = 0.0;               ///< 1, tip slip ratio
+  std::array<double, 3> couple{};  ///< N m, wall couple on the rotor (world)
+  std::array<double, 3> axle{};    ///< a in the world
+  std::array<double, 3> normal{};  ///< e3 in the world
+  int contacts = 0;                ///< tip-wall contacts in the data
 
   double Rpm() const { return omega * 60.0 / (2.0 * 3.14159265358979323846); }
   double CoupleNorm() const;

@@ -13,8 +13,8 @@ CheckSet::CheckSet(const std::vector<CheckConfig>& checks, const std::vector<std
   for (std::size_t i = 0; i < checks_.size(); ++i) {
     const auto it = std::find(columns.begin(), columns.end(), checks_[i].signal);
     if (it == columns.end()) {
-      throw InputError(checks_[i].where + ": check '" + checks_[i].name + "': unknown signal '" +
-                       checks_[i].signal + "' (see the log columns: vlab run --list-signals)");
+      throw InputError(checks_[i].where + ": check '" + checks_[i].name + "': unknown signal '" + checks_[i].signal +
+                       "' (see the log columns: vlab run --list-signals)");
     }
     acc_[i].column = static_cast<int>(it - columns.begin());
   }

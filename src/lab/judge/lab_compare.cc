@@ -158,8 +158,8 @@ std::string FormatCompareReport(const CompareReport& r, bool all) {
   if (!r.coverage_failure.empty()) {
     s << "  FAIL: " << r.coverage_failure << "\n";
   } else {
-    s << "  " << r.golden_rows << " golden rows over t = " << FormatDouble(r.from_s) << " .. "
-      << FormatDouble(r.to_s) << " s, " << r.columns.size() << " columns compared";
+    s << "  " << r.golden_rows << " golden rows over t = " << FormatDouble(r.from_s) << " .. " << FormatDouble(r.to_s)
+      << " s, " << r.columns.size() << " columns compared";
     if (!r.ignored.empty()) s << ", " << r.ignored.size() << " ignored";
     if (!r.run_only.empty()) s << ", " << r.run_only.size() << " only in the run (not compared)";
     s << "\n";

@@ -51,9 +51,9 @@ struct Divergence {
 struct ColumnReport {
   std::string column;
   ColumnTolerance tolerance;
-  bool missing = false;   ///< in the golden, not in the run
-  long compared = 0;      ///< rows compared
-  long out = 0;           ///< rows out of tolerance
+  bool missing = false;  ///< in the golden, not in the run
+  long compared = 0;     ///< rows compared
+  long out = 0;          ///< rows out of tolerance
   double max_abs_diff = 0.0;
   Divergence first, worst;  ///< valid when out > 0
   bool pass() const { return !missing && out == 0; }
@@ -61,12 +61,12 @@ struct ColumnReport {
 
 struct CompareReport {
   std::string run_file, golden_file;
-  long golden_rows = 0;  ///< golden rows in the window
-  double from_s = 0.0, to_s = 0.0;  ///< window actually compared
-  std::string coverage_failure;     ///< "" or why the run does not cover the golden
-  std::vector<ColumnReport> columns;           ///< golden columns, time excepted, ignored ones excepted
-  std::vector<std::string> ignored;            ///< golden columns ignored by a tolerance
-  std::vector<std::string> run_only;           ///< run columns the golden lacks
+  long golden_rows = 0;               ///< golden rows in the window
+  double from_s = 0.0, to_s = 0.0;    ///< window actually compared
+  std::string coverage_failure;       ///< "" or why the run does not cover the golden
+  std::vector<ColumnReport> columns;  ///< golden columns, time excepted, ignored ones excepted
+  std::vector<std::string> ignored;   ///< golden columns ignored by a tolerance
+  std::vector<std::string> run_only;  ///< run columns the golden lacks
   bool pass() const;
   long failing() const;
 };

@@ -32,7 +32,8 @@ GoldenSpec LoadGolden(const std::string& dir) {
     r.Fail("scenario", e.what());
   }
   g.duration_s = r.Number("duration", 0.0);
-  if (r.Has("duration") && !(g.duration_s > 0 && g.duration_s <= 1e6)) r.Fail("duration", "must be > 0 s and at most 1e6 s");
+  if (r.Has("duration") && !(g.duration_s > 0 && g.duration_s <= 1e6))
+    r.Fail("duration", "must be > 0 s and at most 1e6 s");
   if (r.Has("seed")) g.seed = static_cast<long long>(YamlSeed(file, r.Raw("seed"), "seed"));
   g.sets = r.Strings("set", {});
   g.every = r.Integer("every", 1);

@@ -22,12 +22,12 @@ namespace vlab::lab {
 
 struct GoldenSpec {
   std::string dir;
-  std::string scenario;          ///< resolved path of the scenario file
-  double duration_s = 0.0;       ///< 0: the scenario's
-  long long seed = -1;           ///< -1: the scenario's
-  std::vector<std::string> sets; ///< KEY=VALUE overrides
-  int every = 1;                 ///< log rows kept: 0, every, 2 every, ...
-  CompareOptions compare;        ///< tolerances and window
+  std::string scenario;           ///< resolved path of the scenario file
+  double duration_s = 0.0;        ///< 0: the scenario's
+  long long seed = -1;            ///< -1: the scenario's
+  std::vector<std::string> sets;  ///< KEY=VALUE overrides
+  int every = 1;                  ///< log rows kept: 0, every, 2 every, ...
+  CompareOptions compare;         ///< tolerances and window
   std::string log() const { return dir + "/log.csv"; }
 };
 

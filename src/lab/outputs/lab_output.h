@@ -86,15 +86,15 @@ class OutputDir {
   std::string parent_;
   std::string staging_;
   std::unique_ptr<output_fs::FolderLock> staging_lock_;  // held while the run lives
-  std::string run_;  // this run's id, in its marker
+  std::string run_;                                      // this run's id, in its marker
   // the folder at final_dir at Create, the one this run may replace: its inode and its
   // marker's run id (an inode number can come back for another folder; a run id cannot)
   bool had_target_ = false;
   unsigned long target_device_ = 0, target_inode_ = 0;
   std::string target_run_;
   bool done_ = false;
-  std::string committed_;   // where Commit put the files
-  std::string set_aside_;   // the replaced folder, removed once the lock is released
+  std::string committed_;  // where Commit put the files
+  std::string set_aside_;  // the replaced folder, removed once the lock is released
   std::string note_;
 };
 

@@ -8,8 +8,8 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -141,13 +141,13 @@ nlohmann::json ReadMarker(const std::string& folder) {
 std::string ReadRunId(const std::string& folder) {
   const nlohmann::json marker = ReadMarker(folder);
   return marker.is_object() && marker.contains("run") && marker["run"].is_string() ? marker["run"].get<std::string>()
-                                                                                  : "";
+                                                                                   : "";
 }
 
 std::string NewRunId() {
   static std::atomic<unsigned> count{0};
-  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-      std::chrono::system_clock::now().time_since_epoch()).count();
+  const auto ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
   return std::to_string(::getpid()) + "-" + std::to_string(ns) + "-" + std::to_string(++count);
 }
 
@@ -197,9 +197,7 @@ int RenameNoReplace(const std::string& from, const std::string& to) {
   return ::rename(from.c_str(), to.c_str()) == 0 ? 0 : errno;
 }
 
-std::string StagingName(long pid, unsigned n) {
-  return kStagingPrefix + std::to_string(pid) + "-" + std::to_string(n);
-}
+std::string StagingName(long pid, unsigned n) { return kStagingPrefix + std::to_string(pid) + "-" + std::to_string(n); }
 
 bool IsStagingName(std::string_view name) {
   const std::string_view prefix(kStagingPrefix);

@@ -27,8 +27,8 @@ std::unique_ptr<PoseRecorder> PoseRecorder::Create(const mjModel* m, double rate
   r->interval_s_ = rate_hz > 0 ? 1.0 / rate_hz : period_s;
   r->rate_hz_ = 1.0 / r->interval_s_;
   if (r->interval_s_ < period_s - kSameTime_s) {
-    throw InputError(where + ": outputs.poses.rate: " + FormatDouble(rate_hz) + " Hz is faster than the control rate (" +
-                     FormatDouble(1.0 / period_s) + " Hz)");
+    throw InputError(where + ": outputs.poses.rate: " + FormatDouble(rate_hz) +
+                     " Hz is faster than the control rate (" + FormatDouble(1.0 / period_s) + " Hz)");
   }
   r->bodies_ = SceneBodies(m);
   r->poses_.assign(7 * r->bodies_.size(), 0.0);

@@ -1,8 +1,8 @@
 #include "lab/outputs/lab_run_record.h"
 
 #include <cstdio>
-#include <vector>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "lab/outputs/lab_log.h"
 
@@ -20,8 +20,10 @@ std::string Canonical(const RunRecord& r) {
   char duration[40];
   std::snprintf(duration, sizeof duration, "%.17g", r.duration_s);
   std::string text;
-  for (const auto& [name, value] : std::vector<std::pair<const char*, std::string>>{
-           {"vlab", r.vlab}, {"seed", std::to_string(r.seed)}, {"duration_s", duration}, {"scenario", r.scenario_yaml}}) {
+  for (const auto& [name, value] : std::vector<std::pair<const char*, std::string>>{{"vlab", r.vlab},
+                                                                                    {"seed", std::to_string(r.seed)},
+                                                                                    {"duration_s", duration},
+                                                                                    {"scenario", r.scenario_yaml}}) {
     text += name;
     text += '\0';
     text += std::to_string(value.size());

@@ -46,7 +46,8 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
   }
   for (const auto& [name, port] : options.ports) {
     const bool known = std::any_of(devices.begin(), devices.end(), [&](const Device* d) { return d->name() == name; });
-    if (!known) throw InputError("--port " + name + "=" + std::to_string(port) + ": the scenario has no device '" + name + "'");
+    if (!known)
+      throw InputError("--port " + name + "=" + std::to_string(port) + ": the scenario has no device '" + name + "'");
   }
   const std::string server = options.server + " (MuJoCo " + MujocoVersion() + ")";
   b->devices_.reserve(devices.size());
@@ -80,8 +81,8 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     if (sim && sim->ops() == SimOps::kDriver) {
       ec.gate = [self = b.get()](const bridge::Endpoint& from) { return self->SimGate(from); };
     }
-    const bridge::DeviceDescription common{device->name(), server, clock_name, options.bind, d.socket->local_port(),
-                                           control_hz};
+    const bridge::DeviceDescription common{device->name(),         server,    clock_name, options.bind,
+                                           d.socket->local_port(), control_hz};
     ec.describe_json = device->DescribeJson(common);
     d.endpoint = std::make_unique<bridge::DeviceEndpoint>(ec);
     b->fds_.push_back(d.socket->fd());
@@ -289,11 +290,15 @@ std::vector<ServedDevice> LabBridge::Devices() const {
   for (const Served& d : devices_) {
     const char* kind = bridge::KindName(static_cast<int>(d.device->kind()));
     if (const OwnTransport* t = d.device->own_transport()) {
-      out.push_back(
-          {d.device->name(), kind, t->address(), t->port(), t->describe_json(), t->counters(), t->frames()});
+      out.push_back({d.device->name(), kind, t->address(), t->port(), t->describe_json(), t->counters(), t->frames()});
     } else {
-      out.push_back({d.device->name(), kind, d.socket->local_endpoint().address().to_string(), d.socket->local_port(),
-                     d.endpoint->config().describe_json, d.endpoint->counters(), {}});
+      out.push_back({d.device->name(),
+                     kind,
+                     d.socket->local_endpoint().address().to_string(),
+                     d.socket->local_port(),
+                     d.endpoint->config().describe_json,
+                     d.endpoint->counters(),
+                     {}});
     }
   }
   return out;

@@ -15,8 +15,8 @@
 #pragma once
 
 #include <cstdint>
-#include <map>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,8 +32,8 @@
 namespace vlab::lab {
 
 struct BridgeOptions {
-  std::string bind = "127.0.0.1";    ///< address every device socket binds to
-  std::map<std::string, int> ports;  ///< per-device port overrides (0: any free port)
+  std::string bind = "127.0.0.1";     ///< address every device socket binds to
+  std::map<std::string, int> ports;   ///< per-device port overrides (0: any free port)
   std::string server = "vlab serve";  ///< server name in describe replies
   /// Subscribers each device endpoint keeps (`vlab serve --subscribers`), ≥ 1.
   int max_subscribers = bridge::kDefaultMaxSubscribers;
@@ -122,10 +122,10 @@ class LabBridge final : public vlab::CommandSource, public CommandWriter {
  private:
   struct Served {
     Device* device = nullptr;
-    std::unique_ptr<bridge::UdpSocket> socket;        // null for a device with its own transport
+    std::unique_ptr<bridge::UdpSocket> socket;         // null for a device with its own transport
     std::unique_ptr<bridge::DeviceEndpoint> endpoint;  // null for a device with its own transport
-    std::vector<unsigned char> last_state;  // latest encoded state, for new subscribers
-    double command_arrival = -1;            // wall time the pending command arrived
+    std::vector<unsigned char> last_state;             // latest encoded state, for new subscribers
+    double command_arrival = -1;                       // wall time the pending command arrived
   };
   LabBridge() = default;
   void Receive(Served& d);

@@ -26,7 +26,7 @@ std::string EnvironmentName(const std::string& prefix, const std::string& name) 
   std::string out = prefix;
   for (const char c : name) {
     out += std::isalnum(static_cast<unsigned char>(c)) ? static_cast<char>(std::toupper(static_cast<unsigned char>(c)))
-                                                        : '_';
+                                                       : '_';
   }
   return out;
 }

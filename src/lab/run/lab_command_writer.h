@@ -30,11 +30,11 @@ struct RunResult;
 
 /// What a source gets each period, the same for every source.
 struct CommandPeriod {
-  long k = 0;                  ///< the period's index (0: the run's first period, and row 0)
-  double t_s = 0.0;            ///< its start, k T, s
-  double* columns = nullptr;   ///< the controller's log columns of the period's row (task, built-in)
+  long k = 0;                    ///< the period's index (0: the run's first period, and row 0)
+  double t_s = 0.0;              ///< its start, k T, s
+  double* columns = nullptr;     ///< the controller's log columns of the period's row (task, built-in)
   const mjData* data = nullptr;  ///< the state at t_s (read only: the period's physics has not begun)
-  double pace_s = 0.0;         ///< wall seconds per period of a realtime clock (0 otherwise): the wire's watchdog
+  double pace_s = 0.0;           ///< wall seconds per period of a realtime clock (0 otherwise): the wire's watchdog
   const RunOptions* options = nullptr;  ///< the run's options (replay, record)
   RunResult* result = nullptr;          ///< the run's result (recordings)
 };

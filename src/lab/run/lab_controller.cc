@@ -31,7 +31,7 @@ struct BoundChain {
   std::unique_ptr<RobotModel> model;
   std::vector<int> arm_index;  // chain joint i is arm joint arm_index[i]
   int arm_dof = 0;
-  Eigen::VectorXd q, qd;       // chain state of the current period (sized once)
+  Eigen::VectorXd q, qd;  // chain state of the current period (sized once)
 };
 
 BoundChain BindChain(const mjModel* m, const ControllerConfig& c, const std::vector<std::string>& joints) {
@@ -99,9 +99,14 @@ class TaskSpaceBuiltin final : public Controller {
   }
 
   std::vector<std::string> Columns() const override {
-    return {"controller.position_error", "controller.orientation_error", "controller.p_des.x",
-            "controller.p_des.y",        "controller.p_des.z",           "controller.p.x",
-            "controller.p.y",            "controller.p.z"};
+    return {"controller.position_error",
+            "controller.orientation_error",
+            "controller.p_des.x",
+            "controller.p_des.y",
+            "controller.p_des.z",
+            "controller.p.x",
+            "controller.p.y",
+            "controller.p.z"};
   }
 
   void Update(double t, const bridge::ArmState& state, bridge::ArmCommand* command, double* columns) override {
@@ -148,8 +153,10 @@ class JointPdBuiltin final : public Controller {
     // gains: given, or from the bandwidth rule on the start pose's inertia
     const Eigen::VectorXd inertia = model.MassMatrix().diagonal();
     const double w = 2.0 * M_PI * c.pd_bandwidth_hz;
-    gains_.kp = c.kp.empty() ? Eigen::VectorXd(inertia * w * w) : Eigen::Map<const Eigen::VectorXd>(c.kp.data(), c.kp.size());
-    gains_.kd = c.kd.empty() ? Eigen::VectorXd(2.0 * w * inertia) : Eigen::Map<const Eigen::VectorXd>(c.kd.data(), c.kd.size());
+    gains_.kp =
+        c.kp.empty() ? Eigen::VectorXd(inertia * w * w) : Eigen::Map<const Eigen::VectorXd>(c.kp.data(), c.kp.size());
+    gains_.kd =
+        c.kd.empty() ? Eigen::VectorXd(2.0 * w * inertia) : Eigen::Map<const Eigen::VectorXd>(c.kd.data(), c.kd.size());
     if (gains_.kp.size() != n || gains_.kd.size() != n) {
       Fail(c, "gains.kp and gains.kd need one value per chain joint (" + std::to_string(n) + ")");
     }

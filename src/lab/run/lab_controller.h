@@ -31,8 +31,7 @@ class Controller {
   virtual std::vector<std::string> Columns() const = 0;
   /// One control period at time_s: reads the arm state, writes the command
   /// and Columns().size() log values into `columns`.
-  virtual void Update(double time_s, const bridge::ArmState& state, bridge::ArmCommand* command,
-                      double* columns) = 0;
+  virtual void Update(double time_s, const bridge::ArmState& state, bridge::ArmCommand* command, double* columns) = 0;
 };
 
 /// Creates the controller a scenario names. `model` is read-only (the

@@ -44,9 +44,9 @@ class ControllerWriter final : public CommandWriter {
   SimArm& arm_;
   std::string where_;
   std::unique_ptr<Controller> controller_;
-  std::size_t columns_ = 0;        // log columns the controller writes
-  std::size_t replay_at_ = 0;      // the next value of a recording replayed
-  bridge::ArmCommand command_;     // the command of the period
+  std::size_t columns_ = 0;     // log columns the controller writes
+  std::size_t replay_at_ = 0;   // the next value of a recording replayed
+  bridge::ArmCommand command_;  // the command of the period
 };
 
 }  // namespace vlab::lab

@@ -3,8 +3,8 @@
 
 #include <dirent.h>
 #include <fcntl.h>
-#include <signal.h>
 #include <sched.h>
+#include <signal.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
@@ -212,7 +212,8 @@ std::unique_ptr<ExternalController> ExternalController::Start(const std::vector<
     // after the exec: what the program runs at
     c->realtime_.granted = ProcessRealtimePriority(pid) == realtime_priority;
     if (!c->realtime_.granted) {
-      c->realtime_.reason = sched_error != 0 ? RealtimeRefusal(realtime_priority, sched_error) : "not in force after exec";
+      c->realtime_.reason =
+          sched_error != 0 ? RealtimeRefusal(realtime_priority, sched_error) : "not in force after exec";
     }
   }
   if (exec_error != 0) {

@@ -59,8 +59,8 @@ class ExternalController {
   /// SCHED_FIFO at that priority when the user may have it (core_realtime.h);
   /// refused, it runs at normal priority and realtime() says why.
   /// environment: "NAME=VALUE" entries added to (or replacing in) vlab's own.
-  static std::unique_ptr<ExternalController> Start(const std::vector<std::string>& argv,
-                                                   const std::string& log_path, int realtime_priority = 0,
+  static std::unique_ptr<ExternalController> Start(const std::vector<std::string>& argv, const std::string& log_path,
+                                                   int realtime_priority = 0,
                                                    const std::vector<std::string>& environment = {});
   ~ExternalController();
   ExternalController(const ExternalController&) = delete;

@@ -96,8 +96,8 @@ void RunSession::WriteOutputs() {
       // CSV that was not written whole is skipped
       if (result_.interrupted_by || output_failed_) {
         result_.plots_skipped.push_back(plot.file + ": the run " +
-                                        (output_failed_ ? "stopped on a failed write" : "was interrupted") +
-                                        ": " + e.what());
+                                        (output_failed_ ? "stopped on a failed write" : "was interrupted") + ": " +
+                                        e.what());
         continue;
       }
       if (result_.failure.empty()) result_.failure = e.what();

@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "core/core_mujoco.h"
 #include "bridge/bridge_signals.h"
+#include "core/core_mujoco.h"
 #include "lab/outputs/lab_plot.h"
 
 namespace vlab::lab {
@@ -55,9 +55,8 @@ RunResult Lab::Run(const RunOptions& options) {
 }
 
 RunSession::RunSession(Lab::Impl& lab, const RunOptions& options)
-    : s_(lab), options_(options), m_(lab.model.get()), d_(lab.data.get()),
-      period_(lab.scenario.control_period_s), periods_(std::lround(lab.scenario.duration_s / period_)),
-      t_start_(WallClock::now()) {}
+    : s_(lab), options_(options), m_(lab.model.get()), d_(lab.data.get()), period_(lab.scenario.control_period_s),
+      periods_(std::lround(lab.scenario.duration_s / period_)), t_start_(WallClock::now()) {}
 
 // the MuJoCo error cleanup (the staging folder's removal) ends with the run, however it ends
 RunSession::~RunSession() {
@@ -207,8 +206,9 @@ void RunSession::NoteWaiting() {
 bool RunSession::Interrupted() {
   if (!options_.interrupt || *options_.interrupt == 0) return false;
   result_.interrupted_by = *options_.interrupt;
-  result_.failure = "interrupted by " + StopSignalName(result_.interrupted_by) + " at t = " + FormatDouble(k_ * period_) +
-                    " s, after " + std::to_string(k_) + " of " + std::to_string(periods_) + " periods";
+  result_.failure = "interrupted by " + StopSignalName(result_.interrupted_by) +
+                    " at t = " + FormatDouble(k_ * period_) + " s, after " + std::to_string(k_) + " of " +
+                    std::to_string(periods_) + " periods";
   return true;
 }
 
@@ -274,7 +274,8 @@ bool RunSession::Period() {
     const double t_step = d_->time;
     mj_step1(m_, d_);
     for (StepHooks* hooks : s_.step_hooks) hooks->Actuate(*d_, m_->opt.timestep);
-    if (options_.record) result_.recording.controls.insert(result_.recording.controls.end(), d_->ctrl, d_->ctrl + m_->nu);
+    if (options_.record)
+      result_.recording.controls.insert(result_.recording.controls.end(), d_->ctrl, d_->ctrl + m_->nu);
     mj_step2(m_, d_);
     for (StepHooks* hooks : s_.step_hooks) hooks->AfterStep(*d_, m_->opt.timestep);
     ++result_.steps;

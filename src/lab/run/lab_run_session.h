@@ -15,14 +15,14 @@
 #include <vector>
 
 #include "core/core_clock.h"
-#include "lab/run/lab_bridge.h"
 #include "lab/judge/lab_checks.h"
-#include "lab/run/lab_command_writer.h"
-#include "lab/run/lab_external.h"
 #include "lab/outputs/lab_images.h"
 #include "lab/outputs/lab_log.h"
-#include "lab/outputs/lab_poses.h"
 #include "lab/outputs/lab_output.h"
+#include "lab/outputs/lab_poses.h"
+#include "lab/run/lab_bridge.h"
+#include "lab/run/lab_command_writer.h"
+#include "lab/run/lab_external.h"
 #include "lab/run/lab_run_watch.h"
 #include "lab/run/lab_runner.h"
 #include "lab/run/lab_runner_impl.h"

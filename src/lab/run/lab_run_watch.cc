@@ -1,7 +1,7 @@
 #include "lab/run/lab_run_watch.h"
 
-#include "lab/outputs/lab_log.h"
 #include "core/core_mujoco.h"
+#include "lab/outputs/lab_log.h"
 
 namespace vlab::lab {
 
@@ -69,15 +69,15 @@ std::string Verdict(const RunResult& r, bool diverged, const std::string& no_con
   }
   for (const auto& w : r.warnings) {
     if (!w.allowed) {
-      return "MuJoCo warning '" + w.name + "' (" + std::to_string(w.count) + "x, first at t = " +
-             FormatDouble(w.first_time_s) + " s): " + w.message;
+      return "MuJoCo warning '" + w.name + "' (" + std::to_string(w.count) +
+             "x, first at t = " + FormatDouble(w.first_time_s) + " s): " + w.message;
     }
   }
   if (!no_controller.empty()) return no_controller;
   for (const auto& c : r.checks) {
     if (!c.pass) {
-      return "check '" + c.config.name + "' failed: " + ReduceName(c.config.reduce) + std::string("(") + c.config.signal +
-             ") = " + FormatDouble(c.value);
+      return "check '" + c.config.name + "' failed: " + ReduceName(c.config.reduce) + std::string("(") +
+             c.config.signal + ") = " + FormatDouble(c.value);
     }
   }
   return "";

@@ -6,8 +6,8 @@
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_kinds.h"
-#include "lab/run/lab_external.h"
 #include "lab/outputs/lab_log.h"
+#include "lab/run/lab_external.h"
 #include "lab/run/lab_runner_impl.h"
 
 namespace vlab::lab {

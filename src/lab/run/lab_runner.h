@@ -20,11 +20,11 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "lab/run/lab_bridge.h"
-#include "lab/judge/lab_checks.h"
 #include "core/core_clock.h"
-#include "core/core_realtime.h"
 #include "core/core_mujoco.h"
+#include "core/core_realtime.h"
+#include "lab/judge/lab_checks.h"
+#include "lab/run/lab_bridge.h"
 #include "lab/scenario/lab_scenario.h"
 
 namespace vlab::lab {
@@ -86,26 +86,26 @@ struct WarningReport {
 };
 
 struct RunResult {
-  int exit_code = 0;     ///< 0 all checks pass, 1 a check failed, the run diverged or was interrupted
-  std::string failure;   ///< one line when exit_code != 0
+  int exit_code = 0;    ///< 0 all checks pass, 1 a check failed, the run diverged or was interrupted
+  std::string failure;  ///< one line when exit_code != 0
   /// The signal that interrupted the run (RunOptions::interrupt), 0 when none did.
   int interrupted_by = 0;
   std::vector<CheckResult> checks;
   std::vector<WarningReport> warnings;
-  long steps = 0;        ///< physics steps taken
-  long periods = 0;      ///< control periods taken
+  long steps = 0;    ///< physics steps taken
+  long periods = 0;  ///< control periods taken
   double sim_time_s = 0.0;
-  double loop_wall_s = 0.0;   ///< wall time of the step loop
-  double total_wall_s = 0.0;  ///< wall time including writing outputs
-  Recording recording;  ///< if RunOptions::record
+  double loop_wall_s = 0.0;            ///< wall time of the step loop
+  double total_wall_s = 0.0;           ///< wall time including writing outputs
+  Recording recording;                 ///< if RunOptions::record
   ClockMode clock = ClockMode::kFast;  ///< the clock that ran
   /// The control thread's realtime priority: asked for, granted, and why not.
   RealtimeGrant realtime;
   ClockStats clock_stats;
-  std::vector<ServedDevice> served;  ///< served devices with their counters (vlab serve)
-  std::vector<double> latencies_s;   ///< command arrival-to-apply latencies (vlab serve)
-  long log_waits = 0;       ///< times the step loop waited for the log writer (it fell behind)
-  double log_wait_s = 0;    ///< and how long in all, s
+  std::vector<ServedDevice> served;    ///< served devices with their counters (vlab serve)
+  std::vector<double> latencies_s;     ///< command arrival-to-apply latencies (vlab serve)
+  long log_waits = 0;                  ///< times the step loop waited for the log writer (it fell behind)
+  double log_wait_s = 0;               ///< and how long in all, s
   std::vector<double> command_ages_s;  ///< newest command's age at each period's start (vlab serve)
   /// Plots not drawn, each "FILE: why": a CSV an external controller writes, where the lab
   /// did not start the controller (vlab serve) and nobody wrote it.
@@ -119,7 +119,7 @@ struct RunResult {
   struct {
     std::string program;
     std::string outcome;
-    RealtimeGrant realtime;  ///< its controller.realtime_priority, read off the program
+    RealtimeGrant realtime;            ///< its controller.realtime_priority, read off the program
     std::map<std::string, int> ports;  ///< the free ports its {port:NAME} placeholders got
   } controller;
 };

@@ -27,19 +27,19 @@ struct Lab::Impl {
   DataPtr data;
   int steps_per_period = 1;
   std::vector<std::unique_ptr<Device>> devices;  // every device, in scenario order
-  std::vector<Device*> device_ptrs;               // the same, as the bridge and Bind take them
-  std::vector<Device*> log_order;                 // by log rank, then scenario order
+  std::vector<Device*> device_ptrs;              // the same, as the bridge and Bind take them
+  std::vector<Device*> log_order;                // by log rank, then scenario order
   // the devices with each capability (device_capabilities.h), in scenario order, asked once at load
-  std::vector<StepHooks*> step_hooks;       // every physics step: Actuate, AfterStep
-  std::vector<RenderedOutput*> rendered;    // BeforeRun, Deliver, AfterPublish
-  std::vector<LogReader*> log_readers;      // BindLog, LogRow
-  SimControl* sim = nullptr;                      // the sim device, if the scenario has one
+  std::vector<StepHooks*> step_hooks;            // every physics step: Actuate, AfterStep
+  std::vector<RenderedOutput*> rendered;         // BeforeRun, Deliver, AfterPublish
+  std::vector<LogReader*> log_readers;           // BindLog, LogRow
+  SimControl* sim = nullptr;                     // the sim device, if the scenario has one
   std::unique_ptr<ControllerWriter> controller;  // the built-in controller (joint_pd and its kin), or null
-  int keyframe = -1;  // scene keyframe of every reset (-1: qpos0)
-  std::unique_ptr<Randomizer> randomizer;  // the seeded layout every reset puts back, or null
-  std::size_t controller_columns = 0;  // log columns the controller writes
+  int keyframe = -1;                             // scene keyframe of every reset (-1: qpos0)
+  std::unique_ptr<Randomizer> randomizer;        // the seeded layout every reset puts back, or null
+  std::size_t controller_columns = 0;            // log columns the controller writes
   std::vector<std::string> columns;
-  std::unique_ptr<TaskController> task;    // the task-language controller (type task), or null
+  std::unique_ptr<TaskController> task;  // the task-language controller (type task), or null
   /// Every command source's claims but the wire's (MakeBridge checks those,
   /// once its sockets say which devices are served).
   ClaimTable claims;

@@ -1,8 +1,8 @@
 // summary.json: a run's verdict, checks, warnings, versions and timings.
 #include <algorithm>
 #include <cmath>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -11,8 +11,8 @@
 
 #include "bridge/bridge_signals.h"
 #include "lab/outputs/lab_run_record.h"
-#include "lab/run/lab_runner.h"
 #include "lab/outputs/lab_stats.h"
+#include "lab/run/lab_runner.h"
 
 #ifndef VLAB_VERSION
 #define VLAB_VERSION "0.0.0"
@@ -73,15 +73,23 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
     if (std::isfinite(c.config.min)) bound["min"] = c.config.min;
     if (std::isfinite(c.config.max)) bound["max"] = c.config.max;
     json window = {{"from", c.config.from_s}, {"to", number(c.config.to_s)}};
-    checks.push_back({{"name", c.config.name}, {"signal", c.config.signal}, {"reduce", ReduceName(c.config.reduce)},
-                      {"value", number(c.value)}, {"bound", bound}, {"window_s", window},
-                      {"samples", c.samples}, {"pass", c.pass}});
+    checks.push_back({{"name", c.config.name},
+                      {"signal", c.config.signal},
+                      {"reduce", ReduceName(c.config.reduce)},
+                      {"value", number(c.value)},
+                      {"bound", bound},
+                      {"window_s", window},
+                      {"samples", c.samples},
+                      {"pass", c.pass}});
     if (c.skipped) checks.back()["skipped"] = "its window starts after the run's end";
   }
   json warnings = json::array();
   for (const auto& w : r.warnings) {
-    warnings.push_back({{"name", w.name}, {"count", w.count}, {"first_time_s", w.first_time_s},
-                        {"message", w.message}, {"allowed", w.allowed}});
+    warnings.push_back({{"name", w.name},
+                        {"count", w.count},
+                        {"first_time_s", w.first_time_s},
+                        {"message", w.message},
+                        {"allowed", w.allowed}});
   }
   const double rtf = r.loop_wall_s > 0 ? r.sim_time_s / r.loop_wall_s : 0.0;
   json clock = {{"name", ClockModeName(r.clock)}, {"periods", r.clock_stats.periods}};
@@ -97,28 +105,49 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
   json served = json::array();
   for (const auto& d : r.served) {
     const auto& c = d.counters;
-    served.push_back({{"name", d.name}, {"kind", d.kind}, {"address", d.address}, {"port", d.port},
-                      {"received", c.received}, {"requests", c.requests}, {"accepted", c.accepted}, {"describes", c.describes},
-                      {"refused", c.refused}, {"refused_malformed", c.refused_malformed},
-                      {"refused_limits", c.refused_limits}, {"refused_not_owner", c.refused_not_owner},
-                      {"refused_not_subscribed", c.refused_not_subscribed}, {"stale", c.stale},
-                      {"duplicate", c.duplicate}, {"future", c.future}, {"watchdog_holds", c.watchdog_holds},
+    served.push_back({{"name", d.name},
+                      {"kind", d.kind},
+                      {"address", d.address},
+                      {"port", d.port},
+                      {"received", c.received},
+                      {"requests", c.requests},
+                      {"accepted", c.accepted},
+                      {"describes", c.describes},
+                      {"refused", c.refused},
+                      {"refused_malformed", c.refused_malformed},
+                      {"refused_limits", c.refused_limits},
+                      {"refused_not_owner", c.refused_not_owner},
+                      {"refused_not_subscribed", c.refused_not_subscribed},
+                      {"stale", c.stale},
+                      {"duplicate", c.duplicate},
+                      {"future", c.future},
+                      {"watchdog_holds", c.watchdog_holds},
                       {"owners_released", c.owners_released},
                       {"sessions",
-                       {{"challenges", c.sessions.challenges}, {"subscribed", c.sessions.subscribed},
-                        {"unsubscribed", c.sessions.unsubscribed}, {"expired", c.sessions.expired},
-                        {"refused_full", c.sessions.refused_full}, {"evicted", c.sessions.evicted},
+                       {{"challenges", c.sessions.challenges},
+                        {"subscribed", c.sessions.subscribed},
+                        {"unsubscribed", c.sessions.unsubscribed},
+                        {"expired", c.sessions.expired},
+                        {"refused_full", c.sessions.refused_full},
+                        {"evicted", c.sessions.evicted},
                         {"describes_limited", c.sessions.describes_limited}}}});
     if (d.kind == "camera") {
       served.back()["frames"] = {{"sent", d.frames.sent}, {"late", d.frames.late}, {"dropped", d.frames.dropped}};
     }
   }
   const auto grant = [](const RealtimeGrant& g) {
-    return json{{"requested", g.requested}, {"granted", g.granted}, {"memory_locked", g.memory_locked},
-                {"reason", g.reason}, {"slice_ns", g.slice_ns}, {"loop_cpu", g.loop_cpu},
-                {"device_cpus", g.device_cpus}, {"deadline_runtime_ns", g.deadline_runtime_ns},
-                {"deadline_period_ns", g.deadline_period_ns}, {"deadline_refused", g.deadline_refused},
-                {"wake_latency_held", g.wake_latency_held}, {"wake_latency_refused", g.wake_latency_refused}};
+    return json{{"requested", g.requested},
+                {"granted", g.granted},
+                {"memory_locked", g.memory_locked},
+                {"reason", g.reason},
+                {"slice_ns", g.slice_ns},
+                {"loop_cpu", g.loop_cpu},
+                {"device_cpus", g.device_cpus},
+                {"deadline_runtime_ns", g.deadline_runtime_ns},
+                {"deadline_period_ns", g.deadline_period_ns},
+                {"deadline_refused", g.deadline_refused},
+                {"wake_latency_held", g.wake_latency_held},
+                {"wake_latency_refused", g.wake_latency_refused}};
   };
   json overrides = json::object();
   for (const auto& [key, value] : sc.overrides) overrides[key] = value;
@@ -127,7 +156,9 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"file", sc.file},
       {"description", sc.description},
       {"scene", sc.scene},
-      {"result", r.interrupted_by ? "interrupted" : r.exit_code == 0 ? "pass" : "fail"},
+      {"result", r.interrupted_by   ? "interrupted"
+                 : r.exit_code == 0 ? "pass"
+                                    : "fail"},
       {"exit_code", r.exit_code},
       {"failure", r.failure},
       {"seed", sc.seed},
@@ -140,23 +171,33 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
       {"checks", checks},
       {"clock_stats", clock},
       {"realtime_priority", {{"lab", grant(r.realtime)}, {"controller", grant(r.controller.realtime)}}},
-      {"bridge", {{"devices", served}, {"command_latency_s", Distribution(r.latencies_s)},
-                  {"command_age_s", Distribution(r.command_ages_s)}}},
-      {"controller", {{"type", ControllerTypeName(sc.controller.type)},
-                      {"program", r.controller.program},
-                      {"outcome", r.controller.outcome},
-                      {"ports", r.controller.ports}}},
+      {"bridge",
+       {{"devices", served},
+        {"command_latency_s", Distribution(r.latencies_s)},
+        {"command_age_s", Distribution(r.command_ages_s)}}},
+      {"controller",
+       {{"type", ControllerTypeName(sc.controller.type)},
+        {"program", r.controller.program},
+        {"outcome", r.controller.outcome},
+        {"ports", r.controller.ports}}},
       {"warnings", warnings},
       {"plots_skipped", r.plots_skipped},
       {"versions",
-       {{"vlab", VLAB_VERSION}, {"mujoco", MujocoVersion()}, {"compiler", __VERSION__},
+       {{"vlab", VLAB_VERSION},
+        {"mujoco", MujocoVersion()},
+        {"compiler", __VERSION__},
         {"eigen", std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
                       std::to_string(EIGEN_MINOR_VERSION)}}},
       {"timings",
-       {{"sim_time_s", r.sim_time_s}, {"steps", r.steps}, {"control_periods", r.periods},
-        {"loop_wall_s", r.loop_wall_s}, {"total_wall_s", r.total_wall_s},
-        {"steps_per_s", r.loop_wall_s > 0 ? r.steps / r.loop_wall_s : 0.0}, {"realtime_factor", rtf},
-        {"log_writer_waits", r.log_waits}, {"log_writer_wait_s", r.log_wait_s}}},
+       {{"sim_time_s", r.sim_time_s},
+        {"steps", r.steps},
+        {"control_periods", r.periods},
+        {"loop_wall_s", r.loop_wall_s},
+        {"total_wall_s", r.total_wall_s},
+        {"steps_per_s", r.loop_wall_s > 0 ? r.steps / r.loop_wall_s : 0.0},
+        {"realtime_factor", rtf},
+        {"log_writer_waits", r.log_waits},
+        {"log_writer_wait_s", r.log_wait_s}}},
   };
   // which signal stopped the run, and where: the log holds the periods up to sim_time_s
   if (r.interrupted_by) {

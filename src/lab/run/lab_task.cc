@@ -141,7 +141,7 @@ struct TaskController::Impl {
   std::unique_ptr<LabDevices> devices;
   std::unique_ptr<task::Runtime> runtime;
   std::vector<Claim> claims;  // each program's robot arm
-  bool used = false;  // Update ran since the runtime was made
+  bool used = false;          // Update ran since the runtime was made
 };
 
 TaskController::TaskController(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}

@@ -104,7 +104,8 @@ Override ParseOverride(const std::string& text) {
   }
   const std::size_t eq = text.find('=');
   if (eq == std::string::npos) {
-    throw InputError("--set '" + text + "': expected KEY=VALUE (KEY a dotted scenario path, e.g. devices.jr3.filter=2)");
+    throw InputError("--set '" + text +
+                     "': expected KEY=VALUE (KEY a dotted scenario path, e.g. devices.jr3.filter=2)");
   }
   Override o{text.substr(0, eq), text.substr(eq + 1)};
   for (const std::string& segment : Segments(o.key)) {

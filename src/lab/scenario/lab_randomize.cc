@@ -79,12 +79,18 @@ double RestingHeight(const Extent& e, int face) { return face % 2 == 0 ? e.hi[fa
 Eigen::Quaterniond RestingOn(int face) {
   const double half_pi = M_PI / 2;
   switch (face) {
-    case 0: return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitY()));
-    case 1: return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitY()));
-    case 2: return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitX()));
-    case 3: return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitX()));
-    case 4: return Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
-    default: return Eigen::Quaterniond::Identity();
+    case 0:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitY()));
+    case 1:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitY()));
+    case 2:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(-half_pi, Eigen::Vector3d::UnitX()));
+    case 3:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(half_pi, Eigen::Vector3d::UnitX()));
+    case 4:
+      return Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+    default:
+      return Eigen::Quaterniond::Identity();
   }
 }
 

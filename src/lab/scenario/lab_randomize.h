@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <mujoco/mujoco.h>
+#include <Eigen/Geometry>
 
 namespace vlab::lab {
 
@@ -37,13 +37,13 @@ struct RandomizeConfig {
   bool has_within = false;          ///< centres also inside this circle (e.g. the arm's reach)
   Eigen::Vector2d within_center = Eigen::Vector2d::Zero();  ///< m, world x, y
   double within_radius = 0;                                 ///< m
-  std::vector<RandomizeRect> exclude;  ///< no footprint (plus clearance) overlaps these
-  double clearance_m = 0.04;           ///< between footprints, and to an excluded rectangle
-  double surface_z = 0;                ///< world z of the surface the bodies rest on, m
-  double drop_m = 0.0001;              ///< start this far above it (they settle), m
-  int resting_face = -1;               ///< -1: any (uniform); 0-5: always this face down
-  double yaw_min_deg = 0, yaw_max_deg = 360;  ///< yaw uniform in [min, max), deg
-  std::string where;                   ///< "FILE:LINE" of the key, for messages
+  std::vector<RandomizeRect> exclude;                       ///< no footprint (plus clearance) overlaps these
+  double clearance_m = 0.04;                                ///< between footprints, and to an excluded rectangle
+  double surface_z = 0;                                     ///< world z of the surface the bodies rest on, m
+  double drop_m = 0.0001;                                   ///< start this far above it (they settle), m
+  int resting_face = -1;                                    ///< -1: any (uniform); 0-5: always this face down
+  double yaw_min_deg = 0, yaw_max_deg = 360;                ///< yaw uniform in [min, max), deg
+  std::string where;                                        ///< "FILE:LINE" of the key, for messages
 };
 
 /// Reads the `randomize:` mapping; InputError naming file:line and key.

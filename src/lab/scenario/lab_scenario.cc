@@ -1,7 +1,7 @@
 #include "lab/scenario/lab_scenario.h"
 
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 
 #include "core/core_errors.h"
@@ -67,7 +67,8 @@ ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& nod
   }
   const std::string profile = r.String("profile", "quality");
   if (!render::ParseProfile(profile, &o.profile)) r.Fail("profile", std::string("must be ") + render::ProfileNames());
-  if (!o.png && !o.depth && !o.segmentation && o.video.empty()) r.Fail("png", "nothing to write: png, depth, segmentation and video are all off");
+  if (!o.png && !o.depth && !o.segmentation && o.video.empty())
+    r.Fail("png", "nothing to write: png, depth, segmentation and video are all off");
   r.Finish();
   return o;
 }
@@ -90,8 +91,8 @@ ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
       const auto colon = endpoint.rfind(':');
       // the port: 1 to 5 decimal digits, nothing after them
       const std::string digits = colon == std::string::npos ? "" : endpoint.substr(colon + 1);
-      const bool numeric = !digits.empty() && digits.size() <= 5 &&
-                           digits.find_first_not_of("0123456789") == std::string::npos;
+      const bool numeric =
+          !digits.empty() && digits.size() <= 5 && digits.find_first_not_of("0123456789") == std::string::npos;
       const int port = numeric ? std::stoi(digits) : 0;
       if (colon == std::string::npos || colon == 0 || port < 1 || port > 65535) {
         r.Fail("markers", "'" + name + "': expected HOST:PORT (port 1..65535), got '" + endpoint + "'");
@@ -100,7 +101,8 @@ ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
     }
   }
   const YAML::Node programs = r.Sequence("programs");
-  if (programs.size() == 0) r.Fail("programs", "needs at least one program: {robot: ARM, script: FILE.lua, tip_site: SITE}");
+  if (programs.size() == 0)
+    r.Fail("programs", "needs at least one program: {robot: ARM, script: FILE.lua, tip_site: SITE}");
   const std::filesystem::path dir = std::filesystem::path(r.file()).parent_path();
   for (std::size_t i = 0; i < programs.size(); ++i) {
     MapReader p(r.file(), programs[i], r.Child("programs") + "[" + std::to_string(i) + "]");
@@ -122,7 +124,8 @@ ControllerConfig ReadTaskController(MapReader& r, ControllerConfig c) {
         e.params[name] = kv.second.as<std::string>();
       }
     }
-    if (!e.robot.empty() && e.tip_site.empty()) p.Fail("tip_site", "required with a robot (the site at the tool flange)");
+    if (!e.robot.empty() && e.tip_site.empty())
+      p.Fail("tip_site", "required with a robot (the site at the tool flange)");
     p.Finish();
     c.programs.push_back(e);
   }
@@ -226,7 +229,9 @@ CheckConfig ReadCheck(const std::string& file, const YAML::Node& node, const std
   }
   c.signal = r.String("signal");
   const std::string reduce = r.String("reduce", "max");
-  if (!ReduceFromName(reduce, &c.reduce)) r.Fail("reduce", "unknown reduction '" + reduce + "' (known: max, min, mean, rms, final, max_abs, min_of_window_max, max_of_window_min)");
+  if (!ReduceFromName(reduce, &c.reduce))
+    r.Fail("reduce", "unknown reduction '" + reduce +
+                         "' (known: max, min, mean, rms, final, max_abs, min_of_window_max, max_of_window_min)");
   c.min = r.Number("min", c.min);
   c.max = r.Number("max", c.max);
   if (!r.Has("min") && !r.Has("max")) r.Fail("max", "a check needs a bound: min, max or both");
@@ -338,7 +343,8 @@ Scenario LoadScenario(const std::string& path, const std::vector<std::string>& s
   const std::string text = ReadInputFile(path, "scenario '" + path + "'", kMaxYamlBytes);
   const std::size_t first = text.find_first_not_of(" \t\r\n\f\v");
   if (first != std::string::npos && text[first] == '<') {
-    throw InputError(path + ": this is an MJCF scene, not a scenario: a scenario is a YAML file that names its "
+    throw InputError(path +
+                     ": this is an MJCF scene, not a scenario: a scenario is a YAML file that names its "
                      "scene (scene: FILE.xml), its devices and checks (docs/scenarios.md)");
   }
   const YAML::Node root = ParseYamlText(path, text);

@@ -18,9 +18,9 @@
 
 #include "control/time_scaling.h"
 #include "core/core_clock.h"
+#include "lab/devices/device_config.h"
 #include "lab/judge/lab_compare.h"
 #include "lab/scenario/lab_randomize.h"
-#include "lab/devices/device_config.h"
 #include "render/renderer.h"
 
 namespace vlab::lab {
@@ -52,18 +52,18 @@ struct JointWaypoint {
 
 /// One robot program of a `task` controller (src/task/task_runtime.h).
 struct TaskProgramEntry {
-  std::string robot;                ///< arm device it commands ("": none)
-  std::string script;               ///< .lua file, resolved relative to the scenario file
-  std::string base_body = "world";  ///< chain from this body ...
-  std::string tip_site;             ///< ... to this site
-  std::string wrench;               ///< default wrench of guarded moves ("": the only one)
-  std::string where;                ///< "FILE:LINE" of the entry
+  std::string robot;                          ///< arm device it commands ("": none)
+  std::string script;                         ///< .lua file, resolved relative to the scenario file
+  std::string base_body = "world";            ///< chain from this body ...
+  std::string tip_site;                       ///< ... to this site
+  std::string wrench;                         ///< default wrench of guarded moves ("": the only one)
+  std::string where;                          ///< "FILE:LINE" of the entry
   std::map<std::string, std::string> params;  ///< PARAMS of the script: NAME -> text as given
 };
 
 struct ControllerConfig {
   ControllerType type = ControllerType::kNone;
-  std::string arm;            ///< arm device it commands
+  std::string arm;  ///< arm device it commands
   std::string where;
   std::string base_body = "world";  ///< chain from this body ...
   std::string tip_site;             ///< ... to this site
@@ -74,7 +74,7 @@ struct ControllerConfig {
   double damping = 1e-3;        ///< DLS damping of the pseudo-inverse
   std::vector<CartesianWaypoint> cartesian;
   // joint_pd
-  std::vector<double> kp, kd;  ///< N·m/rad, N·m·s/rad (empty: from bandwidth_hz)
+  std::vector<double> kp, kd;    ///< N·m/rad, N·m·s/rad (empty: from bandwidth_hz)
   double pd_bandwidth_hz = 5.0;  ///< default gains: kp = H_ii w², kd = 2 H_ii w at the start pose
   std::vector<JointWaypoint> joint;
   // external: a program `vlab run` starts, with {DEVICE}, {bin}, {scenario_dir}
@@ -91,19 +91,19 @@ struct ControllerConfig {
   std::map<std::string, std::string> markers;
   // joint_pd and task_space
   control::TimeScalingType timing = control::TimeScalingType::kQuintic;  ///< quintic | trapezoidal
-  double start_s = 0.0;            ///< hold until this time, then follow the path
+  double start_s = 0.0;                                                  ///< hold until this time, then follow the path
 };
 
 /// A pass/fail rule over one logged signal.
 struct CheckConfig {
   std::string name;
-  std::string signal;          ///< a log column name
+  std::string signal;  ///< a log column name
   Reduce reduce = Reduce::kMax;
   double min = -std::numeric_limits<double>::infinity();  ///< value must be >= min
   double max = std::numeric_limits<double>::infinity();   ///< value must be <= max
   double from_s = 0.0;
   double to_s = std::numeric_limits<double>::infinity();
-  double window_s = 0.0;       ///< sub-window length, s (> 0 only for the *_of_window_* reductions)
+  double window_s = 0.0;  ///< sub-window length, s (> 0 only for the *_of_window_* reductions)
   std::string where;
   /// A golden check (`golden:` key): the run's log.csv compared with this golden folder
   /// or log CSV (resolved) within `tolerances` (then a golden folder's own), over
@@ -115,24 +115,24 @@ struct CheckConfig {
 
 /// Images of one MJCF camera written into the output folder during a run.
 struct ImageOutputConfig {
-  std::string camera;            ///< MJCF camera name
-  double every_s = 0.1;          ///< one frame every this many simulated seconds (from t = 0)
-  int width = 640;               ///< pixels (at most the scene's offscreen buffer)
+  std::string camera;    ///< MJCF camera name
+  double every_s = 0.1;  ///< one frame every this many simulated seconds (from t = 0)
+  int width = 640;       ///< pixels (at most the scene's offscreen buffer)
   int height = 480;
-  bool png = true;               ///< CAMERA/rgb_NNNNNN.png
-  bool depth = false;            ///< CAMERA/depth_NNNNNN.png: 16-bit, millimetres
-  bool segmentation = false;     ///< CAMERA/seg_NNNNNN.png: 16-bit, geom id + 1 (0: background)
-  std::string video;             ///< MP4 file name in the output folder ("": none)
+  bool png = true;            ///< CAMERA/rgb_NNNNNN.png
+  bool depth = false;         ///< CAMERA/depth_NNNNNN.png: 16-bit, millimetres
+  bool segmentation = false;  ///< CAMERA/seg_NNNNNN.png: 16-bit, geom id + 1 (0: background)
+  std::string video;          ///< MP4 file name in the output folder ("": none)
   render::Profile profile = render::Profile::kQuality;
   std::string where;
 };
 
 /// A line plot (PNG) drawn from a CSV file of the output folder after the run.
 struct PlotConfig {
-  std::string file;              ///< PNG file name in the output folder
-  std::string csv = "log.csv";   ///< CSV in the output folder (log.csv, or a file an external controller wrote)
-  std::string x = "time";        ///< column of the horizontal axis
-  std::vector<std::string> y;    ///< columns drawn against it, one line each
+  std::string file;             ///< PNG file name in the output folder
+  std::string csv = "log.csv";  ///< CSV in the output folder (log.csv, or a file an external controller wrote)
+  std::string x = "time";       ///< column of the horizontal axis
+  std::vector<std::string> y;   ///< columns drawn against it, one line each
   std::string title;
   std::string ylabel;
   std::string where;
@@ -142,16 +142,16 @@ struct OutputsConfig {
   bool log = true;  ///< write log.csv
   std::vector<ImageOutputConfig> images;
   std::vector<PlotConfig> plots;
-  bool poses = false;          ///< record poses.bin + scene.json (lab_poses.h)
-  double poses_rate_hz = 30;   ///< their frames per second (0: every control period)
-  std::string poses_where;     ///< "FILE:LINE" of outputs.poses, for messages
+  bool poses = false;         ///< record poses.bin + scene.json (lab_poses.h)
+  double poses_rate_hz = 30;  ///< their frames per second (0: every control period)
+  std::string poses_where;    ///< "FILE:LINE" of outputs.poses, for messages
 };
 
 struct Scenario {
-  std::string file;        ///< path as given
-  std::string name;        ///< output folder name (default: file stem)
+  std::string file;  ///< path as given
+  std::string name;  ///< output folder name (default: file stem)
   std::string description;
-  std::string scene;       ///< MJCF path, resolved relative to the scenario file
+  std::string scene;  ///< MJCF path, resolved relative to the scenario file
   double duration_s = 1.0;
   double control_period_s = 0.002;
   std::uint64_t seed = 1;

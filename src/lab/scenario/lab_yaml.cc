@@ -68,9 +68,8 @@ std::string CheckSeedText(std::string& text) {
 unsigned long long YamlSeed(const std::string& file, const YAML::Node& node, const std::string& path) {
   unsigned long long seed = 0;
   if (!node.IsScalar() || !ParseSeed(node.Scalar(), &seed)) {
-    throw InputError(YamlError(file, node, path,
-                               "must be a non-negative integer, at most 9007199254740992 (2^53); got " +
-                                   Describe(node)));
+    throw InputError(YamlError(
+        file, node, path, "must be a non-negative integer, at most 9007199254740992 (2^53); got " + Describe(node)));
   }
   return seed;
 }
@@ -151,8 +150,7 @@ int MapReader::Integer(const std::string& key, int fallback) {
   YAML::Node n = Get(key);
   if (!n.IsDefined()) return fallback;
   long long value = 0;
-  if (!n.IsScalar() || !YAML::convert<long long>::decode(n, value) || value < -2147483647LL ||
-      value > 2147483647LL) {
+  if (!n.IsScalar() || !YAML::convert<long long>::decode(n, value) || value < -2147483647LL || value > 2147483647LL) {
     const std::string what = LooksInteger(n) ? "out of range: expected an integer from -2147483647 to 2147483647, got "
                                              : "expected an integer, got ";
     throw InputError(YamlError(file_, n, Child(key), what + Describe(n)));
@@ -195,8 +193,8 @@ std::vector<std::string> MapReader::Strings(const std::string& key, std::vector<
   std::vector<std::string> values;
   for (std::size_t i = 0; i < n.size(); ++i) {
     if (!n[i].IsScalar()) {
-      throw InputError(YamlError(file_, n[i], Child(key) + "[" + std::to_string(i) + "]",
-                                 "expected a name, got " + Describe(n[i])));
+      throw InputError(
+          YamlError(file_, n[i], Child(key) + "[" + std::to_string(i) + "]", "expected a name, got " + Describe(n[i])));
     }
     values.push_back(n[i].Scalar());
   }

@@ -19,10 +19,10 @@ namespace {
 struct Frame {
   bool map = false;
   YAML::anchor_t anchor = YAML::NullAnchor;
-  std::uint64_t nodes = 1;  // expanded nodes in it so far, itself included
-  std::string path;         // its key path ("" for the document)
-  std::size_t items = 0;    // nodes seen in it: in a mapping, keys and values alternate
-  std::string key;          // a mapping's key whose value comes next
+  std::uint64_t nodes = 1;                 // expanded nodes in it so far, itself included
+  std::string path;                        // its key path ("" for the document)
+  std::size_t items = 0;                   // nodes seen in it: in a mapping, keys and values alternate
+  std::string key;                         // a mapping's key whose value comes next
   std::map<std::string, YAML::Mark> keys;  // a mapping's keys, where each first appeared
 };
 
@@ -107,8 +107,7 @@ class Checker : public YAML::EventHandler {
     ++f.items;
   }
 
-  void Leaf(const YAML::Mark& mark, YAML::anchor_t anchor, bool scalar, const std::string& value,
-            std::uint64_t nodes) {
+  void Leaf(const YAML::Mark& mark, YAML::anchor_t anchor, bool scalar, const std::string& value, std::uint64_t nodes) {
     Count(mark, nodes);
     if (anchor != YAML::NullAnchor) {
       sizes_[anchor] = 1;

@@ -64,7 +64,8 @@ CollectedTable CollectRuns(const std::string& dir, bool timings) {
   CollectedTable t;
   for (const std::string& id : ids) {
     const std::string file = dir + "/" + id + "/summary.json";
-    const nlohmann::json s = nlohmann::json::parse(ReadInputFile(file, "'" + file + "'", kMaxJsonBytes), nullptr, false);
+    const nlohmann::json s =
+        nlohmann::json::parse(ReadInputFile(file, "'" + file + "'", kMaxJsonBytes), nullptr, false);
     if (s.is_discarded() || !s.is_object()) throw InputError(file + ": not a summary.json (not JSON)");
     std::map<std::string, std::string> v;
     v["id"] = id;
@@ -127,7 +128,8 @@ std::string CollectedCsv(const CollectedTable& table) {
   return out;
 }
 
-void PlotCollected(const CollectedTable& table, const std::string& key, const std::string& check, const std::string& png) {
+void PlotCollected(const CollectedTable& table, const std::string& key, const std::string& check,
+                   const std::string& png) {
   const std::string x_column = key == "seed" ? "seed" : "set:" + key;
   const int xi = table.Column(x_column), yi = table.Column(check);
   if (xi < 0) throw InputError("--x " + key + ": no run overrides it (collected columns: set:KEY for each --set KEY)");
@@ -147,7 +149,8 @@ void PlotCollected(const CollectedTable& table, const std::string& key, const st
     std::string group;
     if (key == "seed") {
       for (std::size_t c = 0; c < table.columns.size(); ++c) {
-        if (table.columns[c].rfind("set:", 0) == 0) group += (group.empty() ? "" : " ") + table.columns[c].substr(4) + "=" + row[c];
+        if (table.columns[c].rfind("set:", 0) == 0)
+          group += (group.empty() ? "" : " ") + table.columns[c].substr(4) + "=" + row[c];
       }
       if (group.empty()) group = "runs";
     } else {

@@ -32,6 +32,7 @@ std::string CollectedCsv(const CollectedTable& table);
 /// Draws check `check`'s value against override `key` (or "seed"), one line per
 /// seed (per override set when key is "seed"), into the PNG `png`. InputError
 /// when the key or check is not a column or the key's values are not numbers.
-void PlotCollected(const CollectedTable& table, const std::string& key, const std::string& check, const std::string& png);
+void PlotCollected(const CollectedTable& table, const std::string& key, const std::string& check,
+                   const std::string& png);
 
 }  // namespace vlab::lab

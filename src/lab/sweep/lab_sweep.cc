@@ -11,8 +11,8 @@
 #include "core/core_errors.h"
 #include "lab/scenario/lab_overrides.h"
 #include "lab/scenario/lab_scenario.h"
-#include "lab/sweep/lab_sweep_text.h"
 #include "lab/scenario/lab_yaml.h"
+#include "lab/sweep/lab_sweep_text.h"
 
 namespace vlab::lab {
 
@@ -23,9 +23,10 @@ namespace {
 // refuses a key, name or path that holds a control character, at its line
 void RefuseControl(const std::string& file, const YAML::Node& node, const std::string& path, const std::string& text) {
   if (HasControlCharacter(text)) {
-    throw InputError(YamlError(file, node, path, "'" + Printable(text) +
-                                                     "' holds a control character (0x01-0x1f, 0x7f), which a key, "
-                                                     "name or path may not (a value may, in double quotes)"));
+    throw InputError(YamlError(file, node, path,
+                               "'" + Printable(text) +
+                                   "' holds a control character (0x01-0x1f, 0x7f), which a key, "
+                                   "name or path may not (a value may, in double quotes)"));
   }
 }
 
@@ -101,7 +102,8 @@ Sweep LoadSweep(const std::string& path) {
   const std::vector<long long> seeds = ReadSeeds(r);
   std::vector<std::string> common;
   const YAML::Node set = r.Sequence("set");
-  for (std::size_t i = 0; i < set.size(); ++i) common.push_back(CommonSet(path, set[i], "set[" + std::to_string(i) + "]"));
+  for (std::size_t i = 0; i < set.size(); ++i)
+    common.push_back(CommonSet(path, set[i], "set[" + std::to_string(i) + "]"));
 
   // override sets: the grid's combinations, or the list's entries, or one empty set
   std::vector<std::vector<std::string>> sets = {{}};

@@ -25,18 +25,18 @@
 namespace vlab::lab {
 
 struct SweepRun {
-  std::string id;                  ///< "p02_s3"
-  long long seed = -1;             ///< -1: the scenario's
-  std::vector<std::string> sets;   ///< KEY=VALUE, the sweep's `set` first
-  std::string label;               ///< the override set's own KEY=VALUE, for messages ("" when none)
-  std::size_t set = 0;             ///< index of its override set (Sweep::records)
+  std::string id;                 ///< "p02_s3"
+  long long seed = -1;            ///< -1: the scenario's
+  std::vector<std::string> sets;  ///< KEY=VALUE, the sweep's `set` first
+  std::string label;              ///< the override set's own KEY=VALUE, for messages ("" when none)
+  std::size_t set = 0;            ///< index of its override set (Sweep::records)
 };
 
 struct Sweep {
   std::string file;
   std::string name;
-  std::string scenario;  ///< path of the scenario file (as the sweep names it, resolved)
-  double duration_s = 0; ///< 0: the scenario's
+  std::string scenario;   ///< path of the scenario file (as the sweep names it, resolved)
+  double duration_s = 0;  ///< 0: the scenario's
   std::vector<SweepRun> runs;
   /// per override set: the record of its runs with the scenario's seed (one
   /// text per set, not per run: a sweep may have 100000 seeds)

@@ -123,8 +123,9 @@ std::string ValueText(const YAML::Node& node, const std::string& where) {
 }
 
 std::string ShellQuote(const std::string& word) {
-  if (!word.empty() && word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=./:,@%") ==
-                           std::string::npos) {
+  if (!word.empty() &&
+      word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=./:,@%") ==
+          std::string::npos) {
     return word;
   }
   std::string quoted = "'";
@@ -136,7 +137,8 @@ std::string JobLine(const std::vector<std::string>& words) {
   std::string line;
   for (const std::string& w : words) {
     if (HasControlCharacter(w)) {
-      throw InputError("'" + Printable(w) + "': holds a control character, which a job line cannot carry (a newline "
+      throw InputError("'" + Printable(w) +
+                       "': holds a control character, which a job line cannot carry (a newline "
                        "would end the command there); rename it");
     }
     line += (line.empty() ? "" : " ") + ShellQuote(w);
