@@ -26,7 +26,6 @@
 // Never throws nor blocks (but for the wait asked for) once bound. Not thread-safe.
 #pragma once
 
-#include <csignal>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -42,19 +41,6 @@ namespace vlab::bridge {
 
 /// The most datagrams one Receive handles by default, so that a flood cannot stall a loop.
 inline constexpr int kMaxDatagramsPerReceive = 1000;
-
-/// A loop's stop request: the flag a signal handler sets (vlab::g_stop_requested,
-/// bridge_signals.h), or none.
-class StopCheck {
- public:
-  /// `flag` null: never stops.
-  explicit StopCheck(const volatile std::sig_atomic_t* flag = nullptr) : flag_(flag) {}
-  /// True once the flag is non-zero.
-  bool operator()() const { return flag_ != nullptr && *flag_ != 0; }
-
- private:
-  const volatile std::sig_atomic_t* flag_;
-};
 
 struct DeviceServerConfig {
   std::string bind_address = "127.0.0.1";

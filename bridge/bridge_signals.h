@@ -55,6 +55,19 @@ inline void InstallStopSignals() {
 /// True once SIGINT or SIGTERM came (after InstallStopSignals()).
 inline bool StopRequested() { return g_stop_requested != 0; }
 
+/// A loop's stop request: the flag a signal handler sets (g_stop_requested above,
+/// or another), or none.
+class StopCheck {
+ public:
+  /// `flag` null: never stops.
+  explicit StopCheck(const volatile std::sig_atomic_t* flag = nullptr) : flag_(flag) {}
+  /// True once the flag is non-zero.
+  bool operator()() const { return flag_ != nullptr && *flag_ != 0; }
+
+ private:
+  const volatile std::sig_atomic_t* flag_;
+};
+
 /// "SIGINT", "SIGTERM", or "signal N".
 inline std::string StopSignalName(int signal_number) {
   if (signal_number == SIGINT) return "SIGINT";

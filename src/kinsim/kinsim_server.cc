@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "bridge/bridge_describe.h"
+#include "bridge/bridge_signals.h"
 #include "core/core_errors.h"
 
 namespace vlab::kinsim {
@@ -113,7 +114,7 @@ void KinsimServer::RunPeriod(long k) {
 }
 
 void KinsimServer::Run(const volatile std::sig_atomic_t* stop_flag) {
-  const bridge::StopCheck stopped(stop_flag);
+  const StopCheck stopped(stop_flag);
   const double period_ns = 1e9 / config_.rate_hz;
   const long last = config_.duration_s > 0 ? std::lround(config_.duration_s * config_.rate_hz) : -1;
   long long start_ns = NowNs();

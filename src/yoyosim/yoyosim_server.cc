@@ -183,15 +183,14 @@ void YoyoSimServer::Publish(long k) {
 }
 
 int YoyoSimServer::Run(const volatile std::sig_atomic_t* stop) {
-  stopped_ = bridge::StopCheck(stop);
-  const bridge::StopCheck stopped = stopped_;
+  stopped_ = StopCheck(stop);
   const long last = config_.duration_s > 0 ? std::lround(config_.duration_s / sim_->period_s()) : -1;
   int result = 0;
   Publish(0);
-  for (long k = 0; (last < 0 || k < last) && !stopped(); ++k) {
+  for (long k = 0; (last < 0 || k < last) && !stopped_(); ++k) {
     period_ = k;
     const vlab::PeriodStart start = clock_->BeginPeriod(k, this);
-    if (stopped()) break;
+    if (stopped_()) break;
     BeginPeriod(k, start);
     if (!sim_->Step()) {
       std::fprintf(stderr, "vlab-yoyosim: error: the simulation diverged in the period from t = %.3f s (MuJoCo: %s)\n",

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "bridge/bridge_device_server.h"
+#include "bridge/bridge_signals.h"
 #include "core/core_clock.h"
 #include "yoyosim/yoyosim.h"
 
@@ -104,7 +105,7 @@ class YoyoSimServer final : public vlab::CommandSource {
   std::unique_ptr<bridge::DeviceServer> point_, yoyo_;
   std::unique_ptr<vlab::Clock> clock_;
   ServerCounters counters_;
-  bridge::StopCheck stopped_;
+  StopCheck stopped_;
   long period_ = 0;       // the period being waited for or run
   bool pending_ = false;  // an accepted set-point not yet reached by the set-point in force
   Vec3 pending_W_{};
