@@ -52,9 +52,6 @@ struct RenderArgs {
   bool quiet = false;
 };
 
-// frames that fit a duration: n * every <= duration, up to rounding of the period sums
-constexpr double kDueTolerance_s = 1e-9;
-
 // the options that set an image output's fields, for messages
 std::string OptionOf(std::size_t, const std::string& field) {
   if (field == "width, height") return "--width, --height";
@@ -108,7 +105,7 @@ int Render(const RenderArgs& a, const CLI::App& cmd) {
                            lab::FormatDouble(period) + " s of " + scenario.file + " (frames are taken at period ends)");
   }
   // frames that fit the scenario; the run ends at the first period end at or after the last one
-  const long fit = static_cast<long>(std::floor(scenario.duration_s / every + kDueTolerance_s)) + 1;
+  const long fit = static_cast<long>(std::floor(scenario.duration_s / every + lab::kFrameDueTolerance_s)) + 1;
   const long frames = given("--frames") ? std::min(a.frames, fit) : fit;
   if (given("--frames") && a.frames > fit && !a.quiet) {
     std::fprintf(stderr, "vlab: note: %s lasts %s s: %ld of the %ld frames asked for fit (every %s s)\n",

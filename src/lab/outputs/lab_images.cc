@@ -18,9 +18,6 @@ namespace vlab::lab {
 
 namespace {
 
-// a frame is due when t reaches n * every, up to rounding of the period sums
-constexpr double kDueTolerance_s = 1e-9;
-
 std::string FrameName(const char* kind, long n) {
   char name[32];
   std::snprintf(name, sizeof(name), "%s_%06ld.png", kind, n);
@@ -197,7 +194,7 @@ void ImageOutputs::Observe(double t, mjData* d) {
   const long max_frames = impl_->options.max_frames;
   for (Impl::Output& o : impl_->outputs) {
     if (max_frames > 0 && o.frames >= max_frames) continue;
-    if (t + kDueTolerance_s >= o.frames * o.config.every_s) impl_->Frame(o, t, d);
+    if (t + kFrameDueTolerance_s >= o.frames * o.config.every_s) impl_->Frame(o, t, d);
   }
 }
 

@@ -32,6 +32,10 @@
 
 namespace vlab::lab {
 
+/// Frame n is due once t + kFrameDueTolerance_s >= n * every (s): the sums of control periods
+/// round, and `vlab render` counts the frames a duration holds with the same tolerance.
+inline constexpr double kFrameDueTolerance_s = 1e-9;
+
 /// How ImageOutputs lays its files out and names its settings (the defaults: a scenario's outputs.images).
 struct ImageOptions {
   /// The frames and frames.csv of every output in the output folder itself, not in CAMERA/.
