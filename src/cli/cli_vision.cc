@@ -53,7 +53,7 @@ void SplitHostPort(const std::string& text, std::string* host, int* port) {
 // a counter line's frame parts: "N frames (R/s), S skipped, " and "M ms mean, X ms max per frame"
 std::pair<std::string, std::string> FrameText(const vision::FrameCounters& c, double elapsed_s) {
   const double mean_ms = c.frames > 0 ? 1000 * c.process_s_sum / static_cast<double>(c.frames) : 0;
-  char head[96], timing[96];
+  char head[160], timing[96];
   std::snprintf(head, sizeof(head), "%ld frames (%.1f/s), %ld skipped, ", c.frames,
                 elapsed_s > 0 ? static_cast<double>(c.frames) / elapsed_s : 0.0, c.frames_skipped);
   std::snprintf(timing, sizeof(timing), "%.1f ms mean, %.1f ms max per frame", mean_ms, 1000 * c.process_s_max);
