@@ -70,7 +70,7 @@ class TaskSpaceDevice : public Device, public CommandInput, public CommandWriter
   /// feed-forward velocity = the move / period).
   virtual control::TaskSpaceTarget Advance() = 0;
 
-  /// Starts the device's command input: the next period drives the arm (after a Command).
+  /// For Command, once it has taken a command: the device leaves its hold (CommandArmChain).
   void Commanded() { CommandArmChain(chain_); }
   /// The log column names NAME.c of `columns`, in order.
   std::vector<std::string> NamedColumns(std::initializer_list<const char*> columns) const {
