@@ -9,12 +9,14 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bridge/bridge_errors.h"
 #include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
+#include "view/view_program.h"
 #include "vision/vision_program.h"
 #include "vision/vision_yoyo_program.h"
 
@@ -39,29 +41,31 @@ struct VisionArgs {
   bool quiet = false;
 };
 
-// "HOST:PORT", "[v6]:PORT"
+// "HOST:PORT", "[v6]:PORT" (view::SplitHostPort's rules), the example in the message a camera's port
 void SplitHostPort(const std::string& text, std::string* host, int* port) {
-  const std::size_t colon = text.rfind(':');
-  bool ok = colon != std::string::npos && colon > 0 && colon + 1 < text.size();
-  if (ok) {
-    *host = text.substr(0, colon);
-    if (host->size() > 2 && host->front() == '[' && host->back() == ']') *host = host->substr(1, host->size() - 2);
-    const std::string digits = text.substr(colon + 1);
-    ok = digits.find_first_not_of("0123456789") == std::string::npos && digits.size() <= 5;
-    *port = ok ? std::stoi(digits) : 0;
-    ok = ok && *port >= 1 && *port <= 65535;
+  try {
+    view::SplitHostPort("--camera", text, host, port);
+  } catch (const vlab::InputError&) {
+    throw vlab::InputError("--camera '" + text + "': expected HOST:PORT, e.g. 127.0.0.1:50013");
   }
-  if (!ok) throw vlab::InputError("--camera '" + text + "': expected HOST:PORT, e.g. 127.0.0.1:50013");
+}
+
+// a counter line's frame parts: "N frames (R/s), S skipped, " and "M ms mean, X ms max per frame"
+std::pair<std::string, std::string> FrameText(const vision::FrameCounters& c, double elapsed_s) {
+  const double mean_ms = c.frames > 0 ? 1000 * c.process_s_sum / static_cast<double>(c.frames) : 0;
+  char head[160], timing[96];
+  std::snprintf(head, sizeof(head), "%ld frames (%.1f/s), %ld skipped, ", c.frames,
+                elapsed_s > 0 ? static_cast<double>(c.frames) / elapsed_s : 0.0, c.frames_skipped);
+  std::snprintf(timing, sizeof(timing), "%.1f ms mean, %.1f ms max per frame", mean_ms, 1000 * c.process_s_max);
+  return {head, timing};
 }
 
 void Report(const vision::VisionProgram& p, double elapsed_s) {
   const vision::VisionCounters& c = p.counters();
-  const double mean_ms = c.frames > 0 ? 1000 * c.process_s_sum / static_cast<double>(c.frames) : 0;
-  std::printf(
-      "vlab vision: %ld frames (%.1f/s), %ld skipped, %ld markers reported (%ld valid), %ld unknown; "
-      "%.1f ms mean, %.1f ms max per frame; %d subscribers, %ld refused\n",
-      c.frames, elapsed_s > 0 ? static_cast<double>(c.frames) / elapsed_s : 0.0, c.frames_skipped, c.reported, c.valid,
-      c.unknown, mean_ms, 1000 * c.process_s_max, p.server().subscribers(), p.server().counters().refused);
+  const auto [head, timing] = FrameText(c, elapsed_s);
+  std::printf("vlab vision: %s%ld markers reported (%ld valid), %ld unknown; %s; %d subscribers, %ld refused\n",
+              head.c_str(), c.reported, c.valid, c.unknown, timing.c_str(), p.server().subscribers(),
+              p.server().counters().refused);
   std::fflush(stdout);
 }
 
@@ -87,12 +91,9 @@ vision::YoyoLine ParseLine(const std::string& text) {
 
 void ReportYoyo(const vision::YoyoVisionProgram& p, double elapsed_s) {
   const vision::YoyoVisionCounters& c = p.counters();
-  const double mean_ms = c.frames > 0 ? 1000 * c.process_s_sum / static_cast<double>(c.frames) : 0;
-  std::printf(
-      "vlab vision: %ld frames (%.1f/s), %ld skipped, yo-yo seen in %ld, no blob %ld, no pose %ld; "
-      "%.1f ms mean, %.1f ms max per frame; %ld refused\n",
-      c.frames, elapsed_s > 0 ? static_cast<double>(c.frames) / elapsed_s : 0.0, c.frames_skipped, c.seen, c.no_blob,
-      c.no_pose, mean_ms, 1000 * c.process_s_max, p.server().counters().refused);
+  const auto [head, timing] = FrameText(c, elapsed_s);
+  std::printf("vlab vision: %syo-yo seen in %ld, no blob %ld, no pose %ld; %s; %ld refused\n", head.c_str(), c.seen,
+              c.no_blob, c.no_pose, timing.c_str(), p.server().counters().refused);
   std::fflush(stdout);
 }
 

@@ -16,10 +16,10 @@ namespace {
 using nlohmann::json;
 
 // what the markers device's describe reply says about its camera and detector
-json DescribeExtra(const bridge::CameraClient& camera, const CameraModel& m, const DetectorConfig& d,
-                   const std::string& address, int port) {
-  return {{"rates", {{"control_hz", camera.fps()}, {"frame_hz", camera.fps()}}},
-          {"camera", CameraDescribe(camera, m, address, port)},
+json DescribeExtra(const CameraFeed& feed, const VisionConfig& config) {
+  const DetectorConfig& d = config.detector;
+  return {{"rates", {{"control_hz", feed.camera().fps()}, {"frame_hz", feed.camera().fps()}}},
+          {"camera", CameraDescribe(feed, config)},
           {"detector",
            {{"method",
              "OpenCV aruco detectMarkers, CORNER_REFINE_APRILTAG, corners - 0.5 px, outline refined "
@@ -47,66 +47,6 @@ long WholeNumber(const std::string& text, const std::string& what) {
 }
 
 }  // namespace
-
-json CameraDescribe(const bridge::CameraClient& camera, const CameraModel& m, const std::string& address, int port) {
-  const json& cd = camera.describe();
-  return {
-      {"name", camera.name()},
-      {"address", address},
-      {"port", port},
-      {"server", cd.value("server", json())},
-      {"width", m.width},
-      {"height", m.height},
-      {"fps", camera.fps()},
-      // the camera's schedule, as its describe reply gives it (null when it does not): a
-      // client that holds a lockstep clock for a frame's markers needs it (docs/tasks.md)
-      {"exposure_s", cd.value("exposure_s", json())},
-      {"latency_s", cd.value("latency_s", json())},
-      {"intrinsics", {{"fx", m.fx}, {"fy", m.fy}, {"cx", m.cx}, {"cy", m.cy}, {"source", camera.calibration().source}}},
-      {"distortion", camera.calibration().distortion},
-      {"pose", cd.value("pose", json())}};
-}
-
-bool ReceiveFrame(bridge::CameraClient& camera, double wait_s, const CameraModel& model,
-                  bridge::CameraClient::Frame* frame, long* skipped, long* wrong_size) {
-  const long skipped_before = camera.frames_skipped();
-  try {
-    camera.ReceiveLatest(wait_s, frame);
-  } catch (const bridge::TimeoutError&) {
-    return false;
-  }
-  *skipped += camera.frames_skipped() - skipped_before;
-  if (frame->width != model.width || frame->height != model.height ||
-      frame->rgb.size() != static_cast<std::size_t>(frame->width) * frame->height * 3) {
-    ++*wrong_size;
-    return false;
-  }
-  return true;
-}
-
-std::optional<Eigen::Isometry3d> CameraPoseOf(const bridge::CameraClient::Frame& frame) {
-  if (!frame.pose.valid) return std::nullopt;
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = frame.pose.q_WC.normalized().toRotationMatrix();
-  X.translation() = frame.pose.p_WC;
-  return X;
-}
-
-CameraModel CameraModelOf(const bridge::CameraClient& camera) {
-  const bridge::CameraCalibration& c = camera.calibration();
-  CameraModel m;
-  m.width = c.width;
-  m.height = c.height;
-  m.fx = c.fx;
-  m.fy = c.fy;
-  m.cx = c.cx;
-  m.cy = c.cy;
-  if (std::any_of(c.distortion.begin(), c.distortion.end(), [](double v) { return v != 0.0; })) {
-    m.distortion.assign(c.distortion.begin(), c.distortion.end());
-  }
-  CheckCameraModel(m, camera.Label());
-  return m;
-}
 
 std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& text) {
   const std::size_t a = text.find(':'), b = text.rfind(':');
@@ -140,18 +80,12 @@ std::vector<bridge::MarkerDescriptionMsg> ParseMarkerOption(const std::string& t
 }
 
 std::unique_ptr<VisionProgram> VisionProgram::Create(const VisionConfig& config) {
-  bridge::CameraClientOptions options;
-  options.timeout_s = config.connect_timeout_s;
-  bridge::CameraClient camera = bridge::CameraClient::Connect(config.camera_address, config.camera_port, options);
-  return std::unique_ptr<VisionProgram>(new VisionProgram(std::move(camera), config));
+  return std::unique_ptr<VisionProgram>(new VisionProgram(config));
 }
 
-VisionProgram::VisionProgram(bridge::CameraClient camera, const VisionConfig& config)
-    : camera_(std::move(camera)), detector_(config.detector), start_(std::chrono::steady_clock::now()) {
-  model_ = CameraModelOf(camera_);
+VisionProgram::VisionProgram(const VisionConfig& config) : feed_(config), detector_(config.detector) {
   MarkersServerConfig server = config.server;
-  server.describe_extra.update(
-      DescribeExtra(camera_, model_, config.detector, config.camera_address, config.camera_port), true);
+  server.describe_extra.update(DescribeExtra(feed_, config), true);
   server_ = MarkersServer::Create(server);
   if (!server_->Describe(config.markers)) {
     throw vlab::InputError("--marker: " + std::to_string(config.markers.size()) + " markers exceed the table's " +
@@ -160,28 +94,20 @@ VisionProgram::VisionProgram(bridge::CameraClient camera, const VisionConfig& co
   state_.markers.reserve(bridge::kMaxMarkersPerState);
 }
 
-double VisionProgram::Now() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-}
-
 bool VisionProgram::Step(double wait_s) {
-  server_->Poll(Now());
-  if (!ReceiveFrame(camera_, wait_s, model_, &frame_, &counters_.frames_skipped, &counters_.wrong_size)) return false;
-  const double t0 = Now();
-  const cv::Mat rgb(frame_.height, frame_.width, CV_8UC3, frame_.rgb.data());
-  cv::cvtColor(rgb, grey_, cv::COLOR_RGB2GRAY);
-  const std::optional<Eigen::Isometry3d> X_world_camera = CameraPoseOf(frame_);
-  server_->Poll(Now());  // descriptions that came meanwhile apply to this frame
-  const LocateStats stats = LocateMarkers(grey_, model_, X_world_camera, server_->table(), detector_, &state_);
-  server_->Publish(static_cast<double>(frame_.id), frame_.time_s, state_, Now());
+  server_->Poll(feed_.Now());
+  if (!feed_.Receive(wait_s, &counters_)) return false;
+  const double t0 = feed_.Now();
+  cv::cvtColor(feed_.rgb(), grey_, cv::COLOR_RGB2GRAY);
+  server_->Poll(feed_.Now());  // descriptions that came meanwhile apply to this frame
+  const LocateStats stats = LocateMarkers(grey_, feed_.model(), feed_.pose(), server_->table(), detector_, &state_);
+  const bridge::CameraClient::Frame& frame = feed_.frame();
+  server_->Publish(static_cast<double>(frame.id), frame.time_s, state_, feed_.Now());
 
-  ++counters_.frames;
   counters_.reported += stats.reported;
   counters_.valid += stats.valid;
   counters_.unknown += state_.unknown;
-  const double took = Now() - t0;
-  counters_.process_s_sum += took;
-  counters_.process_s_max = std::max(counters_.process_s_max, took);
+  feed_.CountProcessed(t0, &counters_);
   return true;
 }
 

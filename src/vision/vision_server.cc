@@ -19,11 +19,7 @@ json MarkerFields() {
 
 std::unique_ptr<MarkersServer> MarkersServer::Create(const MarkersServerConfig& config) {
   std::unique_ptr<MarkersServer> server(new MarkersServer(config));
-  bridge::DeviceServerConfig s;
-  s.bind_address = config.bind_address;
-  s.port = config.port;
-  s.max_datagrams = 0;  // every datagram queued
-  server->server_ = bridge::DeviceServer::Bind(s);
+  server->server_ = BindDeviceSocket(config);
   server->server_->ServeSessions(Sessions(config, &server->now_s_), "");
   server->RebuildDescribe();
   return server;

@@ -31,19 +31,15 @@
 
 #include "bridge/bridge_device_server.h"
 #include "bridge/bridge_markers.h"
+#include "vision/vision_device_socket.h"
 #include "vision/vision_locate.h"
 
 namespace vlab::vision {
 
-struct MarkersServerConfig {
-  std::string name = "vision";
-  std::string bind_address = "127.0.0.1";
-  int port = 50014;  ///< 0: any free port
-  double subscriber_timeout_s = 10;
-  int max_subscribers = 16;
+/// The markers device: name (default vision), socket (default port 50014), subscribers, the table's size.
+struct MarkersServerConfig : VisionDeviceConfig {
+  MarkersServerConfig() : VisionDeviceConfig("vision", 50014) {}
   std::size_t max_markers = 256;  ///< capacity of the marker table (the describe reply must fit a datagram)
-  /// Facts merged into the describe reply (camera, detector, rates).
-  nlohmann::json describe_extra = nlohmann::json::object();
 };
 
 struct MarkersServerCounters {

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "vision/vision_program.h"
+#include "vision/vision_camera_feed.h"
 
 namespace vlab::vision {
 
@@ -13,9 +13,9 @@ namespace {
 using nlohmann::json;
 
 // what the yoyo device's describe reply says about its camera and tracker
-json DescribeExtra(const bridge::CameraClient& camera, const CameraModel& m, const YoyoVisionConfig& config) {
+json DescribeExtra(const CameraFeed& feed, const YoyoVisionConfig& config) {
   const BlobConfig& b = config.blob;
-  return {{"camera", CameraDescribe(camera, m, config.camera_address, config.camera_port)},
+  return {{"camera", CameraDescribe(feed, config)},
           {"tracker",
            {{"method",
              "colour blob: HSV threshold, largest outer contour filled (holes ignored), its centroid's ray "
@@ -31,36 +31,26 @@ json DescribeExtra(const bridge::CameraClient& camera, const CameraModel& m, con
 }  // namespace
 
 std::unique_ptr<YoyoVisionProgram> YoyoVisionProgram::Create(const YoyoVisionConfig& config) {
-  bridge::CameraClientOptions options;
-  options.timeout_s = config.connect_timeout_s;
-  bridge::CameraClient camera = bridge::CameraClient::Connect(config.camera_address, config.camera_port, options);
-  return std::unique_ptr<YoyoVisionProgram>(new YoyoVisionProgram(std::move(camera), config));
+  return std::unique_ptr<YoyoVisionProgram>(new YoyoVisionProgram(config));
 }
 
-YoyoVisionProgram::YoyoVisionProgram(bridge::CameraClient camera, const YoyoVisionConfig& config)
-    : camera_(std::move(camera)), tracker_(config.blob, config.line), start_(std::chrono::steady_clock::now()) {
-  model_ = CameraModelOf(camera_);
+YoyoVisionProgram::YoyoVisionProgram(const YoyoVisionConfig& config)
+    : feed_(config), tracker_(config.blob, config.line) {
   YoyoServerConfig server = config.server;
-  server.frame_hz = camera_.fps();
-  server.describe_extra.update(DescribeExtra(camera_, model_, config), true);
+  server.frame_hz = feed_.camera().fps();
+  server.describe_extra.update(DescribeExtra(feed_, config), true);
   server_ = YoyoServer::Create(server);
 }
 
-double YoyoVisionProgram::Now() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-}
-
 bool YoyoVisionProgram::Step(double wait_s) {
-  server_->Poll(Now());
-  if (!ReceiveFrame(camera_, wait_s, model_, &frame_, &counters_.frames_skipped, &counters_.wrong_size)) return false;
-  const double t0 = Now();
-  const cv::Mat rgb(frame_.height, frame_.width, CV_8UC3, frame_.rgb.data());
-  const std::optional<Eigen::Isometry3d> X_world_camera = CameraPoseOf(frame_);
-  const double* state = tracker_.Track(rgb, model_, X_world_camera, frame_.time_s);
-  server_->Poll(Now());  // subscribers that came meanwhile get this frame
-  server_->Publish(static_cast<double>(frame_.id), frame_.time_s, state);
+  server_->Poll(feed_.Now());
+  if (!feed_.Receive(wait_s, &counters_)) return false;
+  const double t0 = feed_.Now();
+  const bridge::CameraClient::Frame& frame = feed_.frame();
+  const double* state = tracker_.Track(feed_.rgb(), feed_.model(), feed_.pose(), frame.time_s);
+  server_->Poll(feed_.Now());  // subscribers that came meanwhile get this frame
+  server_->Publish(static_cast<double>(frame.id), frame.time_s, state);
 
-  ++counters_.frames;
   if (tracker_.seen()) {
     ++counters_.seen;
   } else if (!tracker_.blob().found) {
@@ -68,9 +58,7 @@ bool YoyoVisionProgram::Step(double wait_s) {
   } else {
     ++counters_.no_pose;
   }
-  const double took = Now() - t0;
-  counters_.process_s_sum += took;
-  counters_.process_s_max = std::max(counters_.process_s_max, took);
+  feed_.CountProcessed(t0, &counters_);
   return true;
 }
 

@@ -15,35 +15,29 @@
 // Latency: HSV threshold, contours and geometry take ~1 ms per 640 x 480 frame.
 #pragma once
 
-#include <chrono>
 #include <memory>
 #include <string>
 
 #include "bridge/bridge_camera_client.h"
 #include "vision/vision_blob.h"
+#include "vision/vision_camera_feed.h"
 #include "vision/vision_detector.h"
 #include "vision/vision_yoyo_server.h"
 
 namespace vlab::vision {
 
-struct YoyoVisionConfig {
-  std::string camera_address = "127.0.0.1";
-  int camera_port = 50013;
-  double connect_timeout_s = 10;  ///< wait this long for the camera's describe reply
-  YoyoServerConfig server;        ///< the yoyo device (name, bind address, port)
+/// The camera (CameraSourceConfig), the yoyo device, the blob and the yo-yo's line.
+struct YoyoVisionConfig : CameraSourceConfig {
+  YoyoServerConfig server;  ///< the yoyo device (name, bind address, port)
   BlobConfig blob;
   YoyoLine line;
 };
 
-struct YoyoVisionCounters {
-  long frames = 0;           ///< frames processed (states published)
-  long frames_skipped = 0;   ///< whole frames passed over to take a newer one
-  long wrong_size = 0;       ///< frames whose size differs from the camera's describe (not processed)
-  long seen = 0;             ///< frames with a position
-  long no_blob = 0;          ///< frames without a blob of the colour and size
-  long no_pose = 0;          ///< frames with a blob but without the camera's pose (or a ray off the plane)
-  double process_s_max = 0;  ///< longest threshold + blob + geometry + publish, s
-  double process_s_sum = 0;
+/// The frames (FrameCounters: processing is threshold + blob + geometry + publish) and what each showed.
+struct YoyoVisionCounters : FrameCounters {
+  long seen = 0;     ///< frames with a position
+  long no_blob = 0;  ///< frames without a blob of the colour and size
+  long no_pose = 0;  ///< frames with a blob but without the camera's pose (or a ray off the plane)
 };
 
 class YoyoVisionProgram {
@@ -58,23 +52,19 @@ class YoyoVisionProgram {
   /// when a frame was processed.
   bool Step(double wait_s);
 
-  const bridge::CameraClient& camera() const { return camera_; }
+  const bridge::CameraClient& camera() const { return feed_.camera(); }
   const YoyoServer& server() const { return *server_; }
-  const CameraModel& camera_model() const { return model_; }
+  const CameraModel& camera_model() const { return feed_.model(); }
   const YoyoTracker& tracker() const { return tracker_; }
   const YoyoVisionCounters& counters() const { return counters_; }
 
  private:
-  YoyoVisionProgram(bridge::CameraClient camera, const YoyoVisionConfig& config);
-  double Now() const;
+  explicit YoyoVisionProgram(const YoyoVisionConfig& config);
 
-  bridge::CameraClient camera_;
-  CameraModel model_;
+  CameraFeed feed_;
   YoyoTracker tracker_;
   std::unique_ptr<YoyoServer> server_;
   YoyoVisionCounters counters_;
-  std::chrono::steady_clock::time_point start_;
-  bridge::CameraClient::Frame frame_;  // reused
 };
 
 }  // namespace vlab::vision

@@ -52,11 +52,7 @@ json YoyoDescribe(const YoyoServerConfig& config, int port) {
 
 std::unique_ptr<YoyoServer> YoyoServer::Create(const YoyoServerConfig& config) {
   std::unique_ptr<YoyoServer> server(new YoyoServer());
-  bridge::DeviceServerConfig s;
-  s.bind_address = config.bind_address;
-  s.port = config.port;
-  s.max_datagrams = 0;  // every datagram queued
-  server->server_ = bridge::DeviceServer::Bind(s);
+  server->server_ = BindDeviceSocket(config);
   bridge::EndpointConfig e;
   e.name = config.name;
   e.kind = bridge::DeviceKind::kYoyo;

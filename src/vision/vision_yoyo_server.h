@@ -21,23 +21,18 @@
 
 #include <memory>
 #include <string>
-#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_device_server.h"
+#include "vision/vision_device_socket.h"
 
 namespace vlab::vision {
 
-struct YoyoServerConfig {
-  std::string name = "yoyo_vision";
-  std::string bind_address = "127.0.0.1";
-  int port = 50054;  ///< 0: any free port
-  double subscriber_timeout_s = 10;
-  int max_subscribers = 16;
+/// The yoyo device: name (default yoyo_vision), socket (default port 50054), subscribers, the camera's rate.
+struct YoyoServerConfig : VisionDeviceConfig {
+  YoyoServerConfig() : VisionDeviceConfig("yoyo_vision", 50054) {}
   double frame_hz = 0;  ///< the camera's frame rate: rates.control_hz of the describe reply
-  /// Facts merged into the describe reply (camera, tracker).
-  nlohmann::json describe_extra = nlohmann::json::object();
 };
 
 class YoyoServer {

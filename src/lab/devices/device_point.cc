@@ -33,34 +33,16 @@
 #include "control/task_space.h"
 #include "lab/devices/device_arm_chain.h"
 #include "lab/devices/device_point.h"
+#include "lab/devices/device_task_space.h"
 #include "lab/scenario/lab_yaml.h"
 
 namespace vlab::lab {
 
 namespace {
 
-class SimPoint final : public Device, public CommandInput, public CommandWriter {
+class SimPoint final : public TaskSpaceDevice<PointParams> {
  public:
-  SimPoint(const DeviceContext& context, const DeviceConfig& c)
-      : Device(c), model_(context.model), config_(c.ParamsAs<PointParams>()), period_s_(context.control_period_s),
-        chain_(MakeArmChain(model_, config_, who())) {
-    capabilities_.command_input = this;
-    capabilities_.command_writer = this;
-  }
-
-  // its arm: an arm device of the scenario, driven by this device alone
-  void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, who()); }
-  std::vector<Claim> Claims() const override { return {{config_.arm, "point device '" + name() + "'", where()}}; }
-  int log_rank() const override { return 3; }  // after the other devices, as in every log written so far
-
-  void Reset(const mjData& d) override {
-    ReadArmChain(chain_, d);
-    const control::Pose tip = chain_.model->TipPose();
-    R_start_ = tip.R_W;
-    setpoint_ = command_ = tip.p_W;
-    ResetArmChain(chain_, config_);  // the null-space term keeps the start posture; hold
-    Sample(d, d.time);
-  }
+  SimPoint(const DeviceContext& context, const DeviceConfig& c) : TaskSpaceDevice(context, c, "point") {}
 
   int command_length() const override { return 3; }
   bridge::CommandCheck CheckCommand(const std::vector<double>& p) const override {
@@ -73,29 +55,7 @@ class SimPoint final : public Device, public CommandInput, public CommandWriter 
   }
   void Command(const std::vector<double>& p) override {
     command_ = Eigen::Vector3d(p[0], p[1], p[2]);
-    CommandArmChain(chain_);
-  }
-  void Hold() override { chain_.holding = true; }
-  int watchdog_periods() const override { return config_.input.watchdog_periods; }
-  double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
-
-  // the arm's command of the period, toward the newest command (a command source: lab_command_writer.h)
-  bool Write(const CommandPeriod& period, std::string*) override {
-    const mjData& d = *period.data;
-    bool resumed = false;
-    if (!BeginArmChainPeriod(chain_, d, &resumed)) return true;  // holding
-    if (resumed) setpoint_ = chain_.model->TipPose().p_W;        // from a hold: start where the site is
-    // rate limit: the set-point moves toward the command at most max_speed
-    Eigen::Vector3d step = command_ - setpoint_;
-    const double longest = config_.max_speed * period_s_;
-    if (step.norm() > longest) step *= longest / step.norm();
-    control::TaskSpaceTarget target;
-    target.pose.p_W = setpoint_;
-    target.pose.R_W = R_start_;
-    target.v_W = step / period_s_;
-    DriveArm(chain_, target);
-    setpoint_ += step;
-    return true;
+    Commanded();
   }
 
   void Sample(const mjData& d, double) override {
@@ -106,16 +66,11 @@ class SimPoint final : public Device, public CommandInput, public CommandWriter 
   }
 
   void State(std::vector<double>* p) const override {
-    p->assign({chain_.holding ? static_cast<double>(bridge::kStatusHolding) : 0.0, p_.x(), p_.y(), p_.z(), v_.x(),
-               v_.y(), v_.z()});
+    p->assign({StatusValue(), p_.x(), p_.y(), p_.z(), v_.x(), v_.y(), v_.z()});
   }
   std::vector<std::string> Columns() const override {
-    std::vector<std::string> out;
-    for (const char* c :
-         {"x", "y", "z", "vx", "vy", "vz", "setpoint.x", "setpoint.y", "setpoint.z", "error", "rot_error"}) {
-      out.push_back(name() + "." + c);
-    }
-    return out;
+    return NamedColumns(
+        {"x", "y", "z", "vx", "vy", "vz", "setpoint.x", "setpoint.y", "setpoint.z", "error", "rot_error"});
   }
   int ColumnCount() const override { return 11; }
   void Row(const mjData&, double* out) const override {
@@ -135,10 +90,25 @@ class SimPoint final : public Device, public CommandInput, public CommandWriter 
   }
 
  private:
-  const mjModel* model_;
-  PointParams config_;
-  double period_s_;
-  ArmChain chain_;  // the chain, its arm (bound by Bind) and its controller (made by Reset)
+  // the orientation is the one the site had at the reset, kept
+  void Start(const control::Pose& tip) override {
+    R_start_ = tip.R_W;
+    setpoint_ = command_ = tip.p_W;
+  }
+  void Resume(const control::Pose& tip) override { setpoint_ = tip.p_W; }
+  // rate limit: the set-point moves toward the command at most max_speed
+  control::TaskSpaceTarget Advance() override {
+    Eigen::Vector3d step = command_ - setpoint_;
+    const double longest = config_.max_speed * period_s_;
+    if (step.norm() > longest) step *= longest / step.norm();
+    control::TaskSpaceTarget target;
+    target.pose.p_W = setpoint_;
+    target.pose.R_W = R_start_;
+    target.v_W = step / period_s_;
+    setpoint_ += step;
+    return target;
+  }
+
   Eigen::Matrix3d R_start_ = Eigen::Matrix3d::Identity();
   Eigen::Vector3d command_ = Eigen::Vector3d::Zero(), setpoint_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d p_ = Eigen::Vector3d::Zero(), v_ = Eigen::Vector3d::Zero();

@@ -43,6 +43,7 @@
 #include "control/task_space.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_arm_chain.h"
+#include "lab/devices/device_task_space.h"
 #include "lab/devices/device_tool.h"
 #include "lab/scenario/lab_yaml.h"
 
@@ -53,32 +54,14 @@ namespace {
 constexpr double kQuaternionNormTolerance = 1e-3;
 constexpr int kCommandValues = 7;
 
-class SimTool final : public Device, public CommandInput, public CommandWriter {
+class SimTool final : public TaskSpaceDevice<ToolParams> {
  public:
-  SimTool(const DeviceContext& context, const DeviceConfig& c)
-      : Device(c), model_(context.model), config_(c.ParamsAs<ToolParams>()), period_s_(context.control_period_s),
-        chain_(MakeArmChain(model_, config_, who())) {
-    capabilities_.command_input = this;
-    capabilities_.command_writer = this;
+  SimTool(const DeviceContext& context, const DeviceConfig& c) : TaskSpaceDevice(context, c, "tool") {
     reach_centre_ = Eigen::Vector3d(config_.reach_centre[0], config_.reach_centre[1], config_.reach_centre[2]);
     reach_radius_ = config_.reach == ToolParams::Reach::kFixed ? config_.reach_radius : INFINITY;
     if (config_.reach == ToolParams::Reach::kAuto) ChainLength();
     tilt_axis_ = Eigen::Vector3d(config_.tilt_axis[0], config_.tilt_axis[1], config_.tilt_axis[2]).normalized();
     cos_max_tilt_ = std::cos(config_.max_tilt_deg * M_PI / 180);
-  }
-
-  // its arm: an arm device of the scenario, driven by this device alone
-  void Bind(const std::vector<Device*>& devices) override { BindArmChain(chain_, config_, devices, who()); }
-  std::vector<Claim> Claims() const override { return {{config_.arm, "tool device '" + name() + "'", where()}}; }
-  int log_rank() const override { return 3; }  // after the other devices, as the point device
-
-  void Reset(const mjData& d) override {
-    ReadArmChain(chain_, d);
-    const control::Pose tip = chain_.model->TipPose();
-    p_set_ = p_cmd_ = tip.p_W;
-    R_set_ = R_cmd_ = tip.R_W;
-    ResetArmChain(chain_, config_);  // the null-space term keeps the start posture; hold
-    Sample(d, d.time);
   }
 
   int command_length() const override { return kCommandValues; }
@@ -101,38 +84,7 @@ class SimTool final : public Device, public CommandInput, public CommandWriter {
   void Command(const std::vector<double>& c) override {
     p_cmd_ = Eigen::Vector3d(c[0], c[1], c[2]);
     R_cmd_ = Eigen::Quaterniond(c[3], c[4], c[5], c[6]).normalized().toRotationMatrix();
-    CommandArmChain(chain_);
-  }
-  void Hold() override { chain_.holding = true; }
-  int watchdog_periods() const override { return config_.input.watchdog_periods; }
-  double owner_timeout_s() const override { return config_.input.owner_timeout_s; }
-
-  // the arm's command of the period, toward the newest command (a command source: lab_command_writer.h)
-  bool Write(const CommandPeriod& period, std::string*) override {
-    const mjData& d = *period.data;
-    bool resumed = false;
-    if (!BeginArmChainPeriod(chain_, d, &resumed)) return true;  // holding
-    if (resumed) {                                               // from a hold: start where the tool is
-      const control::Pose tip = chain_.model->TipPose();
-      p_set_ = tip.p_W;
-      R_set_ = tip.R_W;
-    }
-    // rate limits: the set-point moves toward the command at most max_speed, turns at most max_angular_speed
-    Eigen::Vector3d step = p_cmd_ - p_set_;
-    const double longest = config_.max_speed * period_s_;
-    if (step.norm() > longest) step *= longest / step.norm();
-    Eigen::Vector3d turn = control::OrientationError(R_cmd_, R_set_);  // world frame: R_cmd = exp(turn) R_set
-    const double widest = config_.max_angular_speed * period_s_;
-    if (turn.norm() > widest) turn *= widest / turn.norm();
-    control::TaskSpaceTarget target;
-    target.pose.p_W = p_set_;
-    target.pose.R_W = R_set_;
-    target.v_W = step / period_s_;
-    target.w_W = turn / period_s_;
-    DriveArm(chain_, target);
-    p_set_ += step;
-    if (turn.norm() > 0) R_set_ = Eigen::AngleAxisd(turn.norm(), turn / turn.norm()).toRotationMatrix() * R_set_;
-    return true;
+    Commanded();
   }
 
   void Sample(const mjData& d, double) override {
@@ -149,16 +101,12 @@ class SimTool final : public Device, public CommandInput, public CommandWriter {
   }
 
   void State(std::vector<double>* p) const override {
-    p->assign({chain_.holding ? static_cast<double>(bridge::kStatusHolding) : 0.0, p_.x(), p_.y(), p_.z(), q_WS_.w(),
-               q_WS_.x(), q_WS_.y(), q_WS_.z(), v_.x(), v_.y(), v_.z(), w_.x(), w_.y(), w_.z()});
+    p->assign({StatusValue(), p_.x(), p_.y(), p_.z(), q_WS_.w(), q_WS_.x(), q_WS_.y(), q_WS_.z(), v_.x(), v_.y(),
+               v_.z(), w_.x(), w_.y(), w_.z()});
   }
   std::vector<std::string> Columns() const override {
-    std::vector<std::string> out;
-    for (const char* c :
-         {"x", "y", "z", "qw", "qx", "qy", "qz", "setpoint.x", "setpoint.y", "setpoint.z", "error", "rot_error"}) {
-      out.push_back(name() + "." + c);
-    }
-    return out;
+    return NamedColumns(
+        {"x", "y", "z", "qw", "qx", "qy", "qz", "setpoint.x", "setpoint.y", "setpoint.z", "error", "rot_error"});
   }
   int ColumnCount() const override { return 12; }
   void Row(const mjData&, double* out) const override {
@@ -188,6 +136,32 @@ class SimTool final : public Device, public CommandInput, public CommandWriter {
   }
 
  private:
+  void Start(const control::Pose& tip) override {
+    p_set_ = p_cmd_ = tip.p_W;
+    R_set_ = R_cmd_ = tip.R_W;
+  }
+  void Resume(const control::Pose& tip) override {
+    p_set_ = tip.p_W;
+    R_set_ = tip.R_W;
+  }
+  // rate limits: the set-point moves toward the command at most max_speed, turns at most max_angular_speed
+  control::TaskSpaceTarget Advance() override {
+    Eigen::Vector3d step = p_cmd_ - p_set_;
+    const double longest = config_.max_speed * period_s_;
+    if (step.norm() > longest) step *= longest / step.norm();
+    Eigen::Vector3d turn = control::OrientationError(R_cmd_, R_set_);  // world frame: R_cmd = exp(turn) R_set
+    const double widest = config_.max_angular_speed * period_s_;
+    if (turn.norm() > widest) turn *= widest / turn.norm();
+    control::TaskSpaceTarget target;
+    target.pose.p_W = p_set_;
+    target.pose.R_W = R_set_;
+    target.v_W = step / period_s_;
+    target.w_W = turn / period_s_;
+    p_set_ += step;
+    if (turn.norm() > 0) R_set_ = Eigen::AngleAxisd(turn.norm(), turn / turn.norm()).toRotationMatrix() * R_set_;
+    return target;
+  }
+
   // the reach sphere of kAuto: the anchors of the chain's joints and the site
   // at the model's reference posture; the distances between them are those of
   // every posture (each lies on one rigid link)
@@ -206,10 +180,6 @@ class SimTool final : public Device, public CommandInput, public CommandWriter {
     reach_centre_ = Eigen::Map<const Eigen::Vector3d>(d->xanchor + 3 * joints.front());
   }
 
-  const mjModel* model_;
-  ToolParams config_;
-  double period_s_;
-  ArmChain chain_;  // the chain, its arm (bound by Bind) and its controller (made by Reset)
   Eigen::Vector3d reach_centre_ = Eigen::Vector3d::Zero(), tilt_axis_ = -Eigen::Vector3d::UnitZ();
   double cos_max_tilt_ = -1;
   double reach_radius_ = INFINITY;  // m
