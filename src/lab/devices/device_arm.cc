@@ -202,13 +202,12 @@ void SimArm::Start(mjData& d) {
   // joint inertia H_ii: the world's (qM diagonal) or the servo model's at this pose
   const bool own_model = feedforward_kind_ == ServoConfig::Feedforward::kModel;
   servo_model_->Place(d);
-  Eigen::VectorXd model_inertia(dof());
-  if (own_model) servo_model_->InertiaDiagonal(d, model_inertia.data());
+  if (own_model) servo_model_->InertiaDiagonal(d, feedforward_.data());  // (its buffer, free until Actuate)
   const double w = 2.0 * M_PI * bandwidth_hz_;
   kp_.resize(dof());
   kd_.resize(dof());
   for (int i = 0; i < dof(); ++i) {
-    const double inertia = own_model ? model_inertia[i] : d.qM[m->dof_Madr[dof_adr_[i]]];
+    const double inertia = own_model ? feedforward_[i] : d.qM[m->dof_Madr[dof_adr_[i]]];
     kp_[i] = inertia * w * w;
     kd_[i] = 2.0 * damping_ratio_ * inertia * w;
     q_ref_[i] = d.qpos[qpos_adr_[i]];
