@@ -174,6 +174,7 @@ std::unique_ptr<ArmServoModel> ArmServoModel::Create(const mjModel& m, const std
   const mjModel* s = servo->model_.get();
   servo->data_ = MakeData(s);
   servo->rne_.assign(s->nv, 0.0);
+  servo->rne_pass_ = std::make_unique<ChainRne>(*s);
   servo->payload_body_ = mj_name2id(s, mjOBJ_BODY, "payload");
   for (std::size_t i = 0; i < joints.size(); ++i) {
     const int j = mj_name2id(s, mjOBJ_JOINT, ("j" + std::to_string(i)).c_str());
@@ -245,12 +246,8 @@ void ArmServoModel::CopyState(const mjData& world, bool with_velocity) {
 }
 
 void ArmServoModel::Bias(const mjData& world, double* tau) {
-  const mjModel* s = model_.get();
   CopyState(world, true);
-  mj_kinematics(s, data_.get());
-  mj_comPos(s, data_.get());
-  mj_comVel(s, data_.get());
-  mj_rne(s, data_.get(), 0, rne_.data());
+  rne_pass_->Bias(*model_, data_->qpos, data_->qvel, rne_.data());
   for (std::size_t i = 0; i < dof_adr_.size(); ++i) tau[i] = rne_[dof_adr_[i]];
 }
 

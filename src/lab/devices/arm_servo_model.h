@@ -14,8 +14,8 @@
 //   output  bias torques h(q, qd) = gravity + Coriolis/centrifugal of the
 //           servo model (N·m or N, device joint order); its joint-space
 //           inertia diagonal H_ii (kg·m² or kg)
-//   cost    per call: one kinematics, com, com-velocity and RNE pass over the
-//           servo model (a handful of bodies); no allocation
+//   cost    per call: one recursive Newton-Euler pass over the servo model's
+//           bodies (arm_servo_rne.h); no allocation
 // The model is built once (Create); Place() puts its base where the world's
 // arm base is (it stays there: a base that moves later is not followed).
 #pragma once
@@ -29,6 +29,7 @@
 #include <mujoco/mujoco.h>
 
 #include "core/core_mujoco.h"
+#include "lab/devices/arm_servo_rne.h"
 
 namespace vlab::lab {
 
@@ -95,7 +96,8 @@ class ArmServoModel {
   // per root of the servo model: its body, its world body's parent, the offset from that parent
   std::vector<int> root_servo_body_, root_world_parent_;
   std::vector<double> root_offset_pos_, root_offset_quat_;
-  std::vector<double> rne_;  // nv of the servo model
+  std::unique_ptr<ChainRne> rne_pass_;  // the bias in one pass (arm_servo_rne.h)
+  std::vector<double> rne_;             // nv of the servo model
 };
 
 }  // namespace vlab::lab
