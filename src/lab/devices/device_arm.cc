@@ -40,6 +40,24 @@ std::vector<double> TorqueMax(const Eigen::VectorXd& tau_min, const Eigen::Vecto
   return out;
 }
 
+// the payload key: {mass: kg, com: [x, y, z] m, inertia: [ixx, iyy, izz(, ixy, ixz, iyz)] kg m^2}
+void ReadPayload(MapReader& r, Payload* payload) {
+  MapReader p = r.Map("payload");
+  if (p.node().size() == 0) return;
+  payload->mass_kg = p.Number("mass");
+  const std::vector<double> com = p.Numbers("com", {0, 0, 0});
+  if (com.size() != 3) p.Fail("com", "needs 3 numbers (x, y, z in the flange frame, m)");
+  payload->com_m = Eigen::Vector3d(com[0], com[1], com[2]);
+  const std::vector<double> inertia = p.Numbers("inertia", {0, 0, 0});
+  if (inertia.size() != 3 && inertia.size() != 6) {
+    p.Fail("inertia", "needs 3 or 6 numbers (ixx, iyy, izz[, ixy, ixz, iyz], kg m^2)");
+  }
+  std::copy(inertia.begin(), inertia.end(), payload->inertia_kgm2.begin());
+  p.Finish();
+  std::string field, reason;
+  if (!CheckPayload(*payload, &field, &reason)) p.Fail(field, reason);
+}
+
 }  // namespace
 
 std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r) {
@@ -66,7 +84,15 @@ std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r) {
   arm->servo.damping_ratio = servo.Number("damping_ratio", arm->servo.damping_ratio);
   if (!(arm->servo.bandwidth_hz > 0)) servo.Fail("bandwidth_hz", "must be > 0 Hz");
   if (!(arm->servo.damping_ratio > 0)) servo.Fail("damping_ratio", "must be > 0");
+  const std::string feedforward = servo.String("feedforward", "world");
+  if (feedforward == "model") {
+    arm->servo.feedforward = ServoConfig::Feedforward::kModel;
+  } else if (feedforward != "world") {
+    servo.Fail("feedforward", "must be world or model, got '" + feedforward + "'");
+  }
+  arm->servo.bodies = servo.Strings("bodies", {});
   servo.Finish();
+  ReadPayload(r, &arm->payload);
   return arm;
 }
 
@@ -135,6 +161,18 @@ std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const Devic
   if (!p.max_velocity.empty()) {
     arm->max_velocity_ = Eigen::Map<const Eigen::VectorXd>(p.max_velocity.data(), n);
   }
+  // the servo's own model, with the declared payload
+  std::vector<int> joint_ids;
+  for (const std::string& joint : p.joints) joint_ids.push_back(mj_name2id(m, mjOBJ_JOINT, joint.c_str()));
+  try {
+    arm->servo_model_ = ArmServoModel::Create(*m, joint_ids, p.servo.bodies);
+  } catch (const InputError& e) {
+    Fail(c, e.what());
+  }
+  std::string why;
+  if (!arm->servo_model_->SetPayload(p.payload, &why)) Fail(c, "payload." + why);
+  arm->feedforward_kind_ = p.servo.feedforward;
+  arm->feedforward_ = Eigen::VectorXd::Zero(n);
   arm->watchdog_periods_ = p.input.watchdog_periods;
   arm->owner_timeout_s_ = p.input.owner_timeout_s;
   arm->log_following_error_ = p.log_following_error;
@@ -161,12 +199,15 @@ void SimArm::SetInitialState(mjData& d) const {
 
 void SimArm::Start(mjData& d) {
   const mjModel* m = model_;
-  // joint inertia H_ii from the factored-free sparse mass matrix: qM diagonal
+  // joint inertia H_ii: the world's (qM diagonal) or the servo model's at this pose
+  const bool own_model = feedforward_kind_ == ServoConfig::Feedforward::kModel;
+  servo_model_->Place(d);
+  if (own_model) servo_model_->InertiaDiagonal(d, feedforward_.data());  // (its buffer, free until Actuate)
   const double w = 2.0 * M_PI * bandwidth_hz_;
   kp_.resize(dof());
   kd_.resize(dof());
   for (int i = 0; i < dof(); ++i) {
-    const double inertia = d.qM[m->dof_Madr[dof_adr_[i]]];
+    const double inertia = own_model ? feedforward_[i] : d.qM[m->dof_Madr[dof_adr_[i]]];
     kp_[i] = inertia * w * w;
     kd_[i] = 2.0 * damping_ratio_ * inertia * w;
     q_ref_[i] = d.qpos[qpos_adr_[i]];
@@ -222,8 +263,13 @@ bool SimArm::Command(const bridge::ArmCommand& cmd) {
   return true;
 }
 
+bool SimArm::SetPayload(const Payload& payload, std::string* why) { return servo_model_->SetPayload(payload, why); }
+
 void SimArm::Actuate(mjData& d, double dt) {
   saturated_ = false;
+  // the servo model's bias torques, once per step, when a servo mode uses them
+  const bool own_model = feedforward_kind_ == ServoConfig::Feedforward::kModel && mode_ != bridge::ArmMode::kTorque;
+  if (own_model) servo_model_->Bias(d, feedforward_.data());
   for (int i = 0; i < dof(); ++i) {
     const double q = d.qpos[qpos_adr_[i]];
     const double qd = d.qvel[dof_adr_[i]];
@@ -236,7 +282,8 @@ void SimArm::Actuate(mjData& d, double dt) {
       // following-error limit: a blocked joint (contact, limit) must not wind
       // the reference up, or it would spring away when released
       q_ref_[i] = std::min(std::max(q_ref_[i], q - kMaxFollowingError), q + kMaxFollowingError);
-      tau = kp_[i] * (q_ref_[i] - q) + kd_[i] * (qd_ref_[i] - qd) + d.qfrc_bias[dof_adr_[i]];
+      const double bias = own_model ? feedforward_[i] : d.qfrc_bias[dof_adr_[i]];
+      tau = kp_[i] * (q_ref_[i] - q) + kd_[i] * (qd_ref_[i] - qd) + bias;
     }
     if (tau > tau_max_[i] || tau < tau_min_[i]) {
       saturated_ = true;

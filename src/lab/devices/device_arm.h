@@ -2,7 +2,8 @@
 //
 // Ports
 //   input   ArmCommand (mode hold | position | velocity | torque, one value per
-//           joint), taken at the start of a control period
+//           joint), taken at the start of a control period; a payload
+//           (SetPayload: mass, centre of mass, inertia at the flange)
 //   output  ArmState (q, qd, applied tau, status bits), sampled at the end of
 //           every control period
 //   rate    the servo runs at every physics step (model timestep); commands and
@@ -10,11 +11,21 @@
 // Behaviour, like a real servo drive:
 //   - holds the initial position until the first command arrives;
 //   - position and velocity modes run a PD servo per joint with bias (gravity
-//     and Coriolis) feed-forward from the model: tau = kp (q_ref - q) +
-//     kd (qd_ref - qd) + h(q, qd); velocity mode integrates q_ref from the
-//     commanded velocity, position mode feeds forward the command's rate;
+//     and Coriolis) feed-forward: tau = kp (q_ref - q) + kd (qd_ref - qd) +
+//     h(q, qd); velocity mode integrates q_ref from the commanded velocity,
+//     position mode feeds forward the command's rate;
+//   - h comes from one of two sources (servo.feedforward):
+//       world  the world model's bias force at the arm's joints (MuJoCo's
+//              qfrc_bias): gravity and Coriolis of everything the arm carries,
+//              a gripper, a ball's rotor, a yo-yo included (the default);
+//       model  the servo's own model (arm_servo_model.h): the arm's own bodies,
+//              the bodies named in servo.bodies and the declared payload, all a
+//              real controller knows; anything else is a disturbance the
+//              joints feel;
 //   - gains follow from the requested bandwidth and damping ratio and each
-//     joint's inertia H_ii at the initial pose: kp = H_ii w^2, kd = 2 zeta H_ii w;
+//     joint's inertia H_ii at the initial pose: kp = H_ii w^2, kd = 2 zeta H_ii w,
+//     H_ii of the world model (feedforward world) or of the servo's model with
+//     the payload set at start (feedforward model); later payloads keep the gains;
 //   - the servo reference stays within 0.2 rad of the measured position (a
 //     following-error window: a joint blocked by contact does not wind up);
 //   - torque mode applies the commanded torque as is;
@@ -35,6 +46,7 @@
 #include <Eigen/Core>
 
 #include "bridge/bridge_messages.h"
+#include "lab/devices/arm_servo_model.h"
 #include "lab/devices/device.h"
 
 namespace vlab::lab {
@@ -42,8 +54,14 @@ namespace vlab::lab {
 /// Joint servo of a simulated arm: the drive electronics between a command
 /// and the motor torque (position and velocity modes).
 struct ServoConfig {
+  /// Where the servo's bias feed-forward comes from (see SimArm).
+  enum class Feedforward { kWorld, kModel };
   double bandwidth_hz = 10.0;  ///< closed-loop natural frequency of each joint servo
   double damping_ratio = 1.0;  ///< its damping ratio
+  Feedforward feedforward = Feedforward::kWorld;
+  /// Bodies rigidly attached to the arm that the servo's model includes
+  /// (besides the bodies that carry the arm's joints), MJCF names.
+  std::vector<std::string> bodies;
 };
 
 struct ArmParams : DeviceParams {
@@ -52,20 +70,23 @@ struct ArmParams : DeviceParams {
   std::vector<double> initial;         ///< initial joint positions, rad (default: qpos0)
   std::vector<double> max_velocity;    ///< |qd| limits of velocity commands, rad/s (empty: none)
   ServoConfig servo;
+  Payload payload;  ///< declared at the flange (the body of the last joint); mass 0: none
   CommandInputConfig input;
   bool log_following_error = false;  ///< log NAME.following_error: max |q_ref - q| of the servo, rad
 };
 
 /// Reads an arm entry's keys (joints, actuators, initial, max_velocity, servo,
-/// watchdog_periods, owner_timeout, log_following_error).
+/// payload, watchdog_periods, owner_timeout, log_following_error). Throws
+/// InputError naming the file, line and key.
 std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r);
 /// Makes a SimArm.
 std::unique_ptr<Device> MakeArm(const DeviceContext& context, const DeviceConfig& config);
 
 class SimArm final : public Device, public CommandInput, public StepHooks {
  public:
-  /// Binds the device to the model's joints and motors. Throws InputError
-  /// naming the device, its scenario line and the missing or unsuitable element.
+  /// Binds the device to the model's joints and motors and builds the servo's
+  /// model. Throws InputError naming the device, its scenario line and the
+  /// missing or unsuitable element (a joint, a motor, servo.bodies, payload).
   static std::unique_ptr<SimArm> Create(const DeviceContext& context, const DeviceConfig& config);
 
   int dof() const { return static_cast<int>(qpos_adr_.size()); }
@@ -89,6 +110,17 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   /// not wait for the arm's own clients.
   void set_driver(const std::string& driver) { driver_ = driver; }
   const std::string& driver() const { return driver_; }
+
+  /// Declares the payload at the flange (frame: the body of the last joint):
+  /// the servo's model carries it from the next physics step (feedforward
+  /// model; with world it is kept but the world's bias force is used). Returns
+  /// false, keeping the previous payload, when it is not a rigid body
+  /// (CheckPayload), with "FIELD: REASON" in `why` if given. Never throws.
+  bool SetPayload(const Payload& payload, std::string* why = nullptr);
+  const Payload& payload() const { return servo_model_->payload(); }
+  ServoConfig::Feedforward feedforward() const { return feedforward_kind_; }
+  /// The servo's own model (built for either feed-forward).
+  const ArmServoModel& servo_model() const { return *servo_model_; }
 
   long refused_commands() const { return refused_; }
   const Eigen::VectorXd& kp() const { return kp_; }
@@ -135,6 +167,9 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   bool log_following_error_ = false;
   double bandwidth_hz_ = 10.0, damping_ratio_ = 1.0;
   Eigen::VectorXd kp_, kd_;
+  ServoConfig::Feedforward feedforward_kind_ = ServoConfig::Feedforward::kWorld;
+  std::unique_ptr<ArmServoModel> servo_model_;
+  Eigen::VectorXd feedforward_;  // the servo model's bias torques of this step
   std::string driver_;  // the device that drives it ("": none)
   // servo state
   bridge::ArmMode mode_ = bridge::ArmMode::kHold;

@@ -1,0 +1,108 @@
+#include "lab/devices/arm_servo_rne.h"
+
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "core/core_errors.h"
+
+namespace vlab::lab {
+
+namespace {
+
+using RowMatrix = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+
+Eigen::Matrix3d QuatToMatrix(const double* quat) {
+  double mat[9];
+  mju_quat2Mat(mat, quat);
+  return Eigen::Map<const RowMatrix>(mat);
+}
+
+}  // namespace
+
+ChainRne::ChainRne(const mjModel& m) : bodies_(m.nbody), joints_(m.njnt) {
+  for (int j = 0; j < m.njnt; ++j) {
+    if (m.jnt_type[j] != mjJNT_HINGE && m.jnt_type[j] != mjJNT_SLIDE) {
+      throw InputError("servo model: joint " + std::to_string(j) + " is not a hinge or slide");
+    }
+  }
+}
+
+void ChainRne::Bias(const mjModel& m, const double* qpos, const double* qvel, double* qfrc) {
+  // the world: at rest, accelerating against gravity
+  Body& world = bodies_[0];
+  world.rotation.setIdentity();
+  world.position.setZero();
+  world.omega.setZero();
+  world.velocity.setZero();
+  world.alpha.setZero();
+  world.force.setZero();
+  world.moment.setZero();
+  world.accel = -Eigen::Map<const Eigen::Vector3d>(m.opt.gravity);
+  if (m.opt.disableflags & mjDSBL_GRAVITY) world.accel.setZero();
+
+  // forward: frames, twists, accelerations; each body's own wrench
+  for (int i = 1; i < m.nbody; ++i) {
+    const Body& parent = bodies_[m.body_parentid[i]];
+    Body& b = bodies_[i];
+    b.position = parent.position + parent.rotation * Eigen::Map<const Eigen::Vector3d>(m.body_pos + 3 * i);
+    b.rotation = parent.rotation * QuatToMatrix(m.body_quat + 4 * i);
+    b.omega = parent.omega;
+    b.velocity = parent.velocity;
+    b.alpha = parent.alpha;
+    b.accel = parent.accel;
+    for (int j = m.body_jntadr[i]; j >= 0 && j < m.body_jntadr[i] + m.body_jntnum[i]; ++j) {
+      const Eigen::Vector3d local_axis = Eigen::Map<const Eigen::Vector3d>(m.jnt_axis + 3 * j);
+      const Eigen::Vector3d local_pos = Eigen::Map<const Eigen::Vector3d>(m.jnt_pos + 3 * j);
+      const int adr = m.jnt_qposadr[j];
+      const double q = qpos[adr] - m.qpos0[adr];
+      const double qd = qvel[m.jnt_dofadr[j]];
+      Joint& joint = joints_[j];
+      joint.axis = b.rotation * local_axis;
+      joint.anchor = b.position + b.rotation * local_pos;
+      // the joint's motion S as a twist at the origin, and its rate
+      Eigen::Vector3d s_angular = Eigen::Vector3d::Zero(), s_linear = joint.axis;
+      if (m.jnt_type[j] == mjJNT_HINGE) {
+        b.rotation = b.rotation * Eigen::AngleAxisd(q, local_axis).toRotationMatrix();
+        b.position = joint.anchor - b.rotation * local_pos;
+        s_angular = joint.axis;
+        s_linear = joint.anchor.cross(joint.axis);
+      } else {
+        b.position += joint.axis * q;
+      }
+      // A += (V x S) qd, then V += S qd
+      b.alpha += b.omega.cross(s_angular) * qd;
+      b.accel += (b.omega.cross(s_linear) + b.velocity.cross(s_angular)) * qd;
+      b.omega += s_angular * qd;
+      b.velocity += s_linear * qd;
+    }
+    // Newton-Euler at the centre of mass, then as a wrench about the origin
+    const Eigen::Matrix3d r_inertial = b.rotation * QuatToMatrix(m.body_iquat + 4 * i);
+    const Eigen::Vector3d com = b.position + b.rotation * Eigen::Map<const Eigen::Vector3d>(m.body_ipos + 3 * i);
+    const Eigen::Vector3d principal = Eigen::Map<const Eigen::Vector3d>(m.body_inertia + 3 * i);
+    // I x = R diag(principal) R^T x, without forming I
+    const auto inertia_times = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+      return r_inertial * principal.cwiseProduct(r_inertial.transpose() * x);
+    };
+    const Eigen::Vector3d com_velocity = b.velocity + b.omega.cross(com);
+    const Eigen::Vector3d com_accel = b.accel + b.alpha.cross(com) + b.omega.cross(com_velocity);
+    b.force = m.body_mass[i] * com_accel;
+    b.moment = inertia_times(b.alpha) + b.omega.cross(inertia_times(b.omega)) + com.cross(b.force);
+  }
+
+  // backward: subtree wrenches, projected on each joint's motion
+  for (int i = m.nbody - 1; i > 0; --i) {
+    Body& b = bodies_[i];
+    for (int j = m.body_jntadr[i]; j >= 0 && j < m.body_jntadr[i] + m.body_jntnum[i]; ++j) {
+      const Joint& joint = joints_[j];
+      qfrc[m.jnt_dofadr[j]] = m.jnt_type[j] == mjJNT_HINGE
+                                  ? joint.axis.dot(b.moment - joint.anchor.cross(b.force))
+                                  : joint.axis.dot(b.force);
+    }
+    Body& parent = bodies_[m.body_parentid[i]];
+    parent.force += b.force;
+    parent.moment += b.moment;
+  }
+}
+
+}  // namespace vlab::lab
