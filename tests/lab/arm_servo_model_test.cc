@@ -132,8 +132,7 @@ TEST_F(ServoModelTest, APayloadEqualToTheLoadIsTheLoad) {
 
 TEST_F(ServoModelTest, EqualsThePa10WithItsToolNamed) {
   const mjModel* m = LoadModel("scenes/pa10.xml");
-  Compare(m, Joints(m, {"S1", "S2", "S3", "E1", "E2", "W1", "W2"}), {"jr3_body", "jr3_tool_side", "tool_body"},
-          {});
+  Compare(m, Joints(m, {"S1", "S2", "S3", "E1", "E2", "W1", "W2"}), {"jr3_body", "jr3_tool_side", "tool_body"}, {});
 }
 
 TEST_F(ServoModelTest, RefusesBodiesItCannotUse) {
@@ -190,8 +189,10 @@ TEST(PayloadTest, ChecksRigidBodies) {
 // Loads a scenario whose arm entry carries `keys`; returns the error ("" if none).
 std::string ArmKeysError(const std::string& keys) {
   testing::TempDir dir;
-  testing::WriteFile(dir / "s.yaml", "scene: scene.xml\nduration: 1\ndevices:\n  - name: arm\n    kind: arm\n"
-                                     "    joints: [a, b]\n" + keys);
+  testing::WriteFile(dir / "s.yaml",
+                     "scene: scene.xml\nduration: 1\ndevices:\n  - name: arm\n    kind: arm\n"
+                     "    joints: [a, b]\n" +
+                         keys);
   try {
     LoadScenario(dir / "s.yaml");
   } catch (const InputError& e) {

@@ -85,7 +85,8 @@ class ArmServoTest : public test::MujocoTest {
     for (const auto& name : kTool) {
       const int b = mj_name2id(model_, mjOBJ_BODY, name.c_str());
       p.mass_kg += model_->body_mass[b];
-      moment += model_->body_mass[b] * r_wf.transpose() * (Eigen::Map<const Eigen::Vector3d>(data_->xipos + 3 * b) - p_wf);
+      moment +=
+          model_->body_mass[b] * r_wf.transpose() * (Eigen::Map<const Eigen::Vector3d>(data_->xipos + 3 * b) - p_wf);
     }
     p.com_m = moment / p.mass_kg;
     Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
@@ -93,7 +94,8 @@ class ArmServoTest : public test::MujocoTest {
       const int b = mj_name2id(model_, mjOBJ_BODY, name.c_str());
       const Rotation r_fb = r_wf.transpose() * Eigen::Map<const Rotation>(data_->ximat + 9 * b);
       const Eigen::Vector3d diag = Eigen::Map<const Eigen::Vector3d>(model_->body_inertia + 3 * b);
-      const Eigen::Vector3d r = r_wf.transpose() * (Eigen::Map<const Eigen::Vector3d>(data_->xipos + 3 * b) - p_wf) - p.com_m;
+      const Eigen::Vector3d r =
+          r_wf.transpose() * (Eigen::Map<const Eigen::Vector3d>(data_->xipos + 3 * b) - p_wf) - p.com_m;
       inertia += r_fb * diag.asDiagonal() * r_fb.transpose() +
                  model_->body_mass[b] * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
     }

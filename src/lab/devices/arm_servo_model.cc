@@ -37,7 +37,7 @@ std::string Numbers(const double* v, int n) {
 // the world's numbers for the servo model: which bodies, and how they hang together
 struct Chain {
   const mjModel& m;
-  std::vector<int> servo_parent;          // per world body: nearest ancestor kept, 0 for a root, -1 not kept
+  std::vector<int> servo_parent;           // per world body: nearest ancestor kept, 0 for a root, -1 not kept
   std::vector<std::vector<int>> children;  // per world body: kept bodies whose servo parent it is
   std::vector<int> roots;
   int flange = -1;
@@ -67,14 +67,14 @@ void WriteBody(const Chain& c, const std::vector<int>& arm_index, int body, std:
   out << "<body name=\"b" << body << "\" pos=\"" << Numbers(pos, 3) << "\" quat=\"" << Numbers(quat, 4) << "\">\n";
   if (m.body_mass[body] > 0) {
     out << "<inertial pos=\"" << Numbers(m.body_ipos + 3 * body, 3) << "\" quat=\""
-        << Numbers(m.body_iquat + 4 * body, 4) << "\" mass=\"" << Numbers(m.body_mass + body, 1)
-        << "\" diaginertia=\"" << Numbers(m.body_inertia + 3 * body, 3) << "\"/>\n";
+        << Numbers(m.body_iquat + 4 * body, 4) << "\" mass=\"" << Numbers(m.body_mass + body, 1) << "\" diaginertia=\""
+        << Numbers(m.body_inertia + 3 * body, 3) << "\"/>\n";
   }
   for (int j = m.body_jntadr[body]; j >= 0 && j < m.body_jntadr[body] + m.body_jntnum[body]; ++j) {
     out << "<joint name=\"j" << arm_index[j] << "\" type=\"" << (m.jnt_type[j] == mjJNT_HINGE ? "hinge" : "slide")
-        << "\" pos=\"" << Numbers(m.jnt_pos + 3 * j, 3) << "\" axis=\"" << Numbers(m.jnt_axis + 3 * j, 3)
-        << "\" ref=\"" << Numbers(m.qpos0 + m.jnt_qposadr[j], 1) << "\" armature=\""
-        << Numbers(m.dof_armature + m.jnt_dofadr[j], 1) << "\"/>\n";
+        << "\" pos=\"" << Numbers(m.jnt_pos + 3 * j, 3) << "\" axis=\"" << Numbers(m.jnt_axis + 3 * j, 3) << "\" ref=\""
+        << Numbers(m.qpos0 + m.jnt_qposadr[j], 1) << "\" armature=\"" << Numbers(m.dof_armature + m.jnt_dofadr[j], 1)
+        << "\"/>\n";
   }
   if (body == c.flange) {
     // the payload: a welded body in the flange frame, its numbers set by SetPayload

@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 #include "core/core_mujoco.h"
 #include "lab/devices/arm_servo_rne.h"
@@ -36,8 +36,8 @@ namespace vlab::lab {
 /// A load declared at the flange, as a real controller's set-payload takes it.
 /// Frame: the body of the arm's last joint (the flange body), at any joint angle.
 struct Payload {
-  double mass_kg = 0.0;                              ///< kg, >= 0 (0: no payload)
-  Eigen::Vector3d com_m = Eigen::Vector3d::Zero();   ///< centre of mass in the flange frame, m
+  double mass_kg = 0.0;                             ///< kg, >= 0 (0: no payload)
+  Eigen::Vector3d com_m = Eigen::Vector3d::Zero();  ///< centre of mass in the flange frame, m
   /// Inertia about the centre of mass in flange axes, kg·m²: ixx, iyy, izz,
   /// ixy, ixz, iyz (products of inertia as in MJCF fullinertia).
   std::array<double, 6> inertia_kgm2 = {0, 0, 0, 0, 0, 0};

@@ -95,9 +95,8 @@ void ChainRne::Bias(const mjModel& m, const double* qpos, const double* qvel, do
     Body& b = bodies_[i];
     for (int j = m.body_jntadr[i]; j >= 0 && j < m.body_jntadr[i] + m.body_jntnum[i]; ++j) {
       const Joint& joint = joints_[j];
-      qfrc[m.jnt_dofadr[j]] = m.jnt_type[j] == mjJNT_HINGE
-                                  ? joint.axis.dot(b.moment - joint.anchor.cross(b.force))
-                                  : joint.axis.dot(b.force);
+      qfrc[m.jnt_dofadr[j]] = m.jnt_type[j] == mjJNT_HINGE ? joint.axis.dot(b.moment - joint.anchor.cross(b.force))
+                                                           : joint.axis.dot(b.force);
     }
     Body& parent = bodies_[m.body_parentid[i]];
     parent.force += b.force;

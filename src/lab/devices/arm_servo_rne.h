@@ -13,8 +13,8 @@
 
 #include <vector>
 
-#include <Eigen/Core>
 #include <mujoco/mujoco.h>
+#include <Eigen/Core>
 
 namespace vlab::lab {
 
@@ -33,9 +33,9 @@ class ChainRne {
   struct Body {
     Eigen::Matrix3d rotation;  // body frame in world
     Eigen::Vector3d position;
-    Eigen::Vector3d omega, velocity;     // twist at the world origin
-    Eigen::Vector3d alpha, accel;        // spatial acceleration at the world origin (gravity as -g)
-    Eigen::Vector3d force, moment;       // wrench of its subtree, moment about the world origin
+    Eigen::Vector3d omega, velocity;  // twist at the world origin
+    Eigen::Vector3d alpha, accel;     // spatial acceleration at the world origin (gravity as -g)
+    Eigen::Vector3d force, moment;    // wrench of its subtree, moment about the world origin
   };
   struct Joint {
     Eigen::Vector3d axis, anchor;  // world

@@ -170,7 +170,7 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   ServoConfig::Feedforward feedforward_kind_ = ServoConfig::Feedforward::kWorld;
   std::unique_ptr<ArmServoModel> servo_model_;
   Eigen::VectorXd feedforward_;  // the servo model's bias torques of this step
-  std::string driver_;  // the device that drives it ("": none)
+  std::string driver_;           // the device that drives it ("": none)
   // servo state
   bridge::ArmMode mode_ = bridge::ArmMode::kHold;
   Eigen::VectorXd value_, q_ref_, qd_ref_, last_position_command_, tau_;
