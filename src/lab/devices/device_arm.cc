@@ -93,6 +93,7 @@ std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r) {
   arm->servo.bodies = servo.Strings("bodies", {});
   servo.Finish();
   ReadPayload(r, &arm->payload);
+  arm->sensing = ReadSensing(r, static_cast<int>(arm->joints.size()));
   return arm;
 }
 
@@ -173,6 +174,9 @@ std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const Devic
   if (!arm->servo_model_->SetPayload(p.payload, &why)) Fail(c, "payload." + why);
   arm->feedforward_kind_ = p.servo.feedforward;
   arm->feedforward_ = Eigen::VectorXd::Zero(n);
+  arm->sensing_.Configure(p.sensing, n);
+  arm->q_true_ = Eigen::VectorXd::Zero(n);
+  arm->qd_true_ = Eigen::VectorXd::Zero(n);
   arm->watchdog_periods_ = p.input.watchdog_periods;
   arm->owner_timeout_s_ = p.input.owner_timeout_s;
   arm->log_following_error_ = p.log_following_error;
@@ -204,13 +208,14 @@ void SimArm::Start(mjData& d) {
   servo_model_->Place(d);
   if (own_model) servo_model_->InertiaDiagonal(d, feedforward_.data());  // (its buffer, free until Actuate)
   const double w = 2.0 * M_PI * bandwidth_hz_;
+  if (sensing_.enabled()) Sense(d, 0.0);  // the encoders' first reading: the reference holds it
   kp_.resize(dof());
   kd_.resize(dof());
   for (int i = 0; i < dof(); ++i) {
     const double inertia = own_model ? feedforward_[i] : d.qM[m->dof_Madr[dof_adr_[i]]];
     kp_[i] = inertia * w * w;
     kd_[i] = 2.0 * damping_ratio_ * inertia * w;
-    q_ref_[i] = d.qpos[qpos_adr_[i]];
+    q_ref_[i] = sensing_.enabled() ? sensing_.q()[i] : d.qpos[qpos_adr_[i]];
   }
   qd_ref_.setZero();
   mode_ = bridge::ArmMode::kHold;
@@ -270,9 +275,12 @@ void SimArm::Actuate(mjData& d, double dt) {
   // the servo model's bias torques, once per step, when a servo mode uses them
   const bool own_model = feedforward_kind_ == ServoConfig::Feedforward::kModel && mode_ != bridge::ArmMode::kTorque;
   if (own_model) servo_model_->Bias(d, feedforward_.data());
+  // what the drive knows of its joints: the encoders' reading, or the exact state
+  const bool sensed = sensing_.enabled();
+  if (sensed) Sense(d, dt);
   for (int i = 0; i < dof(); ++i) {
-    const double q = d.qpos[qpos_adr_[i]];
-    const double qd = d.qvel[dof_adr_[i]];
+    const double q = sensed ? sensing_.q()[i] : d.qpos[qpos_adr_[i]];
+    const double qd = sensed ? sensing_.qd()[i] : d.qvel[dof_adr_[i]];
     double tau;
     if (mode_ == bridge::ArmMode::kTorque) {
       tau = value_[i];
@@ -300,9 +308,12 @@ void SimArm::Sample(const mjData& d, double time_s, bridge::ArmState* s) const {
   s->qd.resize(dof());
   s->tau.resize(dof());
   bool at_limit = false;
+  if (sensing_.enabled()) Peek(d, s->q.data(), s->qd.data());
   for (int i = 0; i < dof(); ++i) {
-    s->q[i] = d.qpos[qpos_adr_[i]];
-    s->qd[i] = d.qvel[dof_adr_[i]];
+    if (!sensing_.enabled()) {
+      s->q[i] = d.qpos[qpos_adr_[i]];
+      s->qd[i] = d.qvel[dof_adr_[i]];
+    }
     s->tau[i] = tau_[i];
     at_limit = at_limit || s->q[i] <= lower_[i] || s->q[i] >= upper_[i];
   }
@@ -327,18 +338,41 @@ std::vector<std::string> SimArm::Columns() const {
 void SimArm::Row(const mjData& d, double* out) const {
   const int n = dof();
   double violation = 0.0;
+  if (sensing_.enabled()) Peek(d, out, out + n);  // the sensed q and qd
   for (int i = 0; i < n; ++i) {
-    const double q = d.qpos[qpos_adr_[i]];
-    out[i] = q;
-    out[n + i] = d.qvel[dof_adr_[i]];
+    const double q = d.qpos[qpos_adr_[i]];  // the limits: of the true q
+    if (!sensing_.enabled()) {
+      out[i] = q;
+      out[n + i] = d.qvel[dof_adr_[i]];
+    }
     out[2 * n + i] = tau_[i];
     violation = std::max({violation, lower_[i] - q, q - upper_[i]});
   }
   out[3 * n] = violation;
   if (!log_following_error_) return;
-  double following = 0.0;  // (torque mode: q_ref follows q, one step behind)
-  for (int i = 0; i < n; ++i) following = std::max(following, std::abs(q_ref_[i] - d.qpos[qpos_adr_[i]]));
+  double following = 0.0;  // (torque mode: q_ref follows q, one step behind; sensed q when sensing)
+  for (int i = 0; i < n; ++i) {
+    following = std::max(following, std::abs(q_ref_[i] - (sensing_.enabled() ? out[i] : d.qpos[qpos_adr_[i]])));
+  }
   out[3 * n + 1] = following;
+}
+
+void SimArm::Gather(const mjData& d) const {
+  for (int i = 0; i < dof(); ++i) {
+    q_true_[i] = d.qpos[qpos_adr_[i]];
+    qd_true_[i] = d.qvel[dof_adr_[i]];
+  }
+}
+
+void SimArm::Sense(const mjData& d, double dt) {
+  Gather(d);
+  sensing_.Sense(q_true_.data(), qd_true_.data(), dt);
+}
+
+void SimArm::Peek(const mjData& d, double* q, double* qd) const {
+  // between two steps: what the next step's servo will sense (its difference over one timestep)
+  Gather(d);
+  sensing_.Peek(q_true_.data(), qd_true_.data(), model_->opt.timestep, q, qd);
 }
 
 void SimArm::Hold() {

@@ -5,7 +5,7 @@
 //           joint), taken at the start of a control period; a payload
 //           (SetPayload: mass, centre of mass, inertia at the flange)
 //   output  ArmState (q, qd, applied tau, status bits), sampled at the end of
-//           every control period
+//           every control period; q and qd are the sensed ones (below)
 //   rate    the servo runs at every physics step (model timestep); commands and
 //           outputs at the control rate
 // Behaviour, like a real servo drive:
@@ -26,6 +26,11 @@
 //     joint's inertia H_ii at the initial pose: kp = H_ii w^2, kd = 2 zeta H_ii w,
 //     H_ii of the world model (feedforward world) or of the servo's model with
 //     the payload set at start (feedforward model); later payloads keep the gains;
+//   - it senses what its encoders give (key sensing, arm_sensing.h): joint
+//     positions in whole counts of the resolution and velocities exact or the
+//     backward difference of the counts over the physics step; the PD, the
+//     state and the log's q and qd columns use the sensed values (no key:
+//     exact positions and the integrator's velocities);
 //   - the servo reference stays within 0.2 rad of the measured position (a
 //     following-error window: a joint blocked by contact does not wind up);
 //   - torque mode applies the commanded torque as is;
@@ -46,6 +51,7 @@
 #include <Eigen/Core>
 
 #include "bridge/bridge_messages.h"
+#include "lab/devices/arm_sensing.h"
 #include "lab/devices/arm_servo_model.h"
 #include "lab/devices/device.h"
 
@@ -70,13 +76,14 @@ struct ArmParams : DeviceParams {
   std::vector<double> initial;         ///< initial joint positions, rad (default: qpos0)
   std::vector<double> max_velocity;    ///< |qd| limits of velocity commands, rad/s (empty: none)
   ServoConfig servo;
-  Payload payload;  ///< declared at the flange (the body of the last joint); mass 0: none
+  Payload payload;        ///< declared at the flange (the body of the last joint); mass 0: none
+  SensingConfig sensing;  ///< encoder resolution and velocity source (empty: exact)
   CommandInputConfig input;
   bool log_following_error = false;  ///< log NAME.following_error: max |q_ref - q| of the servo, rad
 };
 
 /// Reads an arm entry's keys (joints, actuators, initial, max_velocity, servo,
-/// payload, watchdog_periods, owner_timeout, log_following_error). Throws
+/// payload, sensing, watchdog_periods, owner_timeout, log_following_error). Throws
 /// InputError naming the file, line and key.
 std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r);
 /// Makes a SimArm.
@@ -121,6 +128,8 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   ServoConfig::Feedforward feedforward() const { return feedforward_kind_; }
   /// The servo's own model (built for either feed-forward).
   const ArmServoModel& servo_model() const { return *servo_model_; }
+  /// The joints' encoders (disabled without the key sensing).
+  const JointSensing& sensing() const { return sensing_; }
 
   long refused_commands() const { return refused_; }
   const Eigen::VectorXd& kp() const { return kp_; }
@@ -132,8 +141,9 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   void Reset(const mjData& d) override;
   void Actuate(mjData& d, double dt) override;
   void Sample(const mjData& d, double t) override;
-  /// Log columns: NAME.q.JOINT, NAME.qd.JOINT, NAME.tau.JOINT, NAME.limit_violation,
-  /// and NAME.following_error (largest |q_ref - q| of the servo, rad) when configured.
+  /// Log columns: NAME.q.JOINT, NAME.qd.JOINT (sensed), NAME.tau.JOINT,
+  /// NAME.limit_violation (of the true q), and NAME.following_error (largest
+  /// |q_ref - q| of the servo, sensed q, rad) when configured.
   std::vector<std::string> Columns() const override;
   int ColumnCount() const override { return 3 * dof() + 1 + (log_following_error_ ? 1 : 0); }
   void Row(const mjData& d, double* out) const override;
@@ -157,6 +167,13 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
     capabilities_.arm = this;
   }
 
+  // the joints' true state into q_true_, qd_true_
+  void Gather(const mjData& d) const;
+  // the encoders read the state a step dt after their last reading
+  void Sense(const mjData& d, double dt);
+  // what the encoders would read now (sensed q and qd), keeping nothing
+  void Peek(const mjData& d, double* q, double* qd) const;
+
   const mjModel* model_ = nullptr;
   std::vector<std::string> joint_names_;
   std::vector<int> qpos_adr_, dof_adr_, actuator_ids_;
@@ -170,7 +187,9 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   ServoConfig::Feedforward feedforward_kind_ = ServoConfig::Feedforward::kWorld;
   std::unique_ptr<ArmServoModel> servo_model_;
   Eigen::VectorXd feedforward_;  // the servo model's bias torques of this step
-  std::string driver_;           // the device that drives it ("": none)
+  JointSensing sensing_;
+  mutable Eigen::VectorXd q_true_, qd_true_;  // the joints' true state, gathered for sensing
+  std::string driver_;                        // the device that drives it ("": none)
   // servo state
   bridge::ArmMode mode_ = bridge::ArmMode::kHold;
   Eigen::VectorXd value_, q_ref_, qd_ref_, last_position_command_, tau_;
