@@ -39,6 +39,7 @@ std::string DescribeJson(const ArmDescription& d) {
                  {"torque_max", d.torque_max}};
   j["watchdog_periods"] = d.watchdog_periods;
   j["owner_timeout_s"] = d.owner_timeout_s;
+  if (!d.resolution.empty()) j["resolution"] = d.resolution;
   return j.dump();
 }
 

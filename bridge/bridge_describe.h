@@ -27,6 +27,9 @@ struct ArmDescription : DeviceDescription {
   std::vector<double> torque_max;                  ///< N m, |tau| (empty: unlimited)
   int watchdog_periods = 3;
   double owner_timeout_s = 1.0;
+  /// Encoder resolution, rad (slide: m) per count, one per joint; empty: the
+  /// positions are not quantised (then the reply has no "resolution").
+  std::vector<double> resolution;
 };
 
 struct WrenchDescription : DeviceDescription {

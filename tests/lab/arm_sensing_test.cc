@@ -7,6 +7,7 @@
 #include "lab/devices/arm_sensing.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -182,6 +183,9 @@ TEST_F(ArmSensingTest, StateAndLogReportTheSensedValues) {
     EXPECT_EQ(row[7 + i], arm_->state().qd[i]);
   }
   EXPECT_NE(arm_->state().q[1], data_->qpos[model_->jnt_qposadr[1]]);  // S2 at 0.523599: not a whole mrad
+  // the describe reply tells a client the counts' size, one per joint
+  const auto describe = nlohmann::json::parse(arm_->DescribeJson(bridge::DeviceDescription{}));
+  EXPECT_EQ(describe.at("resolution"), std::vector<double>(7, 1e-3));
 }
 
 TEST_F(ArmSensingTest, NoKeyIsExact) {
@@ -193,6 +197,7 @@ TEST_F(ArmSensingTest, NoKeyIsExact) {
   arm_->Row(*data_, row.data());
   EXPECT_EQ(row[6], data_->qpos[w2_]);
   EXPECT_EQ(arm_->state().q[6], data_->qpos[w2_]);
+  EXPECT_FALSE(nlohmann::json::parse(arm_->DescribeJson(bridge::DeviceDescription{})).contains("resolution"));
 }
 
 // Loads a scenario whose arm entry carries `keys`; returns the error ("" if none).

@@ -420,6 +420,9 @@ std::string SimArm::DescribeJson(const bridge::DeviceDescription& common) const 
   desc.torque_max = TorqueMax(tau_min_, tau_max_);
   desc.watchdog_periods = watchdog_periods_;
   desc.owner_timeout_s = owner_timeout_s_;
+  if (sensing_.enabled()) {
+    for (int i = 0; i < dof(); ++i) desc.resolution.push_back(sensing_.resolution(i));
+  }
   static_cast<bridge::DeviceDescription&>(desc) = common;
   return bridge::DescribeJson(desc);
 }
