@@ -99,7 +99,6 @@ void RunSession::Prepare() {
     bridge_ = s_.MakeBridge(*serve, clock_->name());
     // a task program waiting in wall time (markers) lets the lab serve meanwhile
     if (s_.task) s_.task->SetIdle([b = bridge_.get()] { b->Poll(0.0, PollWait::kSleep); });
-    if (options_.on_serving && !external_) options_.on_serving(bridge_->Devices());
     writers_.push_back(bridge_.get());  // the wire writes first
   }
   writers_.insert(writers_.end(), s_.writers.begin(), s_.writers.end());
@@ -166,6 +165,9 @@ void RunSession::Start() {
   EmitRow(0.0);
   if (options_.observe) options_.observe(0.0, m_, d_);
   for (RenderedOutput* output : s_.rendered) output->BeforeRun(d_);
+  // the ports line says the devices answer now: after the cameras' GL start-up, which can take
+  // seconds on a loaded machine while nothing reads the sockets
+  if (bridge_ && options_.on_serving && !external_) options_.on_serving(bridge_->Devices());
   for (RenderedOutput* output : s_.rendered) output->Deliver(0.0, d_);
   Publish(0);
   Recorded(0.0);  // (a failed write ends the run before its first period)

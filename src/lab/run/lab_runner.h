@@ -51,7 +51,8 @@ struct RunOptions {
   const BridgeOptions* serve = nullptr;
   /// Clock to use instead of the scenario's (none: the scenario's).
   std::optional<ClockMode> clock;
-  /// Called once the served devices are bound, before the first period.
+  /// Called once the served devices are bound and answer (after the cameras' render start-up),
+  /// before the first period.
   std::function<void(const std::vector<ServedDevice>&)> on_serving;
   /// Served runs that vlab does not start the controller of (vlab serve),
   /// lockstep or realtime: called once when period 0 begins waiting for the
