@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "arm_keys_error.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
 #include "lab/scenario/lab_scenario.h"
@@ -198,21 +199,6 @@ TEST_F(ArmSensingTest, NoKeyIsExact) {
   EXPECT_EQ(row[6], data_->qpos[w2_]);
   EXPECT_EQ(arm_->state().q[6], data_->qpos[w2_]);
   EXPECT_FALSE(nlohmann::json::parse(arm_->DescribeJson(bridge::DeviceDescription{})).contains("resolution"));
-}
-
-// Loads a scenario whose arm entry carries `keys`; returns the error ("" if none).
-std::string ArmKeysError(const std::string& keys) {
-  testing::TempDir dir;
-  testing::WriteFile(dir / "s.yaml",
-                     "scene: scene.xml\nduration: 1\ndevices:\n  - name: arm\n    kind: arm\n"
-                     "    joints: [a, b]\n" +
-                         keys);
-  try {
-    LoadScenario(dir / "s.yaml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(ArmSensingKeysTest, GoodKeysLoad) {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "arm_keys_error.h"
 #include "arm_servo_forces.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
@@ -184,21 +185,6 @@ TEST(PayloadTest, ChecksRigidBodies) {
   EXPECT_NE(reason.find("triangle"), std::string::npos);
   bad.inertia_kgm2 = {0.01, 0.01, nan, 0, 0, 0};
   EXPECT_EQ(refused(bad), "inertia");
-}
-
-// Loads a scenario whose arm entry carries `keys`; returns the error ("" if none).
-std::string ArmKeysError(const std::string& keys) {
-  testing::TempDir dir;
-  testing::WriteFile(dir / "s.yaml",
-                     "scene: scene.xml\nduration: 1\ndevices:\n  - name: arm\n    kind: arm\n"
-                     "    joints: [a, b]\n" +
-                         keys);
-  try {
-    LoadScenario(dir / "s.yaml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(ArmServoKeysTest, BadKeysNameTheField) {
