@@ -147,6 +147,30 @@ TEST(CheckSetTest, NaNSampleFailsMaxMinAndMaxAbs) {
   EXPECT_TRUE(r[0].pass);
 }
 
+TEST(CheckSetTest, RangeIsLargestMinusSmallestInTheWindow) {
+  // whole run: 6 - (-9); [2, 4]: x = 4, -1.5, 5 -> 6.5; one sample: 0
+  CheckConfig held = Check("held", "range", 5.5);
+  held.max = 3.5;  // t = 6, 7: 6 - 2.5 = 3.5 at the bound: pass
+  CheckConfig wanders = Check("wanders", "range", 5.5);
+  wanders.max = 3.499;
+  const auto r = Evaluate(
+      {Check("all", "range"), Check("mid", "range", 2, 4), Check("one", "range", 3, 3), held, wanders}, kSeries);
+  EXPECT_EQ(r[0].value, 15.0);
+  EXPECT_EQ(r[1].value, 6.5);
+  EXPECT_EQ(r[2].value, 0.0);
+  EXPECT_EQ(r[2].samples, 1);
+  EXPECT_TRUE(r[3].pass);
+  EXPECT_FALSE(r[4].pass);
+  // a NaN inside the window fails it
+  std::vector<double> series = kSeries;
+  series[3] = kNaN;
+  CheckConfig generous = Check("nan", "range");
+  generous.max = 1e9;
+  const auto n = Evaluate({generous}, series);
+  EXPECT_TRUE(std::isnan(n[0].value));
+  EXPECT_FALSE(n[0].pass);
+}
+
 TEST(CheckSetTest, ExtremeValuesReduceToThemselves) {
   // max and min of a series are elements of it, whatever their magnitude
   const std::vector<double> low = {-1.5e308, -1.7e308};

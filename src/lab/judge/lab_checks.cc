@@ -103,6 +103,9 @@ std::vector<CheckResult> CheckSet::Results(double end_s) const {
         case Reduce::kMaxAbs:
           r.value = a.max_abs;
           break;
+        case Reduce::kRange:
+          r.value = a.max - a.min;  // NaN when either is
+          break;
         case Reduce::kMinOfWindowMax:
         case Reduce::kMaxOfWindowMin: {
           // the last sub-window counts only when whole: it ends by `to` and by the last sample

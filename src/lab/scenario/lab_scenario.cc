@@ -231,7 +231,7 @@ CheckConfig ReadCheck(const std::string& file, const YAML::Node& node, const std
   const std::string reduce = r.String("reduce", "max");
   if (!ReduceFromName(reduce, &c.reduce))
     r.Fail("reduce", "unknown reduction '" + reduce +
-                         "' (known: max, min, mean, rms, final, max_abs, min_of_window_max, max_of_window_min)");
+                         "' (known: max, min, mean, rms, final, max_abs, min_of_window_max, max_of_window_min, range)");
   c.min = r.Number("min", c.min);
   c.max = r.Number("max", c.max);
   if (!r.Has("min") && !r.Has("max")) r.Fail("max", "a check needs a bound: min, max or both");
@@ -278,13 +278,15 @@ const char* ReduceName(Reduce reduce) {
       return "min_of_window_max";
     case Reduce::kMaxOfWindowMin:
       return "max_of_window_min";
+    case Reduce::kRange:
+      return "range";
   }
   return "?";
 }
 
 bool ReduceFromName(const std::string& name, Reduce* reduce) {
   for (Reduce k : {Reduce::kMax, Reduce::kMin, Reduce::kMean, Reduce::kRms, Reduce::kFinal, Reduce::kMaxAbs,
-                   Reduce::kMinOfWindowMax, Reduce::kMaxOfWindowMin}) {
+                   Reduce::kMinOfWindowMax, Reduce::kMaxOfWindowMin, Reduce::kRange}) {
     if (name == ReduceName(k)) {
       *reduce = k;
       return true;

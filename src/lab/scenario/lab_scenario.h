@@ -30,10 +30,11 @@ enum class ControllerType { kNone, kJointPd, kTaskSpace, kExternal, kTask };
 /// How a check reduces its signal to one value (the `reduce` key).
 /// kMinOfWindowMax: the window [from, to] cut into consecutive windows of `window` s,
 /// the maximum in each, then the smallest of those maxima (e.g. every swing reaches a
-/// height); kMaxOfWindowMin likewise with minima and the largest of them.
-enum class Reduce { kMax, kMin, kMean, kRms, kFinal, kMaxAbs, kMinOfWindowMax, kMaxOfWindowMin };
+/// height); kMaxOfWindowMin likewise with minima and the largest of them. kRange: the
+/// largest minus the smallest value in [from, to] (how far a held quantity wanders).
+enum class Reduce { kMax, kMin, kMean, kRms, kFinal, kMaxAbs, kMinOfWindowMax, kMaxOfWindowMin, kRange };
 /// "max", "min", "mean", "rms", "final", "max_abs", "min_of_window_max",
-/// "max_of_window_min"; and back (false for anything else).
+/// "max_of_window_min", "range"; and back (false for anything else).
 const char* ReduceName(Reduce reduce);
 bool ReduceFromName(const std::string& name, Reduce* reduce);
 /// "none", "joint_pd", "task_space", "external", "task".
