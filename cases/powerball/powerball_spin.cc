@@ -3,7 +3,7 @@
 // the devices only through the vlab client library; the same binary in every stage.
 //
 //   powerball_spin --arm ADDR --jr3 ADDR --counter ADDR [--target-rpm RPM] [--alpha-max DEG]
-//                  [--delta DEG] [--wrist-speed RAD_S] [--log FILE] [--timeout S] [--quiet]
+//                  [--delta DEG] [--wrist-speed RAD_S] [--stop-at S] [--log FILE] [--timeout S] [--quiet]
 //
 // Devices: --arm, the PA10 (arm; its states pace the loop, one velocity command per state);
 // --jr3, the wrench device at the ball's mount (filter 1 or 2: filter 4's 7.8 Hz cut-off
@@ -40,7 +40,9 @@
 //    stays under --wrist-speed), times a speed regulator (1 at and below target - kRegulatorBand
 //    rpm, 0 at the target) so the rotor holds near the target instead of running away (the
 //    law blows up in finite time), ramped in over the first kRamp_s and rate-limited
-//    (kAlphaRate) so the tips are never slammed.
+//    (kAlphaRate) so the tips are never slammed. With --stop-at S the drive stops at S s after
+//    the first state, as a user who stops turning the wrist: the cone closes at the same rate
+//    and the wrist holds its start pose; the rotor then coasts on its losses.
 // 5. Command: joint velocities, the cone's rate plus kPull times the position error (the
 //    others held at the start pose), clipped to kMaxJointSpeed, changing by at most
 //    kMaxVelocityStep from one command to the next.
@@ -108,6 +110,7 @@ constexpr double kMaxVelocityStep = 0.5;
 struct Options {
   Address arm, jr3, counter;
   double target_rpm = 12000, alpha_max_deg = 10, delta_deg = 0, wrist_speed = 4.0, timeout_s = 2.0;
+  double stop_at_s = -1.0;  // s: the drive stops then; < 0: never
   std::string log;
   bool quiet = false;
 };
@@ -136,6 +139,8 @@ bool ParseOptions(int argc, char** argv, Options* o) {
       o->delta_deg = std::atof(v.c_str());
     else if (arg == "--wrist-speed")
       o->wrist_speed = std::atof(v.c_str());
+    else if (arg == "--stop-at")
+      ok = (o->stop_at_s = std::atof(v.c_str())) >= 0.0;
     else if (arg == "--log")
       o->log = v;
     else if (arg == "--timeout")
@@ -232,7 +237,8 @@ int Run(const Options& o) {
     const double rpm = std::abs(c.values[kCounterRpm]);
     const double cap = std::min(alpha_max, o.wrist_speed / std::max(std::abs(nu_ff), 1e-3));
     const double regulate = std::clamp((o.target_rpm - rpm) / kRegulatorBand, 0.0, 1.0);
-    const double wanted = cap * regulate * std::min(1.0, t / kRamp_s);
+    const bool driving = o.stop_at_s < 0.0 || t < o.stop_at_s;
+    const double wanted = driving ? cap * regulate * std::min(1.0, t / kRamp_s) : 0.0;
     alpha += std::clamp(wanted - alpha, -kAlphaRate * dt, kAlphaRate * dt);
     // 5. velocity command: the cone's rate plus a slow pull (kPull) onto the cone and, for
     // the other joints, onto the start pose. A velocity command survives a late or missed
@@ -288,8 +294,8 @@ int main(int argc, char** argv) {
   if (!ParseOptions(argc, argv, &options)) {
     std::fprintf(stderr,
                  "usage: %s --arm HOST:PORT --jr3 HOST:PORT --counter HOST:PORT [--target-rpm RPM]\n"
-                 "       [--alpha-max DEG (<= 15)] [--delta DEG] [--wrist-speed RAD_S] [--log FILE] [--timeout S]\n"
-                 "       [--quiet]\n",
+                 "       [--alpha-max DEG (<= 15)] [--delta DEG] [--wrist-speed RAD_S] [--stop-at S] [--log FILE]\n"
+                 "       [--timeout S] [--quiet]\n",
                  argv[0]);
     return 2;
   }

@@ -1,0 +1,28 @@
+# Run as: cmake -DVLAB=<vlab> -DCASE=<cases/powerball> -DOUT=<folder> -P drive_stops_test.cmake
+# Stage 1 with the drive stopped at 20 s (powerball_spin --stop-at 20): the rotor coasts on its
+# losses (mjcf/powerball/README.md, "Losses"), so the hold check must fail, and only checks of
+# the rotor's speed may: the arm stays inside its limits and the tips still roll.
+file(REMOVE_RECURSE ${OUT})
+set(command "[\"{bin}/cases/powerball/powerball_spin\", \"--arm\", \"{pa10}\", \"--jr3\", \"{jr3}\", \"--counter\", \"{pb}\",\
+ \"--target-rpm\", \"12000\", \"--stop-at\", \"20\", \"--quiet\"]")
+execute_process(COMMAND ${VLAB} run ${CASE}/stage1.yaml --quiet --out ${OUT} --set "controller.command=${command}"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out TIMEOUT 200)
+if(NOT rc EQUAL 1)
+  message(FATAL_ERROR "expected exit 1 (a check failed), got ${rc}:\n${out}")
+endif()
+file(READ ${OUT}/summary.json summary)
+string(JSON n LENGTH "${summary}" checks)
+math(EXPR last "${n} - 1")
+set(failed "")
+foreach(i RANGE ${last})
+  string(JSON name GET "${summary}" checks ${i} name)
+  string(JSON pass GET "${summary}" checks ${i} pass)
+  string(JSON value GET "${summary}" checks ${i} value)
+  if(NOT pass)
+    list(APPEND failed ${name})
+    message(STATUS "failed as it should: ${name} = ${value}")
+  endif()
+endforeach()
+if(NOT failed STREQUAL "counter_holds_speed")
+  message(FATAL_ERROR "with the drive stopped at 20 s the failed checks are '${failed}', not counter_holds_speed alone")
+endif()
