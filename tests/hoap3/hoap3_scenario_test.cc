@@ -76,11 +76,11 @@ TEST(Hoap3ScenarioTest, AnUnknownKeyframeNamesTheFileLineAndKey) {
   }
 }
 
-// Without commands the arm device holds its initial pose (position servo with the
+// Without commands the arm device holds its initial pose (position servo with its own
 // model's bias forces fed forward): the robot stands on its eight FSRs. Once the
 // first seconds' sway has died out, the feet device's centre of pressure is the
 // ground projection of the robot's centre of mass (moment balance at rest), and the
-// FSR sum its weight.
+// FSR sum, over the last second, its weight.
 TEST(Hoap3ScenarioTest, TheArmServoHoldsTheStandOnTheFsrs) {
   std::unique_ptr<Lab> lab = Lab::Create(InProcess(6.0));
   vlab::testing::TempDir dir;
@@ -116,7 +116,20 @@ TEST(Hoap3ScenarioTest, TheArmServoHoldsTheStandOnTheFsrs) {
             << weight_N << " N\n";
   EXPECT_NEAR(value("feet.cop_x"), com_W.x(), 5e-4);
   EXPECT_NEAR(value("feet.cop_y"), com_W.y(), 5e-4);
-  EXPECT_NEAR(value("feet.sum"), weight_N, 1e-3 * weight_N);
+  // the FSR sum over the last second: the servo reads its joints in whole encoder counts, so
+  // they hunt by a count and the body jiggles (the sum swings by 0.7 N in one row); over a
+  // second the body's vertical momentum hardly changes, so the mean carries the weight
+  const auto sum_column = std::find(header.begin(), header.end(), "feet.sum") - header.begin();
+  double sum_N = 0.0;
+  int rows = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string> row = vlab::testing::SplitCsv(lines[i]);
+    if (std::stod(row[0]) <= 5.0) continue;
+    sum_N += std::stod(row[sum_column]);
+    ++rows;
+  }
+  ASSERT_GT(rows, 100);
+  EXPECT_NEAR(sum_N / rows, weight_N, 1e-3 * weight_N);
   EXPECT_NEAR(value("feet.sum_error"), value("feet.sum") / weight_N - 1, 1e-12);
 }
 

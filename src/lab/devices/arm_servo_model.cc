@@ -203,6 +203,7 @@ void ArmServoModel::Place(const mjData& d) {
     mju_add3(model_->body_pos + 3 * body, d.xpos + 3 * parent, offset);
     mju_mulQuat(model_->body_quat + 4 * body, d.xquat + 4 * parent, root_offset_quat_.data() + 4 * r);
   }
+  rne_pass_->Refresh(*model_);
 }
 
 bool ArmServoModel::SetPayload(const Payload& p, std::string* why) {
@@ -235,6 +236,7 @@ bool ArmServoModel::SetPayload(const Payload& p, std::string* why) {
   // subtree masses follow (the com pass divides by them)
   for (int k = 0; k < s->nbody; ++k) s->body_subtreemass[k] = s->body_mass[k];
   for (int k = s->nbody - 1; k > 0; --k) s->body_subtreemass[s->body_parentid[k]] += s->body_subtreemass[k];
+  if (rne_pass_) rne_pass_->Refresh(*s);
   return true;
 }
 

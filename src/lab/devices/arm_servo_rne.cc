@@ -20,12 +20,40 @@ Eigen::Matrix3d QuatToMatrix(const double* quat) {
 
 }  // namespace
 
-ChainRne::ChainRne(const mjModel& m) : bodies_(m.nbody), joints_(m.njnt) {
+ChainRne::ChainRne(const mjModel& m) : bodies_(m.nbody), joints_(m.njnt), first_joint_(m.nbody), joint_count_(m.nbody) {
   for (int j = 0; j < m.njnt; ++j) {
     if (m.jnt_type[j] != mjJNT_HINGE && m.jnt_type[j] != mjJNT_SLIDE) {
       throw InputError("servo model: joint " + std::to_string(j) + " is not a hinge or slide");
     }
   }
+  Refresh(m);
+}
+
+void ChainRne::Refresh(const mjModel& m) {
+  for (int i = 0; i < m.nbody; ++i) {
+    Body& b = bodies_[i];
+    b.parent = m.body_parentid[i];
+    b.offset = Eigen::Map<const Eigen::Vector3d>(m.body_pos + 3 * i);
+    b.offset_rotation = QuatToMatrix(m.body_quat + 4 * i);
+    b.offset_is_identity = b.offset_rotation == Eigen::Matrix3d::Identity();
+    b.inertial_rotation = QuatToMatrix(m.body_iquat + 4 * i);
+    b.inertial_pos = Eigen::Map<const Eigen::Vector3d>(m.body_ipos + 3 * i);
+    b.principal = Eigen::Map<const Eigen::Vector3d>(m.body_inertia + 3 * i);
+    b.mass = m.body_mass[i];
+    first_joint_[i] = m.body_jntadr[i];
+    joint_count_[i] = m.body_jntadr[i] >= 0 ? m.body_jntnum[i] : 0;
+  }
+  for (int j = 0; j < m.njnt; ++j) {
+    Joint& joint = joints_[j];
+    joint.local_axis = Eigen::Map<const Eigen::Vector3d>(m.jnt_axis + 3 * j);
+    joint.local_pos = Eigen::Map<const Eigen::Vector3d>(m.jnt_pos + 3 * j);
+    joint.hinge = m.jnt_type[j] == mjJNT_HINGE;
+    joint.qpos_adr = m.jnt_qposadr[j];
+    joint.dof_adr = m.jnt_dofadr[j];
+    joint.qpos0 = m.qpos0[joint.qpos_adr];
+  }
+  gravity_accel_ = -Eigen::Map<const Eigen::Vector3d>(m.opt.gravity);
+  if (m.opt.disableflags & mjDSBL_GRAVITY) gravity_accel_.setZero();
 }
 
 void ChainRne::Bias(const mjModel& m, const double* qpos, const double* qvel, double* qfrc) {
@@ -38,33 +66,29 @@ void ChainRne::Bias(const mjModel& m, const double* qpos, const double* qvel, do
   world.alpha.setZero();
   world.force.setZero();
   world.moment.setZero();
-  world.accel = -Eigen::Map<const Eigen::Vector3d>(m.opt.gravity);
-  if (m.opt.disableflags & mjDSBL_GRAVITY) world.accel.setZero();
+  world.accel = gravity_accel_;
 
   // forward: frames, twists, accelerations; each body's own wrench
   for (int i = 1; i < m.nbody; ++i) {
-    const Body& parent = bodies_[m.body_parentid[i]];
     Body& b = bodies_[i];
-    b.position = parent.position + parent.rotation * Eigen::Map<const Eigen::Vector3d>(m.body_pos + 3 * i);
-    b.rotation = parent.rotation * QuatToMatrix(m.body_quat + 4 * i);
+    const Body& parent = bodies_[b.parent];
+    b.position = parent.position + parent.rotation * b.offset;
+    b.rotation = b.offset_is_identity ? parent.rotation : Eigen::Matrix3d(parent.rotation * b.offset_rotation);
     b.omega = parent.omega;
     b.velocity = parent.velocity;
     b.alpha = parent.alpha;
     b.accel = parent.accel;
-    for (int j = m.body_jntadr[i]; j >= 0 && j < m.body_jntadr[i] + m.body_jntnum[i]; ++j) {
-      const Eigen::Vector3d local_axis = Eigen::Map<const Eigen::Vector3d>(m.jnt_axis + 3 * j);
-      const Eigen::Vector3d local_pos = Eigen::Map<const Eigen::Vector3d>(m.jnt_pos + 3 * j);
-      const int adr = m.jnt_qposadr[j];
-      const double q = qpos[adr] - m.qpos0[adr];
-      const double qd = qvel[m.jnt_dofadr[j]];
+    for (int j = first_joint_[i]; j < first_joint_[i] + joint_count_[i]; ++j) {
       Joint& joint = joints_[j];
-      joint.axis = b.rotation * local_axis;
-      joint.anchor = b.position + b.rotation * local_pos;
+      const double q = qpos[joint.qpos_adr] - joint.qpos0;
+      const double qd = qvel[joint.dof_adr];
+      joint.axis = b.rotation * joint.local_axis;
+      joint.anchor = b.position + b.rotation * joint.local_pos;
       // the joint's motion S as a twist at the origin, and its rate
       Eigen::Vector3d s_angular = Eigen::Vector3d::Zero(), s_linear = joint.axis;
-      if (m.jnt_type[j] == mjJNT_HINGE) {
-        b.rotation = b.rotation * Eigen::AngleAxisd(q, local_axis).toRotationMatrix();
-        b.position = joint.anchor - b.rotation * local_pos;
+      if (joint.hinge) {
+        b.rotation = b.rotation * Eigen::AngleAxisd(q, joint.local_axis).toRotationMatrix();
+        b.position = joint.anchor - b.rotation * joint.local_pos;
         s_angular = joint.axis;
         s_linear = joint.anchor.cross(joint.axis);
       } else {
@@ -77,28 +101,27 @@ void ChainRne::Bias(const mjModel& m, const double* qpos, const double* qvel, do
       b.velocity += s_linear * qd;
     }
     // Newton-Euler at the centre of mass, then as a wrench about the origin
-    const Eigen::Matrix3d r_inertial = b.rotation * QuatToMatrix(m.body_iquat + 4 * i);
-    const Eigen::Vector3d com = b.position + b.rotation * Eigen::Map<const Eigen::Vector3d>(m.body_ipos + 3 * i);
-    const Eigen::Vector3d principal = Eigen::Map<const Eigen::Vector3d>(m.body_inertia + 3 * i);
+    const Eigen::Matrix3d r_inertial = b.rotation * b.inertial_rotation;
+    const Eigen::Vector3d com = b.position + b.rotation * b.inertial_pos;
     // I x = R diag(principal) R^T x, without forming I
     const auto inertia_times = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
-      return r_inertial * principal.cwiseProduct(r_inertial.transpose() * x);
+      return r_inertial * b.principal.cwiseProduct(r_inertial.transpose() * x);
     };
     const Eigen::Vector3d com_velocity = b.velocity + b.omega.cross(com);
     const Eigen::Vector3d com_accel = b.accel + b.alpha.cross(com) + b.omega.cross(com_velocity);
-    b.force = m.body_mass[i] * com_accel;
+    b.force = b.mass * com_accel;
     b.moment = inertia_times(b.alpha) + b.omega.cross(inertia_times(b.omega)) + com.cross(b.force);
   }
 
   // backward: subtree wrenches, projected on each joint's motion
   for (int i = m.nbody - 1; i > 0; --i) {
     Body& b = bodies_[i];
-    for (int j = m.body_jntadr[i]; j >= 0 && j < m.body_jntadr[i] + m.body_jntnum[i]; ++j) {
+    for (int j = first_joint_[i]; j < first_joint_[i] + joint_count_[i]; ++j) {
       const Joint& joint = joints_[j];
-      qfrc[m.jnt_dofadr[j]] = m.jnt_type[j] == mjJNT_HINGE ? joint.axis.dot(b.moment - joint.anchor.cross(b.force))
-                                                           : joint.axis.dot(b.force);
+      qfrc[joint.dof_adr] =
+          joint.hinge ? joint.axis.dot(b.moment - joint.anchor.cross(b.force)) : joint.axis.dot(b.force);
     }
-    Body& parent = bodies_[m.body_parentid[i]];
+    Body& parent = bodies_[b.parent];
     parent.force += b.force;
     parent.moment += b.moment;
   }

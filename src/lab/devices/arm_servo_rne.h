@@ -7,8 +7,9 @@
 // Frames: world; twists and spatial accelerations at the world origin
 // (Featherstone), wrenches about it. Joints: hinge and slide, several per body
 // (applied in order, as MuJoCo does); bodies in MuJoCo's order (parents first).
-// Reads body_pos/quat, body_ipos/iquat, mass and inertia at every call, so a
-// changed payload or a moved root is taken as is.
+// The model's constant arrays (body_pos/quat, body_ipos/iquat, mass, inertia,
+// joint axes and anchors) are read once, by the constructor and by Refresh:
+// whoever changes them (a new payload, a moved root) calls Refresh.
 #pragma once
 
 #include <vector>
@@ -21,16 +22,31 @@ namespace vlab::lab {
 /// One-pass RNE for a model of hinge and slide joints (see the file comment).
 class ChainRne {
  public:
-  /// Sizes the scratch for `model`. Throws InputError when it has a joint that
-  /// is not a hinge or slide.
+  /// Sizes the scratch for `model` and reads its constants (Refresh). Throws
+  /// InputError when it has a joint that is not a hinge or slide.
   explicit ChainRne(const mjModel& model);
 
-  /// Bias force h(q, qd) of `model` (the one given at construction) at `qpos`,
-  /// `qvel` into `qfrc` (nv values, N·m or N). No allocation.
+  /// Reads `model`'s body and joint constants again (the model given at
+  /// construction, after its arrays changed). No allocation.
+  void Refresh(const mjModel& model);
+
+  /// Bias force h(q, qd) of `model` (the one given at construction, as of the
+  /// last Refresh) at `qpos`, `qvel` into `qfrc` (nv values, N·m or N). No
+  /// allocation.
   void Bias(const mjModel& model, const double* qpos, const double* qvel, double* qfrc);
 
  private:
   struct Body {
+    // constants (Refresh)
+    int parent = 0;
+    Eigen::Matrix3d offset_rotation;    // body_quat: the frame in its parent's, before the joints
+    Eigen::Vector3d offset;             // body_pos
+    Eigen::Matrix3d inertial_rotation;  // body_iquat
+    Eigen::Vector3d inertial_pos;       // body_ipos
+    Eigen::Vector3d principal;          // body_inertia
+    double mass = 0.0;
+    bool offset_is_identity = false;
+    // per call
     Eigen::Matrix3d rotation;  // body frame in world
     Eigen::Vector3d position;
     Eigen::Vector3d omega, velocity;  // twist at the world origin
@@ -38,10 +54,18 @@ class ChainRne {
     Eigen::Vector3d force, moment;    // wrench of its subtree, moment about the world origin
   };
   struct Joint {
+    // constants (Refresh)
+    Eigen::Vector3d local_axis, local_pos;
+    bool hinge = true;
+    int qpos_adr = 0, dof_adr = 0;
+    double qpos0 = 0.0;
+    // per call
     Eigen::Vector3d axis, anchor;  // world
   };
   std::vector<Body> bodies_;
   std::vector<Joint> joints_;
+  std::vector<int> first_joint_, joint_count_;  // per body
+  Eigen::Vector3d gravity_accel_;               // the world's acceleration: -g, or 0 without gravity
 };
 
 }  // namespace vlab::lab
