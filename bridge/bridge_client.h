@@ -39,6 +39,7 @@ inline constexpr double kClientSpin_s = 200e-6;
 
 #include "bridge/bridge_errors.h"
 #include "bridge/bridge_messages.h"
+#include "bridge/bridge_payload.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_session.h"
 #include "bridge/bridge_udp.h"
@@ -98,6 +99,12 @@ class DeviceClient {
   /// Checks a command seq (a whole number >= 0 that fits the wire); throws
   /// std::invalid_argument.
   static void CheckSeq(std::int64_t seq);
+  /// Waits up to timeout_s for a session reply carrying `yes` or `no` and
+  /// returns which; skips everything else (states too: counted in skipped()).
+  /// Throws TimeoutError naming `what`. (bridge_client_payload.cc)
+  SessionResult AwaitSessionResult(SessionResult yes, SessionResult no, double timeout_s, const std::string& what);
+  /// The kept describe reply, for a handle that learns a fact the device now reports.
+  nlohmann::json& mutable_describe() { return *describe_; }
 
   std::vector<unsigned char> packet_;  ///< scratch for encoding
 
@@ -171,6 +178,21 @@ class Arm : public DeviceClient {
   /// value count, a non-finite value or a negative seq. Whether the device
   /// accepted it shows in the status bits of the next states.
   bool Write(ArmMode mode, const Eigen::VectorXd& values, std::int64_t seq);
+
+  /// Declares the load at the flange (mass kg, centre of mass m and inertia
+  /// kg m^2 about it, flange frame: docs/protocol.md, "Arm payload") and waits
+  /// up to timeout_s for the device's answer; in force from the device's next
+  /// control period. States that arrive meanwhile are skipped (a lockstep
+  /// device sends none before this client's next command). Throws
+  /// std::invalid_argument naming the field for a payload that is no rigid
+  /// body (not finite, negative mass, inertia not positive semi-definite or
+  /// breaking the triangle inequality), RefusedError when the device refuses
+  /// it (another client owns the arm), TimeoutError when no answer came,
+  /// NetworkError when it could not be sent. (bridge_client_payload.cc)
+  void SetPayload(const ArmPayloadMsg& payload, double timeout_s = 1.0);
+  /// The payload the device reports: its describe reply's at connect, or the
+  /// last one SetPayload set (zero mass when the reply has none).
+  ArmPayloadMsg payload() const;
 
  private:
   Arm(const std::string& address, int port, double timeout_s, const std::string& bind_address);

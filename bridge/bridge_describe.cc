@@ -40,7 +40,8 @@ std::string DescribeJson(const ArmDescription& d) {
   j["watchdog_periods"] = d.watchdog_periods;
   j["owner_timeout_s"] = d.owner_timeout_s;
   if (!d.resolution.empty()) j["resolution"] = d.resolution;
-  return j.dump();
+  j["feedforward"] = d.feedforward;
+  return DescribeWithPayload(j.dump(), d.payload);
 }
 
 std::string DescribeJson(const WrenchDescription& d) {

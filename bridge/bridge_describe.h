@@ -3,11 +3,13 @@
 // Every reply has: name, kind, protocol (version), server, clock, endpoint
 // {address, port}, rates {control_hz}, layout {state: [...], command: [...]}
 // (field names in payload order; "q[7]" = 7 values), units, and the kind's
-// own facts (arm: joints, limits, watchdog; wrench: full scale, filter).
+// own facts (arm: joints, limits, watchdog, payload; wrench: full scale, filter).
 #pragma once
 
 #include <string>
 #include <vector>
+
+#include "bridge/bridge_payload.h"
 
 namespace vlab::bridge {
 
@@ -30,6 +32,12 @@ struct ArmDescription : DeviceDescription {
   /// Encoder resolution, rad (slide: m) per count, one per joint; empty: the
   /// positions are not quantised (then the reply has no "resolution").
   std::vector<double> resolution;
+  /// The payload at the flange (reported as "payload": {mass, com, inertia}) ...
+  ArmPayloadMsg payload;
+  /// ... and what the servo does with it (reported as "feedforward"): "model"
+  /// (its gravity and Coriolis feed-forward carries it), "world" (accepted and
+  /// reported, the torques do not depend on it), "none" (no dynamics).
+  std::string feedforward = "none";
 };
 
 struct WrenchDescription : DeviceDescription {

@@ -27,7 +27,7 @@ void DeviceServer::ServeSessions(const SessionConfig& sessions, std::string desc
 }
 
 const std::string& DeviceServer::describe_json() const {
-  return endpoint_ ? endpoint_->config().describe_json : describe_json_;
+  return endpoint_ ? endpoint_->describe_json() : describe_json_;
 }
 
 int DeviceServer::Drain(double wait_s, const Handler& handle) {
@@ -62,9 +62,10 @@ DeviceServer::Request DeviceServer::HandleRequest(const unsigned char* data, std
   if (e == DecodeError::kNone && (describe ? header_.kind > kMaxDeviceKind : header_.kind != kind)) {
     e = DecodeError::kBadKind;
   }
-  // states and session replies go the other way
+  // states and session replies go the other way; a payload is for an arm's endpoint only
   if (e == DecodeError::kNone && (header_.type == static_cast<int>(MessageType::kState) ||
-                                  header_.type == static_cast<int>(MessageType::kSession))) {
+                                  header_.type == static_cast<int>(MessageType::kSession) ||
+                                  header_.type == static_cast<int>(MessageType::kPayload))) {
     e = DecodeError::kBadType;
   }
   if (e != DecodeError::kNone) return Request::kMalformed;

@@ -26,6 +26,9 @@ DeviceEndpoint::DeviceEndpoint(EndpointConfig config) : config_(std::move(config
   command_.reserve(kMaxPacketValues);
   if (config_.kind == DeviceKind::kArm) config_.status_first = true;
   not_owner_packet_.reserve(kMaxPacketValues * sizeof(double));
+  arm_payload_ = config_.payload;
+  describe_json_ = config_.kind == DeviceKind::kArm ? DescribeWithPayload(config_.describe_json, arm_payload_)
+                                                    : config_.describe_json;
 }
 
 const EndpointCounters& DeviceEndpoint::counters() const {
@@ -82,15 +85,23 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
     if (from_owner) refused_flag_ = true;
     return Received::kOther;
   };
+  header_.type = 0;  // (DecodePacket fills it when the header is sound)
   DecodeError e = DecodePacket(data, size, &header_, &payload_);
+  // a payload with a value that is not finite goes on, to be answered (refused, below)
+  const bool payload = header_.type == static_cast<int>(MessageType::kPayload) &&
+                       (e == DecodeError::kNone || e == DecodeError::kNotFinite);
+  const bool payload_finite = e == DecodeError::kNone;
+  if (payload) e = DecodeError::kNone;
   // a describe request is answered whatever kind it names (0: any): tools discover with it
   const bool describe = e == DecodeError::kNone && header_.type == static_cast<int>(MessageType::kDescribe);
   if (e == DecodeError::kNone &&
       (describe ? header_.kind > kMaxDeviceKind : header_.kind != static_cast<int>(config_.kind))) {
     e = DecodeError::kBadKind;
   }
-  if (e == DecodeError::kNone && (header_.type == static_cast<int>(MessageType::kState) ||
-                                  header_.type == static_cast<int>(MessageType::kSession))) {
+  // states and session replies go the other way; only an arm takes a payload
+  if (e == DecodeError::kNone &&
+      (header_.type == static_cast<int>(MessageType::kState) ||
+       header_.type == static_cast<int>(MessageType::kSession) || (payload && config_.kind != DeviceKind::kArm))) {
     e = DecodeError::kBadType;
   }
   if (e != DecodeError::kNone) return refuse(&counters_.refused_malformed);
@@ -104,8 +115,7 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
         return refuse(&counters_.refused_malformed);
       case SessionTable::Outcome::kDescribe:
         ++counters_.describes;
-        socket.SendTo(reinterpret_cast<const unsigned char*>(config_.describe_json.data()),
-                      config_.describe_json.size(), from);
+        socket.SendTo(reinterpret_cast<const unsigned char*>(describe_json_.data()), describe_json_.size(), from);
         return Received::kOther;
       case SessionTable::Outcome::kSubscribed:
         return Received::kSubscribed;
@@ -130,11 +140,13 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   const bool sim = config_.kind == DeviceKind::kSim;
   if (gate == CommandGate::kRefuse || (owner_ && !from_owner && gate != CommandGate::kTakeOver)) {
     if (sim) sessions_.Answer(from, SessionResult::kRefused, socket);  // an op: say so
+    if (payload) sessions_.Answer(from, SessionResult::kPayloadRefused, socket);
     return refuse(&counters_.refused_not_owner);
   }
   // one owner at a time; an owner silent for too long gave the input up (above).
-  // A new owner takes over with its first ACCEPTED command only.
+  // A new owner takes over with its first ACCEPTED command (or payload) only.
   if (from_owner) owner_heard_s_ = sessions_.Now();  // any datagram shows the owner is alive
+  if (payload) return HandlePayload(from, payload_finite, socket);
   // the seq answers a state this device published, newer than the last accepted
   if (header_.seq > newest_seq_) {
     ++counters_.future;
@@ -184,6 +196,32 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   return Received::kCommand;
 }
 
+DeviceEndpoint::Received DeviceEndpoint::HandlePayload(const Endpoint& from, bool finite, UdpSocket& socket) {
+  ArmPayloadMsg parsed;
+  const char* field = nullptr;
+  const char* reason = nullptr;
+  const bool ok = finite && ParseArmPayload(header_, payload_, &parsed) == DecodeError::kNone &&
+                  (config_.check_payload ? config_.check_payload(parsed) : CheckArmPayload(parsed, &field, &reason));
+  if (!ok) {  // counted as malformed: a length, a NaN or a load no rigid body has
+    sessions_.Answer(from, SessionResult::kPayloadRefused, socket);
+    ++counters_.refused_malformed;
+    ++counters_.refused;
+    if (owner_ && *owner_ == from) refused_flag_ = true;
+    return Received::kOther;
+  }
+  if (!owner_) {  // a controller's first word may be its payload: it owns the arm from here on
+    owner_ = from;
+    last_seq_ = -1;
+  }
+  owner_heard_s_ = sessions_.Now();
+  arm_payload_ = parsed;
+  has_payload_ = true;
+  describe_json_ = DescribeWithPayload(config_.describe_json, arm_payload_);
+  ++counters_.payloads;
+  sessions_.Answer(from, SessionResult::kPayloadSet, socket);
+  return Received::kPayload;
+}
+
 bool DeviceEndpoint::UnansweredLongEnough(double pace_s) const {
   if (pace_s <= 0) return true;
   const double first = watch_seq_ + 1;  // the oldest state the owner left unanswered
@@ -223,6 +261,13 @@ bool DeviceEndpoint::TakeCommand(std::vector<double>* payload) {
   if (!has_command_ || config_.command_length == 0) return false;
   payload->assign(command_.begin(), command_.end());
   has_command_ = false;
+  return true;
+}
+
+bool DeviceEndpoint::TakePayload(ArmPayloadMsg* payload) {
+  if (!has_payload_) return false;
+  *payload = arm_payload_;
+  has_payload_ = false;
   return true;
 }
 

@@ -40,6 +40,17 @@
 //     leaves the previous command in force;
 //   - other commanded kinds (base, gripper, point) have a fixed command length
 //     and a check of their own (EndpointConfig::command_length, check_command);
+//   - an arm also takes a payload (type 6, bridge_payload.h) through the same
+//     subscriber and owner rules as its commands (an accepted payload makes
+//     its sender the owner of an arm that has none, as a first command does);
+//     it is not a period's command: its seq is not checked, it feeds no
+//     watchdog and answers no lockstep period. It must have 10 finite values
+//     that make a rigid body (EndpointConfig::check_payload). Every payload
+//     from a subscriber is answered with a session reply, kPayloadSet or
+//     kPayloadRefused; a refused one is counted like any refused datagram
+//     (not owner, malformed) and changes nothing; an accepted one is taken
+//     at the start of the next period (TakePayload) and the describe reply
+//     reports it from then on. Any other kind refuses type 6 unanswered;
 //   - watchdog: an arm (or other commanded device) that received no accepted command for more than
 //     watchdog_periods consecutive periods (3: hold at the start of the 4th,
 //     like the PA10's servo link after 3 missed cycles) holds its position
@@ -60,6 +71,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge/bridge_payload.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_session.h"
 #include "bridge/bridge_udp.h"
@@ -82,6 +94,7 @@ struct EndpointCounters {
   long future = 0;                  ///< seq of a state not published yet (ignored)
   long watchdog_holds = 0;          ///< times the watchdog put the arm on hold
   long owners_released = 0;         ///< owners released after falling silent (or by the lab)
+  long payloads = 0;                ///< arm payloads accepted (type 6)
   SessionCounters sessions;         ///< handshakes, subscriptions, rate limits
 };
 
@@ -121,6 +134,12 @@ struct EndpointConfig {
   /// The state's first payload value is a status word (arm, base, gripper):
   /// non-owners get kStatusNotOwner in it.
   bool status_first = false;
+  /// Arm only: the payload at the flange when the device starts (its
+  /// describe reply reports it, then every payload accepted) ...
+  ArmPayloadMsg payload;
+  /// ... and whether a new one is a load the device can take (null:
+  /// CheckArmPayload). Called in Handle: must not block or throw.
+  std::function<bool(const ArmPayloadMsg& payload)> check_payload;
   /// Wall clock, s (null: the monotonic clock). Tests pass their own.
   std::function<double()> clock;
 };
@@ -130,7 +149,7 @@ class DeviceEndpoint {
   explicit DeviceEndpoint(EndpointConfig config);
 
   /// What one datagram was.
-  enum class Received { kOther, kCommand, kSubscribed };
+  enum class Received { kOther, kCommand, kSubscribed, kPayload };
 
   /// Handles one datagram received at period `period` (replies to describe
   /// and subscribe requests through `socket`). Returns kCommand for an
@@ -151,6 +170,12 @@ class DeviceEndpoint {
   bool TakeSimCommand(SimCommandMsg* command);
   /// The newest accepted command of a kind with EndpointConfig::command_length.
   bool TakeCommand(std::vector<double>* payload);
+  /// An arm's payload accepted since the last call (the newest); false if none.
+  bool TakePayload(ArmPayloadMsg* payload);
+  /// The arm's payload: the newest accepted, or the configured one.
+  const ArmPayloadMsg& payload() const { return arm_payload_; }
+  /// The describe reply as sent now (an arm's: with its payload).
+  const std::string& describe_json() const { return describe_json_; }
   /// seq of the last accepted command (-1 if none since the owner took over).
   double last_accepted_seq() const { return last_seq_; }
   bool has_owner() const { return owner_.has_value(); }
@@ -180,6 +205,8 @@ class DeviceEndpoint {
 
  private:
   bool CheckArmLimits(const ArmCommandMsg& command) const;
+  // a payload from a subscriber the owner rules let through; `finite`: no NaN or infinity in it
+  Received HandlePayload(const Endpoint& from, bool finite, UdpSocket& socket);
   // the state for a non-owner (kStatusNotOwner set) in not_owner_packet_; false when it is the same
   bool MarkNotOwner(const std::vector<unsigned char>& packet);
   // whether the oldest state the owner left unanswered has been out for the watchdog's wall time
@@ -203,6 +230,9 @@ class DeviceEndpoint {
   ArmCommandMsg arm_command_, parsed_;
   SimCommandMsg sim_command_;
   std::vector<double> command_;  // other kinds
+  ArmPayloadMsg arm_payload_;    // arm: the newest accepted payload ...
+  bool has_payload_ = false;     // ... not yet taken
+  std::string describe_json_;
   // scratch, sized at construction
   Header header_;
   std::vector<double> payload_;

@@ -3,7 +3,8 @@
 //   ├─ NetworkError        a socket could not be opened, bound or used
 //   ├─ ProtocolError       a reply was not a valid vlab packet (or not the expected kind)
 //   │   └─ VersionMismatch the peer speaks another protocol version
-//   └─ TimeoutError        nothing arrived within the time given
+//   ├─ TimeoutError        nothing arrived within the time given
+//   └─ RefusedError        the device answered that it refused a request (an arm's payload)
 // The device side never throws in its real-time path: it counts faults.
 #pragma once
 
@@ -29,6 +30,10 @@ class VersionMismatch : public ProtocolError {
   using ProtocolError::ProtocolError;
 };
 class TimeoutError : public BridgeError {
+ public:
+  using BridgeError::BridgeError;
+};
+class RefusedError : public BridgeError {
  public:
   using BridgeError::BridgeError;
 };

@@ -228,6 +228,20 @@ inline constexpr LayoutField kToolCommand[] = {
     {"qz", "", "the orientation it should take, world frame (unit quaternion)"},
 };
 
+// an arm's payload message (type 6): the load at the flange (the body of the last joint)
+inline constexpr LayoutField kArmPayload[] = {
+    {"mass", "kg", "mass of the load, >= 0 (0: none)"},
+    {"com_x", "m", "centre of mass, flange frame"},
+    {"com_y", "m", "centre of mass, flange frame"},
+    {"com_z", "m", "centre of mass, flange frame"},
+    {"ixx", "kg m²", "moment of inertia about the centre of mass, flange axes"},
+    {"iyy", "kg m²", "moment of inertia about the centre of mass, flange axes"},
+    {"izz", "kg m²", "moment of inertia about the centre of mass, flange axes"},
+    {"ixy", "kg m²", "product of inertia (as MJCF fullinertia)"},
+    {"ixz", "kg m²", "product of inertia (as MJCF fullinertia)"},
+    {"iyz", "kg m²", "product of inertia (as MJCF fullinertia)"},
+};
+
 }  // namespace layout_detail
 
 /// The table: one row per device kind, row i is kind i + 1.
@@ -291,6 +305,10 @@ inline constexpr KindLayout kKindLayouts[kMaxDeviceKind] = {
     {DeviceKind::kTool, "tool", true, layout_detail::Fields(layout_detail::kToolState),
      layout_detail::Fields(layout_detail::kToolCommand), "a commanded and measured tool pose"},
 };
+
+/// The fields of an arm's payload message (kind 1, type 6, client -> device;
+/// bridge_payload.h), in payload order: mass, centre of mass, inertia.
+inline constexpr FieldList kArmPayloadLayout = layout_detail::Fields(layout_detail::kArmPayload);
 
 namespace layout_detail {
 

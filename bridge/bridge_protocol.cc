@@ -105,12 +105,12 @@ DecodeError DecodePacket(const unsigned char* data, std::size_t size, Header* h,
   for (int i = 0; i < kHeaderValues; ++i) header[i] = GetDouble(data + 8 * i);
   if (header[0] != kMagic) return DecodeError::kBadMagic;
   if (header[1] != kProtocolVersion) return DecodeError::kBadVersion;
-  for (std::size_t i = 0; i < values; ++i) {
-    if (!std::isfinite(GetDouble(data + 8 * i))) return DecodeError::kNotFinite;
+  for (double v : header) {
+    if (!std::isfinite(v)) return DecodeError::kNotFinite;
   }
   // 0: a describe request to any kind (+0 only: -0 would not survive the round trip through an int)
   if (!IsWhole(header[2], 0, 255) || std::signbit(header[2])) return DecodeError::kBadKind;
-  if (!IsWhole(header[3], 1, 5)) return DecodeError::kBadType;
+  if (!IsWhole(header[3], 1, kMaxMessageType)) return DecodeError::kBadType;
   if (!IsWhole(header[4], 0, 9007199254740992.0)) return DecodeError::kBadValue;
   if (header[6] != static_cast<double>(values - kHeaderValues)) return DecodeError::kBadLength;
   h->kind = static_cast<int>(header[2]);
@@ -118,6 +118,10 @@ DecodeError DecodePacket(const unsigned char* data, std::size_t size, Header* h,
   h->seq = header[4];
   h->time = header[5];
   h->length = static_cast<int>(header[6]);
+  // the payload last: a sound header is known even when a payload value is not finite
+  for (std::size_t i = kHeaderValues; i < values; ++i) {
+    if (!std::isfinite(GetDouble(data + 8 * i))) return DecodeError::kNotFinite;
+  }
   payload->resize(static_cast<std::size_t>(h->length));
   for (int i = 0; i < h->length; ++i) (*payload)[i] = GetDouble(data + 8 * (kHeaderValues + i));
   return DecodeError::kNone;

@@ -9,7 +9,8 @@
 //   2      kind          device kind: 1 arm, 2 wrench, 3 sim (4-17: see DeviceKind)
 //   3      type          1 state (device -> client), 2 command (client -> device),
 //                        3 describe request, 4 subscribe request (client -> device),
-//                        5 session reply (device -> client): bridge_session.h
+//                        5 session reply (device -> client): bridge_session.h,
+//                        6 payload (client -> device, arm only): bridge_payload.h
 //   4      seq           sequence number (see below)
 //   5      time          seconds: simulated time of a state; the sender's clock in a command
 //   6      length        number of payload values that follow
@@ -75,7 +76,16 @@ enum class DeviceKind : int {
   kTool = 17,     ///< a commanded and measured tool pose (position and orientation)
 };
 inline constexpr int kMaxDeviceKind = 17;
-enum class MessageType : int { kState = 1, kCommand = 2, kDescribe = 3, kSubscribe = 4, kSession = 5 };
+enum class MessageType : int {
+  kState = 1,
+  kCommand = 2,
+  kDescribe = 3,
+  kSubscribe = 4,
+  kSession = 5,
+  kPayload = 6,  ///< an arm's payload at its flange (bridge_payload.h)
+};
+/// The highest message type a datagram may carry.
+inline constexpr int kMaxMessageType = static_cast<int>(MessageType::kPayload);
 
 /// Arm status bits (state payload value 0, as a whole number).
 enum ArmStatusBit : std::uint32_t {
@@ -124,7 +134,10 @@ void EncodePacket(const Header& header, const double* payload, int count, std::v
 
 /// Checks a datagram's framing (size, magic, version, finiteness, length
 /// field) and splits it. On success fills `header` and `payload` (payload
-/// values converted from little-endian) and returns kNone.
+/// values converted from little-endian) and returns kNone. When only a
+/// payload value is not finite (the header is sound) it returns kNotFinite
+/// with `header` filled, so that a device can tell the sender which request
+/// it refused; `payload` is then left as it was.
 DecodeError DecodePacket(const unsigned char* data, std::size_t size, Header* header, std::vector<double>* payload);
 
 // ---- typed messages ----------------------------------------------------------

@@ -45,15 +45,17 @@ namespace vlab::bridge {
 
 /// What a session reply's result value says (payload value 1).
 enum class SessionResult : int {
-  kChallenge = 0,     ///< repeat the request with this cookie
-  kSubscribed = 1,    ///< subscribed (or renewed): states follow
-  kFull = 2,          ///< refused: the device has as many subscribers as it takes
-  kUnsubscribed = 3,  ///< no longer subscribed
-  kLimited = 4,       ///< describe refused: too many requests from this source; retry later
-  kRefused = 5,       ///< a command refused: another client controls the device (the sim's ops)
+  kChallenge = 0,       ///< repeat the request with this cookie
+  kSubscribed = 1,      ///< subscribed (or renewed): states follow
+  kFull = 2,            ///< refused: the device has as many subscribers as it takes
+  kUnsubscribed = 3,    ///< no longer subscribed
+  kLimited = 4,         ///< describe refused: too many requests from this source; retry later
+  kRefused = 5,         ///< a command refused: another client controls the device (the sim's ops)
+  kPayloadSet = 6,      ///< an arm's payload (type 6) accepted: in force from the next control period
+  kPayloadRefused = 7,  ///< an arm's payload refused: not the owner, wrong length, NaN, not a rigid body
 };
 /// The highest result value a session reply carries.
-inline constexpr int kMaxSessionResult = static_cast<int>(SessionResult::kRefused);
+inline constexpr int kMaxSessionResult = static_cast<int>(SessionResult::kPayloadRefused);
 
 /// Counters of the sessions of one device (part of EndpointCounters).
 struct SessionCounters {
@@ -106,7 +108,9 @@ class SessionTable {
   Outcome HandleRequest(const Header& header, const std::vector<double>& payload, const Endpoint& from,
                         UdpSocket& socket, const Endpoint* keep = nullptr);
   /// Sends `to` a session reply with its cookie and `result` (a refused
-  /// command: kRefused). As large as the command it answers, or smaller.
+  /// command: kRefused; a payload: kPayloadSet, kPayloadRefused). Only to a
+  /// subscriber (an address proven by the handshake): 9 values, which may be
+  /// more than a malformed request it answers.
   void Answer(const Endpoint& to, SessionResult result, UdpSocket& socket);
 
   bool IsSubscriber(const Endpoint& from) const;

@@ -72,8 +72,8 @@ KIND_CODES = {name: code for code, name in KIND_NAMES.items()}
 # kinds whose payload is not one float64 array per period: their own clients
 _NOT_FLOAT64 = {KIND_CAMERA: "docs/protocol_camera.md, class Camera", KIND_MARKERS: "docs/protocol_markers.md"}
 # message types: state (device -> client), command, describe and subscribe requests (client ->
-# device), session reply (device -> client)
-TYPE_STATE, TYPE_COMMAND, TYPE_DESCRIBE, TYPE_SUBSCRIBE, TYPE_SESSION = 1, 2, 3, 4, 5
+# device), session reply (device -> client), an arm's payload (client -> device)
+TYPE_STATE, TYPE_COMMAND, TYPE_DESCRIBE, TYPE_SUBSCRIBE, TYPE_SESSION, TYPE_PAYLOAD = 1, 2, 3, 4, 5, 6
 KIND_ANY = 0  # a describe request to a device of any kind
 # subscribe request actions
 UNSUBSCRIBE, SUBSCRIBE = 0, 1
@@ -84,6 +84,8 @@ SESSION_FULL = 2          # refused: the device has as many subscribers as it ta
 SESSION_UNSUBSCRIBED = 3  # no longer subscribed
 SESSION_LIMITED = 4       # describe refused by the per-source rate limit: retry later
 SESSION_REFUSED = 5       # a command (a sim op) refused: another client controls the device
+SESSION_PAYLOAD_SET = 6   # an arm's payload accepted: in force from the next control period
+SESSION_PAYLOAD_REFUSED = 7  # an arm's payload refused: not the owner, or not a rigid body
 REQUEST_BYTES = 8 * (HEADER_VALUES + 2)  # describe and subscribe requests, session replies: 72
 
 # arm command modes
@@ -115,6 +117,10 @@ class VersionMismatch(ProtocolError):
 
 class VlabTimeout(VlabError, TimeoutError):
     """Nothing arrived within the time given."""
+
+
+class RefusedError(VlabError):
+    """The device answered that it refused a request (an arm's payload)."""
 
 
 ArmState = collections.namedtuple("ArmState", "seq time status q qd tau")
@@ -186,14 +192,14 @@ def parse_session_reply(data):
     except ProtocolError:
         return None
     cookie, result = payload
-    if not _whole(cookie, 1, MAX_SEQ - 1) or not _whole(result, SESSION_CHALLENGE, SESSION_REFUSED):
+    if not _whole(cookie, 1, MAX_SEQ - 1) or not _whole(result, SESSION_CHALLENGE, SESSION_PAYLOAD_REFUSED):
         return None
     return kind, int(cookie), int(result)
 
 
 def decode(data):
     """Checks a datagram's framing (the checks of the C++ DecodePacket: size, magic, version,
-    finiteness, kind 0..255, type 1..5, seq, length); returns (kind, type, seq, time, payload) or
+    finiteness, kind 0..255, type 1..6, seq, length); returns (kind, type, seq, time, payload) or
     raises ProtocolError (VersionMismatch for another protocol version)."""
     size = len(data)
     if size < 8 * HEADER_VALUES or size % 8:
@@ -211,7 +217,7 @@ def decode(data):
         raise ProtocolError("non-finite value")
     if not _whole(kind, KIND_ANY, 255):
         raise ProtocolError("bad kind")
-    if not _whole(mtype, TYPE_STATE, TYPE_SESSION):
+    if not _whole(mtype, TYPE_STATE, TYPE_PAYLOAD):
         raise ProtocolError("bad type")
     if not _whole(seq, 0, MAX_SEQ):
         raise ProtocolError("bad seq")
@@ -510,6 +516,47 @@ class Arm(Device):
             raise ValueError("%s: command has a non-finite value" % self._label)
         self._check_seq(seq)
         return self._send(encode(KIND_ARM, TYPE_COMMAND, seq, self._time(), [mode] + values))
+
+    def set_payload(self, mass, com=(0.0, 0.0, 0.0), inertia=(0.0, 0.0, 0.0), timeout=1.0):
+        """Declares the load at the flange (docs/protocol.md, "Arm payload"): mass (kg, >= 0), com
+        (x, y, z m) and inertia about it (ixx, iyy, izz[, ixy, ixz, iyz] kg m^2), flange frame; then
+        waits up to `timeout` s for the device's answer. In force from the device's next control
+        period. States that arrive meanwhile are skipped. Raises ValueError for a bad count, a
+        non-finite value or a negative mass, RefusedError when the device refuses it (another client
+        owns the arm, or the inertia is no rigid body's), VlabTimeout when no answer came."""
+        com = [float(v) for v in com]
+        inertia = [float(v) for v in inertia]
+        if len(com) != 3:
+            raise ValueError("%s: payload com needs 3 values (x, y, z m), got %d" % (self._label, len(com)))
+        if len(inertia) not in (3, 6):
+            raise ValueError("%s: payload inertia needs 3 or 6 values (kg m^2), got %d" % (self._label, len(inertia)))
+        inertia += [0.0] * (6 - len(inertia))
+        values = [float(mass)] + com + inertia
+        if not all(math.isfinite(v) for v in values):
+            raise ValueError("%s: payload has a non-finite value" % self._label)
+        if values[0] < 0:
+            raise ValueError("%s: payload mass must be >= 0 kg, got %g" % (self._label, values[0]))
+        if not self._send(encode(KIND_ARM, TYPE_PAYLOAD, 0, self._time(), values)):
+            raise NetworkError("%s: cannot send the payload" % self._label)
+        deadline = time.monotonic() + timeout
+        while True:
+            data = self._receive(deadline)
+            if data is None:
+                raise VlabTimeout("%s: no answer to the payload within %g s" % (self._label, timeout))
+            reply = parse_session_reply(data)
+            if reply is not None and reply[2] == SESSION_PAYLOAD_SET:
+                self._describe["payload"] = {"mass": values[0], "com": com, "inertia": inertia}
+                return
+            if reply is not None and reply[2] == SESSION_PAYLOAD_REFUSED:
+                raise RefusedError("%s: the device refused the payload (another client owns the arm, or the "
+                                   "device found it no rigid body)" % self._label)
+            self.skipped += 1  # a state, a describe reply or the answer to a renewal
+
+    @property
+    def payload(self):
+        """The payload the device reports, {"mass", "com", "inertia"}: its describe reply's at
+        connect, or the last one set_payload set; None when the reply has none."""
+        return self._describe.get("payload")
 
 
 class Wrench(Device):

@@ -56,6 +56,7 @@ std::unique_ptr<KinsimServer> KinsimServer::Create(const ServerConfig& c, std::u
   d.torque_max = {};  // no dynamics: torque commands are refused whatever their size
   d.watchdog_periods = c.watchdog_periods;
   d.owner_timeout_s = c.owner_timeout_s;
+  d.feedforward = "none";  // a payload is accepted and reported, and moves nothing: no dynamics
 
   bridge::EndpointConfig e;
   e.name = a.name;
@@ -84,6 +85,8 @@ void KinsimServer::RunPeriod(long k) {
   // 2. watchdog, then the newest accepted command
   bridge::DeviceEndpoint& endpoint = server_->endpoint();
   const bool watchdog_hold = endpoint.BeginPeriod(k);
+  bridge::ArmPayloadMsg payload;
+  if (endpoint.TakePayload(&payload)) ++counters_.payloads;
   if (endpoint.TakeArmCommand(&command_)) {
     if (arm_->Command(command_)) {
       ++counters_.applied;
@@ -151,13 +154,13 @@ std::string KinsimServer::ReportText() const {
   char text[1024];
   std::snprintf(text, sizeof(text),
                 "vlab-kinsim: %ld periods (%.3f s), missed deadlines %ld (max lateness %.3f ms)\n"
-                "vlab-kinsim: received %ld, describes %ld, accepted %ld, applied %ld\n"
+                "vlab-kinsim: received %ld, describes %ld, accepted %ld, applied %ld, payloads %ld\n"
                 "vlab-kinsim: refused %ld (malformed %ld, limits %ld, not owner %ld, torque mode %ld), "
                 "stale %ld, duplicate %ld, watchdog holds %ld",
                 s.periods, s.periods > 0 ? (s.periods - 1) / config_.rate_hz : 0.0, s.missed_deadlines,
-                s.max_lateness_s * 1e3, e.received, e.describes, e.accepted, s.applied, e.refused + s.refused_torque,
-                e.refused_malformed, e.refused_limits, e.refused_not_owner, s.refused_torque, e.stale, e.duplicate,
-                e.watchdog_holds + s.mode_watchdog_holds);
+                s.max_lateness_s * 1e3, e.received, e.describes, e.accepted, s.applied, s.payloads,
+                e.refused + s.refused_torque, e.refused_malformed, e.refused_limits, e.refused_not_owner,
+                s.refused_torque, e.stale, e.duplicate, e.watchdog_holds + s.mode_watchdog_holds);
   return text;
 }
 

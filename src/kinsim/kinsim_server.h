@@ -3,7 +3,10 @@
 // arm (protocol v1, describe JSON from bridge_describe, the same status bits).
 //
 // Ports
-//   input   UDP datagrams on bind_address:port: arm commands, describe requests
+//   input   UDP datagrams on bind_address:port: arm commands, describe requests,
+//           payloads (type 6: accepted from the owner and reported in the
+//           describe reply, as the lab's arm does; with no dynamics here they
+//           change no motion: describe says "feedforward": "none")
 //   output  one arm state per period to every subscriber (seq = period k,
 //           time = k / rate_hz s); describe replies (JSON, clock "realtime")
 //   rate    rate_hz, paced with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)
@@ -38,6 +41,7 @@ struct ServerConfig {
 struct ServerCounters {
   long periods = 0;
   long applied = 0;              ///< commands the arm took
+  long payloads = 0;             ///< payloads taken (they change nothing: no dynamics)
   long refused_torque = 0;       ///< commands accepted by the endpoint, refused by the arm for their mode
   long mode_watchdog_holds = 0;  ///< holds because the owner sent only refused-mode commands
   long missed_deadlines = 0;     ///< periods that ended after their deadline

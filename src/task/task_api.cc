@@ -833,6 +833,7 @@ void OpenApi(Program* p) {
   lua_setfield(L, -2, "__newindex");
   lua_setmetatable(L, -2);
   lua_setglobal(L, "shared");
+  OpenPayload(L);
   if (luaL_loadbufferx(L, kPrelude, std::strlen(kPrelude), "=vlab", "t") != LUA_OK) {
     throw std::logic_error(std::string("task prelude: ") + lua_tostring(L, -1));
   }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bridge/bridge_markers.h"
+#include "bridge/bridge_payload.h"
 #include "bridge/bridge_protocol.h"
 
 namespace vlab::task {
@@ -27,6 +28,19 @@ class Channel {
   /// Sends a command payload (command_names().size() values). False with a
   /// reason when the device refuses it (in process: its own command check).
   virtual bool Write(const std::vector<double>& values, std::string* why) = 0;
+  /// An arm's load at its flange (docs/protocol.md, "Arm payload"): sets it,
+  /// in force from the next control period. False with the reason when the
+  /// device refuses it or is no arm. May wait for the device's answer (UDP).
+  virtual bool SetPayload(const bridge::ArmPayloadMsg& /*payload*/, std::string* why) {
+    *why = "'" + name() + "' is not an arm";
+    return false;
+  }
+  /// The arm's payload in force (what the device reports); false with the
+  /// reason when the device is no arm.
+  virtual bool GetPayload(bridge::ArmPayloadMsg* /*payload*/, std::string* why) {
+    *why = "'" + name() + "' is not an arm";
+    return false;
+  }
 };
 
 /// The schedule of the camera a markers device reads (its describe reply):

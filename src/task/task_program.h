@@ -92,6 +92,9 @@ struct Program {
 /// blocking moves) in the program's state.
 void OpenApi(Program* program);
 
+/// Registers payload() (task_payload.cc): the robot arm's load at its flange.
+void OpenPayload(lua_State* L);
+
 /// The program of a Lua state (set by OpenApi).
 Program* ProgramOf(lua_State* L);
 

@@ -11,6 +11,9 @@ namespace vlab::task {
 
 namespace {
 
+// how long a payload waits for the arm's answer, s (a lockstep lab answers while it waits for the command)
+constexpr double kPayloadTimeout_s = 2.0;
+
 class UdpArm final : public Channel {
  public:
   explicit UdpArm(bridge::Arm arm) : arm_(std::move(arm)) {
@@ -45,6 +48,19 @@ class UdpArm final : public Channel {
       *why = "the datagram could not be sent";
       return false;
     }
+    return true;
+  }
+  bool SetPayload(const bridge::ArmPayloadMsg& payload, std::string* why) override {
+    try {
+      arm_.SetPayload(payload, kPayloadTimeout_s);
+    } catch (const std::exception& e) {  // refused, no answer, not sent, no rigid body: e says which
+      *why = e.what();
+      return false;
+    }
+    return true;
+  }
+  bool GetPayload(bridge::ArmPayloadMsg* payload, std::string*) override {
+    *payload = arm_.payload();
     return true;
   }
   double Receive(double timeout_s) {

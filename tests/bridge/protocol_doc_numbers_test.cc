@@ -54,7 +54,7 @@ std::vector<Stated> Numbers() {
       {"protocol.md", "the Python example's VERSION", R"(MAGIC, VERSION, ARM = 1447838018, (\d+),)", version},
       {"protocol.md", "the kinds a describe request names", R"(whatever kind it names \(0 to (\d+);)",
        static_cast<double>(kMaxDeviceKind)},
-      {"protocol.md", "the highest session result", R"((\d+) command refused: another client)",
+      {"protocol.md", "the highest session result", R"((\d+) payload refused: not the owner)",
        static_cast<double>(kMaxSessionResult)},
       {"protocol.md", "the lockstep timeout per period", R"(per period \((\d+(?:\.\d+)?) s by default)",
        lockstep.timeout_s},

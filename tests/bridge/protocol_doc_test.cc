@@ -1,6 +1,7 @@
 // Checks docs/protocol.md against the table of wire layouts
 // (bridge/bridge_layouts.h): every "### <Kind> state (kind N, type 1): ...
-// values" and "### <Kind> command (kind N, type 2): ... values" section, its
+// values" and "### <Kind> command (kind N, type 2): ... values" section (and
+// the arm's "### Arm payload (kind 1, type 6): 10 values"), its
 // table's payload indices, field names (in order) and units, and its value
 // count; which kinds have which sections; and the kind codes of the "Devices
 // and ports" table. The page's conventions: a field cell is "name: meaning"
@@ -124,19 +125,20 @@ class PageChecker {
   }
 
   void CheckSections() {
-    static const std::regex heading(R"(^### (\S+) (state|command) \(kind (\d+), type (\d+)\): (.+) values$)");
-    std::vector<int> seen(2 * (kMaxDeviceKind + 1), 0);  // line of each kind's state / command section
+    static const std::regex heading(R"(^### (\S+) (state|command|payload) \(kind (\d+), type (\d+)\): (.+) values$)");
+    std::vector<int> seen(3 * (kMaxDeviceKind + 1), 0);  // line of each kind's state / command / payload section
     for (std::size_t i = 0; i < lines_.size(); ++i) {
       const std::string& line = lines_[i];
       if (line.rfind("### ", 0) != 0 || line.find("(kind ") == std::string::npos) continue;
       const int at = static_cast<int>(i) + 1;
       std::smatch m;
       if (!std::regex_match(line, m, heading)) {
-        Problem(at, "heading not of the form '### <Kind> state|command (kind N, type T): <count> values'");
+        Problem(at, "heading not of the form '### <Kind> state|command|payload (kind N, type T): <count> values'");
         continue;
       }
       const std::string label = m[1], which = m[2];
-      const bool command = which == "command";
+      const bool command = which == "command", payload = which == "payload";
+      const int type = payload ? static_cast<int>(MessageType::kPayload) : command ? 2 : 1;
       const KindLayout* k = FindKindLayout(Lower(label));
       const std::string section = label + " " + which;
       if (k == nullptr) {
@@ -147,13 +149,17 @@ class PageChecker {
         Problem(at, section + ": kind " + std::string(m[3]) + ", the code says " +
                         std::to_string(static_cast<int>(k->kind)));
       }
-      if (std::stoi(m[4]) != (command ? 2 : 1)) {
-        Problem(at, section + ": type " + std::string(m[4]) + ", a " + which + " is type " + (command ? "2" : "1"));
+      if (std::stoi(m[4]) != type) {
+        Problem(at, section + ": type " + std::string(m[4]) + ", a " + which + " is type " + std::to_string(type));
       }
-      int& first = seen[2 * static_cast<int>(k->kind) + (command ? 1 : 0)];
+      int& first = seen[3 * static_cast<int>(k->kind) + (payload ? 2 : command ? 1 : 0)];
       if (first != 0) Problem(at, section + ": a second section (the first is at line " + std::to_string(first) + ")");
       first = at;
-      const FieldList fields = command ? k->command : k->state;
+      if (payload && k->kind != DeviceKind::kArm) {
+        Problem(at, section + ": only an arm takes a payload");
+        continue;
+      }
+      const FieldList fields = payload ? kArmPayloadLayout : command ? k->command : k->state;
       if (!k->float64) {
         Problem(at, section + ": " + k->name + " has no float64 layout (" + k->note + ")");
         continue;
@@ -169,9 +175,11 @@ class PageChecker {
     }
     for (const KindLayout& k : kKindLayouts) {
       if (!k.float64) continue;
-      if (seen[2 * static_cast<int>(k.kind)] == 0) Problem(0, std::string(k.name) + ": no state section");
-      const bool has_command = seen[2 * static_cast<int>(k.kind) + 1] != 0;
+      if (seen[3 * static_cast<int>(k.kind)] == 0) Problem(0, std::string(k.name) + ": no state section");
+      const bool has_command = seen[3 * static_cast<int>(k.kind) + 1] != 0;
       if (!k.command.empty() && !has_command) Problem(0, std::string(k.name) + ": no command section");
+      const bool has_payload = seen[3 * static_cast<int>(k.kind) + 2] != 0;
+      if (k.kind == DeviceKind::kArm && !has_payload) Problem(0, "arm: no payload section");
     }
   }
 
@@ -374,6 +382,18 @@ TEST(ProtocolDocTest, EachMistakeInThePageIsReported) {
        "### Gaze state (kind 12, type 1)",
        "### Gaze command (kind 12, type 2)",
        {"Gaze command: the code's gaze takes no commands"}},
+      {"two payload fields swapped",
+       "| 7, 8, 9 | ixy, ixz, iyz:",
+       "| 7, 8, 9 | ixy, iyz, ixz:",
+       {"Arm payload: field 9 is 'iyz', the code says 'ixz'"}},
+      {"a payload unit changed",
+       "| 0 | mass: mass of the load, \xE2\x89\xA5 0 (0: none) | kg |",
+       "| 0 | mass: mass of the load, \xE2\x89\xA5 0 (0: none) | g |",
+       {"Arm payload: field 1 (mass) has unit 'g', the code says 'kg'"}},
+      {"a payload for another kind",
+       "### Arm payload (kind 1, type 6)",
+       "### Base payload (kind 6, type 6)",
+       {"Base payload: only an arm takes a payload"}},
       {"a wrong code in the kinds table",
        "| gaze | 12 |",
        "| gaze | 14 |",

@@ -235,7 +235,7 @@ TEST(ProtocolTest, FramingErrors) {
   EXPECT_EQ(with(2, 1.5), DecodeError::kBadKind);
   EXPECT_EQ(with(2, 256), DecodeError::kBadKind);
   EXPECT_EQ(with(3, 0), DecodeError::kBadType);
-  EXPECT_EQ(with(3, 6), DecodeError::kBadType);
+  EXPECT_EQ(with(3, 7), DecodeError::kBadType);
   EXPECT_EQ(with(4, -1), DecodeError::kBadValue);    // seq below 0
   EXPECT_EQ(with(4, 2.5), DecodeError::kBadValue);   // seq not whole
   EXPECT_EQ(with(4, 1e17), DecodeError::kBadValue);  // seq beyond 2^53

@@ -299,7 +299,7 @@ class CodecTest(unittest.TestCase):
             "bad length": [good[:48] + struct.pack("<d", 21) + good[56:]],
             "bad seq": [good[:32] + struct.pack("<d", 2.5) + good[40:]],
             "bad kind": [good[:16] + struct.pack("<d", 256) + good[24:], good[:16] + struct.pack("<d", -1) + good[24:]],
-            "bad type": [good[:24] + struct.pack("<d", 6) + good[32:], good[:24] + struct.pack("<d", 0) + good[32:]],
+            "bad type": [good[:24] + struct.pack("<d", 7) + good[32:], good[:24] + struct.pack("<d", 0) + good[32:]],
         }
         for reason, datagrams in cases.items():
             for data in datagrams:
@@ -332,7 +332,7 @@ class CodecTest(unittest.TestCase):
         for bad in (reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 0, 1),        # cookie 0
                     reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 2 ** 53, 1),  # cookie too large
                     reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 2.5, 1),      # not whole
-                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 6),        # no such result
+                    reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 8),        # no such result
                     reply(vc.MAGIC, 2, 1, 5, 0, 0, 2, 9, 1.5),
                     reply(vc.MAGIC, 2, 1, 1, 0, 0, 2, 9, 1),        # a state
                     reply(vc.MAGIC, 1, 1, 5, 0, 0, 2, 9, 1),        # version 1
@@ -415,6 +415,35 @@ class ClientTest(unittest.TestCase):
         self.assertIn(" accepted=2 ", counters[0])
         self.assertIn(" duplicate=1 ", counters[0])
         self.assertIn(" describes=1", counters[0])
+
+    def test_payload_set_by_the_owner_and_refused_for_another(self):
+        """An arm's payload (type 6): the first client's takes the arm and the describe reply
+        reports it; a second client is refused (result 7), and so is a load no rigid body has."""
+        server = ArmServer()
+        try:
+            with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as first:
+                self.assertEqual(first.payload["mass"], 0.0)
+                first.set_payload(1.5, (0.1, 0.0, 0.05), (0.01, 0.012, 0.008), timeout=PATIENCE_S)
+                self.assertEqual(first.payload, {"mass": 1.5, "com": [0.1, 0.0, 0.05],
+                                                 "inertia": [0.01, 0.012, 0.008, 0.0, 0.0, 0.0]})
+                with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as second:
+                    self.assertEqual(second.payload["mass"], 1.5)  # the device reports it
+                    self.assertEqual(second.payload["inertia"], [0.01, 0.012, 0.008, 0.0, 0.0, 0.0])
+                    with self.assertRaisesRegex(vc.RefusedError, "refused the payload"):
+                        second.set_payload(1.0, timeout=PATIENCE_S)
+                with self.assertRaises(vc.RefusedError):  # the triangle inequality: the device's check
+                    first.set_payload(1.0, inertia=(0.01, 0.01, 0.03), timeout=PATIENCE_S)
+                self.assertEqual(first.payload["mass"], 1.5)
+                with self.assertRaisesRegex(ValueError, "mass must be >= 0"):
+                    first.set_payload(-1.0)
+                with self.assertRaisesRegex(ValueError, "com needs 3 values"):
+                    first.set_payload(1.0, com=(0.0, 0.0))
+                with self.assertRaisesRegex(ValueError, "non-finite"):
+                    first.set_payload(float("nan"))
+        finally:
+            lines = server.stop()
+        counters = [line for line in lines if line.startswith("counters ")]
+        self.assertIn(" refused=2 ", counters[0], lines)
 
     def test_sessions_of_the_endpoint(self):
         """Without the cookie a request gets a 72-byte challenge and nothing else; with it, a

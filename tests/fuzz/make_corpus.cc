@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "bridge/bridge_payload.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_session.h"
 
@@ -110,6 +111,24 @@ Seeds MakeSeeds() {
   add("subscribe_sim", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kSim, 1, 1, b); });
   add("unsubscribe_arm", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kArm, 1, 0, b); });
   add("subscribe_wrong_cookie", [](Bytes* b) { EncodeSubscribeRequest(DeviceKind::kWrench, 123456789, 1, b); });
+  // arm payloads (type 6): a rigid body, a wrong length, a negative mass, a broken triangle inequality
+  auto payload = [](std::vector<double> v, Bytes* b) {
+    Header h;
+    h.kind = static_cast<int>(DeviceKind::kArm);
+    h.type = static_cast<int>(MessageType::kPayload);
+    h.seq = 1;
+    EncodePacket(h, v.data(), static_cast<int>(v.size()), b);
+  };
+  add("arm_payload", [](Bytes* b) {
+    ArmPayloadMsg m;
+    m.mass_kg = 1.5;
+    m.com_m = {0.1, 0, 0.05};
+    m.inertia_kgm2 = {0.01, 0.012, 0.008, 0.001, 0, 0};
+    EncodeArmPayload(1, 2.5, m, b);
+  });
+  add("arm_payload_9_values", [&](Bytes* b) { payload({1, 0, 0, 0, 0, 0, 0, 0, 0}, b); });
+  add("arm_payload_negative_mass", [&](Bytes* b) { payload({-1, 0, 0, 0, 0, 0, 0, 0, 0, 0}, b); });
+  add("arm_payload_not_rigid", [&](Bytes* b) { payload({1, 0, 0, 0, 0.01, 0.01, 0.03, 0, 0, 0}, b); });
   add("session_reply", [](Bytes* b) {
     const double payload[2] = {987654321, 1};
     Header h;

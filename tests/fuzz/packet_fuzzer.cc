@@ -21,7 +21,9 @@
 // cookie (the harness puts it in), so that the fuzzer reaches the paths past
 // the handshake; any other cookie is what the input says.
 // After each step the endpoint's invariants are checked: the counters add up,
-// only a well-formed command answering a published state is accepted, the
+// only a well-formed command answering a published state is accepted, only a
+// well-formed payload (type 6: 10 finite values of a rigid body) is taken by
+// an arm, and by no other kind, the
 // subscribers never outnumber the table, and a taken command is one the
 // device accepts. A broken invariant or round trip aborts with a message; that,
 // and any sanitizer report, is a finding.
@@ -40,6 +42,7 @@
 
 #include "bridge/bridge_describe.h"
 #include "bridge/bridge_endpoint.h"
+#include "bridge/bridge_payload.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_udp.h"
 
@@ -211,8 +214,8 @@ void CheckCounters(const DeviceEndpoint& ep) {
   const EndpointCounters& c = ep.counters();
   Check(c.refused == c.refused_malformed + c.refused_limits + c.refused_not_owner + c.refused_not_subscribed,
         "refused != sum of its reasons");
-  Check(c.received == c.accepted + c.requests + c.refused + c.stale + c.duplicate + c.future,
-        "received != accepted + requests + refused + stale + duplicate + future");
+  Check(c.received == c.accepted + c.payloads + c.requests + c.refused + c.stale + c.duplicate + c.future,
+        "received != accepted + payloads + requests + refused + stale + duplicate + future");
   Check(c.describes <= c.requests, "more describe replies than requests");
   Check(ep.subscribers() <= ep.config().max_subscribers, "more subscribers than the table holds");
 }
@@ -223,9 +226,19 @@ void CheckAfterHandle(const DeviceEndpoint& ep, DeviceEndpoint::Received receive
   const bool accepted = received == DeviceEndpoint::Received::kCommand;
   CheckCounters(ep);
   if (ep.config().kind == DeviceKind::kWrench) Check(!accepted && !ep.has_owner(), "wrench accepted a command");
-  if (!accepted) return;
   Header h;
   std::vector<double> p;
+  if (received == DeviceEndpoint::Received::kPayload) {  // a sound payload, now the arm's
+    ArmPayloadMsg m;
+    const char* field = nullptr;
+    const char* reason = nullptr;
+    Check(ep.config().kind == DeviceKind::kArm, "a device other than an arm took a payload");
+    Check(DecodePacket(data, size, &h, &p) == DecodeError::kNone && ParseArmPayload(h, p, &m) == DecodeError::kNone,
+          "took a malformed payload");
+    Check(CheckArmPayload(m, &field, &reason), "took a payload that is no rigid body");
+    Check(ep.payload() == m && ep.has_owner(), "took a payload, but the arm does not report it or has no owner");
+  }
+  if (!accepted) return;
   Check(DecodePacket(data, size, &h, &p) == DecodeError::kNone, "accepted a malformed datagram");
   Check(h.kind == static_cast<int>(ep.config().kind) && h.type == static_cast<int>(MessageType::kCommand),
         "accepted something other than a command of its kind");
@@ -292,6 +305,13 @@ void TakeAndCheck(DeviceEndpoint& ep) {
   SimCommandMsg sim;
   if (ep.TakeArmCommand(&arm)) CheckTakenArm(ep.config(), arm);
   if (ep.TakeSimCommand(&sim)) CheckTakenSim(sim);
+  ArmPayloadMsg payload;
+  const char* field = nullptr;
+  const char* reason = nullptr;
+  if (ep.TakePayload(&payload)) {
+    Check(ep.config().kind == DeviceKind::kArm, "taken payload: not an arm");
+    Check(CheckArmPayload(payload, &field, &reason), "taken payload: no rigid body");
+  }
 }
 
 // the state the device would publish this period

@@ -42,7 +42,7 @@ build="$(cd "$build" && pwd)"
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all"
 cxxflags=(-std=c++17 -g -O1 -fno-omit-frame-pointer -pthread -I"$root" -isystem /usr/include/eigen3)
 sources=(bridge/bridge_protocol.cc bridge/bridge_layouts.cc bridge/bridge_endpoint.cc bridge/bridge_session.cc
-  bridge/bridge_udp.cc bridge/bridge_describe.cc tests/fuzz/packet_fuzzer.cc)
+  bridge/bridge_udp.cc bridge/bridge_describe.cc bridge/bridge_payload.cc tests/fuzz/packet_fuzzer.cc)
 newest_header=""
 for header in "$root"/bridge/*.h; do
   if [ -z "$newest_header" ] || [ "$header" -nt "$newest_header" ]; then newest_header="$header"; fi
@@ -71,10 +71,11 @@ done
 maker="$build/make_corpus"
 if [ ! -f "$maker" ] || [ "$maker" -ot "$here/make_corpus.cc" ] || [ "$maker" -ot "$newest_header" ] ||
   [ "$maker" -ot "$root/bridge/bridge_protocol.cc" ] || [ "$maker" -ot "$root/bridge/bridge_layouts.cc" ] ||
-  [ "$maker" -ot "$root/bridge/bridge_session.cc" ]; then
+  [ "$maker" -ot "$root/bridge/bridge_session.cc" ] || [ "$maker" -ot "$root/bridge/bridge_payload.cc" ]; then
   # shellcheck disable=SC2086
   "$cxx" "${cxxflags[@]}" $sanitize "$here/make_corpus.cc" "$root/bridge/bridge_protocol.cc" \
-    "$root/bridge/bridge_layouts.cc" "$root/bridge/bridge_session.cc" "$root/bridge/bridge_udp.cc" -o "$maker" ||
+    "$root/bridge/bridge_layouts.cc" "$root/bridge/bridge_session.cc" "$root/bridge/bridge_udp.cc" \
+    "$root/bridge/bridge_payload.cc" -o "$maker" ||
     fail "building make_corpus failed"
 fi
 

@@ -4,12 +4,14 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_client.h"
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_udp.h"
 #include "kinsim_process.h"
@@ -329,6 +331,30 @@ TEST_F(KinsimUdpTest, SecondClientIsNotTheOwner) {
   ASSERT_TRUE(other.Settle());
   const std::string report = StopReport();
   EXPECT_NE(report.find("not owner " + std::to_string(sent)), std::string::npos) << report;
+}
+
+// the payload (type 6) through the C++ client: the owner's is taken and reported (no dynamics:
+// "feedforward": "none"), another client's is refused with result 7
+TEST_F(KinsimUdpTest, APayloadIsTakenFromTheOwnerAndReported) {
+  Start({"--watchdog-periods", "0"});
+  vlab::bridge::Arm owner = vlab::bridge::Arm::Connect("127.0.0.1", process_->port(), 5.0);
+  EXPECT_EQ(owner.describe()["feedforward"], "none");
+  EXPECT_EQ(owner.payload().mass_kg, 0.0);
+  ArmPayloadMsg load;
+  load.mass_kg = 2.5;
+  load.com_m = {0, 0, 0.1};
+  load.inertia_kgm2 = {0.02, 0.02, 0.01, 0, 0, 0};
+  owner.SetPayload(load, 5.0);
+  vlab::bridge::Arm other = vlab::bridge::Arm::Connect("127.0.0.1", process_->port(), 5.0);
+  EXPECT_EQ(other.payload(), load);  // its describe reply at connect reports the owner's
+  ArmPayloadMsg lighter = load;
+  lighter.mass_kg = 1.0;
+  EXPECT_THROW(other.SetPayload(lighter, 5.0), vlab::bridge::RefusedError);
+  load.inertia_kgm2 = {0.01, 0.01, 0.03, 0, 0, 0};  // no rigid body: the client says so before sending
+  EXPECT_THROW(owner.SetPayload(load, 5.0), std::invalid_argument);
+  const std::string report = StopReport();
+  EXPECT_NE(report.find("payloads 1"), std::string::npos) << report;
+  EXPECT_NE(report.find("not owner 1"), std::string::npos) << report;
 }
 
 TEST_F(KinsimUdpTest, StaleAndDuplicateSeqAreIgnored) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "../kinsim/kinsim_process.h"
+#include "bridge/bridge_client.h"
 #include "test_util.h"
 
 namespace vlab::testing {
@@ -86,6 +87,58 @@ TEST(TaskCli, ParamsReachTheScriptInProcessAndStandalone) {
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--param '2word=FACE': parameter '2word'"), std::string::npos) << bad.err;
   kinsim.Stop();
+}
+
+// payload(): in process and over UDP (vlab-kinsim) the script sets and reads the same payload
+// and gets the same errors for bad arguments; refused by the arm (another client owns it), it
+// is a script error with the device's reason
+TEST(TaskCli, PayloadIsSetInProcessAndOverUdp) {
+  const auto lines = [](const std::string& out) {
+    std::string found;
+    for (const std::string& line : Lines(out)) {
+      const std::size_t at = line.find("] payload");
+      if (at != std::string::npos) found += line.substr(at + 2) + "\n";
+    }
+    return found;
+  };
+  TempDir out;
+  const ProcessResult in = RunVlab("run tests/data/task/payload.yaml --out '" + out.path() + "/run'");
+  EXPECT_EQ(in.exit_code, 0) << in.out << in.err;
+  const std::string got = lines(in.out);
+  EXPECT_NE(got.find("payload before\t0.0\t3\t6\n"), std::string::npos) << got;
+  EXPECT_NE(got.find("payload after\t1.25\t0.1\t0.01\t0.005\t0.0\n"), std::string::npos) << got;
+  for (const char* error : {"payload: argument 1 (mass) must be a finite number >= 0 kg, got -1",
+                            "payload: argument 1 (mass) must be a number (kg), got string",
+                            "payload: com must be {x, y, z} (m, flange frame), got 2 numbers",
+                            "payload: inertia principal moments break the triangle inequality",
+                            "payload: unknown option 'mass' (com, inertia)"}) {
+    EXPECT_NE(got.find(error), std::string::npos) << error << "\n" << got;
+  }
+
+  KinsimProcess kinsim({"--scene", "scenes/pa10.xml"});
+  ASSERT_TRUE(kinsim.ok()) << kinsim.start_line();
+  const std::string arm = " --arm 127.0.0.1:" + std::to_string(kinsim.port()) + " --scene scenes/pa10.xml --tip tool";
+  const ProcessResult udp = RunVlab("task tests/data/task/payload.lua" + arm, 60);
+  EXPECT_EQ(udp.exit_code, 0) << udp.out << udp.err;
+  EXPECT_EQ(lines(udp.out), got);  // the same lines, word for word
+  kinsim.Stop();
+  EXPECT_NE(kinsim.output().find("payloads 1"), std::string::npos) << kinsim.output();
+
+  // another client owns the arm (for 30 s of silence): the script's payload is refused
+  KinsimProcess owned({"--scene", "scenes/pa10.xml", "--owner-timeout", "30"});
+  ASSERT_TRUE(owned.ok()) << owned.start_line();
+  bridge::Arm owner = bridge::Arm::Connect("127.0.0.1", owned.port(), 5.0);
+  owner.SetPayload(bridge::ArmPayloadMsg{}, 5.0);
+  const ProcessResult refused =
+      RunVlab("task tests/data/task/payload.lua --arm 127.0.0.1:" + std::to_string(owned.port()) +
+                  " --scene scenes/pa10.xml --tip tool",
+              60);
+  EXPECT_EQ(refused.exit_code, 1) << refused.out << refused.err;
+  EXPECT_NE(refused.err.find("payload.lua:6: payload: arm 'pa10' at 127.0.0.1:" + std::to_string(owned.port()) +
+                             ": the device refused the payload (another client owns the arm"),
+            std::string::npos)
+      << refused.err;
+  owned.Stop();
 }
 
 // same scenario and seed, fast mode: the same bytes, although the script walks a

@@ -3,7 +3,9 @@
 // Ports
 //   input   ArmCommand (mode hold | position | velocity | torque, one value per
 //           joint), taken at the start of a control period; a payload
-//           (SetPayload: mass, centre of mass, inertia at the flange)
+//           (SetPayload: mass, centre of mass, inertia at the flange), also
+//           from the wire (type 6 from the owner, taken with the period's
+//           command; the describe reply reports it, whatever servo.feedforward)
 //   output  ArmState (q, qd, applied tau, status bits), sampled at the end of
 //           every control period; q and qd are the sensed ones (below)
 //   rate    the servo runs at every physics step (model timestep); commands and

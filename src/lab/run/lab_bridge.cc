@@ -296,7 +296,7 @@ std::vector<ServedDevice> LabBridge::Devices() const {
                      kind,
                      d.socket->local_endpoint().address().to_string(),
                      d.socket->local_port(),
-                     d.endpoint->config().describe_json,
+                     d.endpoint->describe_json(),
                      d.endpoint->counters(),
                      {}});
     }
