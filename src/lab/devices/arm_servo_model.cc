@@ -8,6 +8,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "bridge/bridge_payload.h"
 #include "core/core_errors.h"
 
 namespace vlab::lab {
@@ -87,26 +88,17 @@ void WriteBody(const Chain& c, const std::vector<int>& arm_index, int body, std:
 }  // namespace
 
 bool CheckPayload(const Payload& p, std::string* field, std::string* reason) {
-  auto fail = [&](const char* f, const std::string& r) {
-    *field = f;
-    *reason = r;
-    return false;
-  };
-  if (!std::isfinite(p.mass_kg) || p.mass_kg < 0) return fail("mass", "must be a finite number >= 0 kg");
-  if (!p.com_m.allFinite()) return fail("com", "must be 3 finite numbers (m)");
-  for (double v : p.inertia_kgm2) {
-    if (!std::isfinite(v)) return fail("inertia", "must be finite numbers (kg m^2)");
-  }
-  const auto& i = p.inertia_kgm2;
-  Eigen::Matrix3d inertia;
-  inertia << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
-  const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia).eigenvalues();
-  const double tolerance = 1e-12 + 1e-9 * std::abs(inertia.trace());
-  if (moments.minCoeff() < -tolerance) return fail("inertia", "is not positive semi-definite");
-  if (moments[2] > moments[0] + moments[1] + tolerance) {
-    return fail("inertia", "principal moments break the triangle inequality (largest > sum of the others)");
-  }
-  return true;
+  // one rule for the scenario key, SetPayload and the wire (bridge_payload.h)
+  bridge::ArmPayloadMsg msg;
+  msg.mass_kg = p.mass_kg;
+  for (int k = 0; k < 3; ++k) msg.com_m[k] = p.com_m[k];
+  for (int k = 0; k < 6; ++k) msg.inertia_kgm2[k] = p.inertia_kgm2[k];
+  const char* f = nullptr;
+  const char* r = nullptr;
+  if (bridge::CheckArmPayload(msg, &f, &r)) return true;
+  *field = f;
+  *reason = r;
+  return false;
 }
 
 std::unique_ptr<ArmServoModel> ArmServoModel::Create(const mjModel& m, const std::vector<int>& joints,

@@ -113,6 +113,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                       {"requests", c.requests},
                       {"accepted", c.accepted},
                       {"describes", c.describes},
+                      {"payloads", c.payloads},
                       {"refused", c.refused},
                       {"refused_malformed", c.refused_malformed},
                       {"refused_limits", c.refused_limits},
