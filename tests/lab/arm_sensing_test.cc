@@ -18,6 +18,7 @@
 
 #include "arm_keys_error.h"
 #include "core/core_errors.h"
+#include "lab/devices/arm_servo_model.h"
 #include "lab/devices/device_arm.h"
 #include "lab/scenario/lab_scenario.h"
 #include "mujoco_fixture.h"
@@ -101,6 +102,7 @@ class ArmSensingTest : public test::MujocoTest {
     p.joints = p.actuators = kJoints;
     p.initial = {0, 0.523599, 0, 1.047198, 0, 1.570796, 0};  // ready: tool down
     p.sensing = sensing;
+    p.servo.feedforward = feedforward_;
     arm_ = SimArm::Create({model_, kPeriod, 1, "pa10.xml"}, c);
     data_ = MakeData(model_);
     arm_->SetInitialState(*data_);
@@ -117,6 +119,7 @@ class ArmSensingTest : public test::MujocoTest {
   mjModel* model_ = nullptr;
   mjData* data_ = nullptr;
   std::unique_ptr<SimArm> arm_;
+  ServoConfig::Feedforward feedforward_ = ServoConfig::Feedforward::kWorld;
   int w2_ = 0;
 };
 
@@ -187,6 +190,36 @@ TEST_F(ArmSensingTest, StateAndLogReportTheSensedValues) {
   // the describe reply tells a client the counts' size, one per joint
   const auto describe = nlohmann::json::parse(arm_->DescribeJson(bridge::DeviceDescription{}));
   EXPECT_EQ(describe.at("resolution"), std::vector<double>(7, 1e-3));
+}
+
+// The servo's own model runs at the joint state the drive reads, as a real controller's
+// does: with coarse counts (0.02 rad) the first torque of a held arm at rest is the model's
+// bias at the counted angles, not at the true ones (S2's gravity torque differs by about
+// its gradient times the rounding).
+TEST_F(ArmSensingTest, TheModelFeedForwardRunsAtTheCountedAngles) {
+  SensingConfig sensing;
+  sensing.resolution = {0.02};
+  sensing.velocity = SensingConfig::Velocity::kModel;
+  feedforward_ = ServoConfig::Feedforward::kModel;
+  Start(sensing);
+  Step();
+  arm_->Sample(*data_, data_->time);
+  std::vector<int> joint_ids;
+  for (const std::string& j : kJoints) joint_ids.push_back(mj_name2id(model_, mjOBJ_JOINT, j.c_str()));
+  std::unique_ptr<ArmServoModel> own = ArmServoModel::Create(*model_, joint_ids, {});
+  own->Place(*data_);
+  std::vector<double> counted(7), zero(7, 0.0), at_counts(7), at_truth(7);
+  mjData* start = MakeData(model_);
+  arm_->SetInitialState(*start);
+  for (int i = 0; i < 7; ++i) counted[i] = std::round(start->qpos[joint_ids[i]] / 0.02) * 0.02;
+  own->Bias(counted.data(), zero.data(), at_counts.data());
+  mj_forward(model_, start);
+  own->Bias(*start, at_truth.data());
+  for (int i = 0; i < 7; ++i) {
+    // at rest on its first reading: no position or velocity error, the feed-forward alone
+    EXPECT_NEAR(arm_->state().tau[i], at_counts[i], 1e-9) << kJoints[i];
+  }
+  EXPECT_GT(std::abs(at_counts[1] - at_truth[1]), 0.05);  // S2: rounded by 0.0036 rad
 }
 
 TEST_F(ArmSensingTest, NoKeyIsExact) {

@@ -245,6 +245,15 @@ void ArmServoModel::Bias(const mjData& world, double* tau) {
   for (std::size_t i = 0; i < dof_adr_.size(); ++i) tau[i] = rne_[dof_adr_[i]];
 }
 
+void ArmServoModel::Bias(const double* q, const double* qd, double* tau) {
+  for (std::size_t i = 0; i < qpos_adr_.size(); ++i) {
+    data_->qpos[qpos_adr_[i]] = q[i];
+    data_->qvel[dof_adr_[i]] = qd[i];
+  }
+  rne_pass_->Bias(*model_, data_->qpos, data_->qvel, rne_.data());
+  for (std::size_t i = 0; i < dof_adr_.size(); ++i) tau[i] = rne_[dof_adr_[i]];
+}
+
 void ArmServoModel::InertiaDiagonal(const mjData& world, double* h) {
   const mjModel* s = model_.get();
   CopyState(world, false);

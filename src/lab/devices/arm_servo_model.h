@@ -73,6 +73,10 @@ class ArmServoModel {
   /// arm joint in device order, into `tau` (size: the number of arm joints).
   void Bias(const mjData& world_data, double* tau);
 
+  /// The same at the arm state the servo reads (`q`, rad or m, and `qd`, one per
+  /// arm joint in device order: its encoders' counts, not the world's state).
+  void Bias(const double* q, const double* qd, double* tau);
+
   /// Joint-space inertia diagonal H_ii (armature included) of the servo model at
   /// the world's arm positions, one per arm joint in device order, into `h`.
   void InertiaDiagonal(const mjData& world_data, double* h);

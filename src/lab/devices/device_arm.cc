@@ -289,12 +289,19 @@ bool SimArm::SetPayload(const Payload& payload, std::string* why) { return servo
 
 void SimArm::Actuate(mjData& d, double dt) {
   saturated_ = false;
-  // the servo model's bias torques, once per step, when a servo mode uses them
-  const bool own_model = feedforward_kind_ == ServoConfig::Feedforward::kModel && mode_ != bridge::ArmMode::kTorque;
-  if (own_model) servo_model_->Bias(d, feedforward_.data());
   // what the drive knows of its joints: the encoders' reading, or the exact state
   const bool sensed = sensing_.enabled();
   if (sensed) Sense(d, dt);
+  // the servo model's bias torques, once per step, when a servo mode uses them: at the joint
+  // state the drive reads (the counts when it senses them), as a real controller's model runs
+  const bool own_model = feedforward_kind_ == ServoConfig::Feedforward::kModel && mode_ != bridge::ArmMode::kTorque;
+  if (own_model) {
+    if (sensed) {
+      servo_model_->Bias(sensing_.q().data(), sensing_.qd().data(), feedforward_.data());
+    } else {
+      servo_model_->Bias(d, feedforward_.data());
+    }
+  }
   for (int i = 0; i < dof(); ++i) {
     const double q = sensed ? sensing_.q()[i] : d.qpos[qpos_adr_[i]];
     const double qd = sensed ? sensing_.qd()[i] : d.qvel[dof_adr_[i]];
