@@ -11,8 +11,9 @@ build="${VLAB_ASAN_BUILD:-build-asan}"
 case "$build" in /*) ;; *) build="$PWD/$build" ;; esac
 jobs="$(nproc 2>/dev/null || echo 2)"
 
-# -O0 without debug information keeps the build short (about 40 % less compile time than -O1);
-# the stacks still name functions.
+# -O1 without debug information keeps the build short; the stacks still name functions.
+# (-O0 compiles about 40 % faster but its tests ran 316 s against 186 s, and CI as a whole
+# took 40 s longer with it: 3055 s against 3015 s.)
 # GCC 12's null, nonnull-attribute and returns-nonnull-attribute checks turn off
 # -fdelete-null-pointer-checks, and then a constant expression may not compare an object's
 # address with nullptr (bridge/bridge_layouts.h LayoutOf): those three are left out (ASan
@@ -36,7 +37,7 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 
 echo "vlab: sanitizer lane: configuring $build"
 cmake -S . -B "$build" "${launcher[@]}" -DCMAKE_BUILD_TYPE=Sanitize \
-  "-DCMAKE_CXX_FLAGS_SANITIZE=-O0 $sanitize" \
+  "-DCMAKE_CXX_FLAGS_SANITIZE=-O1 $sanitize" \
   "-DCMAKE_EXE_LINKER_FLAGS_SANITIZE=$sanitize" "-DCMAKE_SHARED_LINKER_FLAGS_SANITIZE=$sanitize" \
   -DVLAB_WERROR=OFF >/dev/null
 
