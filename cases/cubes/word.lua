@@ -37,7 +37,7 @@ local S = {
   frame_timeout = 2.0,  -- s of simulated time to wait for one
   -- VERIFY redoes a letter seen farther than these from its slot; each is its check's bound
   -- (stage1.yaml) less what the look may be off at the slot row (fused positions within 0.6 mm,
-  -- rotations within 0.1 deg there: README) and a margin
+  -- reading directions within 0.6 deg there: README) and a margin
   pos_tolerance = 0.003,  -- m (check: 5 mm)
   yaw_tolerance = 3,      -- deg, reading direction (check: 5 deg)
   tilt_tolerance = 1.5,   -- deg, top face against level (check: 2 deg)
