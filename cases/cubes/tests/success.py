@@ -5,8 +5,9 @@
 
 Runs the scenario once per seed (`vlab run SCENARIO --seed N`), then prints one row per seed:
 pass/fail, the failed checks (the cause), and the simulated time of each letter: the time at
-which the letter's cube came to within 10 mm of its slot for good (the word device's
-word.L.pos_error, log.csv) minus the previous letter's (the first from t = 0, so it includes the first look),
+which the letter's cube came to within 5 mm of its slot for good (the word device's
+word.L.pos_error, log.csv) minus the previous such time (the first from t = 0, so it includes the first look),
+in the order the letters came (a letter that VERIFY took out of its slot and set back comes last),
 and the run's final errors: the worst letter's distance from its slot (mm) and reading-direction
 error (deg), the log's last row. The word is the word device's: its letters in the order of their
 log columns. Last, the success count, the median and range of the time per letter, the worst and
@@ -74,7 +75,7 @@ def main():
     count = int(args[3]) if len(args) > 3 else 20
     scenario = args[4] if len(args) > 4 else "cases/cubes/stage1.yaml"
     passed, per_letter, walls, finals = 0, [], [], []
-    print(f"{'seed':>4}  {'verdict':7}  {'s per letter, in order':28}  {'worst mm, deg':14}  cause")
+    print(f"{'seed':>4}  {'verdict':7}  {'s per letter, as they came':28}  {'worst mm, deg':14}  cause")
     for seed in range(first, first + count):
         folder = out / f"seed{seed}"
         start = time.monotonic()
@@ -96,9 +97,7 @@ def main():
         passed += ok
         times = letter_times(folder / "log.csv") if (folder / "log.csv").exists() else []
         steps, prev = [], 0.0
-        for t in times:
-            if t is None:
-                break
+        for t in sorted(t for t in times if t is not None):
             steps.append(t - prev)
             prev = t
         errors = final_errors(folder / "log.csv") if (folder / "log.csv").exists() else []
