@@ -6,8 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -15,6 +17,7 @@
 #include "arm_keys_error.h"
 #include "arm_servo_forces.h"
 #include "core/core_errors.h"
+#include "lab/devices/arm_servo_rne.h"
 #include "lab/devices/device_arm.h"
 #include "lab/scenario/lab_scenario.h"
 #include "mujoco_fixture.h"
@@ -134,6 +137,35 @@ TEST_F(ServoModelTest, APayloadEqualToTheLoadIsTheLoad) {
 TEST_F(ServoModelTest, EqualsThePa10WithItsToolNamed) {
   const mjModel* m = LoadModel("scenes/pa10.xml");
   Compare(m, Joints(m, {"S1", "S2", "S3", "E1", "E2", "W1", "W2"}), {"jr3_body", "jr3_tool_side", "tool_body"}, {});
+}
+
+// The PA10's chain (one hinge per body, at its origin) takes the pass in the bodies' frames;
+// at 20 random states it gives the general pass's torques to rounding. kChain (a slide, a
+// joint off its body's origin) cannot, and takes the general pass.
+TEST_F(ServoModelTest, TheLocalPassEqualsTheGeneralOne) {
+  const mjModel* pa10 = LoadModel("scenes/pa10.xml");
+  const std::unique_ptr<ArmServoModel> servo = ArmServoModel::Create(
+      *pa10, Joints(pa10, {"S1", "S2", "S3", "E1", "E2", "W1", "W2"}), {"jr3_body", "jr3_tool_side", "tool_body"});
+  const mjModel& s = servo->model();
+  ChainRne rne(s);
+  ASSERT_TRUE(rne.local());
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> angle(-2.0, 2.0), rate(-3.0, 3.0);
+  std::vector<double> qpos(s.nq), qvel(s.nv), local(s.nv), general(s.nv);
+  double worst = 0.0, largest = 0.0;
+  for (int trial = 0; trial < 20; ++trial) {
+    for (int i = 0; i < s.nq; ++i) qpos[i] = angle(rng);
+    for (int i = 0; i < s.nv; ++i) qvel[i] = rate(rng);
+    rne.Bias(s, qpos.data(), qvel.data(), local.data());
+    rne.BiasWorld(s, qpos.data(), qvel.data(), general.data());
+    for (int i = 0; i < s.nv; ++i) {
+      worst = std::max(worst, std::abs(local[i] - general[i]));
+      largest = std::max(largest, std::abs(general[i]));
+    }
+  }
+  EXPECT_LE(worst, 1e-12 * largest) << "largest torque " << largest;
+  EXPECT_GT(largest, 1.0);
+  EXPECT_FALSE(ChainRne(*LoadModelFromString(kChain)).local());
 }
 
 TEST_F(ServoModelTest, RefusesBodiesItCannotUse) {

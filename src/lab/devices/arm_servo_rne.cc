@@ -1,5 +1,6 @@
 #include "lab/devices/arm_servo_rne.h"
 
+#include <cmath>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -54,9 +55,92 @@ void ChainRne::Refresh(const mjModel& m) {
   }
   gravity_accel_ = -Eigen::Map<const Eigen::Vector3d>(m.opt.gravity);
   if (m.opt.disableflags & mjDSBL_GRAVITY) gravity_accel_.setZero();
+
+  // the local pass: one hinge at most per body, at its origin
+  local_ = true;
+  for (int i = 1; i < m.nbody; ++i) {
+    Body& b = bodies_[i];
+    b.inertia_com = b.inertial_rotation * b.principal.asDiagonal() * b.inertial_rotation.transpose();
+    b.joint = joint_count_[i] == 1 ? first_joint_[i] : -1;
+    b.axis_index = -1;
+    if (joint_count_[i] > 1) local_ = false;
+    if (b.joint < 0) continue;
+    const Joint& joint = joints_[b.joint];
+    if (!joint.hinge || !joint.local_pos.isZero(0.0)) local_ = false;
+    for (int k = 0; k < 3; ++k) {
+      if (joint.local_axis == Eigen::Vector3d::Unit(k)) b.axis_index = k;
+    }
+  }
 }
 
 void ChainRne::Bias(const mjModel& m, const double* qpos, const double* qvel, double* qfrc) {
+  if (local_) {
+    BiasLocal(m, qpos, qvel, qfrc);
+  } else {
+    BiasWorld(m, qpos, qvel, qfrc);
+  }
+}
+
+void ChainRne::BiasLocal(const mjModel& m, const double* qpos, const double* qvel, double* qfrc) {
+  // in each body's frame: omega, its rate, the origin's acceleration (gravity as -g); the
+  // world's frame is the world's
+  Body& world = bodies_[0];
+  world.rotation.setIdentity();
+  world.omega.setZero();
+  world.alpha.setZero();
+  world.accel = gravity_accel_;
+  world.force.setZero();
+  world.moment.setZero();
+
+  for (int i = 1; i < m.nbody; ++i) {
+    Body& b = bodies_[i];
+    const Body& parent = bodies_[b.parent];
+    // rotation: the body's frame in its parent's (offset, then its hinge), R = Q Rot(axis, q)
+    double qd = 0.0;
+    b.rotation = b.offset_rotation;
+    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+    if (b.joint >= 0) {
+      const Joint& joint = joints_[b.joint];
+      const double q = qpos[joint.qpos_adr] - joint.qpos0;
+      qd = qvel[joint.dof_adr];
+      axis = joint.local_axis;
+      const double s = std::sin(q), c = std::cos(q);
+      if (b.axis_index >= 0) {
+        // about a frame axis: the other two columns turn
+        const int u = (b.axis_index + 1) % 3, v = (b.axis_index + 2) % 3;
+        const Eigen::Vector3d cu = b.offset_rotation.col(u), cv = b.offset_rotation.col(v);
+        b.rotation.col(u) = c * cu + s * cv;
+        b.rotation.col(v) = c * cv - s * cu;
+      } else {
+        b.rotation = b.offset_rotation * Eigen::AngleAxisd(q, axis).toRotationMatrix();
+      }
+    }
+    const Eigen::Matrix3d rt = b.rotation.transpose();
+    // the parent's motion carried to this origin, then into this frame
+    const Eigen::Vector3d parent_omega = rt * parent.omega;
+    const Eigen::Vector3d joint_rate = axis * qd;
+    b.omega = parent_omega + joint_rate;
+    b.alpha = rt * parent.alpha + parent_omega.cross(joint_rate);
+    b.accel = rt * (parent.accel + parent.alpha.cross(b.offset) + parent.omega.cross(parent.omega.cross(b.offset)));
+    // Newton-Euler at the centre of mass; the moment about the body's origin
+    const Eigen::Vector3d& c_i = b.inertial_pos;
+    const Eigen::Vector3d com_accel = b.accel + b.alpha.cross(c_i) + b.omega.cross(b.omega.cross(c_i));
+    b.force = b.mass * com_accel;
+    b.moment = b.inertia_com * b.alpha + b.omega.cross(b.inertia_com * b.omega) + c_i.cross(b.force);
+  }
+
+  // backward: the subtree's wrench about each origin, in its frame; a hinge takes its axis' part
+  for (int i = m.nbody - 1; i > 0; --i) {
+    Body& b = bodies_[i];
+    if (b.joint >= 0) qfrc[joints_[b.joint].dof_adr] = joints_[b.joint].local_axis.dot(b.moment);
+    Body& parent = bodies_[b.parent];
+    const Eigen::Vector3d force = b.rotation * b.force;
+    parent.force += force;
+    parent.moment += b.rotation * b.moment + b.offset.cross(force);
+  }
+}
+
+void ChainRne::BiasWorld(const mjModel& m, const double* qpos, const double* qvel, double* qfrc) {
   // the world: at rest, accelerating against gravity
   Body& world = bodies_[0];
   world.rotation.setIdentity();

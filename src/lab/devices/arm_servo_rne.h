@@ -10,6 +10,12 @@
 // The model's constant arrays (body_pos/quat, body_ipos/iquat, mass, inertia,
 // joint axes and anchors) are read once, by the constructor and by Refresh:
 // whoever changes them (a new payload, a moved root) calls Refresh.
+//
+// A chain whose every body has at most one joint, a hinge at the body's origin
+// (the PA10, the HOAP-3, the head), takes a faster pass in the bodies' own
+// frames (Luh, Walker and Paul's recursion): a hinge about a frame axis turns
+// two columns, and each body's inertia about its centre of mass is a constant
+// 3x3 in its frame. It gives the same torques to rounding.
 #pragma once
 
 #include <vector>
@@ -35,10 +41,21 @@ class ChainRne {
   /// allocation.
   void Bias(const mjModel& model, const double* qpos, const double* qvel, double* qfrc);
 
+  /// Whether Bias takes the pass in the bodies' frames (see the file comment).
+  bool local() const { return local_; }
+  /// The general pass (world-origin twists), whatever the chain: Bias's
+  /// answer for a chain that cannot take the local pass; tests compare the two.
+  void BiasWorld(const mjModel& model, const double* qpos, const double* qvel, double* qfrc);
+
  private:
+  void BiasLocal(const mjModel& model, const double* qpos, const double* qvel, double* qfrc);
+
   struct Body {
     // constants (Refresh)
     int parent = 0;
+    Eigen::Matrix3d inertia_com;        // about the centre of mass, body axes (the local pass)
+    int axis_index = -1;                // the local pass: its hinge is about body axis 0, 1 or 2; -1 other or none
+    int joint = -1;                     // the local pass: its hinge (-1: welded to its parent)
     Eigen::Matrix3d offset_rotation;    // body_quat: the frame in its parent's, before the joints
     Eigen::Vector3d offset;             // body_pos
     Eigen::Matrix3d inertial_rotation;  // body_iquat
@@ -64,6 +81,7 @@ class ChainRne {
   };
   std::vector<Body> bodies_;
   std::vector<Joint> joints_;
+  bool local_ = false;                          // every body: at most one joint, a hinge at its origin
   std::vector<int> first_joint_, joint_count_;  // per body
   Eigen::Vector3d gravity_accel_;               // the world's acceleration: -g, or 0 without gravity
 };
