@@ -8,7 +8,6 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "bridge/bridge_payload.h"
 #include "core/core_errors.h"
 
 namespace vlab::lab {
@@ -89,16 +88,28 @@ void WriteBody(const Chain& c, const std::vector<int>& arm_index, int body, std:
 
 bool CheckPayload(const Payload& p, std::string* field, std::string* reason) {
   // one rule for the scenario key, SetPayload and the wire (bridge_payload.h)
-  bridge::ArmPayloadMsg msg;
-  msg.mass_kg = p.mass_kg;
-  for (int k = 0; k < 3; ++k) msg.com_m[k] = p.com_m[k];
-  for (int k = 0; k < 6; ++k) msg.inertia_kgm2[k] = p.inertia_kgm2[k];
   const char* f = nullptr;
   const char* r = nullptr;
-  if (bridge::CheckArmPayload(msg, &f, &r)) return true;
+  if (bridge::CheckArmPayload(PayloadToWire(p), &f, &r)) return true;
   *field = f;
   *reason = r;
   return false;
+}
+
+bridge::ArmPayloadMsg PayloadToWire(const Payload& p) {
+  bridge::ArmPayloadMsg m;
+  m.mass_kg = p.mass_kg;
+  for (int k = 0; k < 3; ++k) m.com_m[k] = p.com_m[k];
+  m.inertia_kgm2 = p.inertia_kgm2;
+  return m;
+}
+
+Payload PayloadFromWire(const bridge::ArmPayloadMsg& m) {
+  Payload p;
+  p.mass_kg = m.mass_kg;
+  p.com_m = Eigen::Vector3d(m.com_m[0], m.com_m[1], m.com_m[2]);
+  p.inertia_kgm2 = m.inertia_kgm2;
+  return p;
 }
 
 std::unique_ptr<ArmServoModel> ArmServoModel::Create(const mjModel& m, const std::vector<int>& joints,
@@ -241,8 +252,7 @@ void ArmServoModel::CopyState(const mjData& world, bool with_velocity) {
 
 void ArmServoModel::Bias(const mjData& world, double* tau) {
   CopyState(world, true);
-  rne_pass_->Bias(*model_, data_->qpos, data_->qvel, rne_.data());
-  for (std::size_t i = 0; i < dof_adr_.size(); ++i) tau[i] = rne_[dof_adr_[i]];
+  BiasOfState(tau);
 }
 
 void ArmServoModel::Bias(const double* q, const double* qd, double* tau) {
@@ -250,6 +260,10 @@ void ArmServoModel::Bias(const double* q, const double* qd, double* tau) {
     data_->qpos[qpos_adr_[i]] = q[i];
     data_->qvel[dof_adr_[i]] = qd[i];
   }
+  BiasOfState(tau);
+}
+
+void ArmServoModel::BiasOfState(double* tau) {
   rne_pass_->Bias(*model_, data_->qpos, data_->qvel, rne_.data());
   for (std::size_t i = 0; i < dof_adr_.size(); ++i) tau[i] = rne_[dof_adr_[i]];
 }

@@ -28,6 +28,7 @@
 #include <mujoco/mujoco.h>
 #include <Eigen/Core>
 
+#include "bridge/bridge_payload.h"
 #include "core/core_mujoco.h"
 #include "lab/devices/arm_servo_rne.h"
 
@@ -48,6 +49,11 @@ struct Payload {
 /// inequality. Returns true when it is; else false with `field` set to
 /// "mass", "com" or "inertia" and `reason` to why.
 bool CheckPayload(const Payload& payload, std::string* field, std::string* reason);
+
+/// The payload as the wire carries it (bridge_payload.h), and back: the same
+/// numbers, field by field.
+bridge::ArmPayloadMsg PayloadToWire(const Payload& payload);
+Payload PayloadFromWire(const bridge::ArmPayloadMsg& payload);
 
 /// The servo's model of its arm (see the file comment).
 class ArmServoModel {
@@ -89,6 +95,8 @@ class ArmServoModel {
   ArmServoModel() = default;
   // copies the arm's q (and qd) from the world into the servo data
   void CopyState(const mjData& world_data, bool with_velocity);
+  // the pass at the servo data's state; the arm joints' torques into tau
+  void BiasOfState(double* tau);
 
   std::string xml_;
   ModelPtr model_;

@@ -40,23 +40,6 @@ std::vector<double> TorqueMax(const Eigen::VectorXd& tau_min, const Eigen::Vecto
   return out;
 }
 
-// the servo's payload as the wire carries it, and back
-bridge::ArmPayloadMsg ToWire(const Payload& p) {
-  bridge::ArmPayloadMsg m;
-  m.mass_kg = p.mass_kg;
-  for (int i = 0; i < 3; ++i) m.com_m[i] = p.com_m[i];
-  m.inertia_kgm2 = p.inertia_kgm2;
-  return m;
-}
-
-Payload FromWire(const bridge::ArmPayloadMsg& m) {
-  Payload p;
-  p.mass_kg = m.mass_kg;
-  p.com_m = Eigen::Vector3d(m.com_m[0], m.com_m[1], m.com_m[2]);
-  p.inertia_kgm2 = m.inertia_kgm2;
-  return p;
-}
-
 // the payload key: {mass: kg, com: [x, y, z] m, inertia: [ixx, iyy, izz(, ixy, ixz, iyz)] kg m^2}
 void ReadPayload(MapReader& r, Payload* payload) {
   MapReader p = r.Map("payload");
@@ -408,7 +391,7 @@ bool SimArm::TakeCommand(bridge::DeviceEndpoint& endpoint, std::vector<double>* 
   (void)scratch;
   // a payload the owner set: from this period on (the endpoint checked it with CheckPayload)
   bridge::ArmPayloadMsg payload;
-  if (endpoint.TakePayload(&payload)) SetPayload(FromWire(payload));
+  if (endpoint.TakePayload(&payload)) SetPayload(PayloadFromWire(payload));
   if (!endpoint.TakeArmCommand(&wire_command_)) return false;
   command_.mode = static_cast<bridge::ArmMode>(wire_command_.mode);
   command_.value = Eigen::Map<const Eigen::VectorXd>(wire_command_.value.data(),
@@ -436,12 +419,9 @@ void SimArm::ConfigureEndpoint(double, bridge::EndpointConfig* ec) const {
   ec->velocity_max = Limits(max_velocity_, false);
   ec->torque_max = TorqueMax(tau_min_, tau_max_);
   ec->watchdog_periods = watchdog_periods_;
-  // the payload: the one in force, and the servo model's own check of a new one
-  ec->payload = ToWire(payload());
-  ec->check_payload = [](const bridge::ArmPayloadMsg& p) {
-    std::string field, reason;
-    return CheckPayload(FromWire(p), &field, &reason);
-  };
+  // the payload in force; a new one the endpoint checks by the one rule (CheckArmPayload,
+  // which CheckPayload is)
+  ec->payload = PayloadToWire(payload());
 }
 
 std::string SimArm::DescribeJson(const bridge::DeviceDescription& common) const {
@@ -456,7 +436,7 @@ std::string SimArm::DescribeJson(const bridge::DeviceDescription& common) const 
   if (sensing_.enabled()) {
     for (int i = 0; i < dof(); ++i) desc.resolution.push_back(sensing_.resolution(i));
   }
-  desc.payload = ToWire(payload());
+  desc.payload = PayloadToWire(payload());
   desc.feedforward = feedforward_kind_ == ServoConfig::Feedforward::kModel ? "model" : "world";
   static_cast<bridge::DeviceDescription&>(desc) = common;
   return bridge::DescribeJson(desc);

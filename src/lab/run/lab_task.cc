@@ -92,18 +92,12 @@ class LabChannel final : public task::Channel {
   bool SetPayload(const bridge::ArmPayloadMsg& p, std::string* why) override {
     SimArm* arm = device_->arm();
     if (!arm) return task::Channel::SetPayload(p, why);
-    Payload payload;  // in process: from the next physics step, as a command written now
-    payload.mass_kg = p.mass_kg;
-    payload.com_m = Eigen::Vector3d(p.com_m[0], p.com_m[1], p.com_m[2]);
-    payload.inertia_kgm2 = p.inertia_kgm2;
-    return arm->SetPayload(payload, why);
+    return arm->SetPayload(PayloadFromWire(p), why);  // in process: from the next physics step
   }
   bool GetPayload(bridge::ArmPayloadMsg* p, std::string* why) override {
     const SimArm* arm = device_->arm();
     if (!arm) return task::Channel::GetPayload(p, why);
-    p->mass_kg = arm->payload().mass_kg;
-    for (int i = 0; i < 3; ++i) p->com_m[i] = arm->payload().com_m[i];
-    p->inertia_kgm2 = arm->payload().inertia_kgm2;
+    *p = PayloadToWire(arm->payload());
     return true;
   }
 
