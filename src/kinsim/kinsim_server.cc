@@ -85,8 +85,6 @@ void KinsimServer::RunPeriod(long k) {
   // 2. watchdog, then the newest accepted command
   bridge::DeviceEndpoint& endpoint = server_->endpoint();
   const bool watchdog_hold = endpoint.BeginPeriod(k);
-  bridge::ArmPayloadMsg payload;
-  if (endpoint.TakePayload(&payload)) ++counters_.payloads;
   if (endpoint.TakeArmCommand(&command_)) {
     if (arm_->Command(command_)) {
       ++counters_.applied;
@@ -158,7 +156,7 @@ std::string KinsimServer::ReportText() const {
                 "vlab-kinsim: refused %ld (malformed %ld, limits %ld, not owner %ld, torque mode %ld), "
                 "stale %ld, duplicate %ld, watchdog holds %ld",
                 s.periods, s.periods > 0 ? (s.periods - 1) / config_.rate_hz : 0.0, s.missed_deadlines,
-                s.max_lateness_s * 1e3, e.received, e.describes, e.accepted, s.applied, s.payloads,
+                s.max_lateness_s * 1e3, e.received, e.describes, e.accepted, s.applied, e.payloads,
                 e.refused + s.refused_torque, e.refused_malformed, e.refused_limits, e.refused_not_owner,
                 s.refused_torque, e.stale, e.duplicate, e.watchdog_holds + s.mode_watchdog_holds);
   return text;

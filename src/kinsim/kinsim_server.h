@@ -41,7 +41,6 @@ struct ServerConfig {
 struct ServerCounters {
   long periods = 0;
   long applied = 0;              ///< commands the arm took
-  long payloads = 0;             ///< payloads taken (they change nothing: no dynamics)
   long refused_torque = 0;       ///< commands accepted by the endpoint, refused by the arm for their mode
   long mode_watchdog_holds = 0;  ///< holds because the owner sent only refused-mode commands
   long missed_deadlines = 0;     ///< periods that ended after their deadline
