@@ -47,16 +47,6 @@ ZigguratNormal::ZigguratNormal() {
   }
 }
 
-double ZigguratNormal::operator()(Xoshiro256pp& rng) const {
-  // bits 0-6: layer, bit 7: sign, bits 8-63: position in the layer
-  const std::uint64_t word = rng();
-  const int layer = static_cast<int>(word & (kLayers - 1));
-  const std::uint64_t value = word >> 8;
-  const double x = static_cast<double>(value) * scale_[layer];
-  const double magnitude = value < fast_[layer] ? x : Slow(rng, layer, x);
-  return (word & 0x80) ? -magnitude : magnitude;
-}
-
 double ZigguratNormal::Slow(Xoshiro256pp& rng, int layer, double x) const {
   for (;;) {
     if (layer == 0) {

@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 
 namespace vlab::sensors {
 
@@ -55,8 +56,23 @@ class ZigguratNormal {
  public:
   /// Builds the layer tables (128 entries; no allocation).
   ZigguratNormal();
-  /// One standard normal deviate (mean 0, variance 1).
-  double operator()(Xoshiro256pp& rng) const;
+  /// One standard normal deviate (mean 0, variance 1). Inline, without a branch on the
+  /// sign (a random one): the JR3 model draws 48 per millisecond.
+  double operator()(Xoshiro256pp& rng) const {
+    // bits 0-6: layer, bit 7: sign, bits 8-63: position in the layer
+    const std::uint64_t word = rng();
+    const int layer = static_cast<int>(word & (kLayers - 1));
+    const std::uint64_t value = word >> 8;
+    const double x = static_cast<double>(value) * scale_[layer];
+    const double magnitude = value < fast_[layer] ? x : Slow(rng, layer, x);
+    // the sign bit set from bit 7: -magnitude when it is set
+    std::uint64_t bits;
+    std::memcpy(&bits, &magnitude, sizeof bits);
+    bits ^= (word & 0x80) << 56;
+    double signed_value;
+    std::memcpy(&signed_value, &bits, sizeof bits);
+    return signed_value;
+  }
 
  private:
   static constexpr int kLayers = 128;

@@ -2,6 +2,7 @@
 #include "sensors/sensor_wrench.h"
 
 #include "sensors/sensor_random.h"
+#include "sensors/sensor_round.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -33,7 +34,7 @@ Wrench ToCounts(const WrenchSensorModel& model, const Wrench& value, bool* satur
       if (saturated) *saturated = true;
       counts[i] = std::copysign(kWrenchClipCounts, counts[i]);
     }
-    if (model.quantization_enabled()) counts[i] = std::round(counts[i]);
+    if (model.quantization_enabled()) counts[i] = RoundHalfAway(counts[i]);
   }
   return counts;
 }

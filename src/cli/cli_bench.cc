@@ -2,18 +2,22 @@
 //
 // 1. One untimed lab run records the controller's commands and the motor
 //    controls of every physics step.
-// 2. Timed, best of --repeat each:
+// 2. Timed, best of --repeat each, the loop on the first CPU allowed (it does
+//    not migrate, as a realtime loop that keeps a CPU; the log writer is free
+//    on all the CPUs allowed, so mostly on another):
 //    a. bare mj_step on a fresh mjData of the same model, replaying the
 //       recorded motor controls: exactly the physics the lab computed;
 //    b. the lab loop with the recorded commands replayed: arm servo, JR3
 //       model at 8 kHz, log.csv (writer thread), checks — the lab's own cost;
 //    c. the full lab loop with the built-in controller computing live.
-// 3. a and b again, best of --repeat, with this process pinned to one CPU.
+// 3. a and b again, best of --repeat, with the whole process on that one CPU.
 // The ratio b / a is the fraction of raw engine speed the lab keeps with the
 // JR3 model and logging on (goal >= 0.90); c shows the controller's share.
 // log.csv is formatted on a writer thread, which has a core of its own when
 // more than one is allowed: the one-CPU b / a counts that work, the other does
-// not, so both are printed, after the CPUs the process may use.
+// not, so both are printed, after the CPUs the process may use. An unpinned
+// loop is not measured: where a thread's migration is dear (some virtual
+// machines) it slows a and b alike and hides the lab's cost.
 #include <sched.h>
 
 #include <algorithm>
@@ -85,18 +89,25 @@ int BenchCommand(const BenchArgs& args) {
     std::printf("  CPUs: %zu allowed (%s) of %ld online; log.csv is formatted on a writer thread\n", allowed.size(),
                 CpuListText(allowed).c_str(), sysconf(_SC_NPROCESSORS_ONLN));
 
-    // a and b, best of --repeat; c too when `live` is given
+    // a and b, best of --repeat, the loop on `loop_cpu` (the rest of the process where it is);
+    // c too when `live` is given
+    const int loop_cpu = allowed.empty() ? 0 : allowed.front();
+    const std::vector<int> one = {loop_cpu};
     bool same_all = true;
     const auto measure = [&](double* live) {
+      const std::vector<int> before = ThreadCpus();
       Rates best;
       for (int i = 0; i < args.repeat; ++i) {
         bool same = false;
+        BindThread(0, one);
         best.bare = std::max(best.bare, BareReplay(*lab, recorded.recording.controls, final_qpos, &same));
+        BindThread(0, before);
         same_all = same_all && same;
 
         lab::RunOptions replay;
         replay.out_dir = out_dir;
         replay.replay = &recorded.recording;
+        replay.loop_cpu = loop_cpu;
         const lab::RunResult r = lab->Run(replay);
         best.replayed = std::max(best.replayed, r.steps / r.loop_wall_s);
         same_all = same_all && lab->FinalQpos() == final_qpos;
@@ -104,6 +115,7 @@ int BenchCommand(const BenchArgs& args) {
         if (!live) continue;
         lab::RunOptions full;
         full.out_dir = out_dir;
+        full.loop_cpu = loop_cpu;
         const lab::RunResult f = lab->Run(full);
         *live = std::max(*live, f.steps / f.loop_wall_s);
       }
@@ -111,7 +123,6 @@ int BenchCommand(const BenchArgs& args) {
     };
     double live = 0;
     const Rates all = measure(&live);
-    const std::vector<int> one = {allowed.empty() ? 0 : allowed.front()};
     BindThread(0, one);
     const Rates single = measure(nullptr);
     BindThread(0, allowed);
@@ -120,8 +131,9 @@ int BenchCommand(const BenchArgs& args) {
 
     const double ratio = all.replayed / all.bare;
     const double ratio_one = single.replayed / single.bare;
-    std::printf("  on the CPUs allowed (%s), the log writer %s:\n", CpuListText(allowed).c_str(),
-                allowed.size() > 1 ? "free to run beside the loop" : "sharing the one CPU with the loop");
+    std::printf("  the loop on CPU %d, the log writer %s:\n", loop_cpu,
+                allowed.size() > 1 ? ("free on the CPUs allowed (" + CpuListText(allowed) + ")").c_str()
+                                   : "sharing the one CPU with the loop");
     std::printf("    a. bare mj_step, recorded controls           %9.0f steps/s  (%.0fx real time)\n", all.bare,
                 all.bare * m->opt.timestep);
     std::printf("    b. lab: servo + JR3 8 kHz + log.csv + checks %9.0f steps/s  ratio b/a %.3f\n", all.replayed,
@@ -133,8 +145,8 @@ int BenchCommand(const BenchArgs& args) {
     std::printf("    b. lab: servo + JR3 8 kHz + log.csv + checks %9.0f steps/s  ratio b/a %.3f\n", single.replayed,
                 ratio_one);
     std::printf("  a and b reproduce the recorded trajectory bit for bit: %s\n", same_all ? "yes" : "NO");
-    std::printf("  goal: b/a >= 0.90 -> %s on the CPUs allowed, %s on one CPU\n", ratio >= 0.90 ? "met" : "NOT met",
-                ratio_one >= 0.90 ? "met" : "NOT met");
+    std::printf("  goal: b/a >= 0.90 -> %s with the log writer beside the loop, %s on one CPU\n",
+                ratio >= 0.90 ? "met" : "NOT met", ratio_one >= 0.90 ? "met" : "NOT met");
     return 0;
   });
 }

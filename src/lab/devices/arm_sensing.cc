@@ -4,6 +4,7 @@
 #include <string>
 
 #include "lab/scenario/lab_yaml.h"
+#include "sensors/sensor_round.h"
 
 namespace vlab::lab {
 
@@ -48,7 +49,7 @@ void JointSensing::Configure(const SensingConfig& config, int joints) {
 }
 
 std::int64_t JointSensing::Count(int i, double q) const {
-  return static_cast<std::int64_t>(std::llround(q / resolution_[i]));
+  return sensors::RoundToCount(q / resolution_[i]);
 }
 
 void JointSensing::Peek(const double* q, const double* qd, double dt, double* q_out, double* qd_out) const {

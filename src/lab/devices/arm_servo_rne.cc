@@ -13,6 +13,32 @@ namespace {
 
 using RowMatrix = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
+constexpr double kZero[3] = {0.0, 0.0, 0.0};
+
+// 3-vector kernels on column-major 3x3 arrays, summing in the order Eigen's fixed-size
+// expressions do (rows 0 and 1 of a product as one SSE2 pair, row 2 as a reduction, a dot as
+// the pair then the third term), so that the scalar pass gives Eigen's results to the bit
+inline void Times(const double* a, const double* x, double* out) {
+  out[0] = a[0] * x[0] + a[3] * x[1] + a[6] * x[2];
+  out[1] = a[1] * x[0] + a[4] * x[1] + a[7] * x[2];
+  out[2] = a[2] * x[0] + (a[5] * x[1] + a[8] * x[2]);
+}
+
+// a^T x
+inline void TransposeTimes(const double* a, const double* x, double* out) {
+  out[0] = a[0] * x[0] + a[1] * x[1] + a[2] * x[2];
+  out[1] = a[3] * x[0] + a[4] * x[1] + a[5] * x[2];
+  out[2] = a[6] * x[0] + (a[7] * x[1] + a[8] * x[2]);
+}
+
+inline void Cross(const double* a, const double* b, double* out) {
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+inline double Dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
 Eigen::Matrix3d QuatToMatrix(const double* quat) {
   double mat[9];
   mju_quat2Mat(mat, quat);
@@ -83,7 +109,9 @@ void ChainRne::Bias(const mjModel& m, const double* qpos, const double* qvel, do
 
 void ChainRne::BiasLocal(const mjModel& m, const double* qpos, const double* qvel, double* qfrc) {
   // in each body's frame: omega, its rate, the origin's acceleration (gravity as -g); the
-  // world's frame is the world's
+  // world's frame is the world's. Scalar arithmetic on the bodies' arrays (no temporaries),
+  // each sum in the order of the Eigen expressions it replaced, so the torques are the same
+  // to the bit (arm_servo_rne_test compares them with the general pass)
   Body& world = bodies_[0];
   world.rotation.setIdentity();
   world.omega.setZero();
@@ -98,45 +126,70 @@ void ChainRne::BiasLocal(const mjModel& m, const double* qpos, const double* qve
     // rotation: the body's frame in its parent's (offset, then its hinge), R = Q Rot(axis, q)
     double qd = 0.0;
     b.rotation = b.offset_rotation;
-    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+    const double* axis = kZero;
     if (b.joint >= 0) {
       const Joint& joint = joints_[b.joint];
       const double q = qpos[joint.qpos_adr] - joint.qpos0;
       qd = qvel[joint.dof_adr];
-      axis = joint.local_axis;
+      axis = joint.local_axis.data();
       const double s = std::sin(q), c = std::cos(q);
       if (b.axis_index >= 0) {
         // about a frame axis: the other two columns turn
         const int u = (b.axis_index + 1) % 3, v = (b.axis_index + 2) % 3;
-        const Eigen::Vector3d cu = b.offset_rotation.col(u), cv = b.offset_rotation.col(v);
-        b.rotation.col(u) = c * cu + s * cv;
-        b.rotation.col(v) = c * cv - s * cu;
+        for (int r = 0; r < 3; ++r) {
+          const double cu = b.offset_rotation(r, u), cv = b.offset_rotation(r, v);
+          b.rotation(r, u) = c * cu + s * cv;
+          b.rotation(r, v) = c * cv - s * cu;
+        }
       } else {
-        b.rotation = b.offset_rotation * Eigen::AngleAxisd(q, axis).toRotationMatrix();
+        b.rotation = b.offset_rotation * Eigen::AngleAxisd(q, joint.local_axis).toRotationMatrix();
       }
     }
-    const Eigen::Matrix3d rt = b.rotation.transpose();
+    const double* rot = b.rotation.data();  // column-major: rot[3 * col + row]
     // the parent's motion carried to this origin, then into this frame
-    const Eigen::Vector3d parent_omega = rt * parent.omega;
-    const Eigen::Vector3d joint_rate = axis * qd;
-    b.omega = parent_omega + joint_rate;
-    b.alpha = rt * parent.alpha + parent_omega.cross(joint_rate);
-    b.accel = rt * (parent.accel + parent.alpha.cross(b.offset) + parent.omega.cross(parent.omega.cross(b.offset)));
+    double parent_omega[3], joint_rate[3], carried[3], rate_cross[3];
+    TransposeTimes(rot, parent.omega.data(), parent_omega);
+    for (int k = 0; k < 3; ++k) joint_rate[k] = axis[k] * qd;
+    for (int k = 0; k < 3; ++k) b.omega[k] = parent_omega[k] + joint_rate[k];
+    TransposeTimes(rot, parent.alpha.data(), carried);
+    Cross(parent_omega, joint_rate, rate_cross);
+    for (int k = 0; k < 3; ++k) b.alpha[k] = carried[k] + rate_cross[k];
+    double lever[3], spin[3], whirl[3], origin_accel[3];
+    Cross(parent.alpha.data(), b.offset.data(), lever);
+    Cross(parent.omega.data(), b.offset.data(), spin);
+    Cross(parent.omega.data(), spin, whirl);
+    for (int k = 0; k < 3; ++k) origin_accel[k] = parent.accel[k] + lever[k] + whirl[k];
+    TransposeTimes(rot, origin_accel, b.accel.data());
     // Newton-Euler at the centre of mass; the moment about the body's origin
-    const Eigen::Vector3d& c_i = b.inertial_pos;
-    const Eigen::Vector3d com_accel = b.accel + b.alpha.cross(c_i) + b.omega.cross(b.omega.cross(c_i));
-    b.force = b.mass * com_accel;
-    b.moment = b.inertia_com * b.alpha + b.omega.cross(b.inertia_com * b.omega) + c_i.cross(b.force);
+    const double* c_i = b.inertial_pos.data();
+    const double* omega = b.omega.data();
+    double c_lever[3], c_spin[3], c_whirl[3];
+    Cross(b.alpha.data(), c_i, c_lever);
+    Cross(omega, c_i, c_spin);
+    Cross(omega, c_spin, c_whirl);
+    for (int k = 0; k < 3; ++k) b.force[k] = b.mass * (b.accel[k] + c_lever[k] + c_whirl[k]);
+    double i_alpha[3], i_omega[3], gyro[3], c_force[3];
+    Times(b.inertia_com.data(), b.alpha.data(), i_alpha);
+    Times(b.inertia_com.data(), omega, i_omega);
+    Cross(omega, i_omega, gyro);
+    Cross(c_i, b.force.data(), c_force);
+    for (int k = 0; k < 3; ++k) b.moment[k] = i_alpha[k] + gyro[k] + c_force[k];
   }
 
   // backward: the subtree's wrench about each origin, in its frame; a hinge takes its axis' part
   for (int i = m.nbody - 1; i > 0; --i) {
     Body& b = bodies_[i];
-    if (b.joint >= 0) qfrc[joints_[b.joint].dof_adr] = joints_[b.joint].local_axis.dot(b.moment);
+    if (b.joint >= 0) qfrc[joints_[b.joint].dof_adr] = Dot(joints_[b.joint].local_axis.data(), b.moment.data());
     Body& parent = bodies_[b.parent];
-    const Eigen::Vector3d force = b.rotation * b.force;
-    parent.force += force;
-    parent.moment += b.rotation * b.moment + b.offset.cross(force);
+    const double* rot = b.rotation.data();
+    double force[3], moment[3], arm[3];
+    Times(rot, b.force.data(), force);
+    Times(rot, b.moment.data(), moment);
+    Cross(b.offset.data(), force, arm);
+    for (int k = 0; k < 3; ++k) {
+      parent.force[k] += force[k];
+      parent.moment[k] += moment[k] + arm[k];
+    }
   }
 }
 

@@ -6,6 +6,7 @@
 
 #include "bridge/bridge_signals.h"
 #include "core/core_mujoco.h"
+#include "core/core_realtime.h"
 #include "lab/outputs/lab_plot.h"
 
 namespace vlab::lab {
@@ -172,6 +173,10 @@ void RunSession::Start() {
   Publish(0);
   Recorded(0.0);  // (a failed write ends the run before its first period)
   NoteWaiting();
+  if (options_.loop_cpu >= 0) {
+    loop_cpus_before_ = ThreadCpus();
+    if (!BindThread(0, {options_.loop_cpu})) loop_cpus_before_.clear();
+  }
   t_loop_ = t_progress_ = WallClock::now();
 }
 
@@ -332,6 +337,7 @@ void RunSession::AwaitFinalAnswer() {
 
 RunResult RunSession::Finish() {
   result_.loop_wall_s = Seconds(t_loop_, WallClock::now());
+  if (!loop_cpus_before_.empty()) BindThread(0, loop_cpus_before_);
   AwaitFinalAnswer();
   DropRealtime(result_.realtime);  // the outputs are written at normal priority
   if (controller_) {

@@ -91,6 +91,7 @@ class RunSession {
   long periods_;
   RunResult result_;
   WallClock::time_point t_start_, t_loop_, t_progress_;
+  std::vector<int> loop_cpus_before_;  // the thread's CPUs before RunOptions::loop_cpu bound it
   bool external_ = false;
   BridgeOptions external_serve_;
   std::unique_ptr<Clock> clock_;

@@ -70,6 +70,11 @@ struct RunOptions {
   /// Called once before period 0 with what each realtime priority asked for got
   /// (the lab's, and an external controller's), one line each.
   std::function<void(const std::string& line)> on_realtime;
+  /// The CPU the step loop runs on from period 0 to its end (vlab bench physics: a loop
+  /// that does not migrate, as a realtime loop that keeps a CPU); the threads made before,
+  /// the log writer's among them, keep the CPUs the calling thread had, and it has them
+  /// again when the loop ends. -1: the thread's CPUs are left as they are.
+  int loop_cpu = -1;
 };
 
 /// What a recorded run computed.
