@@ -70,6 +70,9 @@ struct RunOptions {
   /// Called once before period 0 with what each realtime priority asked for got
   /// (the lab's, and an external controller's), one line each.
   std::function<void(const std::string& line)> on_realtime;
+  /// No print() output of task programs (controller type task) on stdout; it
+  /// is still kept in RunResult::task_output (vlab run -q).
+  bool quiet = false;
 };
 
 /// What a recorded run computed.
@@ -123,6 +126,10 @@ struct RunResult {
     RealtimeGrant realtime;            ///< its controller.realtime_priority, read off the program
     std::map<std::string, int> ports;  ///< the free ports its {port:NAME} placeholders got
   } controller;
+  /// What the task programs (controller type task) printed, one line each:
+  /// "[ROBOT t=SECONDS] TEXT" (simulated time), and a script error's first line
+  /// as "[error t=SECONDS] FILE:LINE: ...": the run's task.log.
+  std::string task_output;
 };
 
 class Lab {
