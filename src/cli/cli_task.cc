@@ -40,6 +40,44 @@ struct TaskArgs {
   double timeout_s = 5.0;
   bool hold = false;
   bool quiet = false;
+  std::string log;  // task.log: every print() line and the error, with the simulated time
+};
+
+// where the script's output goes: stdout unless --quiet, and the --log file
+class TaskOutput {
+ public:
+  TaskOutput(const std::string& path, bool quiet) : quiet_(quiet) {
+    if (path.empty()) return;
+    file_ = std::fopen(path.c_str(), "w");
+    if (!file_) throw InputError("task: --log: cannot write '" + path + "'");
+  }
+  ~TaskOutput() {
+    if (file_) std::fclose(file_);
+  }
+  TaskOutput(const TaskOutput&) = delete;
+  TaskOutput& operator=(const TaskOutput&) = delete;
+  // one print() line of the script at simulated time t
+  void Print(const std::string& who, double t, const std::string& text) {
+    char head[160];
+    std::snprintf(head, sizeof head, "[%s t=%.3f] ", who.c_str(), t);
+    if (file_) {
+      std::fprintf(file_, "%s%s\n", head, text.c_str());
+      std::fflush(file_);
+    }
+    if (quiet_) return;
+    std::printf("%s%s\n", head, text.c_str());
+    std::fflush(stdout);
+  }
+  // the script's error (its first line) in the log; the whole message goes to stderr
+  void Error(double t, const std::string& error) {
+    if (!file_) return;
+    std::fprintf(file_, "[error t=%.3f] %s\n", t, error.substr(0, error.find('\n')).c_str());
+    std::fflush(file_);
+  }
+
+ private:
+  bool quiet_;
+  std::FILE* file_ = nullptr;
 };
 
 int Task(const TaskArgs& a) {
@@ -67,12 +105,8 @@ int Task(const TaskArgs& a) {
   rc.period_s = a.period_s > 0 ? a.period_s : (devices.control_hz() > 0 ? 1.0 / devices.control_hz() : 0.002);
   rc.seed = static_cast<std::uint64_t>(a.seed);
   rc.markers_hold = !devices.realtime();  // lockstep: markers:next() holds the period for its frame
-  const bool quiet = a.quiet;
-  rc.print = [quiet](const std::string& who, double t, const std::string& text) {
-    if (quiet) return;
-    std::printf("[%s t=%.3f] %s\n", who.c_str(), t, text.c_str());
-    std::fflush(stdout);
-  };
+  auto output = std::make_shared<TaskOutput>(a.log, a.quiet);
+  rc.print = [output](const std::string& who, double t, const std::string& text) { output->Print(who, t, text); };
   task::ProgramConfig p;
   p.script = a.script;
   p.robot = devices.arm_name();
@@ -99,7 +133,8 @@ int Task(const TaskArgs& a) {
       t0 = t;
       devices.set_time_origin(t0);
     }
-    if (!runtime->Step(t - t0, nullptr)) {
+    if (!runtime->Step(t - t0, nullptr)) {  // a script error ends the program at once, --hold or not
+      output->Error(t - t0, runtime->error());
       std::fprintf(stderr, "vlab task: %s\n", runtime->error().c_str());
       return 1;
     }
@@ -140,7 +175,10 @@ Subcommand AddTaskCommand(CLI::App& app) {
   cmd->add_flag("--hold", a->hold,
                 "After the script ends, keep holding the arm until its states stop or SIGINT/SIGTERM (for vlab run's "
                 "external controllers)");
-  cmd->add_flag("--quiet", a->quiet, "No print() output or end line");
+  cmd->add_flag("-q,--quiet", a->quiet, "No print() output or end line on stdout (--log still gets it)");
+  cmd->add_option("--log", a->log,
+                  "Write every print() line and a script error, with the simulated time, to FILE (e.g. "
+                  "{out_dir}/task.log as an external controller of vlab run)");
   return {cmd, [a]() { return WithErrorReport([a]() { return Task(*a); }); }};
 }
 

@@ -36,7 +36,9 @@ int main(int argc, char** argv) {
   run_cmd->add_option("scenario", run.scenario, "Scenario file (YAML); the .yaml extension may be left out")
       ->required();
   run_cmd->add_option("--out", run.out_dir, kOutHelp);
-  run_cmd->add_flag("-q,--quiet", run.quiet, "No progress bar and no per-check lines");
+  run_cmd->add_flag("-q,--quiet", run.quiet,
+                    "No progress bar, no per-check lines and no task print() lines (kept in the output folder's "
+                    "task.log)");
   run_cmd->add_option("--duration", run.duration_s, "Override the scenario's duration, s (> 0, at most 1e6)");
   run_cmd->add_option("--seed", run.seed, "Override the scenario's seed: an integer from 0 to 2^53")
       ->check(CLI::Validator(vlab::lab::CheckSeedText, ""));

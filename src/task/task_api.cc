@@ -130,18 +130,73 @@ double Option(lua_State* L, int options, const char* key, double fallback, const
   return v;
 }
 
-void CheckOptions(lua_State* L, int options, const char* what, const char* const* known) {
+// an option a move does not take, and why (named in its error)
+struct Refused {
+  const char* key;
+  const char* why;
+};
+
+// every key of an options table must be one the move honours: a refused one says why, an
+// unknown one lists the known ones
+void CheckOptions(lua_State* L, int options, const char* what, const char* const* known,
+                  const Refused* refused = nullptr) {
   if (lua_isnoneornil(L, options)) return;
   if (!lua_istable(L, options)) ScriptError(L, "%s: options must be a table, got %s", what, luaL_typename(L, options));
   lua_pushnil(L);
   while (lua_next(L, options)) {
     lua_pop(L, 1);
-    bool ok = lua_type(L, -1) == LUA_TSTRING;
-    const char* key = ok ? lua_tostring(L, -1) : "?";
+    if (lua_type(L, -1) != LUA_TSTRING) {
+      ScriptError(L, "%s: option keys are names (v = ..., t = ...), got a %s key", what, luaL_typename(L, -1));
+    }
+    const char* key = lua_tostring(L, -1);
     bool found = false;
     for (const char* const* k = known; *k; ++k) found = found || !std::strcmp(*k, key);
-    if (!found) ScriptError(L, "%s: unknown option '%s'", what, key);
+    if (found) continue;
+    for (const Refused* r = refused; r && r->key; ++r) {
+      if (!std::strcmp(r->key, key)) ScriptError(L, "%s: option '%s' is not supported: %s", what, key, r->why);
+    }
+    char list[256] = "";
+    for (const char* const* k = known; *k; ++k) {
+      std::strncat(list, k == known ? "" : ", ", sizeof list - std::strlen(list) - 1);
+      std::strncat(list, *k, sizeof list - std::strlen(list) - 1);
+    }
+    ScriptError(L, "%s: unknown option '%s' (options: %s)", what, key, list);
   }
+}
+
+// whether the options table has `key`
+bool HasOption(lua_State* L, int options, const char* key) {
+  if (lua_isnoneornil(L, options)) return false;
+  lua_getfield(L, options, key);
+  const bool has = !lua_isnil(L, -1);
+  lua_pop(L, 1);
+  return has;
+}
+
+// a duration (t) replaces the speed limits: an option that would then be ignored is an error
+void CheckDurationAlone(lua_State* L, int options, const char* what, const char* const* speed_keys) {
+  if (!HasOption(L, options, "t")) return;
+  for (const char* const* k = speed_keys; *k; ++k) {
+    if (HasOption(L, options, *k)) {
+      ScriptError(L, "%s: options 't' and '%s' together: t sets the move's duration, so '%s' would be ignored", what,
+                  *k, *k);
+    }
+  }
+}
+
+// the wrench option names the sensor of a guarded move: without force it would be ignored
+void CheckWrenchNeedsForce(lua_State* L, int options, const char* what) {
+  if (HasOption(L, options, "wrench") && !HasOption(L, options, "force")) {
+    ScriptError(L, "%s: option 'wrench' names the sensor of a guarded move: give 'force' (N) too", what);
+  }
+}
+
+// a move's target frame: every number finite (a NaN or inf would reach the inverse kinematics)
+void CheckFinite(lua_State* L, const Frame& f, const char* what, const char* which) {
+  if (!f.p.allFinite()) {
+    ScriptError(L, "%s: the %s position (%g, %g, %g) m is not finite", what, which, f.p.x(), f.p.y(), f.p.z());
+  }
+  if (!f.q.coeffs().allFinite()) ScriptError(L, "%s: the %s rotation is not finite (a NaN or inf)", what, which);
 }
 
 // the limits of one move: the settings, overridden by the options v, a, w, alpha
@@ -151,10 +206,21 @@ MotionLimits MoveLimits(lua_State* L, const Robot& r, int options, const char* w
   l.accel_mps2 = Option(L, options, "a", l.accel_mps2, what);
   l.rot_speed_rps = Option(L, options, "w", l.rot_speed_rps / kDeg, what) * kDeg;
   l.joint_speed_rps = Option(L, options, "jv", l.joint_speed_rps / kDeg, what) * kDeg;
-  if (!(l.speed_mps > 0 && l.accel_mps2 > 0 && l.rot_speed_rps > 0 && l.joint_speed_rps > 0)) {
-    ScriptError(L, "%s: speeds and accelerations must be > 0", what);
+  const struct {
+    const char* key;
+    double value;
+  } given[] = {{"v", l.speed_mps}, {"a", l.accel_mps2}, {"w", l.rot_speed_rps}, {"jv", l.joint_speed_rps}};
+  for (const auto& g : given) {
+    if (!(g.value > 0)) ScriptError(L, "%s: option %s must be > 0", what, g.key);
   }
   return l;
+}
+
+// the option t (s): 0 when absent (the speed limits set the duration), else > 0
+double Duration(lua_State* L, int options, const char* what) {
+  const double t = Option(L, options, "t", 0, what);
+  if (HasOption(L, options, "t") && !(t > 0)) ScriptError(L, "%s: option t must be > 0 s, got %g", what, t);
+  return t;
 }
 
 // the world frame of a target given in the script's base frame
@@ -215,11 +281,22 @@ void PlanOrFail(lua_State* L, Robot& r, const char* what, F plan_fn) {
 
 int MoveJ(lua_State* L) {
   Robot& r = NeedRobot(L, "movej");
-  static const char* const known[] = {"v", "a", "w", "jv", "t", nullptr};
-  CheckOptions(L, 2, "movej", known);
+  static const char* const known[] = {"jv", "t", nullptr};
+  static const Refused refused[] = {
+      {"v", "movej interpolates the joints; its speed is jv (deg/s) or its duration t (s)"},
+      {"a", "movej's joint acceleration is the setting jspeed(v, a)"},
+      {"w", "movej interpolates the joints; its speed is jv (deg/s) or its duration t (s)"},
+      {"r", "only movel and movec blend"},
+      {"force", "only movel and movec are guarded moves"},
+      {"wrench", "only movel and movec are guarded moves"},
+      {nullptr, nullptr}};
+  static const char* const speeds[] = {"jv", nullptr};
+  CheckOptions(L, 2, "movej", known, refused);
+  CheckDurationAlone(L, 2, "movej", speeds);
   const MotionLimits limits = MoveLimits(L, r, 2, "movej");
-  const double t = Option(L, 2, "t", 0, "movej");
+  const double t = Duration(L, 2, "movej");
   if (const Frame* f = ToFrame(L, 1)) {
+    CheckFinite(L, *f, "movej", "target");
     const Frame goal = ToWorld(r, *f);
     PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, r.planner->Ik(r.q_ref, goal), limits, t); });
     return 0;
@@ -234,7 +311,9 @@ int MoveJ(lua_State* L) {
   for (int i = 0; i < n; ++i) {
     lua_rawgeti(L, 1, i + 1);
     if (!lua_isnumber(L, -1)) ScriptError(L, "movej: joint %d must be a number (deg)", i + 1);
-    q[i] = lua_tonumber(L, -1) * kDeg;
+    const double deg = lua_tonumber(L, -1);
+    if (!std::isfinite(deg)) ScriptError(L, "movej: joint %d is %g, not a finite angle (deg)", i + 1, deg);
+    q[i] = deg * kDeg;
     lua_pop(L, 1);
   }
   PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, q, limits, t); });
@@ -264,10 +343,16 @@ void SetBlend(lua_State* L, Robot& r, const Eigen::Vector3d& target, double radi
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
   static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
-  CheckOptions(L, 2, "movel", known);
+  static const Refused refused[] = {{"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s)"},
+                                    {nullptr, nullptr}};
+  static const char* const speeds[] = {"v", "a", "w", nullptr};
+  CheckOptions(L, 2, "movel", known, refused);
+  CheckDurationAlone(L, 2, "movel", speeds);
+  CheckWrenchNeedsForce(L, 2, "movel");
+  CheckFinite(L, CheckFrame(L, 1, "movel"), "movel", "target");
   const Frame goal = ToWorld(r, CheckFrame(L, 1, "movel"));
   const MotionLimits limits = MoveLimits(L, r, 2, "movel");
-  const double t = Option(L, 2, "t", 0, "movel");
+  const double t = Duration(L, 2, "movel");
   const double radius = Option(L, 2, "r", r.blend_setting_m, "movel");
   if (radius < 0) ScriptError(L, "movel: the blend radius r must be >= 0 m, got %g", radius);
   if (radius > 0 && Option(L, 2, "force", 0, "movel") > 0) {
@@ -308,7 +393,12 @@ int MoveL(lua_State* L) {
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
   static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
-  CheckOptions(L, 3, "movec", known);
+  static const Refused refused[] = {{"jv", "movec moves the tool: its speeds are v (m/s) and w (deg/s)"},
+                                    {nullptr, nullptr}};
+  static const char* const speeds[] = {"v", "a", "w", nullptr};
+  CheckOptions(L, 3, "movec", known, refused);
+  CheckDurationAlone(L, 3, "movec", speeds);
+  CheckWrenchNeedsForce(L, 3, "movec");
   const double radius = Option(L, 3, "r", r.blend_setting_m, "movec");
   if (radius < 0) ScriptError(L, "movec: the blend radius r must be >= 0 m, got %g", radius);
   if (radius > 0 && Option(L, 3, "force", 0, "movec") > 0) {
@@ -322,9 +412,11 @@ int MoveC(lua_State* L) {
     point.p = CheckVec3(L, 1, "movec");
     via = ToWorld(r, point).p;
   }
+  if (!via.allFinite()) ScriptError(L, "movec: the via point (%g, %g, %g) m is not finite", via.x(), via.y(), via.z());
+  CheckFinite(L, CheckFrame(L, 2, "movec"), "movec", "target");
   const Frame goal = ToWorld(r, CheckFrame(L, 2, "movec"));
   const MotionLimits limits = MoveLimits(L, r, 3, "movec");
-  const double t = Option(L, 3, "t", 0, "movec");
+  const double t = Duration(L, 3, "movec");
   const double chord = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
   PlanOrFail(L, r, "movec", [&] { return r.planner->Arc(r.q_ref, via, goal, limits, t); });
   if (radius > 0) SetBlend(L, r, goal.p, radius, chord, "movec");
@@ -335,8 +427,12 @@ int MoveC(lua_State* L) {
 int SelfMove(lua_State* L) {
   Robot& r = NeedRobot(L, "selfmove");
   static const char* const known[] = {"joint", "by", "t", nullptr};
+  static const Refused refused[] = {{"v", "selfmove's duration is t (s)"},       {"a", "selfmove's profile is quintic over t (s)"},
+                                    {"w", "selfmove's duration is t (s)"},       {"jv", "selfmove's duration is t (s)"},
+                                    {"r", "only movel and movec blend"},         {"force", "only movel and movec are guarded moves"},
+                                    {"wrench", "only movel and movec are guarded moves"}, {nullptr, nullptr}};
   if (!lua_istable(L, 1)) ScriptError(L, "selfmove: expected {joint = N, by = DEG, t = S}");
-  CheckOptions(L, 1, "selfmove", known);
+  CheckOptions(L, 1, "selfmove", known, refused);
   const int joint = static_cast<int>(Option(L, 1, "joint", 3, "selfmove")) - 1;
   const double by = Option(L, 1, "by", 0, "selfmove") * kDeg;
   const double t = Option(L, 1, "t", 0, "selfmove");

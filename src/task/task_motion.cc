@@ -143,15 +143,85 @@ Eigen::VectorXd MotionPlanner::Solve(const Eigen::VectorXd& q_start, const Frame
   return q;
 }
 
+std::string MotionPlanner::Singularity(const Eigen::VectorXd& q) const {
+  const int n = model_->dof();
+  model_->SetState(q, zero_);
+  const Eigen::MatrixXd J = model_->Jacobian();  // tip site, world: rows 0-2 linear, 3-5 angular
+  const Eigen::Vector3d p = model_->TipPose().p_W;
+  // each joint's axis line: direction a, and its point closest to the tip, p + a × v
+  std::vector<Eigen::Vector3d> a(n), o(n);
+  for (int i = 0; i < n; ++i) {
+    a[i] = J.block<3, 1>(3, i);
+    const double len = a[i].norm();
+    if (len < 0.5) return "";  // not a hinge
+    a[i] /= len;
+    o[i] = p + a[i].cross(J.block<3, 1>(0, i) / len);
+  }
+  constexpr double kAngle = 10 * kDeg, kDistance_m = 1e-3;
+  std::string best;
+  double best_angle = kAngle;
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 2; j < n; ++j) {
+      const double angle = std::asin(std::min(1.0, a[i].cross(a[j]).norm()));
+      if (angle >= best_angle) continue;
+      // the lines must meet (within 1 mm) near the arm (within 1 m of the tip), not merely be parallel
+      const Eigen::Vector3d d = o[j] - o[i];
+      const double b = a[i].dot(a[j]), den = 1 - b * b;
+      if (den < 1e-12) {
+        if (d.cross(a[i]).norm() > kDistance_m) continue;  // parallel: the same line or none
+      } else {
+        const double si = (d.dot(a[i]) - b * d.dot(a[j])) / den, sj = (b * d.dot(a[i]) - d.dot(a[j])) / den;
+        const Eigen::Vector3d ci = o[i] + si * a[i], cj = o[j] + sj * a[j];
+        if ((ci - cj).norm() > kDistance_m || (ci - p).norm() > 1.0) continue;
+      }
+      // the joint between them nearest 0 or 180 deg aligns them
+      int k_best = i + 1;
+      for (int k = i + 1; k < j; ++k)
+        if (std::abs(std::sin(q[k])) < std::abs(std::sin(q[k_best]))) k_best = k;
+      const char* kind = k_best >= n - 3 ? "wrist" : (k_best <= 1 ? "shoulder" : "elbow");
+      best_angle = angle;
+      best = std::string(kind) + " singularity near " + model_->joint_names()[k_best] + " = " +
+             Fmt(q[k_best] / kDeg, "%.3g") + " deg (the axes of " + model_->joint_names()[i] + " and " +
+             model_->joint_names()[j] + " line up)";
+    }
+  }
+  return best;
+}
+
+std::string MotionPlanner::Unreached(const Eigen::VectorXd& q_end, double pe, double re, int it) const {
+  std::string s = "out of reach: the IK's closest pose is " + Fmt(pe, "%.3g") + " m from the target position and " +
+                  Fmt(re / kDeg, "%.3g") + " deg from its orientation (final residual after " + std::to_string(it) +
+                  " iterations)";
+  const std::string sing = Singularity(q_end);
+  if (!sing.empty()) s += "; it ended near a singularity: " + sing;
+  return s;
+}
+
+std::string MotionPlanner::PathFailure(int i, int n, const Eigen::VectorXd& q_good, const Frame& goal,
+                                       const std::string& what) const {
+  // the target itself: from the last good sample, can the IK reach it at all?
+  int it;
+  double pe, re;
+  const Eigen::VectorXd q_goal = Solve(q_good, goal, &it, &pe, &re);
+  if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
+    return "the target is " + Unreached(q_goal, pe, re, it) + "; the path fails " + Percent(i, n);
+  }
+  const std::string sing = Singularity(q_good);
+  if (!sing.empty()) return Percent(i, n) + ": the path passes through a " + sing + ": " + what;
+  return Percent(i, n) + ": " + what;
+}
+
 Eigen::VectorXd MotionPlanner::Ik(const Eigen::VectorXd& q0, const Frame& goal_W) const {
   int it;
   double pe, re;
   const Eigen::VectorXd q = Solve(q0, goal_W, &it, &pe, &re);
-  if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
-    throw std::invalid_argument("out of reach: the closest pose found is " + Fmt(pe * 1e3) + " mm and " +
-                                Fmt(re / kDeg) + " deg away (" + std::to_string(it) + " iterations)");
+  if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) throw std::invalid_argument(Unreached(q, pe, re, it));
+  try {
+    CheckLimits(q, "at the target");
+  } catch (const std::invalid_argument& e) {
+    const std::string sing = Singularity(q);
+    throw std::invalid_argument(sing.empty() ? e.what() : std::string(e.what()) + " (the IK ended near a " + sing + ")");
   }
-  CheckLimits(q, "at the target");
   return q;
 }
 
@@ -221,11 +291,17 @@ Plan MotionPlanner::SolvePath(const Eigen::VectorXd& q0, const std::vector<Frame
     // Newton from the linear extrapolation of the last two samples: one step usually does
     guess = i >= 2 ? Eigen::VectorXd(2 * plan.q[i - 1] - plan.q[i - 2]) : q;
     q = Solve(guess, goal, &it, &pe, &re);
+    const Eigen::VectorXd& q_good = i > 0 ? plan.q[i - 1] : q0;
     if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
-      throw std::invalid_argument(Percent(i, N) + ": out of reach (" + Fmt(pe * 1e3) + " mm and " + Fmt(re / kDeg) +
-                                  " deg away)");
+      throw std::invalid_argument(PathFailure(i, N, q_good, goals.back(),
+                                              "the IK cannot reach this pose of the path (" + Fmt(pe, "%.3g") +
+                                                  " m and " + Fmt(re / kDeg, "%.3g") + " deg away, its final residual)"));
     }
-    CheckLimits(q, Percent(i, N));
+    try {
+      CheckLimits(q, "the IK's solution");
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(PathFailure(i, N, q_good, goals.back(), e.what()));
+    }
     plan.q.push_back(q);
     plan.tool_W.push_back(goal);
   }

@@ -107,6 +107,12 @@ class MotionPlanner {
   /// path: joint E1 = 172.1 deg beyond its limit 170 deg").
   void CheckLimits(const Eigen::VectorXd& q, const std::string& where) const;
 
+  /// The singularity the chain is in or near at q, or "" when none: two joint
+  /// axes with joints between them line up (within 10 deg, their lines within
+  /// 1 mm), e.g. "wrist singularity near W1 = 0.4 deg (the axes of E2 and W2
+  /// line up)"; the joint named is the one between them closest to 0 or 180 deg.
+  std::string Singularity(const Eigen::VectorXd& q) const;
+
  private:
   // samples of a Cartesian path: pose(s) for s of a trapezoid in time
   template <class PoseAt>
@@ -116,6 +122,12 @@ class MotionPlanner {
   Plan SolvePath(const Eigen::VectorXd& q0, const std::vector<Frame>& goals, const std::vector<double>& speeds) const;
   Eigen::VectorXd Solve(const Eigen::VectorXd& q_start, const Frame& goal_W, int* iterations, double* pos_err,
                         double* rot_err) const;
+  // the message of a pose the IK did not reach: the final residual (m, deg), stated as
+  // such, and the singularity the IK ended near, if any
+  std::string Unreached(const Eigen::VectorXd& q_end, double pos_err, double rot_err, int iterations) const;
+  // the failure of path sample i of n (IK at q_bad from q_good): the target's own reach
+  // first (goal), then a singularity near q_good, else `what`
+  std::string PathFailure(int i, int n, const Eigen::VectorXd& q_good, const Frame& goal, const std::string& what) const;
 
   control::RobotModel* model_;
   double period_s_;

@@ -127,6 +127,10 @@ struct Runtime::Impl {
   }
 
   bool Resume(Program& p);
+  // one period of every program, in order; false at the first failure (error)
+  bool ResumeAll(double t_s);
+  // the log columns of the period (columns may be null)
+  void WriteColumns(double* columns);
   bool SendCommands(Program& p);
 };
 
@@ -209,6 +213,7 @@ bool Runtime::Impl::Resume(Program& p) {
     return true;
   }
   // the message, then the coroutine's stack as it was at the error
+  p.failed_line = std::max(1, WaitingLine(p.co));  // (the log's line column: not 0, which says "ended")
   const char* message = lua_tostring(p.co, -1);
   luaL_traceback(p.L, p.co, message ? message : "(error object is not a string)", 0);
   error = std::string(lua_tostring(p.L, -1)) + "\n(program of " + p.label + ", t = ";
@@ -227,12 +232,14 @@ bool Runtime::Impl::SendCommands(Program& p) {
     r.command[0] = 1.0;  // position mode
     for (std::size_t i = 0; i < r.arm_index.size(); ++i) r.command[1 + r.arm_index[i]] = r.q_ref[i];
     if (!r.arm->Write(r.command, &why)) {
+      p.failed_line = std::max(1, WaitingLine(p.co));
       error = p.config.script + ": arm '" + r.arm->name() + "' refused the command: " + why;
       return false;
     }
   }
   for (const auto& [name, values] : p.device_commands) {
     if (!devices->Find(name)->Write(values, &why)) {
+      p.failed_line = std::max(1, WaitingLine(p.co));
       error = p.config.script + ": device '" + name + "' refused the command: " + why;
       return false;
     }
@@ -243,6 +250,16 @@ bool Runtime::Impl::SendCommands(Program& p) {
 bool Runtime::Step(double t_s, double* columns) {
   Impl& s = *impl_;
   if (!s.error.empty()) return false;
+  if (!s.ResumeAll(t_s)) {
+    s.WriteColumns(columns);  // the failed program's line column says where it died
+    return false;
+  }
+  s.WriteColumns(columns);
+  return true;
+}
+
+bool Runtime::Impl::ResumeAll(double t_s) {
+  Impl& s = *this;
   for (auto& pp : s.programs) {
     Program& p = *pp;
     p.t_s = t_s;
@@ -263,11 +280,15 @@ bool Runtime::Step(double t_s, double* columns) {
     if (p.robot) AdvanceMotion(p.robot.get());
     if (!s.SendCommands(p)) return false;
   }
+  return true;
+}
+
+void Runtime::Impl::WriteColumns(double* columns) {
   if (columns) {
-    for (auto& p : s.programs) {
+    for (auto& p : programs) {
       if (!p->robot) continue;
       Robot& r = *p->robot;
-      *columns++ = p->ended ? 0 : WaitingLine(p->co);
+      *columns++ = p->failed_line > 0 ? p->failed_line : (p->ended ? 0 : WaitingLine(p->co));
       // the planned tool position: the plan's own sample, else forward kinematics once per change
       if (r.next > 0 && r.next <= r.plan.tool_W.size() && r.plan.q[r.next - 1] == r.q_ref) {
         r.tool_ref_W = r.plan.tool_W[r.next - 1].p;
@@ -279,7 +300,6 @@ bool Runtime::Step(double t_s, double* columns) {
       for (int i = 0; i < 3; ++i) *columns++ = r.tool_ref_W[i];
     }
   }
-  return true;
 }
 
 bool Runtime::finished() const {

@@ -83,12 +83,13 @@ class Runtime {
   ~Runtime();
 
   /// Log columns: per program with a robot, "task.ROBOT.line" (the script line
-  /// it waits at, 0 once ended) and "task.ROBOT.tool.x|y|z" (the planned tool
+  /// it waits at, 0 once it returned, the line of its error once it failed) and "task.ROBOT.tool.x|y|z" (the planned tool
   /// position, world, m).
   std::vector<std::string> Columns() const;
   /// One control period at simulated time t_s; writes Columns().size()
   /// values into `columns` (may be null). False once a program failed (see
-  /// error()); the commands of the period are not sent then.
+  /// error()); the commands of the period are not sent then, its columns are
+  /// written (the failed program's line is that of its error).
   bool Step(double t_s, double* columns);
   /// True when every program has ended.
   bool finished() const;

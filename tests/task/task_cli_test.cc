@@ -1,7 +1,10 @@
 // The task language end to end, through the built executables: the same
 // script (scenes/tasks/hello.lua) in process, under vlab run as an external
 // controller and against vlab-kinsim; byte-identical logs from two runs;
-// a guarded move stopping at the table; syntax and runtime errors.
+// a guarded move stopping at the table; syntax and runtime errors; print()
+// output kept in task.log (silenced on stdout by -q) and vlab task's --log; a
+// script error ending vlab task at once even with --hold; program_ended failing
+// for a program that died in its first period.
 #include <gtest/gtest.h>
 
 #include "../kinsim/kinsim_process.h"
@@ -211,6 +214,52 @@ TEST(TaskCli, RuntimeErrorIsExit1WithTracebackAndTheLogKept) {
   EXPECT_NE(r.err.find("runtime_error.lua:7: in main chunk"), std::string::npos) << r.err;
   // the log up to the failing period: 0.5 s of 2 ms periods, and row 0
   EXPECT_EQ(Lines(ReadFile(out / "log.csv")).size(), 1u + 251u);
+}
+
+// where print() output and a script error go: task.log, -q, --log, --hold, program_ended
+#define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << (text)
+
+TEST(TaskCli, PrintLinesAreKeptInTaskLogAndQuietSilencesThem) {
+  TempDir out, quiet;
+  const ProcessResult r = RunVlab("run scenes/pa10_task_hello --out '" + out.path() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_HAS(r.out, "[pa10 t=0.000] start\tframe(");
+  const std::string log = ReadFile(out / "task.log");
+  EXPECT_EQ(log.rfind("[pa10 t=0.000] start\tframe(", 0), 0u) << log;
+  EXPECT_HAS(log, "] back\tframe(");
+  const ProcessResult q = RunVlab("run scenes/pa10_task_hello -q --out '" + quiet.path() + "'");
+  ASSERT_EQ(q.exit_code, 0) << q.out << q.err;
+  EXPECT_EQ(q.out.find("[pa10 t="), std::string::npos) << q.out;
+  EXPECT_EQ(ReadFile(quiet / "task.log"), log);  // the same lines, kept with the run
+}
+
+TEST(TaskCli, AProgramThatDiesInItsFirstPeriodFailsTheRunAndProgramEnded) {
+  TempDir out;
+  const ProcessResult r = RunVlab("run tests/task/died_at_start.yaml --out '" + out.path() + "'");
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_HAS(r.out, "FAIL  program_ended");
+  EXPECT_HAS(r.err, "died_at_start.lua:4: movej: option 'v' is not supported");
+  const std::string log = ReadFile(out / "task.log");
+  EXPECT_HAS(log, "[pa10 t=0.000] starting\n");
+  EXPECT_HAS(log, "[error t=0.000] ");
+  EXPECT_HAS(log, "died_at_start.lua:4: movej: option 'v' is not supported");
+}
+
+TEST(TaskCli, AScriptErrorEndsVlabTaskAtOnceEvenWithHold) {
+  KinsimProcess kinsim({"--scene", "scenes/pa10.xml"});
+  ASSERT_TRUE(kinsim.ok()) << kinsim.start_line();
+  TempDir out;
+  const ProcessResult r = RunVlab("task tests/task/died_at_start.lua --hold -q --log '" + out.path() +
+                                      "/task.log' --arm 127.0.0.1:" + std::to_string(kinsim.port()) +
+                                      " --scene scenes/pa10.xml --tip tool",
+                                  30);
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_HAS(r.err, "died_at_start.lua:4: movej: option 'v' is not supported");
+  EXPECT_EQ(r.out.find("starting"), std::string::npos) << r.out;  // -q
+  const std::string log = ReadFile(out / "task.log");
+  EXPECT_EQ(log.rfind("[pa10 t=0.000] starting\n", 0), 0u) << log;
+  EXPECT_HAS(log, "[error t=0.000] tests/task/died_at_start.lua:4: movej: option 'v'");
+  kinsim.Stop();
 }
 
 }  // namespace

@@ -75,6 +75,9 @@ struct RunOptions {
   /// the log writer's among them, keep the CPUs the calling thread had, and it has them
   /// again when the loop ends. -1: the thread's CPUs are left as they are.
   int loop_cpu = -1;
+  /// No print() output of task programs (controller type task) on stdout; it
+  /// is still kept in RunResult::task_output (vlab run -q).
+  bool quiet = false;
 };
 
 /// What a recorded run computed.
@@ -128,6 +131,10 @@ struct RunResult {
     RealtimeGrant realtime;            ///< its controller.realtime_priority, read off the program
     std::map<std::string, int> ports;  ///< the free ports its {port:NAME} placeholders got
   } controller;
+  /// What the task programs (controller type task) printed, one line each:
+  /// "[ROBOT t=SECONDS] TEXT" (simulated time), and a script error's first line
+  /// as "[error t=SECONDS] FILE:LINE: ...": the run's task.log.
+  std::string task_output;
 };
 
 class Lab {

@@ -9,6 +9,7 @@
 #include "bridge/bridge_layouts.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
+#include "lab/run/lab_runner.h"
 #include "task/task_markers.h"
 #include "task/task_runtime.h"
 
@@ -154,6 +155,17 @@ struct TaskController::Impl {
   std::unique_ptr<task::Runtime> runtime;
   std::vector<Claim> claims;  // each program's robot arm
   bool used = false;          // Update ran since the runtime was made
+  // where the programs' print() lines go: the run's result (task.log), and stdout unless quiet
+  RunResult* result = nullptr;
+  bool quiet = false;
+  void Print(const std::string& who, double t, const std::string& text) {
+    char head[160];
+    std::snprintf(head, sizeof head, "[%s t=%.3f] ", who.c_str(), t);
+    if (result) result->task_output += head + text + "\n";
+    if (quiet) return;
+    std::printf("%s%s\n", head, text.c_str());
+    std::fflush(stdout);
+  }
 };
 
 TaskController::TaskController(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -169,10 +181,8 @@ std::unique_ptr<TaskController> TaskController::Create(const mjModel* model, con
   rc.instruction_budget = scenario.controller.instruction_budget;
   // the scenario's clock (vlab serve --clock may override it: realtime then still holds)
   rc.markers_hold = scenario.clock != ClockMode::kRealtime;
-  rc.print = [](const std::string& who, double t, const std::string& text) {
-    std::printf("[%s t=%.3f] %s\n", who.c_str(), t, text.c_str());
-    std::fflush(stdout);
-  };
+  Impl* raw = impl.get();
+  rc.print = [raw](const std::string& who, double t, const std::string& text) { raw->Print(who, t, text); };
   for (const TaskProgramEntry& e : scenario.controller.programs) {
     task::ProgramConfig p;
     p.script = e.script;
@@ -207,6 +217,9 @@ void TaskController::Restart() {
 }
 bool TaskController::Restart(const CommandPeriod& period, std::string* failure) {
   Restart();  // a lab run again starts its programs anew
+  impl_->result = period.result;
+  impl_->quiet = period.options && period.options->quiet;
+  if (impl_->result) impl_->result->task_output.clear();
   return Step(period, failure);
 }
 bool TaskController::Write(const CommandPeriod& period, std::string* failure) {
@@ -216,6 +229,12 @@ bool TaskController::Step(const CommandPeriod& period, std::string* failure) {
   impl_->used = true;
   if (impl_->runtime->Step(period.t_s, period.columns)) return true;
   *failure = impl_->runtime->error();  // a script error ends the run (the log keeps the periods before)
+  // task.log ends with the error's first line (the traceback is on stderr)
+  if (impl_->result) {
+    char head[64];
+    std::snprintf(head, sizeof head, "[error t=%.3f] ", period.t_s);
+    impl_->result->task_output += head + failure->substr(0, failure->find('\n')) + "\n";
+  }
   return false;
 }
 void TaskController::SetIdle(std::function<void()> idle) { impl_->devices->SetIdle(idle); }
