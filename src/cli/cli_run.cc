@@ -10,7 +10,6 @@
 #include "cli/cli_commands.h"
 #include "core/core_errors.h"
 #include "lab/outputs/lab_log.h"
-#include "lab/outputs/lab_output.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
 
@@ -76,21 +75,6 @@ int WithErrorReport(const std::function<int()>& body) {
   }
 }
 
-// the task programs' print() output, with the simulated time, as task.log in the run's folder
-void WriteTaskLog(const lab::RunResult& r) {
-  if (r.out_dir.empty()) return;
-  const std::string path = r.out_dir + "/task.log";
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  const bool ok = f && std::fwrite(r.task_output.data(), 1, r.task_output.size(), f) == r.task_output.size();
-  if (f && std::fclose(f) != 0) f = nullptr;
-  if (!ok || !f) {
-    std::fprintf(stderr, "vlab: cannot write %s\n", path.c_str());
-    return;
-  }
-  const std::string why = lab::AddToOutputList(r.out_dir, "task.log");
-  if (!why.empty()) std::fprintf(stderr, "vlab: %s: %s\n", path.c_str(), why.c_str());
-}
-
 int RunCommand(const RunArgs& args) {
   return WithErrorReport([&args] {
     // SIGINT, SIGTERM: the run stops at the next period and writes what ran (exit 1); installed
@@ -115,7 +99,6 @@ int RunCommand(const RunArgs& args) {
     options.quiet = args.quiet;
     const lab::RunResult r = lab->Run(options);
     bar.Finish();
-    if (scenario.controller.type == lab::ControllerType::kTask) WriteTaskLog(r);
 
     if (!args.quiet) {
       for (const auto& c : r.checks) {

@@ -80,6 +80,19 @@ void RunSession::WriteOutputs() {
   attempt([this] {
     if (poses_) poses_->Finish();
   });
+  // the task programs' print() lines and a script error's first line, with the simulated time
+  attempt([this] {
+    if (!s_.task) return;
+    const std::string path = out_->File("task.log");
+    std::ofstream file(path, std::ios::binary);
+    file << result_.task_output;
+    errno = 0;
+    file.close();
+    if (!file) {
+      throw std::runtime_error("task log '" + out_->final_dir() + "/task.log': write failed: " +
+                               std::strerror(errno ? errno : EIO));
+    }
+  });
   // a plot that cannot be drawn fails the run, and the rest is written; a plot of a CSV
   // that an external controller writes into {out} is skipped where the lab did not start
   // the controller (vlab serve: one started by hand has no {out}) and the file is not there
