@@ -115,7 +115,7 @@ class RunLog {
   sem_t work_;   // posted once per full block, and once to close
   sem_t freed_;  // posted once per block given back
   std::atomic<bool> closing_{false};
-  std::string error_;                  // the first failure, set before failed_ (release)
+  std::string error_;  // the first failure, set before failed_ (release)
   std::atomic<bool> failed_{false};
   std::thread writer_;
   bool closed_ = false;

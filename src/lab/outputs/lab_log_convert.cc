@@ -44,9 +44,12 @@ void WriteAll(const scene::CsvTable& table, LogSink& sink) {
 
 std::unique_ptr<LogSink> OpenSink(LogFormat format, const std::string& path, const std::vector<std::string>& columns) {
   switch (format) {
-    case LogFormat::kCsv: return OpenCsvSink(path, columns);
-    case LogFormat::kMat: return OpenMatSink(path, columns);
-    case LogFormat::kHdf5: return OpenHdf5Sink(path, columns);
+    case LogFormat::kCsv:
+      return OpenCsvSink(path, columns);
+    case LogFormat::kMat:
+      return OpenMatSink(path, columns);
+    case LogFormat::kHdf5:
+      return OpenHdf5Sink(path, columns);
   }
   return nullptr;
 }
@@ -64,7 +67,9 @@ ConvertResult ConvertLog(const std::string& run_dir, LogFormat to, bool force) {
   // to csv: from log.h5; to hdf5: from log.csv; to mat: log.csv, else log.h5
   result.source = to == LogFormat::kCsv ? h5 : to == LogFormat::kHdf5 ? csv : Exists(csv) ? csv : h5;
   if (!Exists(result.source)) {
-    const std::string from = to == LogFormat::kCsv ? "log.h5" : to == LogFormat::kHdf5 ? "log.csv" : "log.csv or log.h5";
+    const std::string from = to == LogFormat::kCsv    ? "log.h5"
+                             : to == LogFormat::kHdf5 ? "log.csv"
+                                                      : "log.csv or log.h5";
     throw InputError("run folder '" + run_dir + "': no " + from + " to convert");
   }
 
@@ -90,8 +95,7 @@ ConvertResult ConvertLog(const std::string& run_dir, LogFormat to, bool force) {
   }
 
   // written under a temporary name, renamed into place
-  const std::string temporary =
-      (fs::path(run_dir) / ("." + name + ".tmp-" + std::to_string(::getpid()))).string();
+  const std::string temporary = (fs::path(run_dir) / ("." + name + ".tmp-" + std::to_string(::getpid()))).string();
   try {
     std::unique_ptr<LogSink> sink = OpenSink(to, temporary, table.columns);
     WriteAll(table, *sink);

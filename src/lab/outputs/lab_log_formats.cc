@@ -12,24 +12,43 @@ namespace {
 
 // quantity (the name's part after the device) -> unit; a vector quantity's axis (p.x) counts its group
 const std::pair<const char*, const char*> kUnits[] = {
-    {"q", "rad"},                 // arm joints (revolute; a prismatic joint's would be m)
-    {"qd", "rad/s"},              //
-    {"tau", "N*m"},               // joint torques
-    {"following_error", "rad"},   //
-    {"limit_violation", "rad"},   // how far past a joint limit
-    {"Fx", "N"},         {"Fy", "N"},         {"Fz", "N"},  // wrench sensors
-    {"Mx", "N*m"},       {"My", "N*m"},       {"Mz", "N*m"},
-    {"position_error", "m"},      // controllers
-    {"orientation_error", "rad"}, //
-    {"p", "m"},          {"p_des", "m"},      // positions (per axis)
-    {"x", "m"},          {"y", "m"},          {"z", "m"},  // body positions
-    {"vx", "m/s"},       {"vy", "m/s"},       {"vz", "m/s"},
-    {"wx", "rad/s"},     {"wy", "rad/s"},     {"wz", "rad/s"},
-    {"spin_rpm", "1/min"},        {"rpm", "1/min"},  {"revolutions", "turns"},
-    {"precess_rate", "rad/s"},    {"string_force", "N"}, {"force", "N"},
-    {"opening", "m"},             {"opening_velocity", "m/s"},
-    {"error_deg", "deg"},         {"yaw_error", "deg"}, {"pos_error", "m"},
-    {"u", "px"},                  {"v", "px"},
+    {"q", "rad"},                // arm joints (revolute; a prismatic joint's would be m)
+    {"qd", "rad/s"},             //
+    {"tau", "N*m"},              // joint torques
+    {"following_error", "rad"},  //
+    {"limit_violation", "rad"},  // how far past a joint limit
+    {"Fx", "N"},
+    {"Fy", "N"},
+    {"Fz", "N"},  // wrench sensors
+    {"Mx", "N*m"},
+    {"My", "N*m"},
+    {"Mz", "N*m"},
+    {"position_error", "m"},       // controllers
+    {"orientation_error", "rad"},  //
+    {"p", "m"},
+    {"p_des", "m"},  // positions (per axis)
+    {"x", "m"},
+    {"y", "m"},
+    {"z", "m"},  // body positions
+    {"vx", "m/s"},
+    {"vy", "m/s"},
+    {"vz", "m/s"},
+    {"wx", "rad/s"},
+    {"wy", "rad/s"},
+    {"wz", "rad/s"},
+    {"spin_rpm", "1/min"},
+    {"rpm", "1/min"},
+    {"revolutions", "turns"},
+    {"precess_rate", "rad/s"},
+    {"string_force", "N"},
+    {"force", "N"},
+    {"opening", "m"},
+    {"opening_velocity", "m/s"},
+    {"error_deg", "deg"},
+    {"yaw_error", "deg"},
+    {"pos_error", "m"},
+    {"u", "px"},
+    {"v", "px"},
 };
 
 const char* UnitOf(const std::string& quantity) {
@@ -51,18 +70,24 @@ LogFormat ParseLogFormat(const std::string& name, const std::string& where) {
 
 const char* LogFormatName(LogFormat format) {
   switch (format) {
-    case LogFormat::kCsv: return "csv";
-    case LogFormat::kMat: return "mat";
-    case LogFormat::kHdf5: return "hdf5";
+    case LogFormat::kCsv:
+      return "csv";
+    case LogFormat::kMat:
+      return "mat";
+    case LogFormat::kHdf5:
+      return "hdf5";
   }
   return "?";
 }
 
 const char* LogFileName(LogFormat format) {
   switch (format) {
-    case LogFormat::kCsv: return "log.csv";
-    case LogFormat::kMat: return "log.mat";
-    case LogFormat::kHdf5: return "log.h5";
+    case LogFormat::kCsv:
+      return "log.csv";
+    case LogFormat::kMat:
+      return "log.mat";
+    case LogFormat::kHdf5:
+      return "log.h5";
   }
   return "?";
 }
@@ -105,9 +130,15 @@ std::vector<std::unique_ptr<LogSink>> OpenLogSinks(const std::string& folder, co
   for (LogFormat format : formats) {
     const std::string path = folder + "/" + LogFileName(format);
     switch (format) {
-      case LogFormat::kCsv: sinks.push_back(OpenCsvSink(path, columns)); break;
-      case LogFormat::kMat: sinks.push_back(OpenMatSink(path, columns)); break;
-      case LogFormat::kHdf5: sinks.push_back(OpenHdf5Sink(path, columns)); break;
+      case LogFormat::kCsv:
+        sinks.push_back(OpenCsvSink(path, columns));
+        break;
+      case LogFormat::kMat:
+        sinks.push_back(OpenMatSink(path, columns));
+        break;
+      case LogFormat::kHdf5:
+        sinks.push_back(OpenHdf5Sink(path, columns));
+        break;
     }
   }
   return sinks;

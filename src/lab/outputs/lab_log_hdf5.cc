@@ -38,7 +38,8 @@ bool WriteStrings(hid_t object, const char* name, const std::vector<std::string>
   for (const std::string& v : values) pointers.push_back(v.c_str());
   const hsize_t n = values.size();
   Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
-  if (!type.ok() || H5Tset_size(type.get(), H5T_VARIABLE) < 0 || H5Tset_cset(type.get(), H5T_CSET_UTF8) < 0) return false;
+  if (!type.ok() || H5Tset_size(type.get(), H5T_VARIABLE) < 0 || H5Tset_cset(type.get(), H5T_CSET_UTF8) < 0)
+    return false;
   Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose);
   Handle attribute(H5Acreate2(object, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   return attribute.ok() && H5Awrite(attribute.get(), type.get(), pointers.data()) >= 0;
@@ -80,8 +81,7 @@ class Hdf5Sink : public LogSink {
     Handle file_space(H5Dget_space(dataset_), H5Sclose);
     Handle memory_space(H5Screate_simple(2, count, nullptr), H5Sclose);
     if (!file_space.ok() || H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
-        H5Dwrite(dataset_, H5T_NATIVE_DOUBLE, memory_space.get(), file_space.get(), H5P_DEFAULT,
-                 pending_.data()) < 0) {
+        H5Dwrite(dataset_, H5T_NATIVE_DOUBLE, memory_space.get(), file_space.get(), H5P_DEFAULT, pending_.data()) < 0) {
       return Error("cannot write rows " + std::to_string(rows_) + " on");
     }
     pending_.clear();
@@ -115,9 +115,8 @@ std::unique_ptr<LogSink> OpenHdf5Sink(const std::string& path, const std::vector
   Handle properties(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
   const bool set = n > 0 && H5Pset_chunk(properties.get(), 2, chunk) >= 0 && H5Pset_shuffle(properties.get()) >= 0 &&
                    H5Pset_deflate(properties.get(), 6) >= 0;
-  const hid_t dataset = set ? H5Dcreate2(file, "log", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, properties.get(),
-                                         H5P_DEFAULT)
-                            : -1;
+  const hid_t dataset =
+      set ? H5Dcreate2(file, "log", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, properties.get(), H5P_DEFAULT) : -1;
   std::vector<std::string> units;
   for (const std::string& c : columns) units.push_back(ColumnUnit(c));
   if (dataset < 0 || !WriteStrings(dataset, "columns", columns) || !WriteStrings(dataset, "units", units)) {
@@ -157,8 +156,7 @@ scene::CsvTable ReadHdf5Log(const std::string& path) {
   for (char* name : names) t.columns.push_back(name ? name : "");
   H5Dvlen_reclaim(type.get(), attribute_space.get(), H5P_DEFAULT, names.data());
   std::vector<double> data(dims[0] * dims[1]);
-  if (!data.empty() &&
-      H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0) {
+  if (!data.empty() && H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0) {
     throw fail("cannot read /log as float64");
   }
   for (hsize_t r = 0; r < dims[0]; ++r) {
