@@ -14,6 +14,8 @@ VLAB_APT_PACKAGES=(
 )
 # the robot task language embeds Lua 5.4 (src/task/)
 VLAB_APT_PACKAGES+=(liblua5.4-dev)
+# run logs in HDF5 and MATLAB .mat besides CSV (src/lab/outputs/lab_log_hdf5.*, lab_log_mat.*)
+VLAB_APT_PACKAGES+=(libhdf5-dev libmatio-dev)
 
 # for the tests only: Octave runs the MATLAB/Octave example (tests/serve/octave_client_test.sh)
 VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)
@@ -24,6 +26,8 @@ VLAB_TEST_APT_PACKAGES+=(parallel slurm-wlm munge)
 VLAB_TEST_APT_PACKAGES+=(chromium)
 # for the tests only: format_check (tests/format_check.sh) holds the tree to .clang-format
 VLAB_TEST_APT_PACKAGES+=(clang-format)
+# for the tests only: Octave loads log.mat, h5py reads log.h5 (tests/lab/log_formats_*)
+VLAB_TEST_APT_PACKAGES+=(python3-h5py)
 
 vlab_missing_packages() {
   local pkg missing=()

@@ -118,7 +118,8 @@ int main(int argc, char** argv) {
       vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app), vlab::cli::AddVisionCommand(app),
       vlab::cli::AddCubesCommand(app),  vlab::cli::AddTaskCommand(app),   vlab::cli::AddCompareCommand(app),
       vlab::cli::AddGoldenCommand(app), vlab::cli::AddSweepCommand(app),  vlab::cli::AddCollectCommand(app),
-      vlab::cli::AddViewCommand(app),   vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app)};
+      vlab::cli::AddViewCommand(app),   vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app),
+      vlab::cli::AddConvertCommand(app)};
 
   try {
     app.parse(argc, argv);

@@ -1,8 +1,10 @@
-// The run log: one CSV row of named signals per control period.
+// The run log: one row of named signals per control period, written as CSV
+// (log.csv) and, by choice, HDF5 and MATLAB .mat (lab_log_formats.h).
 //
 // The step loop copies each row into a preallocated block; full blocks go to a
-// writer thread that formats them (shortest round-trip decimal, std::to_chars)
-// and writes the file, so formatting costs the step loop nothing but a copy.
+// writer thread that hands them to every format's LogSink (CSV: shortest
+// round-trip decimal, std::to_chars) and writes the files, so formatting costs
+// the step loop nothing but a copy.
 // The same values always give the same bytes: logs of identical runs are
 // identical files.
 //
@@ -14,7 +16,8 @@
 // kBlocks blocks behind (the disk took nothing for that long: 4 s of a 1 kHz
 // run): a row is never dropped, and the wait is counted (waits(), wait_s()).
 // The writer flushes each block it writes, so a write that fails (disk full, a
-// file size limit) shows in failed() at once.
+// file size limit) shows in failed() at once, and a file holds every whole
+// block written so far.
 #pragma once
 
 #include <semaphore.h>
@@ -28,14 +31,36 @@
 
 namespace vlab::lab {
 
-class CsvLog {
+/// One file format of the log. The writer thread calls Write for each block
+/// of rows and Close once at the end; nothing else calls them.
+class LogSink {
  public:
-  /// Creates the file and writes the header line. Throws std::runtime_error
-  /// naming the path when it cannot be written.
-  static std::unique_ptr<CsvLog> Open(const std::string& path, std::vector<std::string> columns);
-  ~CsvLog();
-  CsvLog(const CsvLog&) = delete;
-  CsvLog& operator=(const CsvLog&) = delete;
+  virtual ~LogSink() = default;
+  /// Appends `count` rows of columns().size() values (row-major) and flushes
+  /// them to the file. "" on success, else one line naming the file and the
+  /// error; after a failure the sink is not written again.
+  virtual std::string Write(const double* rows, int count) = 0;
+  /// Completes and closes the file. "" on success, else why not (as Write).
+  virtual std::string Close() = 0;
+};
+
+/// The CSV sink: a header line of column names, then one line per row of
+/// shortest round-trip decimals. Throws std::runtime_error naming the path
+/// when the file cannot be created.
+std::unique_ptr<LogSink> OpenCsvSink(const std::string& path, const std::vector<std::string>& columns);
+
+class RunLog {
+ public:
+  /// Creates the CSV file `path` and writes the header line. Throws
+  /// std::runtime_error naming the path when it cannot be written.
+  static std::unique_ptr<RunLog> Open(const std::string& path, std::vector<std::string> columns);
+  /// A log that writes each block into every sink (at least one), in order;
+  /// `path` names the log in error(). Never throws.
+  static std::unique_ptr<RunLog> Open(std::vector<std::unique_ptr<LogSink>> sinks, std::string path,
+                                      std::vector<std::string> columns);
+  ~RunLog();
+  RunLog(const RunLog&) = delete;
+  RunLog& operator=(const RunLog&) = delete;
 
   const std::vector<std::string>& columns() const { return columns_; }
   /// Appends one row of columns().size() values. Never allocates or locks
@@ -48,8 +73,9 @@ class CsvLog {
   long waits() const { return waits_; }
   double wait_s() const { return wait_s_; }
   /// True once a write failed (lock-free: the step loop asks every period).
-  bool failed() const { return write_errno_.load(std::memory_order_acquire) != 0; }
-  /// "log 'PATH': write failed: ERRNO TEXT" once failed(), else "".
+  bool failed() const { return failed_.load(std::memory_order_acquire); }
+  /// The first sink's error once failed() (CSV: "log 'PATH': write failed:
+  /// ERRNO TEXT"), else "".
   std::string error() const;
 
   /// Rows a block holds, and blocks in all.
@@ -69,11 +95,12 @@ class CsvLog {
     std::atomic<int> tail_{0};  // next to push (producer)
   };
 
-  CsvLog(std::FILE* file, std::string path, std::vector<std::string> columns);
+  RunLog(std::vector<std::unique_ptr<LogSink>> sinks, std::string path, std::vector<std::string> columns);
   void WriterLoop();
   void Submit();
+  void Fail(const std::string& why);
 
-  std::FILE* file_;
+  std::vector<std::unique_ptr<LogSink>> sinks_;  // used by the writer thread only, then by Close
   std::string path_;
   std::vector<std::string> columns_;
   std::vector<std::vector<double>> blocks_;
@@ -88,10 +115,14 @@ class CsvLog {
   sem_t work_;   // posted once per full block, and once to close
   sem_t freed_;  // posted once per block given back
   std::atomic<bool> closing_{false};
-  std::atomic<int> write_errno_{0};  // the errno of the first failed write (0: none)
+  std::string error_;  // the first failure, set before failed_ (release)
+  std::atomic<bool> failed_{false};
   std::thread writer_;
   bool closed_ = false;
 };
+
+/// The log as it was first named: a CSV-only RunLog.
+using CsvLog = RunLog;
 
 /// Formats a double as the shortest decimal that reads back to the same value.
 std::string FormatDouble(double value);

@@ -7,6 +7,7 @@
 #include "bridge/bridge_signals.h"
 #include "core/core_mujoco.h"
 #include "core/core_realtime.h"
+#include "lab/outputs/lab_log_formats.h"
 #include "lab/outputs/lab_plot.h"
 
 namespace vlab::lab {
@@ -110,7 +111,7 @@ void RunSession::Prepare() {
       std::error_code ec;
       std::filesystem::remove_all(staging, ec);
     });
-    if (sc.outputs.log) log_ = CsvLog::Open(out_->File("log.csv"), s_.columns);
+    if (sc.outputs.log) log_ = OpenRunLog(out_->staging_dir(), sc.outputs.log_formats, s_.columns);
     if (images_) images_->Open(*out_);
     if (poses_) poses_->Open(*out_);
   }

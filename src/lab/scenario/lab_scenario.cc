@@ -10,6 +10,7 @@
 #include "core/core_realtime.h"
 #include "lab/devices/device_kinds.h"
 #include "lab/judge/lab_golden.h"
+#include "lab/outputs/lab_log_formats.h"
 #include "lab/scenario/lab_overrides.h"
 #include "lab/scenario/lab_yaml.h"
 #include "task/task_runtime.h"
@@ -44,6 +45,39 @@ double PositiveDuration(MapReader& r) {
   const double duration = r.Number("duration");
   if (!(duration > 0)) r.Fail("duration", "must be > 0 s");
   return duration;
+}
+
+// outputs.log: true (csv), false, or {format: NAME or [NAME, ...]}
+void ReadLogOutput(const std::string& file, MapReader& outputs, OutputsConfig* out) {
+  const YAML::Node node = outputs.Raw("log");
+  if (!node || node.IsNull()) return;
+  if (!node.IsMap()) {
+    out->log = outputs.Bool("log", out->log);
+    out->log_formats = out->log ? std::vector<std::string>{"csv"} : std::vector<std::string>{};
+    return;
+  }
+  MapReader log(file, node, "outputs.log");
+  const YAML::Node format = log.Raw("format");
+  const std::vector<std::string> names =
+      format.IsScalar() ? std::vector<std::string>{log.String("format")} : log.Strings("format", {});
+  if (names.empty()) log.Fail("format", "expected csv, mat or hdf5, or a list of them");
+  out->log = true;
+  out->log_formats.clear();
+  for (const std::string& name : names) {
+    ParseLogFormat(name, YamlWhere(file, format) + ": outputs.log.format");
+    for (const std::string& taken : out->log_formats) {
+      if (taken == name) log.Fail("format", "'" + name + "' listed twice");
+    }
+    out->log_formats.push_back(name);
+  }
+  log.Finish();
+}
+
+bool WritesCsv(const OutputsConfig& outputs) {
+  for (const std::string& format : outputs.log_formats) {
+    if (format == "csv") return true;
+  }
+  return false;
 }
 
 ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& node, const std::string& path) {
@@ -446,7 +480,7 @@ Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
   }
   if (r.Has("controller")) s.controller = ReadController(r.Map("controller"));
   MapReader outputs = r.Map("outputs");
-  s.outputs.log = outputs.Bool("log", s.outputs.log);
+  ReadLogOutput(path, outputs, &s.outputs);
   const YAML::Node images = outputs.Sequence("images");
   for (std::size_t i = 0; i < images.size(); ++i) {
     s.outputs.images.push_back(ReadImageOutput(path, images[i], "outputs.images[" + std::to_string(i) + "]"));
@@ -485,9 +519,10 @@ Scenario ParseScenario(const std::string& path, const YAML::Node& root) {
   const YAML::Node checks = r.Sequence("checks");
   for (std::size_t i = 0; i < checks.size(); ++i) {
     s.checks.push_back(ReadCheck(path, checks[i], "checks[" + std::to_string(i) + "]"));
-    if (!s.checks.back().golden.empty() && !s.outputs.log) {
+    if (!s.checks.back().golden.empty() && !WritesCsv(s.outputs)) {
       throw InputError(s.checks.back().where + ": checks[" + std::to_string(i) +
-                       "].golden: a golden check compares log.csv: it needs outputs.log: true");
+                       "].golden: a golden check compares log.csv: it needs outputs.log: true (or a format list "
+                       "with csv)");
     }
   }
   r.Finish();

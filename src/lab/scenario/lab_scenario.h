@@ -140,7 +140,10 @@ struct PlotConfig {
 };
 
 struct OutputsConfig {
-  bool log = true;  ///< write log.csv
+  bool log = true;  ///< write the log (false: `log: false`)
+  /// Its formats, each once, in the order given: "csv" (log.csv), "mat"
+  /// (log.mat), "hdf5" (log.h5); `log: true` is csv alone.
+  std::vector<std::string> log_formats = {"csv"};
   std::vector<ImageOutputConfig> images;
   std::vector<PlotConfig> plots;
   bool poses = false;         ///< record poses.bin + scene.json (lab_poses.h)

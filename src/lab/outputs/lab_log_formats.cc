@@ -1,0 +1,155 @@
+#include "lab/outputs/lab_log_formats.h"
+
+#include <utility>
+
+#include "core/core_errors.h"
+#include "lab/outputs/lab_log_hdf5.h"
+#include "lab/outputs/lab_log_mat.h"
+
+namespace vlab::lab {
+
+namespace {
+
+// quantity (the name's part after the device) -> unit; a vector quantity's axis (p.x) counts its group
+const std::pair<const char*, const char*> kUnits[] = {
+    {"q", "rad"},                // arm joints (revolute; a prismatic joint's would be m)
+    {"qd", "rad/s"},             //
+    {"tau", "N*m"},              // joint torques
+    {"following_error", "rad"},  //
+    {"limit_violation", "rad"},  // how far past a joint limit
+    {"Fx", "N"},
+    {"Fy", "N"},
+    {"Fz", "N"},  // wrench sensors
+    {"Mx", "N*m"},
+    {"My", "N*m"},
+    {"Mz", "N*m"},
+    {"position_error", "m"},       // controllers
+    {"orientation_error", "rad"},  //
+    {"p", "m"},
+    {"p_des", "m"},  // positions (per axis)
+    {"x", "m"},
+    {"y", "m"},
+    {"z", "m"},  // body positions
+    {"vx", "m/s"},
+    {"vy", "m/s"},
+    {"vz", "m/s"},
+    {"wx", "rad/s"},
+    {"wy", "rad/s"},
+    {"wz", "rad/s"},
+    {"spin_rpm", "1/min"},
+    {"rpm", "1/min"},
+    {"revolutions", "turns"},
+    {"precess_rate", "rad/s"},
+    {"string_force", "N"},
+    {"force", "N"},
+    {"opening", "m"},
+    {"opening_velocity", "m/s"},
+    {"error_deg", "deg"},
+    {"yaw_error", "deg"},
+    {"pos_error", "m"},
+    {"u", "px"},
+    {"v", "px"},
+};
+
+const char* UnitOf(const std::string& quantity) {
+  for (const auto& [name, unit] : kUnits) {
+    if (quantity == name) return unit;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+LogFormat ParseLogFormat(const std::string& name, const std::string& where) {
+  if (name == "csv") return LogFormat::kCsv;
+  if (name == "mat") return LogFormat::kMat;
+  if (name == "hdf5") return LogFormat::kHdf5;
+  if (name == "mcap") throw InputError(where + ": format 'mcap' is not supported yet (csv, mat or hdf5)");
+  throw InputError(where + ": unknown log format '" + name + "' (csv, mat or hdf5)");
+}
+
+const char* LogFormatName(LogFormat format) {
+  switch (format) {
+    case LogFormat::kCsv:
+      return "csv";
+    case LogFormat::kMat:
+      return "mat";
+    case LogFormat::kHdf5:
+      return "hdf5";
+  }
+  return "?";
+}
+
+const char* LogFileName(LogFormat format) {
+  switch (format) {
+    case LogFormat::kCsv:
+      return "log.csv";
+    case LogFormat::kMat:
+      return "log.mat";
+    case LogFormat::kHdf5:
+      return "log.h5";
+  }
+  return "?";
+}
+
+std::string ColumnGroup(const std::string& column) {
+  const std::size_t dot = column.rfind('.');
+  return dot == std::string::npos ? column : column.substr(0, dot);
+}
+
+std::string ColumnUnit(const std::string& column) {
+  if (column == "time") return "s";
+  // the part before the last names the quantity (pa10.q.S1, controller.p.x), else the last does (jr3.Fx)
+  const std::size_t last = column.rfind('.');
+  if (last == std::string::npos) return "";
+  const std::size_t before = last == 0 ? std::string::npos : column.rfind('.', last - 1);
+  if (before != std::string::npos) {
+    if (const char* unit = UnitOf(column.substr(before + 1, last - before - 1))) return unit;
+  }
+  const char* unit = UnitOf(column.substr(last + 1));
+  return unit ? unit : "";
+}
+
+std::vector<ColumnGroupIndex> GroupColumns(const std::vector<std::string>& columns) {
+  std::vector<ColumnGroupIndex> groups;
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    const std::string name = ColumnGroup(columns[i]);
+    ColumnGroupIndex* group = nullptr;
+    for (ColumnGroupIndex& g : groups) {
+      if (g.name == name) group = &g;
+    }
+    if (!group) group = &groups.emplace_back(ColumnGroupIndex{name, {}});
+    group->columns.push_back(static_cast<int>(i));
+  }
+  return groups;
+}
+
+std::vector<std::unique_ptr<LogSink>> OpenLogSinks(const std::string& folder, const std::vector<LogFormat>& formats,
+                                                   const std::vector<std::string>& columns) {
+  std::vector<std::unique_ptr<LogSink>> sinks;
+  for (LogFormat format : formats) {
+    const std::string path = folder + "/" + LogFileName(format);
+    switch (format) {
+      case LogFormat::kCsv:
+        sinks.push_back(OpenCsvSink(path, columns));
+        break;
+      case LogFormat::kMat:
+        sinks.push_back(OpenMatSink(path, columns));
+        break;
+      case LogFormat::kHdf5:
+        sinks.push_back(OpenHdf5Sink(path, columns));
+        break;
+    }
+  }
+  return sinks;
+}
+
+std::unique_ptr<RunLog> OpenRunLog(const std::string& folder, const std::vector<std::string>& formats,
+                                   const std::vector<std::string>& columns) {
+  std::vector<LogFormat> parsed;
+  for (const std::string& name : formats) parsed.push_back(ParseLogFormat(name, "outputs.log.format"));
+  const std::string first = folder + "/" + (parsed.empty() ? "log.csv" : LogFileName(parsed.front()));
+  return RunLog::Open(OpenLogSinks(folder, parsed, columns), first, columns);
+}
+
+}  // namespace vlab::lab
