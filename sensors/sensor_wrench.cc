@@ -50,20 +50,33 @@ void FillReading(const WrenchSensorModel& model, const WrenchSensorState& state,
   reading.wrench = reading.all_filters[model.filter()];
 }
 
-// one sensor sample: noise, ADC, then every stage whose update instant this is
-void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench,
+// one sensor sample: noise, ADC, then every stage whose update instant this is; `load` is
+// the true wrench plus the bias (constant over the samples of one Advance)
+void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& load,
                    WrenchReading& reading) {
   ++state.sample_count;
 
-  // sensor signal plus bias and white noise
-  Wrench signal = true_wrench + state.bias;
-  if (model.noise_enabled()) {
-    signal += model.noise_sigma().cwiseProduct(DrawStandardNormal(model, state.rng));
+  // sensor signal plus white noise (the six draws first, in axis order), then the ADC's clip
+  // and quantisation give filter0: ToCounts, channel by channel
+  double normal[6] = {0, 0, 0, 0, 0, 0};
+  const bool noise = model.noise_enabled();
+  if (noise) {
+    for (int i = 0; i < 6; ++i) normal[i] = model.normal()(state.rng);
   }
-
-  // ADC clip and quantisation give filter0
+  const bool quantize = model.quantization_enabled();
   bool saturated = false;
-  state.output[0] = ToCounts(model, signal, &saturated, &reading.near_saturated).cwiseProduct(model.lsb());
+  for (int i = 0; i < 6; ++i) {
+    const double signal = noise ? load[i] + model.noise_sigma()[i] * normal[i] : load[i];
+    double counts = signal / model.lsb()[i];
+    const double magnitude = std::abs(counts);
+    if (magnitude >= kWrenchNearSaturationCounts) reading.near_saturated = true;
+    if (magnitude > kWrenchClipCounts) {
+      saturated = true;
+      counts = std::copysign(kWrenchClipCounts, counts);
+    }
+    if (quantize) counts = RoundHalfAway(counts);
+    state.output[0][i] = counts * model.lsb()[i];
+  }
   if (saturated) {
     reading.saturated = true;
     state.saturated_latched = true;
@@ -135,7 +148,8 @@ WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, c
   state.phase_samples = phase - whole;
   const auto samples = static_cast<std::uint64_t>(whole);
 
-  for (std::uint64_t i = 0; i < samples; ++i) ProcessSample(model, state, true_wrench, *flags);
+  const Wrench load = true_wrench + state.bias;
+  for (std::uint64_t i = 0; i < samples; ++i) ProcessSample(model, state, load, *flags);
   flags->samples += samples;
   flags->status = WrenchStatus::kOk;
   return flags->status;
@@ -145,6 +159,13 @@ WrenchReading Read(const WrenchSensorModel& model, const WrenchSensorState& stat
   WrenchReading reading;
   FillReading(model, state, reading);
   return reading;
+}
+
+Wrench ReadSelected(const WrenchSensorModel& model, const WrenchSensorState& state) {
+  // filter0 is already ADC data (as FillReading)
+  const int f = model.filter();
+  if (f == 0) return state.output[0];
+  return ToCounts(model, state.output[f], nullptr, nullptr).cwiseProduct(model.lsb());
 }
 
 WrenchReading Update(const WrenchSensorModel& model, WrenchSensorState& state, const Wrench& true_wrench, double dt) {

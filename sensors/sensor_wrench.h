@@ -204,6 +204,10 @@ WrenchStatus Advance(const WrenchSensorModel& model, WrenchSensorState& state, c
 /// What the host reads now: every data set as clipped (and rounded) counts times lsb.
 WrenchReading Read(const WrenchSensorModel& model, const WrenchSensorState& state);
 
+/// The selected data set alone (Read's `wrench`, the same values), for a host that reads
+/// one filter every control period.
+Wrench ReadSelected(const WrenchSensorModel& model, const WrenchSensorState& state);
+
 /// Advances the sensor by dt [s] with `true_wrench` held over (t, t + dt] and returns what the
 /// host reads at t + dt. dt = 0 only reads. Never throws, never allocates: bad input is
 /// refused (status kRejectedInput, last data returned, state.rejected_updates counted).

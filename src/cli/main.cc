@@ -112,6 +112,11 @@ int main(int argc, char** argv) {
                         "realtime: of each run (default 10)");
   bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
   bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant, 1 to 100 (best kept)");
+  bench_cmd
+      ->add_option("--set", bench.sets,
+                   "physics: KEY=VALUE, a scenario override as vlab run's (devices.pa10.servo.feedforward=model); "
+                   "repeatable")
+      ->allow_extra_args(false);
 
   // subcommands that define themselves in their own files
   const std::vector<vlab::cli::Subcommand> more = {

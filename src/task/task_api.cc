@@ -427,10 +427,14 @@ int MoveC(lua_State* L) {
 int SelfMove(lua_State* L) {
   Robot& r = NeedRobot(L, "selfmove");
   static const char* const known[] = {"joint", "by", "t", nullptr};
-  static const Refused refused[] = {{"v", "selfmove's duration is t (s)"},       {"a", "selfmove's profile is quintic over t (s)"},
-                                    {"w", "selfmove's duration is t (s)"},       {"jv", "selfmove's duration is t (s)"},
-                                    {"r", "only movel and movec blend"},         {"force", "only movel and movec are guarded moves"},
-                                    {"wrench", "only movel and movec are guarded moves"}, {nullptr, nullptr}};
+  static const Refused refused[] = {{"v", "selfmove's duration is t (s)"},
+                                    {"a", "selfmove's profile is quintic over t (s)"},
+                                    {"w", "selfmove's duration is t (s)"},
+                                    {"jv", "selfmove's duration is t (s)"},
+                                    {"r", "only movel and movec blend"},
+                                    {"force", "only movel and movec are guarded moves"},
+                                    {"wrench", "only movel and movec are guarded moves"},
+                                    {nullptr, nullptr}};
   if (!lua_istable(L, 1)) ScriptError(L, "selfmove: expected {joint = N, by = DEG, t = S}");
   CheckOptions(L, 1, "selfmove", known, refused);
   const int joint = static_cast<int>(Option(L, 1, "joint", 3, "selfmove")) - 1;

@@ -220,7 +220,8 @@ Eigen::VectorXd MotionPlanner::Ik(const Eigen::VectorXd& q0, const Frame& goal_W
     CheckLimits(q, "at the target");
   } catch (const std::invalid_argument& e) {
     const std::string sing = Singularity(q);
-    throw std::invalid_argument(sing.empty() ? e.what() : std::string(e.what()) + " (the IK ended near a " + sing + ")");
+    throw std::invalid_argument(sing.empty() ? e.what()
+                                             : std::string(e.what()) + " (the IK ended near a " + sing + ")");
   }
   return q;
 }
@@ -295,7 +296,8 @@ Plan MotionPlanner::SolvePath(const Eigen::VectorXd& q0, const std::vector<Frame
     if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
       throw std::invalid_argument(PathFailure(i, N, q_good, goals.back(),
                                               "the IK cannot reach this pose of the path (" + Fmt(pe, "%.3g") +
-                                                  " m and " + Fmt(re / kDeg, "%.3g") + " deg away, its final residual)"));
+                                                  " m and " + Fmt(re / kDeg, "%.3g") +
+                                                  " deg away, its final residual)"));
     }
     try {
       CheckLimits(q, "the IK's solution");

@@ -127,7 +127,8 @@ class MotionPlanner {
   std::string Unreached(const Eigen::VectorXd& q_end, double pos_err, double rot_err, int iterations) const;
   // the failure of path sample i of n (IK at q_bad from q_good): the target's own reach
   // first (goal), then a singularity near q_good, else `what`
-  std::string PathFailure(int i, int n, const Eigen::VectorXd& q_good, const Frame& goal, const std::string& what) const;
+  std::string PathFailure(int i, int n, const Eigen::VectorXd& q_good, const Frame& goal,
+                          const std::string& what) const;
 
   control::RobotModel* model_;
   double period_s_;

@@ -79,7 +79,7 @@ struct Program {
   lua_State* co = nullptr;
   bool ended = false;
   int failed_line = 0;  ///< the script line of its error (>= 1) once it failed; 0 otherwise
-  double t_s = 0;  ///< simulated time of the current period
+  double t_s = 0;       ///< simulated time of the current period
   double period_s = 0.002;
   bool markers_hold = true;      ///< RuntimeConfig::markers_hold
   double markers_wait_s = 10.0;  ///< RuntimeConfig::markers_wait_s

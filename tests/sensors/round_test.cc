@@ -21,10 +21,29 @@ std::uint64_t Bits(double x) {
 
 // halves, their neighbours, signed zeros, the 2^52 edge, counts of the JR3's int16 range
 std::vector<double> EdgeValues() {
-  std::vector<double> v = {0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5, 32767.5, -32767.5, 32767.0, -32768.0,
-                           0.49999999999999994, -0.49999999999999994, 4503599627370495.5, -4503599627370495.5,
-                           4503599627370496.0, -4503599627370496.0, 9007199254740993.0, 1e300, -1e300,
-                           std::numeric_limits<double>::denorm_min(), -std::numeric_limits<double>::denorm_min()};
+  std::vector<double> v = {0.0,
+                           -0.0,
+                           0.5,
+                           -0.5,
+                           1.5,
+                           -1.5,
+                           2.5,
+                           -2.5,
+                           32767.5,
+                           -32767.5,
+                           32767.0,
+                           -32768.0,
+                           0.49999999999999994,
+                           -0.49999999999999994,
+                           4503599627370495.5,
+                           -4503599627370495.5,
+                           4503599627370496.0,
+                           -4503599627370496.0,
+                           9007199254740993.0,
+                           1e300,
+                           -1e300,
+                           std::numeric_limits<double>::denorm_min(),
+                           -std::numeric_limits<double>::denorm_min()};
   for (double h = 0.5; h < 1e6; h = h * 3 + 0.5) {
     v.push_back(std::nextafter(h, 0.0));
     v.push_back(std::nextafter(h, 1e9));

@@ -166,6 +166,24 @@ TEST(WrenchSensorTest, ChunkingDoesNotChangeOutputWithNoiseOn) {
   EXPECT_EQ(states[0].sample_count, 200u * 64u);
 }
 
+TEST(WrenchSensorTest, ReadSelectedIsReadsWrenchForEveryFilter) {
+  // a host reading one data set per period gets the values Read gives, saturation included
+  for (int f = 0; f <= 6; ++f) {
+    WrenchSensorConfig config;
+    config.filter = f;
+    const auto model = WrenchSensorModel::Create(config);
+    WrenchSensorState state;
+    Reset(*model, state);
+    for (int period = 0; period < 400; ++period) {
+      Wrench load;
+      load << 60.0 * std::sin(0.05 * period), 3.0, period % 100 < 20 ? 260.0 : -20.0, 0.2, -4.0, 0.01 * period;
+      WrenchReading flags;
+      Advance(*model, state, load, 0.002, &flags);
+      ASSERT_EQ(ReadSelected(*model, state), Read(*model, state).wrench) << "filter " << f << " period " << period;
+    }
+  }
+}
+
 TEST(WrenchSensorTest, SameSeedSameReadingsOtherSeedOtherBias) {
   WrenchSensorConfig config;
   const auto model_a = WrenchSensorModel::Create(config);

@@ -249,10 +249,10 @@ TEST(TaskCli, AScriptErrorEndsVlabTaskAtOnceEvenWithHold) {
   KinsimProcess kinsim({"--scene", "scenes/pa10.xml"});
   ASSERT_TRUE(kinsim.ok()) << kinsim.start_line();
   TempDir out;
-  const ProcessResult r = RunVlab("task tests/task/died_at_start.lua --hold -q --log '" + out.path() +
-                                      "/task.log' --arm 127.0.0.1:" + std::to_string(kinsim.port()) +
-                                      " --scene scenes/pa10.xml --tip tool",
-                                  30);
+  const ProcessResult r =
+      RunVlab("task tests/task/died_at_start.lua --hold -q --log '" + out.path() +
+                  "/task.log' --arm 127.0.0.1:" + std::to_string(kinsim.port()) + " --scene scenes/pa10.xml --tip tool",
+              30);
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   EXPECT_HAS(r.err, "died_at_start.lua:4: movej: option 'v' is not supported");
   EXPECT_EQ(r.out.find("starting"), std::string::npos) << r.out;  // -q

@@ -48,9 +48,7 @@ void JointSensing::Configure(const SensingConfig& config, int joints) {
   qd_ = Eigen::VectorXd::Zero(joints);
 }
 
-std::int64_t JointSensing::Count(int i, double q) const {
-  return sensors::RoundToCount(q / resolution_[i]);
-}
+std::int64_t JointSensing::Count(int i, double q) const { return sensors::RoundToCount(q / resolution_[i]); }
 
 void JointSensing::Peek(const double* q, const double* qd, double dt, double* q_out, double* qd_out) const {
   for (std::size_t i = 0; i < resolution_.size(); ++i) {

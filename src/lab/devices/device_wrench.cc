@@ -67,7 +67,7 @@ class SimWrench final : public Device, public StepHooks {
   }
   // forms the host's reading at the end of a control period
   void Sample(const mjData&, double) override {
-    reading_ = sensors::Read(*sensor_, state_);
+    reading_.wrench = sensors::ReadSelected(*sensor_, state_);  // (the filter is the one Reset read)
     saturated_ = saturated_in_period_;
     saturated_in_period_ = false;
   }

@@ -89,8 +89,8 @@ void RunSession::WriteOutputs() {
     errno = 0;
     file.close();
     if (!file) {
-      throw std::runtime_error("task log '" + out_->final_dir() + "/task.log': write failed: " +
-                               std::strerror(errno ? errno : EIO));
+      throw std::runtime_error("task log '" + out_->final_dir() +
+                               "/task.log': write failed: " + std::strerror(errno ? errno : EIO));
     }
   });
   // a plot that cannot be drawn fails the run, and the rest is written; a plot of a CSV
