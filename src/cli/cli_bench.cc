@@ -81,9 +81,8 @@ double BareReplay(const lab::Lab& lab, const std::vector<double>& controls, cons
 
 int BenchCommand(const BenchArgs& args) {
   return WithErrorReport([&args] {
-    lab::Scenario scenario =
-        lab::LoadScenario(lab::ResolveScenarioPath(args.scenario.empty() ? "scenes/pa10_reach" : args.scenario),
-                          args.sets);
+    lab::Scenario scenario = lab::LoadScenario(
+        lab::ResolveScenarioPath(args.scenario.empty() ? "scenes/pa10_reach" : args.scenario), args.sets);
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
     const mjModel* m = lab->model();

@@ -46,11 +46,11 @@ int ServeCommand(const ServeArgs& args);
 int DevicesCommand(const ServeArgs& args);
 
 struct BenchArgs {
-  std::string what;        ///< "physics"
-  std::string scenario;    ///< scenario whose scene and devices are measured
-  double duration_s = 0;   ///< simulated seconds per measurement (0: scenario's)
-  int repeat = 3;          ///< measurements per variant; the best is reported
-  double realtime_s = 30;  ///< bridge: length of the realtime run, s
+  std::string what;               ///< "physics"
+  std::string scenario;           ///< scenario whose scene and devices are measured
+  double duration_s = 0;          ///< simulated seconds per measurement (0: scenario's)
+  int repeat = 3;                 ///< measurements per variant; the best is reported
+  double realtime_s = 30;         ///< bridge: length of the realtime run, s
   std::vector<std::string> sets;  ///< physics: --set KEY=VALUE scenario overrides, in order
 };
 int BenchCommand(const BenchArgs& args);
