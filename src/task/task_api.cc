@@ -199,18 +199,30 @@ void CheckFinite(lua_State* L, const Frame& f, const char* what, const char* whi
   if (!f.q.coeffs().allFinite()) ScriptError(L, "%s: the %s rotation is not finite (a NaN or inf)", what, which);
 }
 
-// the limits of one move: the settings, overridden by the options v, a, w, alpha
-MotionLimits MoveLimits(lua_State* L, const Robot& r, int options, const char* what) {
+// the limits of one move: the settings, overridden by its options (movej: v and jv in deg/s,
+// a in deg/s^2, of the fastest joint; movel, movec: v in m/s, a in m/s^2, w in deg/s)
+MotionLimits MoveLimits(lua_State* L, const Robot& r, int options, const char* what, bool joint_move = false) {
   MotionLimits l = r.limits;
+  struct Given {
+    const char* key;
+    double value;
+  };
+  if (joint_move) {
+    l.joint_speed_rps = Option(L, options, "jv", l.joint_speed_rps / kDeg, what) * kDeg;
+    l.joint_speed_rps = Option(L, options, "v", l.joint_speed_rps / kDeg, what) * kDeg;
+    l.joint_accel_rps2 = Option(L, options, "a", l.joint_accel_rps2 / kDeg, what) * kDeg;
+    for (const Given& g : {Given{"v", l.joint_speed_rps}, Given{"a", l.joint_accel_rps2}}) {
+      if (!(g.value > 0)) ScriptError(L, "%s: option %s must be > 0", what, g.key);
+    }
+    if (HasOption(L, options, "v") && HasOption(L, options, "jv")) {
+      ScriptError(L, "%s: options 'v' and 'jv' together: they are the same (deg/s), give one", what);
+    }
+    return l;
+  }
   l.speed_mps = Option(L, options, "v", l.speed_mps, what);
   l.accel_mps2 = Option(L, options, "a", l.accel_mps2, what);
   l.rot_speed_rps = Option(L, options, "w", l.rot_speed_rps / kDeg, what) * kDeg;
-  l.joint_speed_rps = Option(L, options, "jv", l.joint_speed_rps / kDeg, what) * kDeg;
-  const struct {
-    const char* key;
-    double value;
-  } given[] = {{"v", l.speed_mps}, {"a", l.accel_mps2}, {"w", l.rot_speed_rps}, {"jv", l.joint_speed_rps}};
-  for (const auto& g : given) {
+  for (const Given& g : {Given{"v", l.speed_mps}, Given{"a", l.accel_mps2}, Given{"w", l.rot_speed_rps}}) {
     if (!(g.value > 0)) ScriptError(L, "%s: option %s must be > 0", what, g.key);
   }
   return l;
@@ -281,19 +293,17 @@ void PlanOrFail(lua_State* L, Robot& r, const char* what, F plan_fn) {
 
 int MoveJ(lua_State* L) {
   Robot& r = NeedRobot(L, "movej");
-  static const char* const known[] = {"jv", "t", nullptr};
+  static const char* const known[] = {"v", "a", "jv", "t", nullptr};
   static const Refused refused[] = {
-      {"v", "movej interpolates the joints; its speed is jv (deg/s) or its duration t (s)"},
-      {"a", "movej's joint acceleration is the setting jspeed(v, a)"},
-      {"w", "movej interpolates the joints; its speed is jv (deg/s) or its duration t (s)"},
+      {"w", "movej interpolates the joints; its speed is v (deg/s, the fastest joint) or its duration t (s)"},
       {"r", "only movel and movec blend"},
       {"force", "only movel and movec are guarded moves"},
       {"wrench", "only movel and movec are guarded moves"},
       {nullptr, nullptr}};
-  static const char* const speeds[] = {"jv", nullptr};
+  static const char* const speeds[] = {"v", "a", "jv", nullptr};
   CheckOptions(L, 2, "movej", known, refused);
   CheckDurationAlone(L, 2, "movej", speeds);
-  const MotionLimits limits = MoveLimits(L, r, 2, "movej");
+  const MotionLimits limits = MoveLimits(L, r, 2, "movej", true);
   const double t = Duration(L, 2, "movej");
   if (const Frame* f = ToFrame(L, 1)) {
     CheckFinite(L, *f, "movej", "target");
@@ -343,8 +353,9 @@ void SetBlend(lua_State* L, Robot& r, const Eigen::Vector3d& target, double radi
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
   static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
-  static const Refused refused[] = {{"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s)"},
-                                    {nullptr, nullptr}};
+  static const Refused refused[] = {
+      {"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
+      {nullptr, nullptr}};
   static const char* const speeds[] = {"v", "a", "w", nullptr};
   CheckOptions(L, 2, "movel", known, refused);
   CheckDurationAlone(L, 2, "movel", speeds);
@@ -373,6 +384,7 @@ int MoveL(lua_State* L) {
     b.entry = r.plan.tool_W[r.next - 1];
     b.corner = r.blend_corner_W;
     b.speed_mps = r.plan.speed_mps[r.next - 1];
+    if (r.next >= 2) b.q_before = r.plan.q[r.next - 2];  // (the entry at the plan's first sample: from rest)
     // direction of motion at the entry: the central difference of the samples around it
     const std::size_t i = r.next - 1;
     const Eigen::Vector3d after = r.plan.tool_W[std::min(i + 1, r.plan.tool_W.size() - 1)].p;
@@ -393,8 +405,9 @@ int MoveL(lua_State* L) {
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
   static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
-  static const Refused refused[] = {{"jv", "movec moves the tool: its speeds are v (m/s) and w (deg/s)"},
-                                    {nullptr, nullptr}};
+  static const Refused refused[] = {
+      {"jv", "movec moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
+      {nullptr, nullptr}};
   static const char* const speeds[] = {"v", "a", "w", nullptr};
   CheckOptions(L, 3, "movec", known, refused);
   CheckDurationAlone(L, 3, "movec", speeds);
@@ -516,6 +529,17 @@ int SetJointSpeed(lua_State* L) {
   if (!(v > 0)) ScriptError(L, "jspeed: must be > 0 deg/s");
   r.limits.joint_speed_rps = v * kDeg;
   if (!lua_isnoneornil(L, 2)) r.limits.joint_accel_rps2 = Number(L, 2, "jspeed") * kDeg;
+  return 0;
+}
+int SetRateLimits(lua_State* L) {  // limits("slow" | "refuse"): what a move beyond the joints' limits does
+  Robot& r = NeedRobot(L, "limits");
+  const char* mode = lua_tostring(L, 1);
+  const bool slow = mode && !std::strcmp(mode, "slow"), refuse = mode && !std::strcmp(mode, "refuse");
+  if (!slow && !refuse)
+    ScriptError(L, "limits: expected \"slow\" or \"refuse\", got %s", luaL_tolstring(L, 1, nullptr));
+  JointRateLimits l = r.planner->rate_limits();
+  l.refuse = refuse;
+  r.planner->set_rate_limits(l);
   return 0;
 }
 int SetTool(lua_State* L) {
@@ -884,6 +908,7 @@ void OpenApi(Program* p) {
                                        {"speed", SetSpeed},
                                        {"accel", SetAccel},
                                        {"jspeed", SetJointSpeed},
+                                       {"limits", SetRateLimits},
                                        {"tool", SetTool},
                                        {"base", SetBase},
                                        {"blend", SetBlend},

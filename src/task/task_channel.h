@@ -23,6 +23,10 @@ class Channel {
   /// An arm's joint names in device order (its describe reply); empty for
   /// other kinds.
   virtual std::vector<std::string> joint_names() const { return {}; }
+  /// An arm's joint speed limits in device order, rad/s (its `max_velocity`,
+  /// the describe reply's limits.velocity_max); empty when it gives none (the
+  /// task language then keeps its defaults, task_rates.h).
+  virtual std::vector<double> velocity_limits() const { return {}; }
   /// The newest state payload; false when the device has sent none yet.
   virtual bool Read(std::vector<double>* values) = 0;
   /// Sends a command payload (command_names().size() values). False with a

@@ -18,6 +18,7 @@ constexpr double kTolRot_rad = 1e-9;
 constexpr int kMaxIterations = 200;
 constexpr double kDamping = 1e-6;
 constexpr double kMaxStep_rad = 0.3;  // per Newton step (norm), keeps far targets on the near branch
+constexpr int kStretchRounds = 8;     // plans tried with a longer timing before giving up
 
 std::string Fmt(double v, const char* format = "%.4g") {
   char b[32];
@@ -106,7 +107,51 @@ void TrapezoidTiming(double d, double v, double a, double* duration_s, double* a
 }
 
 MotionPlanner::MotionPlanner(control::RobotModel* model, double period_s)
-    : model_(model), period_s_(period_s), zero_(Eigen::VectorXd::Zero(model->dof())) {}
+    : model_(model), period_s_(period_s), rates_(DefaultRateLimits(model->dof())),
+      zero_(Eigen::VectorXd::Zero(model->dof())) {}
+
+void MotionPlanner::set_rate_limits(const JointRateLimits& limits) {
+  const long n = model_->dof();
+  if (limits.v_rps.size() != n || limits.a_rps2.size() != n) {
+    throw std::invalid_argument("joint speed and acceleration limits: expected " + std::to_string(n) +
+                                " values each, got " + std::to_string(limits.v_rps.size()) + " and " +
+                                std::to_string(limits.a_rps2.size()));
+  }
+  for (long j = 0; j < n; ++j) {
+    if (!(limits.v_rps[j] > 0 && limits.a_rps2[j] > 0 && std::isfinite(limits.v_rps[j]) &&
+          std::isfinite(limits.a_rps2[j]))) {
+      throw std::invalid_argument("joint " + model_->joint_names()[j] +
+                                  ": its speed and acceleration limits must be finite and > 0");
+    }
+  }
+  rates_ = limits;
+}
+
+template <class Replan>
+Plan MotionPlanner::Within(const Eigen::VectorXd& q_before, const Eigen::VectorXd& q_start, Replan replan) const {
+  double k = 1;
+  Plan plan = replan(k);
+  std::vector<Eigen::VectorXd> path;
+  for (int round = 0;; ++round) {
+    // the commanded sequence: the two samples before, the plan, at rest at its end
+    path.assign({q_before, q_start});
+    path.insert(path.end(), plan.q.begin(), plan.q.end());
+    if (!plan.q.empty()) path.push_back(plan.q.back());
+    const JointRates rates = PeakRates(path, period_s_);
+    const RateExcess e = Excess(rates, rates_);
+    if (e.stretch <= 1 + 1e-9) return plan;
+    const std::string name = model_->joint_names()[e.joint];
+    if (rates_.refuse) throw std::invalid_argument(ExcessMessage(rates, rates_, e, name));
+    if (round == kStretchRounds) {
+      throw std::invalid_argument("slowing the move down by " + Fmt(k, "%.3g") + " times does not keep joint " + name +
+                                  " within its limits (a move entered from a blend keeps the speed it enters with): " +
+                                  ExcessMessage(rates, rates_, e, name));
+    }
+    // the same path, slower: speeds scale by 1/k, accelerations by 1/k² (a margin for whole periods)
+    k *= e.stretch * 1.0005;
+    plan = replan(k);
+  }
+}
 
 Frame MotionPlanner::ToolPose(const Eigen::VectorXd& q) const {
   model_->SetState(q, zero_);
@@ -245,19 +290,31 @@ Plan MotionPlanner::Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, 
                                 std::to_string(q1.size()));
   }
   CheckLimits(q1, "the target");
-  double T = duration_s, frac = 0.25;
-  if (T <= 0)
-    TrapezoidTiming((q1 - q0).cwiseAbs().maxCoeff(), limits.joint_speed_rps, limits.joint_accel_rps2, &T, &frac);
-  const int N = std::max(1, static_cast<int>(std::ceil(T / period_s_ - 1e-9)));
-  T = N * period_s_;
-  control::TimeScaling scaling{control::TimeScalingType::kTrapezoidal, std::clamp(frac, 1e-3, 0.5)};
-  Plan plan;
-  plan.duration_s = T;
-  for (int i = 0; i < N; ++i) {
-    const double s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_).s;
-    plan.q.push_back(i == N - 1 ? q1 : Eigen::VectorXd(q0 + s * (q1 - q0)));
+  double T0 = duration_s, frac = 0.25;
+  if (T0 <= 0) {
+    // the fastest joint's speed and acceleration, lowered so that every joint keeps its own limits
+    const double D = (q1 - q0).cwiseAbs().maxCoeff();
+    double v = limits.joint_speed_rps, a = limits.joint_accel_rps2;
+    for (int j = 0; j < q1.size() && !rates_.refuse; ++j) {
+      const double d = std::abs(q1[j] - q0[j]);
+      if (d <= 0) continue;
+      v = std::min(v, rates_.v_rps[j] * D / d);
+      a = std::min(a, rates_.a_rps2[j] * D / d);
+    }
+    TrapezoidTiming(D, v, a, &T0, &frac);
   }
-  return plan;
+  return Within(q0, q0, [&](double k) {
+    const int N = std::max(1, static_cast<int>(std::ceil(T0 * k / period_s_ - 1e-9)));
+    const double T = N * period_s_;
+    control::TimeScaling scaling{control::TimeScalingType::kTrapezoidal, std::clamp(frac, 1e-3, 0.5)};
+    Plan plan;
+    plan.duration_s = T;
+    for (int i = 0; i < N; ++i) {
+      const double s = control::EvaluateTimeScaling(scaling, T, (i + 1) * period_s_).s;
+      plan.q.push_back(i == N - 1 ? q1 : Eigen::VectorXd(q0 + s * (q1 - q0)));
+    }
+    return plan;
+  });
 }
 
 template <class PoseAt>
@@ -289,8 +346,10 @@ Plan MotionPlanner::SolvePath(const Eigen::VectorXd& q0, const std::vector<Frame
     const Frame& goal = goals[i];
     int it;
     double pe, re;
-    // Newton from the linear extrapolation of the last two samples: one step usually does
-    guess = i >= 2 ? Eigen::VectorXd(2 * plan.q[i - 1] - plan.q[i - 2]) : q;
+    // Newton from the previous sample: its minimum-norm steps add no self-motion, so the
+    // joints come to rest with the tool (extrapolating the last two samples would carry
+    // a self-motion on at constant speed past the end of the path: a jump in joint speed there)
+    guess = q;
     q = Solve(guess, goal, &it, &pe, &re);
     const Eigen::VectorXd& q_good = i > 0 ? plan.q[i - 1] : q0;
     if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
@@ -322,11 +381,13 @@ Plan MotionPlanner::Linear(const Eigen::VectorXd& q0, const Frame& goal_W, const
     T = std::max(T_lin, T_rot);
     frac = T_lin >= T_rot ? f_lin : f_rot;
   }
-  return Cartesian(q0, T, frac, (goal_W.p - start.p).norm(), [&](double s) {
-    Frame f;
-    f.p = start.p + s * (goal_W.p - start.p);
-    f.q = start.q.slerp(s, q1);
-    return f;
+  return Within(q0, q0, [&](double k) {
+    return Cartesian(q0, T * k, frac, (goal_W.p - start.p).norm(), [&](double s) {
+      Frame f;
+      f.p = start.p + s * (goal_W.p - start.p);
+      f.q = start.q.slerp(s, q1);
+      return f;
+    });
   });
 }
 
@@ -357,14 +418,16 @@ Plan MotionPlanner::Arc(const Eigen::VectorXd& q0, const Eigen::Vector3d& via, c
     T = std::max(T_lin, T_rot);
     frac = T_lin >= T_rot ? f_lin : f_rot;
   }
-  Plan plan = Cartesian(q0, T, frac, r * theta, [&](double s) {
-    Frame f;
-    f.p = c + r * (u * std::cos(theta * s) + w * std::sin(theta * s));
-    f.q = start.q.slerp(s, q1);
-    return f;
+  return Within(q0, q0, [&](double k) {
+    Plan plan = Cartesian(q0, T * k, frac, r * theta, [&](double s) {
+      Frame f;
+      f.p = c + r * (u * std::cos(theta * s) + w * std::sin(theta * s));
+      f.q = start.q.slerp(s, q1);
+      return f;
+    });
+    plan.tool_W.back().p = goal_W.p;  // equal up to rounding
+    return plan;
   });
-  plan.tool_W.back().p = goal_W.p;  // equal up to rounding
-  return plan;
 }
 
 Plan MotionPlanner::FromBlend(const BlendStart& b, const Frame& goal_W, const MotionLimits& limits) const {
@@ -393,31 +456,35 @@ Plan MotionPlanner::FromBlend(const BlendStart& b, const Frame& goal_W, const Mo
   // the path speed: limited so that the SLERP over the path keeps the angular speed limit
   double v = limits.speed_mps;
   if (angle > 1e-12) v = std::min(v, limits.rot_speed_rps * L / angle);
-  const StartSpeedProfile profile(L, b.speed_mps, v, limits.accel_mps2);
-  const int N = std::max(1, static_cast<int>(std::ceil(profile.T / period_s_ - 1e-9)));
-  std::vector<Frame> goals(N);
-  std::vector<double> speeds(N);
-  for (int i = 0; i < N; ++i) {
-    double s, sv;
-    profile.At(std::min((i + 1) * period_s_, profile.T), &s, &sv);
-    if (i == N - 1) s = L, sv = 0;
-    Frame f;
-    if (s < Lb) {
-      const int k = static_cast<int>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin());
-      const int k0 = std::clamp(k - 1, 0, kTable - 1);
-      const double t = (k0 + (s - arc[k0]) / std::max(1e-15, arc[k0 + 1] - arc[k0])) / kTable;
-      f.p = bezier(std::clamp(t, 0.0, 1.0));
-    } else {
-      f.p = P2 + (s - Lb) * u2;
+  const Eigen::VectorXd& q_before = b.q_before.size() == b.q.size() ? b.q_before : b.q;
+  // slower by k: the cruise speed by 1/k, the acceleration by 1/k² (the entry speed stays)
+  return Within(q_before, b.q, [&](double k) {
+    const StartSpeedProfile profile(L, b.speed_mps, v / k, limits.accel_mps2 / (k * k));
+    const int N = std::max(1, static_cast<int>(std::ceil(profile.T / period_s_ - 1e-9)));
+    std::vector<Frame> goals(N);
+    std::vector<double> speeds(N);
+    for (int i = 0; i < N; ++i) {
+      double s, sv;
+      profile.At(std::min((i + 1) * period_s_, profile.T), &s, &sv);
+      if (i == N - 1) s = L, sv = 0;
+      Frame f;
+      if (s < Lb) {
+        const int k = static_cast<int>(std::upper_bound(arc.begin(), arc.end(), s) - arc.begin());
+        const int k0 = std::clamp(k - 1, 0, kTable - 1);
+        const double t = (k0 + (s - arc[k0]) / std::max(1e-15, arc[k0 + 1] - arc[k0])) / kTable;
+        f.p = bezier(std::clamp(t, 0.0, 1.0));
+      } else {
+        f.p = P2 + (s - Lb) * u2;
+      }
+      if (i == N - 1) f.p = C;
+      f.q = b.entry.q.slerp(L > 0 ? s / L : 1.0, q1);
+      goals[i] = f;
+      speeds[i] = sv;
     }
-    if (i == N - 1) f.p = C;
-    f.q = b.entry.q.slerp(L > 0 ? s / L : 1.0, q1);
-    goals[i] = f;
-    speeds[i] = sv;
-  }
-  Plan plan = SolvePath(b.q, goals, speeds);
-  plan.duration_s = N * period_s_;
-  return plan;
+    Plan plan = SolvePath(b.q, goals, speeds);
+    plan.duration_s = N * period_s_;
+    return plan;
+  });
 }
 
 Plan MotionPlanner::Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const {
@@ -430,42 +497,44 @@ Plan MotionPlanner::Self(const Eigen::VectorXd& q0, int joint, double delta, dou
                                 std::to_string(n) + ")");
   if (!(duration_s > 0)) throw std::invalid_argument("t must be > 0 s");
   const Frame held = ToolPose(q0);
-  const int N = std::max(1, static_cast<int>(std::ceil(duration_s / period_s_ - 1e-9)));
-  const double T = N * period_s_;
-  const control::TimeScaling quintic{control::TimeScalingType::kQuintic, 0.25};
-  Plan plan;
-  plan.duration_s = T;
-  Eigen::VectorXd q = q0;
-  for (int i = 0; i < N; ++i) {
-    const double qj = q0[joint] + delta * control::EvaluateTimeScaling(quintic, T, (i + 1) * period_s_).s;
-    // Newton on the square system [J_tool; e_jᵀ] dq = [pose error; qj − q_j]
-    double pe = 1, re = 1, je = 1;
-    for (int it = 0; it < kMaxIterations && !(pe < kTolPos_m && re < kTolRot_rad && je < kTolRot_rad); ++it) {
-      const Frame x = ToolPose(q);
-      Eigen::Matrix<double, 7, 1> e;
-      e.head<3>() = held.p - x.p;
-      e.segment<3>(3) = control::RotationVector((held.q * x.q.conjugate()).toRotationMatrix());
-      e[6] = qj - q[joint];
-      pe = e.head<3>().norm();
-      re = e.segment<3>(3).norm();
-      je = std::abs(e[6]);
-      Eigen::MatrixXd J = model_->Jacobian();
-      J.topRows(3) -= Skew(x.p - model_->TipPose().p_W) * J.bottomRows(3);
-      Eigen::Matrix<double, 7, 7> A;
-      A.topRows(6) = J;
-      A.row(6).setZero();
-      A(6, joint) = 1.0;
-      q += A.colPivHouseholderQr().solve(e);
+  return Within(q0, q0, [&](double k) {
+    const int N = std::max(1, static_cast<int>(std::ceil(duration_s * k / period_s_ - 1e-9)));
+    const double T = N * period_s_;
+    const control::TimeScaling quintic{control::TimeScalingType::kQuintic, 0.25};
+    Plan plan;
+    plan.duration_s = T;
+    Eigen::VectorXd q = q0;
+    for (int i = 0; i < N; ++i) {
+      const double qj = q0[joint] + delta * control::EvaluateTimeScaling(quintic, T, (i + 1) * period_s_).s;
+      // Newton on the square system [J_tool; e_jᵀ] dq = [pose error; qj − q_j]
+      double pe = 1, re = 1, je = 1;
+      for (int it = 0; it < kMaxIterations && !(pe < kTolPos_m && re < kTolRot_rad && je < kTolRot_rad); ++it) {
+        const Frame x = ToolPose(q);
+        Eigen::Matrix<double, 7, 1> e;
+        e.head<3>() = held.p - x.p;
+        e.segment<3>(3) = control::RotationVector((held.q * x.q.conjugate()).toRotationMatrix());
+        e[6] = qj - q[joint];
+        pe = e.head<3>().norm();
+        re = e.segment<3>(3).norm();
+        je = std::abs(e[6]);
+        Eigen::MatrixXd J = model_->Jacobian();
+        J.topRows(3) -= Skew(x.p - model_->TipPose().p_W) * J.bottomRows(3);
+        Eigen::Matrix<double, 7, 7> A;
+        A.topRows(6) = J;
+        A.row(6).setZero();
+        A(6, joint) = 1.0;
+        q += A.colPivHouseholderQr().solve(e);
+      }
+      if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10 && je < kTolRot_rad * 10)) {
+        throw std::invalid_argument(Percent(i, N) + ": the tool pose cannot be held while joint " +
+                                    model_->joint_names()[joint] + " moves (a singular configuration?)");
+      }
+      CheckLimits(q, Percent(i, N));
+      plan.q.push_back(q);
+      plan.tool_W.push_back(held);
     }
-    if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10 && je < kTolRot_rad * 10)) {
-      throw std::invalid_argument(Percent(i, N) + ": the tool pose cannot be held while joint " +
-                                  model_->joint_names()[joint] + " moves (a singular configuration?)");
-    }
-    CheckLimits(q, Percent(i, N));
-    plan.q.push_back(q);
-    plan.tool_W.push_back(held);
-  }
-  return plan;
+    return plan;
+  });
 }
 
 }  // namespace vlab::task

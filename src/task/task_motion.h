@@ -27,6 +27,11 @@
 // q += J⁺·e (damped least squares, λ = 1e-6) from the previous sample, to
 // 1e-9 m and 1e-9 rad; a sample that does not converge, or a joint beyond its
 // limits, fails the plan with std::invalid_argument saying where on the path.
+// Joint speed and acceleration limits (task_rates.h): every plan's samples are
+// differentiated at the period; a plan that needs more than a joint allows is
+// planned again with its timing stretched by the factor that brings the worst
+// joint within (the same path, slower), or refused (JointRateLimits::refuse)
+// with a message naming the joint, what it needs and what it may.
 #pragma once
 
 #include <memory>
@@ -36,6 +41,7 @@
 #include <Eigen/Core>
 
 #include "control/robot_model.h"
+#include "task/task_rates.h"
 #include "task/task_values.h"
 
 namespace vlab::task {
@@ -46,8 +52,8 @@ struct MotionLimits {
   double accel_mps2 = 0.5;           ///< tool linear acceleration, m/s²
   double rot_speed_rps = 0.7854;     ///< tool angular speed, rad/s (45°/s)
   double rot_accel_rps2 = 3.1416;    ///< tool angular acceleration, rad/s² (180°/s²)
-  double joint_speed_rps = 0.5236;   ///< joint speed, rad/s (30°/s)
-  double joint_accel_rps2 = 1.5708;  ///< joint acceleration, rad/s² (90°/s²)
+  double joint_speed_rps = 0.5236;   ///< movej: speed of the fastest joint, rad/s (30°/s)
+  double joint_accel_rps2 = 1.5708;  ///< movej: acceleration of the fastest joint, rad/s² (90°/s²)
 };
 
 /// A planned move: one joint reference per period.
@@ -67,6 +73,7 @@ struct BlendStart {
   Eigen::Vector3d corner = Eigen::Vector3d::Zero();   ///< the running move's target point B (world)
   Eigen::Vector3d tangent = Eigen::Vector3d::Zero();  ///< unit direction of motion at P1 (a line: towards B)
   double speed_mps = 0;                               ///< the tool's path speed there
+  Eigen::VectorXd q_before;                           ///< chain joints one period before q (empty: at rest at q)
 };
 
 class MotionPlanner {
@@ -76,6 +83,10 @@ class MotionPlanner {
   MotionPlanner(control::RobotModel* model, double period_s);
 
   void set_tool(const Frame& tip_T_tool) { tool_ = tip_T_tool; }
+  /// The joint speed and acceleration limits every plan keeps (default:
+  /// DefaultRateLimits); std::invalid_argument unless one positive value per joint.
+  void set_rate_limits(const JointRateLimits& limits);
+  const JointRateLimits& rate_limits() const { return rates_; }
   const Frame& tool() const { return tool_; }
 
   /// Tool pose (world) at chain joints q.
@@ -86,6 +97,11 @@ class MotionPlanner {
   Eigen::VectorXd Ik(const Eigen::VectorXd& q0, const Frame& goal_W) const;
 
   /// Plans; every function throws std::invalid_argument naming the problem.
+  /// Every plan keeps rate_limits(): slowed down to them, or refused.
+  /// Joint: a trapezoid of the fastest joint at limits.joint_speed_rps and
+  /// joint_accel_rps2, each lowered (when not refusing) so that no joint
+  /// exceeds its own limit: T = D/v + v/a (D the largest joint distance), or
+  /// 2·sqrt(D/a) when D < v²/a; rounded up to whole periods.
   Plan Joint(const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, const MotionLimits& limits,
              double duration_s = 0) const;
   Plan Linear(const Eigen::VectorXd& q0, const Frame& goal_W, const MotionLimits& limits, double duration_s = 0) const;
@@ -114,6 +130,10 @@ class MotionPlanner {
   std::string Singularity(const Eigen::VectorXd& q) const;
 
  private:
+  // the plan of replan(1), or of replan(k) with the smallest stretch k found that keeps
+  // every joint within rate_limits() (from q_before, q_start: the two samples before it)
+  template <class Replan>
+  Plan Within(const Eigen::VectorXd& q_before, const Eigen::VectorXd& q_start, Replan replan) const;
   // samples of a Cartesian path: pose(s) for s of a trapezoid in time
   template <class PoseAt>
   Plan Cartesian(const Eigen::VectorXd& q0, double duration_s, double accel_fraction, double length_m,
@@ -133,6 +153,7 @@ class MotionPlanner {
   control::RobotModel* model_;
   double period_s_;
   Frame tool_;
+  JointRateLimits rates_;
   Eigen::VectorXd zero_;  // joint velocities of every evaluation (kinematics only)
 };
 

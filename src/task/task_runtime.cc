@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -60,6 +61,19 @@ std::unique_ptr<Robot> BindRobot(const ProgramConfig& c, const mjModel* m, Devic
   r->q_ref.setZero(r->model->dof());
   r->command.assign(1 + n, 0.0);
   r->planner = std::make_unique<MotionPlanner>(r->model.get(), period_s);
+  // the arm's own joint speed limits where it gives them; else the defaults
+  const std::vector<double> vmax = r->arm->velocity_limits();
+  if (!vmax.empty()) {
+    JointRateLimits rates = r->planner->rate_limits();
+    for (std::size_t i = 0; i < r->arm_index.size(); ++i) {
+      const int k = r->arm_index[i];
+      if (k >= static_cast<int>(vmax.size()) || !(vmax[k] > 0) || !std::isfinite(vmax[k])) {
+        Fail(c, "arm '" + c.robot + "': no valid speed limit for joint '" + r->model->joint_names()[i] + "'");
+      }
+      rates.v_rps[static_cast<long>(i)] = vmax[k];
+    }
+    r->planner->set_rate_limits(rates);
+  }
   if (!c.wrench.empty()) {
     r->default_wrench = devices->Find(c.wrench);
     if (!r->default_wrench || r->default_wrench->kind() != bridge::DeviceKind::kWrench) {

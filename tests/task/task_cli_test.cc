@@ -238,11 +238,11 @@ TEST(TaskCli, AProgramThatDiesInItsFirstPeriodFailsTheRunAndProgramEnded) {
   const ProcessResult r = RunVlab("run tests/task/died_at_start.yaml --out '" + out.path() + "'");
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   EXPECT_HAS(r.out, "FAIL  program_ended");
-  EXPECT_HAS(r.err, "died_at_start.lua:4: movej: option 'v' is not supported");
+  EXPECT_HAS(r.err, "died_at_start.lua:4: movej: option 'w' is not supported");
   const std::string log = ReadFile(out / "task.log");
   EXPECT_HAS(log, "[pa10 t=0.000] starting\n");
   EXPECT_HAS(log, "[error t=0.000] ");
-  EXPECT_HAS(log, "died_at_start.lua:4: movej: option 'v' is not supported");
+  EXPECT_HAS(log, "died_at_start.lua:4: movej: option 'w' is not supported");
 }
 
 TEST(TaskCli, AScriptErrorEndsVlabTaskAtOnceEvenWithHold) {
@@ -254,11 +254,11 @@ TEST(TaskCli, AScriptErrorEndsVlabTaskAtOnceEvenWithHold) {
                   "/task.log' --arm 127.0.0.1:" + std::to_string(kinsim.port()) + " --scene scenes/pa10.xml --tip tool",
               30);
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
-  EXPECT_HAS(r.err, "died_at_start.lua:4: movej: option 'v' is not supported");
+  EXPECT_HAS(r.err, "died_at_start.lua:4: movej: option 'w' is not supported");
   EXPECT_EQ(r.out.find("starting"), std::string::npos) << r.out;  // -q
   const std::string log = ReadFile(out / "task.log");
   EXPECT_EQ(log.rfind("[pa10 t=0.000] starting\n", 0), 0u) << log;
-  EXPECT_HAS(log, "[error t=0.000] tests/task/died_at_start.lua:4: movej: option 'v'");
+  EXPECT_HAS(log, "[error t=0.000] tests/task/died_at_start.lua:4: movej: option 'w'");
   kinsim.Stop();
 }
 

@@ -59,6 +59,12 @@ TEST_F(MotionTest, LinearIsStraightWithSlerpOrientation) {
   const Frame goal = Pose(0.55, 0.15, 0.55, Down(60));
   MotionLimits limits;
   limits.speed_mps = 0.2;
+  // the tool's trapezoid alone: joint limits far away (at the PA10's defaults a wrist joint
+  // would need 200 deg/s^2 here, and the move is slowed: tests/task/task_rates_test.cc)
+  JointRateLimits wide = DefaultRateLimits(7);
+  wide.v_rps.setConstant(100.0);
+  wide.a_rps2.setConstant(1000.0);
+  planner_->set_rate_limits(wide);
   const Plan plan = planner_->Linear(q0_, goal, limits);
   ASSERT_GT(plan.q.size(), 100u);
   const Eigen::Vector3d d = goal.p - start.p;

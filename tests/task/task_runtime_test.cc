@@ -173,20 +173,20 @@ TEST_F(RuntimeTest, GuardedMoveStopsOnForce) {
 // (pa10 first), so pa10b's first sample is in the very period pa10's move has
 // ended (period 250); shared values travel by value.
 TEST_F(RuntimeTest, TwoRobotProgramsSynchroniseThroughASignal) {
-  auto r = Make({{"pa10", "movej({10, 30, 0, 60, 0, 90, 0}, {t = 0.5})\nshared.where = pose()\nsignal('done')\n"},
+  auto r = Make({{"pa10", "movej({8, 30, 0, 60, 0, 90, 0}, {t = 0.5})\nshared.where = pose()\nsignal('done')\n"},
                  {"pa10b",
                   "wait_signal('done')\nprint('go', shared.where.pos.x > 0)\n"
-                  "movej({-10, 30, 0, 60, 0, 90, 0}, {t = 0.5})\n"}});
+                  "movej({-8, 30, 0, 60, 0, 90, 0}, {t = 0.5})\n"}});
   ASSERT_TRUE(RunFor(*r, 2000)) << r->error();
   EXPECT_EQ(printed_, std::vector<std::string>{"pa10b@250: go\ttrue"});
   // pa10 reached its goal at period 249 (250 samples of 2 ms); pa10b had not moved until then
   const auto& a = arm_->history();
   const auto& b = arm2_->history();
   ASSERT_GE(a.size(), 250u);
-  EXPECT_NEAR(a[249][0], 10 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(a[249][0], 8 * M_PI / 180, 1e-12);
   for (int k = 0; k < 250; ++k) EXPECT_EQ(b[k][0], 0.0) << k;
   EXPECT_LT(b[250][0], 0.0);
-  EXPECT_NEAR(arm2_->q()[0], -10 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(arm2_->q()[0], -8 * M_PI / 180, 1e-12);
 }
 
 // gripper(name) and device(name): commands by field name, re-sent every period
