@@ -47,6 +47,12 @@ class LabChannel final : public task::Channel {
   const std::vector<std::string>& state_names() const override { return state_names_; }
   const std::vector<std::string>& command_names() const override { return command_names_; }
   std::vector<std::string> joint_names() const override { return joints_; }
+  // the arm's max_velocity, where its scenario entry gives one
+  std::vector<double> velocity_limits() const override {
+    const SimArm* arm = device_->arm();
+    if (!arm || arm->max_velocity().size() == 0) return {};
+    return std::vector<double>(arm->max_velocity().data(), arm->max_velocity().data() + arm->max_velocity().size());
+  }
   bool Read(std::vector<double>* values) override {
     // the state datagram the device would send now, decoded as a client would
     device_->EncodeState(0, 0, 0, &scratch_, &bytes_);
