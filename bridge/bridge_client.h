@@ -183,12 +183,15 @@ class Arm : public DeviceClient {
   /// kg m^2 about it, flange frame: docs/protocol.md, "Arm payload") and waits
   /// up to timeout_s for the device's answer; in force from the device's next
   /// control period. States that arrive meanwhile are skipped (a lockstep
-  /// device sends none before this client's next command). Throws
-  /// std::invalid_argument naming the field for a payload that is no rigid
-  /// body (not finite, negative mass, inertia not positive semi-definite or
-  /// breaking the triangle inequality), RefusedError when the device refuses
-  /// it (another client owns the arm), TimeoutError when no answer came,
-  /// NetworkError when it could not be sent. (bridge_client_payload.cc)
+  /// device sends none before this client's next command). Each payload sent
+  /// carries the next value of this handle's own payload counter (1, 2, 3,
+  /// ...) as its seq, so that the device can refuse a late or replayed copy
+  /// of an older one. Throws std::invalid_argument naming the field for a
+  /// payload that is no rigid body (not finite, negative mass, inertia not
+  /// positive semi-definite or breaking the triangle inequality),
+  /// RefusedError when the device refuses it (another client owns the arm),
+  /// TimeoutError when no answer came, NetworkError when it could not be
+  /// sent. (bridge_client_payload.cc)
   void SetPayload(const ArmPayloadMsg& payload, double timeout_s = 1.0);
   /// The payload the device reports: its describe reply's at connect, or the
   /// last one SetPayload set (zero mass when the reply has none).
@@ -203,6 +206,7 @@ class Arm : public DeviceClient {
   std::vector<double> position_min_, position_max_, velocity_max_, torque_max_;
   ArmStateMsg message_;
   std::vector<double> command_payload_;  ///< [mode, v_1..v_n], sized at connect
+  std::int64_t payload_seq_ = 0;         ///< seq of the last payload sent (its own counter)
 };
 
 /// A force/torque sensor: output only.

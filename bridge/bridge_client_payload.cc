@@ -51,12 +51,13 @@ void Arm::SetPayload(const ArmPayloadMsg& payload, double timeout_s) {
   if (!CheckArmPayload(payload, &field, &reason)) {
     throw std::invalid_argument(Label() + ": payload " + field + " " + reason);
   }
-  EncodeArmPayload(0, ClientTime(), payload, &packet_);
+  // the next value of this handle's payload counter: the device refuses any seq not above the last it took
+  EncodeArmPayload(static_cast<double>(++payload_seq_), ClientTime(), payload, &packet_);
   if (!Send(packet_)) throw NetworkError(Label() + ": cannot send the payload");
   if (AwaitSessionResult(SessionResult::kPayloadSet, SessionResult::kPayloadRefused, timeout_s, "payload") ==
       SessionResult::kPayloadRefused) {
     throw RefusedError(Label() + ": the device refused the payload (another client owns the arm, or the device " +
-                       "found it no rigid body)");
+                       "found it no rigid body or its seq not above the last one it took)");
   }
   mutable_describe()["payload"] = {
       {"mass", payload.mass_kg}, {"com", payload.com_m}, {"inertia", payload.inertia_kgm2}};

@@ -40,6 +40,7 @@ void DeviceEndpoint::ReleaseOwner() {
   if (owner_) ++counters_.owners_released;
   owner_.reset();
   last_seq_ = -1;
+  last_payload_seq_ = 0;  // the next owner counts its payloads from its own 1
 }
 
 bool DeviceEndpoint::ReleaseSilentOwner() {
@@ -183,6 +184,7 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   if (!from_owner) {
     if (owner_) ++counters_.owners_released;  // taken over (a gate's kTakeOver)
     owner_ = from;
+    last_payload_seq_ = 0;  // a new owner's payload counter starts from its own 1
   }
   owner_heard_s_ = sessions_.Now();
   last_seq_ = header_.seq;
@@ -200,19 +202,30 @@ DeviceEndpoint::Received DeviceEndpoint::HandlePayload(const Endpoint& from, boo
   ArmPayloadMsg parsed;
   const char* field = nullptr;
   const char* reason = nullptr;
-  const bool ok = finite && ParseArmPayload(header_, payload_, &parsed) == DecodeError::kNone &&
+  const bool from_owner = owner_ && *owner_ == from;
+  // seq: the sender's own payload counter, a whole number >= 1 (DecodePacket checked it is whole)
+  const bool ok = finite && header_.seq >= kFirstPayloadSeq &&
+                  ParseArmPayload(header_, payload_, &parsed) == DecodeError::kNone &&
                   (config_.check_payload ? config_.check_payload(parsed) : CheckArmPayload(parsed, &field, &reason));
-  if (!ok) {  // counted as malformed: a length, a NaN or a load no rigid body has
+  if (!ok) {  // counted as malformed: seq 0, a length, a NaN or a load no rigid body has
     sessions_.Answer(from, SessionResult::kPayloadRefused, socket);
     ++counters_.refused_malformed;
     ++counters_.refused;
-    if (owner_ && *owner_ == from) refused_flag_ = true;
+    if (from_owner) refused_flag_ = true;
+    return Received::kOther;
+  }
+  // a late or replayed copy of an older payload must not set that payload again
+  if (from_owner && header_.seq <= last_payload_seq_) {
+    sessions_.Answer(from, SessionResult::kPayloadRefused, socket);
+    ++counters_.stale;
+    refused_flag_ = true;
     return Received::kOther;
   }
   if (!owner_) {  // a controller's first word may be its payload: it owns the arm from here on
     owner_ = from;
     last_seq_ = -1;
   }
+  last_payload_seq_ = header_.seq;
   owner_heard_s_ = sessions_.Now();
   arm_payload_ = parsed;
   has_payload_ = true;

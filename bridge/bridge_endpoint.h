@@ -43,12 +43,16 @@
 //   - an arm also takes a payload (type 6, bridge_payload.h) through the same
 //     subscriber and owner rules as its commands (an accepted payload makes
 //     its sender the owner of an arm that has none, as a first command does);
-//     it is not a period's command: its seq is not checked, it feeds no
-//     watchdog and answers no lockstep period. It must have 10 finite values
-//     that make a rigid body (EndpointConfig::check_payload). Every payload
-//     from a subscriber is answered with a session reply, kPayloadSet or
-//     kPayloadRefused; a refused one is counted like any refused datagram
-//     (not owner, malformed) and changes nothing; an accepted one is taken
+//     it is not a period's command: it feeds no watchdog and answers no
+//     lockstep period. Its seq is the sender's own payload counter (1, 2,
+//     3, ...): a whole number >= 1 (0: malformed) above the owner's last
+//     accepted payload seq (reset when the owner changes), else it is stale
+//     (a late or replayed copy) and changes nothing. It must have 10 finite
+//     values that make a rigid body (EndpointConfig::check_payload). Every
+//     payload from a subscriber is answered with a session reply, kPayloadSet
+//     or kPayloadRefused; a refused one is counted like any refused datagram
+//     (not owner, malformed; a stale one as stale), sets kStatusRefused when
+//     it came from the owner, and changes nothing; an accepted one is taken
 //     at the start of the next period (TakePayload) and the describe reply
 //     reports it from then on. Any other kind refuses type 6 unanswered;
 //   - watchdog: an arm (or other commanded device) that received no accepted command for more than
@@ -89,7 +93,8 @@ struct EndpointCounters {
   long refused_limits = 0;          ///< wrong joint count or a value beyond a limit
   long refused_not_owner = 0;       ///< commands from a non-owner
   long refused_not_subscribed = 0;  ///< commands from a source that is no subscriber
-  long stale = 0;                   ///< seq lower than the last accepted, or older than the window (ignored)
+  long stale = 0;                   ///< seq lower than the last accepted, or older than the window (ignored);
+                                    ///< payloads: seq not above the owner's last accepted one (refused, answered)
   long duplicate = 0;               ///< seq equal to the last accepted (ignored)
   long future = 0;                  ///< seq of a state not published yet (ignored)
   long watchdog_holds = 0;          ///< times the watchdog put the arm on hold
@@ -178,6 +183,9 @@ class DeviceEndpoint {
   const std::string& describe_json() const { return describe_json_; }
   /// seq of the last accepted command (-1 if none since the owner took over).
   double last_accepted_seq() const { return last_seq_; }
+  /// seq of the owner's last accepted payload (0 if none since it took over):
+  /// a payload must carry a higher one.
+  double last_payload_seq() const { return last_payload_seq_; }
   bool has_owner() const { return owner_.has_value(); }
   /// The owner's address and port (empty when none).
   const std::optional<Endpoint>& owner() const { return owner_; }
@@ -219,7 +227,8 @@ class DeviceEndpoint {
   std::optional<Endpoint> owner_;
   double owner_heard_s_ = 0;
   double last_seq_ = -1;
-  double newest_seq_ = -1;  // seq of the newest state published
+  double last_payload_seq_ = 0;  // the owner's last accepted payload seq (its own counter)
+  double newest_seq_ = -1;       // seq of the newest state published
   long last_command_period_ = 0;
   double watch_seq_ = -1;  // seq of the last accepted command (kept when the owner is released)
   std::array<double, kPublishedRing> published_s_{};  // wall time each recent seq was first published

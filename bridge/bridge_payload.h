@@ -6,8 +6,11 @@
 // values (bridge_layouts.h, kArmPayloadLayout): mass kg; centre of mass x, y,
 // z m; inertia about the centre of mass ixx, iyy, izz, ixy, ixz, iyz kg m^2;
 // all in the flange frame (the body of the arm's last joint). Only the arm's
-// owner may set it; the device answers every payload from a subscriber with a
-// session reply: kPayloadSet or kPayloadRefused (bridge_session.h). The
+// owner may set it, with a seq (its own payload counter: 1, 2, 3, ...)
+// above the last it set, so that a late or replayed copy of an older
+// payload cannot set that one again; the device answers every payload from
+// a subscriber with a session reply: kPayloadSet or kPayloadRefused
+// (bridge_session.h). The
 // describe reply of an arm reports the payload in force as
 // "payload": {"mass": kg, "com": [x, y, z], "inertia": [ixx, iyy, izz, ixy, ixz, iyz]}.
 #pragma once
@@ -23,6 +26,10 @@ namespace vlab::bridge {
 /// Values in a payload datagram.
 inline constexpr int kArmPayloadValues = 10;
 
+/// The seq of a sender's first payload; each next payload it sends carries one
+/// more. A seq below it (0) is malformed.
+inline constexpr double kFirstPayloadSeq = 1;
+
 /// A load at an arm's flange (frame: the body of its last joint).
 struct ArmPayloadMsg {
   double mass_kg = 0;                                       ///< kg, >= 0 (0: no payload)
@@ -34,7 +41,9 @@ struct ArmPayloadMsg {
 };
 
 /// Encodes a payload datagram (kind arm, type 6) into `out` (resized). seq:
-/// the newest state the sender read (informative); time: the sender's clock, s.
+/// the sender's own payload counter, a whole number >= 1 that grows with every
+/// payload it sends (the device refuses one not above the last it accepted
+/// from its owner); time: the sender's clock, s (informative).
 void EncodeArmPayload(double seq, double time, const ArmPayloadMsg& payload, std::vector<unsigned char>* out);
 
 /// Payload of a framed datagram -> message: kind arm, type 6 and exactly 10

@@ -85,7 +85,7 @@ SESSION_UNSUBSCRIBED = 3  # no longer subscribed
 SESSION_LIMITED = 4       # describe refused by the per-source rate limit: retry later
 SESSION_REFUSED = 5       # a command (a sim op) refused: another client controls the device
 SESSION_PAYLOAD_SET = 6   # an arm's payload accepted: in force from the next control period
-SESSION_PAYLOAD_REFUSED = 7  # an arm's payload refused: not the owner, or not a rigid body
+SESSION_PAYLOAD_REFUSED = 7  # an arm's payload refused: not the owner, not a rigid body, or a stale seq
 REQUEST_BYTES = 8 * (HEADER_VALUES + 2)  # describe and subscribe requests, session replies: 72
 
 # arm command modes
@@ -469,6 +469,7 @@ class Arm(Device):
             raise ProtocolError('%s: describe reply has no "joints" array of names' % self._label)
         self.joint_names = list(names)
         self.joints = len(names)
+        self._payload_seq = 0  # seq of the last payload sent: this handle's own counter
         limits = self._describe.get("limits") or {}
         try:
             self.position_min = self._limit(limits, "position_min")
@@ -521,9 +522,12 @@ class Arm(Device):
         """Declares the load at the flange (docs/protocol.md, "Arm payload"): mass (kg, >= 0), com
         (x, y, z m) and inertia about it (ixx, iyy, izz[, ixy, ixz, iyz] kg m^2), flange frame; then
         waits up to `timeout` s for the device's answer. In force from the device's next control
-        period. States that arrive meanwhile are skipped. Raises ValueError for a bad count, a
-        non-finite value or a negative mass, RefusedError when the device refuses it (another client
-        owns the arm, or the inertia is no rigid body's), VlabTimeout when no answer came."""
+        period. States that arrive meanwhile are skipped. Each payload sent carries the next value
+        of this handle's own payload counter (1, 2, 3, ...) as its seq: the device refuses a seq
+        not above the last it took, so a late or replayed copy of an older payload cannot set it
+        again. Raises ValueError for a bad count, a non-finite value or a negative mass,
+        RefusedError when the device refuses it (another client owns the arm, or the inertia is no
+        rigid body's), VlabTimeout when no answer came."""
         com = [float(v) for v in com]
         inertia = [float(v) for v in inertia]
         if len(com) != 3:
@@ -536,7 +540,8 @@ class Arm(Device):
             raise ValueError("%s: payload has a non-finite value" % self._label)
         if values[0] < 0:
             raise ValueError("%s: payload mass must be >= 0 kg, got %g" % (self._label, values[0]))
-        if not self._send(encode(KIND_ARM, TYPE_PAYLOAD, 0, self._time(), values)):
+        self._payload_seq += 1
+        if not self._send(encode(KIND_ARM, TYPE_PAYLOAD, self._payload_seq, self._time(), values)):
             raise NetworkError("%s: cannot send the payload" % self._label)
         deadline = time.monotonic() + timeout
         while True:
@@ -549,7 +554,8 @@ class Arm(Device):
                 return
             if reply is not None and reply[2] == SESSION_PAYLOAD_REFUSED:
                 raise RefusedError("%s: the device refused the payload (another client owns the arm, or the "
-                                   "device found it no rigid body)" % self._label)
+                                   "device found it no rigid body or its seq not above the last one it took)"
+                                   % self._label)
             self.skipped += 1  # a state, a describe reply or the answer to a renewal
 
     @property

@@ -1,7 +1,8 @@
 // Tests an arm endpoint's payload (type 6, bridge_payload.h): the owner sets
 // it and the describe reply reports it; anyone else, a wrong length, NaN, a
 // negative mass or an inertia no rigid body has is refused, counted, and
-// answered with result 7; a device of another kind answers nothing.
+// answered with result 7; a device of another kind answers nothing. Its seq
+// rule: endpoint_payload_seq_test.cc.
 #include "bridge/bridge_payload.h"
 
 #include <cmath>
@@ -14,75 +15,12 @@
 
 #include "bridge/bridge_endpoint.h"
 #include "bridge/endpoint_fixture.h"
+#include "bridge/payload_fixture.h"
 
 namespace vlab::bridge {
 namespace {
 
-constexpr int kJoints = 2;
-
-EndpointConfig ArmConfig() {
-  EndpointConfig c;
-  c.name = "arm";
-  c.kind = DeviceKind::kArm;
-  c.describe_json = R"({"name":"arm","kind":"arm"})";
-  c.joints = kJoints;
-  c.payload.mass_kg = 0.25;  // the scenario's
-  return c;
-}
-
-ArmPayloadMsg Load() {
-  ArmPayloadMsg p;
-  p.mass_kg = 1.5;
-  p.com_m = {0.1, 0, 0.05};
-  p.inertia_kgm2 = {0.01, 0.012, 0.008, 0.001, 0, 0};
-  return p;
-}
-
-Bytes Encoded(const ArmPayloadMsg& p) {
-  Bytes b;
-  EncodeArmPayload(0, 0, p, &b);
-  return b;
-}
-
-// a payload datagram of any values (a wrong count, NaN)
-Bytes Raw(std::vector<double> values, int kind = static_cast<int>(DeviceKind::kArm)) {
-  Header h;
-  h.kind = kind;
-  h.type = static_cast<int>(MessageType::kPayload);
-  Bytes b;
-  EncodePacket(h, values.data(), static_cast<int>(values.size()), &b);
-  return b;
-}
-
-class PayloadTest : public EndpointTest {
- protected:
-  void PublishArm(DeviceEndpoint& e, double seq) {
-    ArmStateMsg s;
-    s.q.assign(kJoints, 0);
-    s.qd.assign(kJoints, 0);
-    s.tau.assign(kJoints, 0);
-    Bytes packet;
-    EncodeArmState(seq, 0, s, &packet);
-    e.Publish(packet, *device_);
-  }
-  // `from` takes the arm with a hold command answering state 0
-  void Own(DeviceEndpoint& e, UdpSocket& from) {
-    PublishArm(e, 0);
-    ASSERT_TRUE(Send(e, from, static_cast<int>(DeviceKind::kArm), 0, {0, 0, 0}, 0));
-  }
-  // the result of the session reply a payload got; kChallenge when none came
-  SessionResult Answer(DeviceEndpoint& e, UdpSocket& from, const Bytes& payload) {
-    const long n = Request(e, from, payload);
-    return n < 0 ? SessionResult::kChallenge : Reply(n).second;
-  }
-  nlohmann::json Described(DeviceEndpoint& e, UdpSocket& from, double cookie) {
-    Bytes request;
-    EncodeDescribeRequest(static_cast<int>(DeviceKind::kArm), cookie, &request);
-    const long n = Request(e, from, request);
-    EXPECT_GT(n, 0);
-    return nlohmann::json::parse(std::string(reinterpret_cast<char*>(buffer_), n > 0 ? n : 0), nullptr, false);
-  }
-};
+EndpointConfig ArmConfig() { return PayloadArmConfig(); }
 
 TEST_F(PayloadTest, TheOwnerSetsItAndTheDescribeReplyReportsIt) {
   DeviceEndpoint e(ArmConfig());
@@ -153,10 +91,8 @@ TEST_F(PayloadTest, TheDevicesOwnCheckDecides) {
   DeviceEndpoint e(c);
   Subscribe(e, *client_);
   Own(e, *client_);
-  EXPECT_EQ(Answer(e, *client_, Encoded(Load())), SessionResult::kPayloadRefused);
-  ArmPayloadMsg light = Load();
-  light.mass_kg = 0.5;
-  EXPECT_EQ(Answer(e, *client_, Encoded(light)), SessionResult::kPayloadSet);
+  EXPECT_EQ(Answer(e, *client_, Encoded(Load(), 1)), SessionResult::kPayloadRefused);
+  EXPECT_EQ(Answer(e, *client_, Encoded(Load(0.5), 2)), SessionResult::kPayloadSet);
 }
 
 TEST_F(PayloadTest, AFirstPayloadTakesAnArmThatHasNoOwner) {

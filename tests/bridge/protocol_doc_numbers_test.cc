@@ -3,10 +3,11 @@
 // version (title, header tables, JSON examples, the Python example), the kind
 // range of a describe request and the kind names a describe reply carries,
 // the session reply results, the lockstep timeouts, the subscriber table's
-// size, the owner and subscriber timeouts, the watchdog, the seq window and
-// the largest datagram. Each number is found by the sentence that states it;
-// a sentence that is gone is reported, and so is every mistake: each check is
-// also run on a copy of the page with its number changed, and must fail.
+// size, the owner and subscriber timeouts, the watchdog, the seq window, the
+// first seq of an arm payload and the largest datagram. Each number is found
+// by the sentence that states it; a sentence that is gone is reported, and so
+// is every mistake: each check is also run on a copy of the page with its
+// number changed, and must fail.
 #include <fstream>
 #include <functional>
 #include <regex>
@@ -70,6 +71,10 @@ std::vector<Stated> Numbers() {
       {"protocol.md", "the watchdog", R"(consecutive\s+periods \((\d+) by default)",
        static_cast<double>(endpoint.watchdog_periods)},
       {"protocol.md", "the seq window", R"(\*\*newest (\d+) states it)", static_cast<double>(kSeqWindow + 1)},
+      {"protocol.md", "the first payload seq", R"(\*\*payload counter\*\*: (\d+) for its first payload)",
+       kFirstPayloadSeq},
+      {"protocol.md", "the first payload seq of a new owner", R"(payloads count from its own (\d+)\.)",
+       kFirstPayloadSeq},
       {"protocol.md", "the largest datagram", R"(at most (\d+) values \()", static_cast<double>(kMaxPacketValues)},
   };
 }

@@ -418,14 +418,26 @@ class ClientTest(unittest.TestCase):
 
     def test_payload_set_by_the_owner_and_refused_for_another(self):
         """An arm's payload (type 6): the first client's takes the arm and the describe reply
-        reports it; a second client is refused (result 7), and so is a load no rigid body has."""
+        reports it; its payloads carry its own counter, so two in a row are both taken and a late
+        copy of the first is refused; a second client is refused (result 7), and so is a load no
+        rigid body has."""
         server = ArmServer()
         try:
             with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as first:
                 self.assertEqual(first.payload["mass"], 0.0)
-                first.set_payload(1.5, (0.1, 0.0, 0.05), (0.01, 0.012, 0.008), timeout=PATIENCE_S)
+                first.set_payload(1.0, timeout=PATIENCE_S)  # seq 1
+                first.set_payload(1.5, (0.1, 0.0, 0.05), (0.01, 0.012, 0.008), timeout=PATIENCE_S)  # seq 2
                 self.assertEqual(first.payload, {"mass": 1.5, "com": [0.1, 0.0, 0.05],
                                                  "inertia": [0.01, 0.012, 0.008, 0.0, 0.0, 0.0]})
+                # a late copy of the first (seq 1) from the owner's address: refused, nothing changes
+                first._send(vc.encode(vc.KIND_ARM, vc.TYPE_PAYLOAD, 1, 0.0, [1.0] + [0.0] * 9))
+                deadline = time.monotonic() + PATIENCE_S
+                reply = None
+                while reply is None or reply[2] not in (vc.SESSION_PAYLOAD_SET, vc.SESSION_PAYLOAD_REFUSED):
+                    data = first._receive(deadline)
+                    self.assertIsNotNone(data, "no answer to the late copy")
+                    reply = vc.parse_session_reply(data)
+                self.assertEqual(reply[2], vc.SESSION_PAYLOAD_REFUSED)
                 with vc.Arm("127.0.0.1", server.port, timeout=PATIENCE_S) as second:
                     self.assertEqual(second.payload["mass"], 1.5)  # the device reports it
                     self.assertEqual(second.payload["inertia"], [0.01, 0.012, 0.008, 0.0, 0.0, 0.0])
@@ -444,6 +456,7 @@ class ClientTest(unittest.TestCase):
             lines = server.stop()
         counters = [line for line in lines if line.startswith("counters ")]
         self.assertIn(" refused=2 ", counters[0], lines)
+        self.assertIn(" stale=1 ", counters[0], lines)  # the late copy
 
     def test_sessions_of_the_endpoint(self):
         """Without the cookie a request gets a 72-byte challenge and nothing else; with it, a

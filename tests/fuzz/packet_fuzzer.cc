@@ -22,8 +22,8 @@
 // the handshake; any other cookie is what the input says.
 // After each step the endpoint's invariants are checked: the counters add up,
 // only a well-formed command answering a published state is accepted, only a
-// well-formed payload (type 6: 10 finite values of a rigid body) is taken by
-// an arm, and by no other kind, the
+// well-formed payload (type 6: 10 finite values of a rigid body, a seq >= 1
+// above the owner's last) is taken by an arm, and by no other kind, the
 // subscribers never outnumber the table, and a taken command is one the
 // device accepts. A broken invariant or round trip aborts with a message; that,
 // and any sanitizer report, is a finding.
@@ -237,6 +237,8 @@ void CheckAfterHandle(const DeviceEndpoint& ep, DeviceEndpoint::Received receive
           "took a malformed payload");
     Check(CheckArmPayload(m, &field, &reason), "took a payload that is no rigid body");
     Check(ep.payload() == m && ep.has_owner(), "took a payload, but the arm does not report it or has no owner");
+    Check(h.seq >= kFirstPayloadSeq && h.seq == ep.last_payload_seq(),
+          "took a payload, but its seq is below 1 or not the owner's last payload seq");
   }
   if (!accepted) return;
   Check(DecodePacket(data, size, &h, &p) == DecodeError::kNone, "accepted a malformed datagram");

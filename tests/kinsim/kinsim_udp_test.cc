@@ -333,8 +333,9 @@ TEST_F(KinsimUdpTest, SecondClientIsNotTheOwner) {
   EXPECT_NE(report.find("not owner " + std::to_string(sent)), std::string::npos) << report;
 }
 
-// the payload (type 6) through the C++ client: the owner's is taken and reported (no dynamics:
-// "feedforward": "none"), another client's is refused with result 7
+// the payload (type 6) through the C++ client: the owner's are taken (two in a row: the handle's
+// payload counter grows) and reported (no dynamics: "feedforward": "none"), another client's is
+// refused with result 7
 TEST_F(KinsimUdpTest, APayloadIsTakenFromTheOwnerAndReported) {
   Start({"--watchdog-periods", "0"});
   vlab::bridge::Arm owner = vlab::bridge::Arm::Connect("127.0.0.1", process_->port(), 5.0);
@@ -344,16 +345,17 @@ TEST_F(KinsimUdpTest, APayloadIsTakenFromTheOwnerAndReported) {
   load.mass_kg = 2.5;
   load.com_m = {0, 0, 0.1};
   load.inertia_kgm2 = {0.02, 0.02, 0.01, 0, 0, 0};
-  owner.SetPayload(load, 5.0);
-  vlab::bridge::Arm other = vlab::bridge::Arm::Connect("127.0.0.1", process_->port(), 5.0);
-  EXPECT_EQ(other.payload(), load);  // its describe reply at connect reports the owner's
   ArmPayloadMsg lighter = load;
   lighter.mass_kg = 1.0;
+  owner.SetPayload(lighter, 5.0);  // seq 1
+  owner.SetPayload(load, 5.0);     // seq 2: the handle's counter grows, both are taken
+  vlab::bridge::Arm other = vlab::bridge::Arm::Connect("127.0.0.1", process_->port(), 5.0);
+  EXPECT_EQ(other.payload(), load);  // its describe reply at connect reports the owner's
   EXPECT_THROW(other.SetPayload(lighter, 5.0), vlab::bridge::RefusedError);
   load.inertia_kgm2 = {0.01, 0.01, 0.03, 0, 0, 0};  // no rigid body: the client says so before sending
   EXPECT_THROW(owner.SetPayload(load, 5.0), std::invalid_argument);
   const std::string report = StopReport();
-  EXPECT_NE(report.find("payloads 1"), std::string::npos) << report;
+  EXPECT_NE(report.find("payloads 2"), std::string::npos) << report;
   EXPECT_NE(report.find("not owner 1"), std::string::npos) << report;
 }
 
