@@ -75,9 +75,10 @@ class ArmPayloadWireTest : public test::MujocoTest {
     return endpoint_->Handle(datagram.data(), datagram.size(), from.local_endpoint(), 0, *device_);
   }
   // sends a payload from `from`; the result of the session reply it gets
+  double payload_seq_ = 0;  // the payloads sent so far (docs/protocol.md: seq 1, 2, 3, ...)
   bridge::SessionResult SendPayload(const bridge::ArmPayloadMsg& p, bridge::UdpSocket& from) {
     std::vector<unsigned char> datagram;
-    bridge::EncodeArmPayload(0, 0, p, &datagram);
+    bridge::EncodeArmPayload(++payload_seq_, 0, p, &datagram);  // a sender's own counter: 1, 2, ...
     Handle(datagram, from);
     unsigned char buffer[2048];
     bridge::Endpoint sender;
