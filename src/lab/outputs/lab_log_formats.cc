@@ -51,6 +51,18 @@ const std::pair<const char*, const char*> kUnits[] = {
     {"v", "px"},
 };
 
+// each format's scenario name and file in the output folder
+struct FormatEntry {
+  LogFormat format;
+  const char* name;
+  const char* file;
+};
+const FormatEntry kFormats[] = {
+    {LogFormat::kCsv, "csv", "log.csv"},
+    {LogFormat::kMat, "mat", "log.mat"},
+    {LogFormat::kHdf5, "hdf5", "log.h5"},
+};
+
 const char* UnitOf(const std::string& quantity) {
   for (const auto& [name, unit] : kUnits) {
     if (quantity == name) return unit;
@@ -61,33 +73,16 @@ const char* UnitOf(const std::string& quantity) {
 }  // namespace
 
 LogFormat ParseLogFormat(const std::string& name, const std::string& where) {
-  if (name == "csv") return LogFormat::kCsv;
-  if (name == "mat") return LogFormat::kMat;
-  if (name == "hdf5") return LogFormat::kHdf5;
+  for (const FormatEntry& entry : kFormats) {
+    if (name == entry.name) return entry.format;
+  }
   if (name == "mcap") throw InputError(where + ": format 'mcap' is not supported yet (csv, mat or hdf5)");
   throw InputError(where + ": unknown log format '" + name + "' (csv, mat or hdf5)");
 }
 
-const char* LogFormatName(LogFormat format) {
-  switch (format) {
-    case LogFormat::kCsv:
-      return "csv";
-    case LogFormat::kMat:
-      return "mat";
-    case LogFormat::kHdf5:
-      return "hdf5";
-  }
-  return "?";
-}
-
 const char* LogFileName(LogFormat format) {
-  switch (format) {
-    case LogFormat::kCsv:
-      return "log.csv";
-    case LogFormat::kMat:
-      return "log.mat";
-    case LogFormat::kHdf5:
-      return "log.h5";
+  for (const FormatEntry& entry : kFormats) {
+    if (entry.format == format) return entry.file;
   }
   return "?";
 }

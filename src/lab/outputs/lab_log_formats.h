@@ -17,8 +17,6 @@ enum class LogFormat { kCsv, kMat, kHdf5 };
 /// The format a name gives: "csv", "mat", "hdf5". Throws InputError naming
 /// `where` for any other name ("mcap": not yet, said so).
 LogFormat ParseLogFormat(const std::string& name, const std::string& where);
-/// "csv", "mat" or "hdf5".
-const char* LogFormatName(LogFormat format);
 /// The log's file name in the output folder: log.csv, log.mat or log.h5.
 const char* LogFileName(LogFormat format);
 
