@@ -11,7 +11,6 @@
 #include "core/core_errors.h"
 #include "core/core_input_file.h"
 #include "lab/outputs/lab_log_hdf5.h"
-#include "lab/outputs/lab_log_mat.h"
 #include "lab/outputs/lab_output.h"
 #include "lab/outputs/lab_output_fs.h"
 #include "scene/scene_csv.h"
@@ -40,18 +39,6 @@ void WriteAll(const scene::CsvTable& table, LogSink& sink) {
   }
   const std::string why = sink.Close();
   if (!why.empty()) throw std::runtime_error(why);
-}
-
-std::unique_ptr<LogSink> OpenSink(LogFormat format, const std::string& path, const std::vector<std::string>& columns) {
-  switch (format) {
-    case LogFormat::kCsv:
-      return OpenCsvSink(path, columns);
-    case LogFormat::kMat:
-      return OpenMatSink(path, columns);
-    case LogFormat::kHdf5:
-      return OpenHdf5Sink(path, columns);
-  }
-  return nullptr;
 }
 
 }  // namespace
@@ -97,7 +84,7 @@ ConvertResult ConvertLog(const std::string& run_dir, LogFormat to, bool force) {
   // written under a temporary name, renamed into place
   const std::string temporary = (fs::path(run_dir) / ("." + name + ".tmp-" + std::to_string(::getpid()))).string();
   try {
-    std::unique_ptr<LogSink> sink = OpenSink(to, temporary, table.columns);
+    std::unique_ptr<LogSink> sink = OpenLogSink(to, temporary, table.columns);
     WriteAll(table, *sink);
   } catch (...) {
     ::unlink(temporary.c_str());

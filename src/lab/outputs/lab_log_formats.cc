@@ -1,5 +1,6 @@
 #include "lab/outputs/lab_log_formats.h"
 
+#include <stdexcept>
 #include <utility>
 
 #include "core/core_errors.h"
@@ -119,23 +120,23 @@ std::vector<ColumnGroupIndex> GroupColumns(const std::vector<std::string>& colum
   return groups;
 }
 
+std::unique_ptr<LogSink> OpenLogSink(LogFormat format, const std::string& path,
+                                     const std::vector<std::string>& columns) {
+  switch (format) {
+    case LogFormat::kCsv:
+      return OpenCsvSink(path, columns);
+    case LogFormat::kMat:
+      return OpenMatSink(path, columns);
+    case LogFormat::kHdf5:
+      return OpenHdf5Sink(path, columns);
+  }
+  throw std::logic_error("log format " + std::to_string(static_cast<int>(format)));
+}
+
 std::vector<std::unique_ptr<LogSink>> OpenLogSinks(const std::string& folder, const std::vector<LogFormat>& formats,
                                                    const std::vector<std::string>& columns) {
   std::vector<std::unique_ptr<LogSink>> sinks;
-  for (LogFormat format : formats) {
-    const std::string path = folder + "/" + LogFileName(format);
-    switch (format) {
-      case LogFormat::kCsv:
-        sinks.push_back(OpenCsvSink(path, columns));
-        break;
-      case LogFormat::kMat:
-        sinks.push_back(OpenMatSink(path, columns));
-        break;
-      case LogFormat::kHdf5:
-        sinks.push_back(OpenHdf5Sink(path, columns));
-        break;
-    }
-  }
+  for (LogFormat format : formats) sinks.push_back(OpenLogSink(format, folder + "/" + LogFileName(format), columns));
   return sinks;
 }
 

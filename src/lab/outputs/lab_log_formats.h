@@ -37,6 +37,11 @@ struct ColumnGroupIndex {
 };
 std::vector<ColumnGroupIndex> GroupColumns(const std::vector<std::string>& columns);
 
+/// Opens the sink of `format` writing `path` (a CSV, .mat or HDF5 log of
+/// `columns`). Throws std::runtime_error naming the file when it cannot be
+/// created.
+std::unique_ptr<LogSink> OpenLogSink(LogFormat format, const std::string& path,
+                                     const std::vector<std::string>& columns);
 /// Opens one sink per format, each at folder/LogFileName(format). Throws
 /// std::runtime_error naming the file when one cannot be created (the ones
 /// created before it are closed).
