@@ -6,35 +6,13 @@
 
 #include <gtest/gtest.h>
 
-#include "control/robot_model.h"
-#include "mujoco_fixture.h"
-#include "task/task_motion.h"
+#include "pa10_planner_fixture.h"
 
 namespace vlab::task {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-constexpr double kPeriod = 0.002;
-
-class MotionTest : public test::MujocoTest {
+class MotionTest : public Pa10PlannerTest {
  protected:
-  void SetUp() override {
-    model_ = LoadModel(std::string(VLAB_SOURCE_DIR) + "/scenes/pa10.xml");
-    chain_ = control::RobotModel::Create(model_, {"world", "tool"});
-    fk_ = control::RobotModel::Create(model_, {"world", "tool"});
-    planner_ = std::make_unique<MotionPlanner>(chain_.get(), kPeriod);
-    q0_.resize(7);
-    q0_ << 0, 30 * kDeg, 0, 60 * kDeg, 0, 90 * kDeg, 0;  // the "ready" pose of scenes/pa10_reach.yaml
-  }
-  // the tool pose of q by the independent chain
-  Frame Fk(const Eigen::VectorXd& q) {
-    fk_->SetState(q, Eigen::VectorXd::Zero(7));
-    const control::Pose p = fk_->TipPose();
-    Frame f;
-    f.p = p.p_W;
-    f.q = Eigen::Quaterniond(p.R_W);
-    return f;
-  }
   static Frame Pose(double x, double y, double z, const Eigen::Quaterniond& q) {
     Frame f;
     f.p = {x, y, z};
@@ -45,11 +23,6 @@ class MotionTest : public test::MujocoTest {
     return Eigen::Quaterniond(Eigen::AngleAxisd(yaw_deg * kDeg, Eigen::Vector3d::UnitZ()) *
                               Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
   }
-
-  mjModel* model_ = nullptr;  // owned by the fixture
-  std::unique_ptr<control::RobotModel> chain_, fk_;
-  std::unique_ptr<MotionPlanner> planner_;
-  Eigen::VectorXd q0_;
 };
 
 // movel: p(s) on the segment start -> goal; R(s) = slerp(R0, R1, s) with the

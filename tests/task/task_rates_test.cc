@@ -9,15 +9,10 @@
 
 #include <gtest/gtest.h>
 
-#include "control/robot_model.h"
-#include "mujoco_fixture.h"
-#include "task/task_motion.h"
+#include "pa10_planner_fixture.h"
 
 namespace vlab::task {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
-constexpr double kPeriod = 0.002;
 
 #define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << (text)
 
@@ -38,15 +33,10 @@ Peaks PeaksOf(const std::vector<Eigen::VectorXd>& q) {
   return p;
 }
 
-class RatesTest : public test::MujocoTest {
+class RatesTest : public Pa10PlannerTest {
  protected:
   void SetUp() override {
-    model_ = LoadModel(std::string(VLAB_SOURCE_DIR) + "/scenes/pa10.xml");
-    chain_ = control::RobotModel::Create(model_, {"world", "tool"});
-    fk_ = control::RobotModel::Create(model_, {"world", "tool"});
-    planner_ = std::make_unique<MotionPlanner>(chain_.get(), kPeriod);
-    q0_.resize(7);
-    q0_ << 0, 30 * kDeg, 0, 60 * kDeg, 0, 90 * kDeg, 0;  // the "ready" pose
+    Pa10PlannerTest::SetUp();
     start_ = planner_->ToolPose(q0_);
   }
   // tight limits, so that fast moves must be slowed: 20 deg/s and 40 deg/s² (W2: 30, 60)
@@ -82,10 +72,6 @@ class RatesTest : public test::MujocoTest {
     return f;
   }
 
-  mjModel* model_ = nullptr;
-  std::unique_ptr<control::RobotModel> chain_, fk_;
-  std::unique_ptr<MotionPlanner> planner_;
-  Eigen::VectorXd q0_;
   Frame start_;
 };
 
