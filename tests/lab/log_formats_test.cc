@@ -31,18 +31,14 @@
 namespace vlab::lab {
 namespace {
 
+using vlab::testing::Bits;
+
 namespace fs = std::filesystem;
 using vlab::testing::ReadFile;
 using vlab::testing::RunVlab;
 using vlab::testing::TempDir;
 using vlab::testing::WaitUntil;
 using vlab::testing::WriteFile;
-
-std::uint64_t Bits(double v) {
-  std::uint64_t b;
-  std::memcpy(&b, &v, sizeof b);
-  return b;
-}
 
 // every value of `b` has the bits of `a`'s value in the same row and column (columns by name)
 void ExpectSameBits(const scene::CsvTable& a, const scene::CsvTable& b) {

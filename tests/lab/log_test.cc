@@ -25,6 +25,8 @@
 namespace vlab::lab {
 namespace {
 
+using vlab::testing::Bits;
+
 namespace fs = std::filesystem;
 using vlab::testing::Entries;
 using vlab::testing::Lines;
@@ -32,12 +34,6 @@ using vlab::testing::ReadFile;
 using vlab::testing::SplitCsv;
 using vlab::testing::TempDir;
 using vlab::testing::WriteFile;
-
-std::uint64_t Bits(double v) {
-  std::uint64_t b;
-  std::memcpy(&b, &v, sizeof b);
-  return b;
-}
 
 // Parses with strtod and requires the whole field to be consumed.
 double Parse(const std::string& text) {

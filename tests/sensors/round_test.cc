@@ -1,7 +1,6 @@
 // sensor_round.h: the inline roundings equal std::round and std::llround bit for bit.
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -9,15 +8,12 @@
 #include <gtest/gtest.h>
 
 #include "sensors/sensor_round.h"
+#include "test_util.h"
 
 namespace vlab::sensors {
 namespace {
 
-std::uint64_t Bits(double x) {
-  std::uint64_t b;
-  std::memcpy(&b, &x, sizeof b);
-  return b;
-}
+using vlab::testing::Bits;
 
 // halves, their neighbours, signed zeros, the 2^52 edge, counts of the JR3's int16 range
 std::vector<double> EdgeValues() {
