@@ -24,18 +24,23 @@ Wrench DrawStandardNormal(const WrenchSensorModel& model, Xoshiro256pp& rng) {
   return out;
 }
 
-// counts clipped to the int16 range and (optionally) rounded; flags what was hit
-Wrench ToCounts(const WrenchSensorModel& model, const Wrench& value, bool* saturated, bool* near_saturated) {
-  Wrench counts = value.cwiseQuotient(model.lsb());
-  for (int i = 0; i < 6; ++i) {
-    const double magnitude = std::abs(counts[i]);
-    if (magnitude >= kWrenchNearSaturationCounts && near_saturated) *near_saturated = true;
-    if (magnitude > kWrenchClipCounts) {
-      if (saturated) *saturated = true;
-      counts[i] = std::copysign(kWrenchClipCounts, counts[i]);
-    }
-    if (model.quantization_enabled()) counts[i] = RoundHalfAway(counts[i]);
+// one channel's counts, clipped to the int16 range and (optionally) rounded; flags what was hit
+inline double ChannelCounts(const WrenchSensorModel& model, int i, double value, bool* saturated,
+                            bool* near_saturated) {
+  double counts = value / model.lsb()[i];
+  const double magnitude = std::abs(counts);
+  if (magnitude >= kWrenchNearSaturationCounts && near_saturated) *near_saturated = true;
+  if (magnitude > kWrenchClipCounts) {
+    if (saturated) *saturated = true;
+    counts = std::copysign(kWrenchClipCounts, counts);
   }
+  return model.quantization_enabled() ? RoundHalfAway(counts) : counts;
+}
+
+// every channel's counts (ChannelCounts)
+Wrench ToCounts(const WrenchSensorModel& model, const Wrench& value, bool* saturated, bool* near_saturated) {
+  Wrench counts;
+  for (int i = 0; i < 6; ++i) counts[i] = ChannelCounts(model, i, value[i], saturated, near_saturated);
   return counts;
 }
 
@@ -57,25 +62,16 @@ void ProcessSample(const WrenchSensorModel& model, WrenchSensorState& state, con
   ++state.sample_count;
 
   // sensor signal plus white noise (the six draws first, in axis order), then the ADC's clip
-  // and quantisation give filter0: ToCounts, channel by channel
+  // and quantisation give filter0, channel by channel
   double normal[6] = {0, 0, 0, 0, 0, 0};
   const bool noise = model.noise_enabled();
   if (noise) {
     for (int i = 0; i < 6; ++i) normal[i] = model.normal()(state.rng);
   }
-  const bool quantize = model.quantization_enabled();
   bool saturated = false;
   for (int i = 0; i < 6; ++i) {
     const double signal = noise ? load[i] + model.noise_sigma()[i] * normal[i] : load[i];
-    double counts = signal / model.lsb()[i];
-    const double magnitude = std::abs(counts);
-    if (magnitude >= kWrenchNearSaturationCounts) reading.near_saturated = true;
-    if (magnitude > kWrenchClipCounts) {
-      saturated = true;
-      counts = std::copysign(kWrenchClipCounts, counts);
-    }
-    if (quantize) counts = RoundHalfAway(counts);
-    state.output[0][i] = counts * model.lsb()[i];
+    state.output[0][i] = ChannelCounts(model, i, signal, &saturated, &reading.near_saturated) * model.lsb()[i];
   }
   if (saturated) {
     reading.saturated = true;
