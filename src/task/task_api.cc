@@ -2,13 +2,17 @@
 // Lua side of task_program.h). Blocking commands are Lua functions of the
 // prelude below: they start something here, then yield once per period
 // until it is done.
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <initializer_list>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include <lua.hpp>
 
@@ -22,6 +26,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 constexpr const char* kProgramKey = "vlab.program";
+constexpr const char* kFramesKey = "vlab.frames";  // registry: the program's user frames, name -> frame
 
 // the runtime's own Lua code: blocking commands and waits
 constexpr const char* kPrelude = R"lua(
@@ -45,10 +50,11 @@ function wait(a, timeout)
 end
 local function await() while moving() do yield() end return outcome() end
 local function settle() while moving(true) do yield() end end  -- a blended move's end: at rest
-local mj, ml, mc, sm = _movej, _movel, _movec, _selfmove
-_movej, _movel, _movec, _selfmove = nil, nil, nil, nil
+local mj, ml, mlr, mc, sm = _movej, _movel, _movel_rel, _movec, _selfmove
+_movej, _movel, _movel_rel, _movec, _selfmove = nil, nil, nil, nil, nil
 function movej(target, options) settle() mj(target, options) return await() end
 function movel(target, options) ml(target, options) return await() end
+function movel_rel(delta, options) mlr(delta, options) return await() end
 function movec(via, target, options) settle() mc(via, target, options) return await() end
 function selfmove(options) settle() sm(options) return await() end
 local raise = _signal
@@ -200,6 +206,77 @@ void CheckFinite(lua_State* L, const Frame& f, const char* what, const char* whi
   if (!f.q.coeffs().allFinite()) ScriptError(L, "%s: the %s rotation is not finite (a NaN or inf)", what, which);
 }
 
+// a frame as a script's frame value holds it (PushFrame normalises the rotation once more): a
+// frame computed here and the same one computed by the script are equal to the bit
+Frame AsValue(Frame f) {
+  f.q.normalize();
+  return f;
+}
+
+// a * b as the script's `a * b` gives it (the frame type's product, then AsValue)
+Frame Compose(const Frame& a, const Frame& b) {
+  Frame c;
+  c.p = a.p + a.q * b.p;
+  c.q = (a.q * b.q).normalized();
+  return AsValue(c);
+}
+
+// the names of the user frames, sorted, as "a, b" (or a hint when there are none) into `out`
+void DefinedFrames(lua_State* L, char* out, std::size_t size) {
+  std::vector<std::string> names;
+  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
+  lua_pushnil(L);
+  while (lua_next(L, -2)) {
+    lua_pop(L, 1);
+    names.emplace_back(lua_tostring(L, -1));  // (every key is a string: frame_def)
+  }
+  lua_pop(L, 1);
+  std::sort(names.begin(), names.end());
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "'" : ", '") + n + "'";
+  std::snprintf(out, size, "%s",
+                names.empty() ? "none is defined: frame_def(name, frame)" : ("defined: " + list).c_str());
+}
+
+// the user frame `name`; an error naming it and the defined ones when there is none. The
+// frame stays referenced by the registry's table, so the pointer outlives the Lua stack slot.
+const Frame* UserFrame(lua_State* L, const char* name, const char* what) {
+  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
+  lua_getfield(L, -1, name);
+  const Frame* f = ToFrame(L, -1);
+  lua_pop(L, 2);
+  if (!f) {
+    char list[512];
+    DefinedFrames(L, list, sizeof list);
+    ScriptError(L, "%s: no user frame '%s' (%s)", what, name, list);
+  }
+  return f;
+}
+
+// the user frame that option ref of a move names, or null without the option
+const Frame* RefFrame(lua_State* L, int options, const char* what) {
+  if (!HasOption(L, options, "ref")) return nullptr;
+  lua_getfield(L, options, "ref");
+  if (lua_type(L, -1) != LUA_TSTRING) {
+    ScriptError(L, "%s: option ref must be the name of a user frame (frame_def), got %s", what, luaL_typename(L, -1));
+  }
+  const Frame* f = UserFrame(L, lua_tostring(L, -1), what);
+  lua_pop(L, 1);
+  return f;
+}
+
+// a move's target (the frame at `index`) in the base frame: given in the user frame of
+// option ref when there is one (user * target), checked finite
+Frame Target(lua_State* L, int index, int options, const char* what) {
+  const Frame& given = CheckFrame(L, index, what);
+  CheckFinite(L, given, what, "target");
+  const Frame* user = RefFrame(L, options, what);
+  if (!user) return given;
+  const Frame target = Compose(*user, given);
+  CheckFinite(L, target, what, "target");
+  return target;
+}
+
 // the limits of one move: the settings, overridden by its options (movej: v and jv in deg/s,
 // a in deg/s^2, of the fastest joint; movel, movec: v in m/s, a in m/s^2, w in deg/s)
 MotionLimits MoveLimits(lua_State* L, const Robot& r, int options, const char* what, bool joint_move = false) {
@@ -242,6 +319,28 @@ Frame ToWorld(const Robot& r, const Frame& f) {
   w.p = r.base_W.p + r.base_W.q * f.p;
   w.q = (r.base_W.q * f.q).normalized();
   return w;
+}
+
+// a world frame in the script's base frame (the inverse of ToWorld)
+Frame ToBase(const Robot& r, const Frame& w) {
+  Frame b;
+  b.q = (r.base_W.q.conjugate() * w.q).normalized();
+  b.p = r.base_W.q.conjugate() * (w.p - r.base_W.p);
+  return b;
+}
+
+// the planned tool pose (world) at the planned joints q_ref: the plan's own sample (the
+// target, at a Cartesian move's end) where q_ref is that sample, else forward kinematics
+Frame PlannedTool(const Robot& r) {
+  if (r.next > 0 && r.next <= r.plan.tool_W.size() && r.plan.q[r.next - 1] == r.q_ref) return r.plan.tool_W[r.next - 1];
+  return r.planner->ToolPose(r.q_ref);
+}
+
+// the planned pose (world) a relative move starts from: where the running move ends (its
+// target: it is being blended into the next one), else the planned pose
+Frame PlannedEnd(const Robot& r) {
+  if (!r.moving) return PlannedTool(r);
+  return r.plan.tool_W.empty() ? r.planner->ToolPose(r.plan.q.back()) : r.plan.tool_W.back();
 }
 
 void Start(Robot& r, Plan&& plan) {
@@ -294,10 +393,11 @@ void PlanOrFail(lua_State* L, Robot& r, const char* what, F plan_fn) {
 
 int MoveJ(lua_State* L) {
   Robot& r = NeedRobot(L, "movej");
-  static const char* const known[] = {"v", "a", "jv", "t", nullptr};
+  static const char* const known[] = {"v", "a", "jv", "t", "ref", nullptr};
   static const Refused refused[] = {
       {"w", "movej interpolates the joints; its speed is v (deg/s, the fastest joint) or its duration t (s)"},
       {"r", "only movel and movec blend"},
+      {"rel", "only movel_rel moves relative to the planned pose"},
       {"force", "only movel and movec are guarded moves"},
       {"wrench", "only movel and movec are guarded moves"},
       {nullptr, nullptr}};
@@ -306,14 +406,15 @@ int MoveJ(lua_State* L) {
   CheckDurationAlone(L, 2, "movej", speeds);
   const MotionLimits limits = MoveLimits(L, r, 2, "movej", true);
   const double t = Duration(L, 2, "movej");
-  if (const Frame* f = ToFrame(L, 1)) {
-    CheckFinite(L, *f, "movej", "target");
-    const Frame goal = ToWorld(r, *f);
+  if (ToFrame(L, 1)) {
+    const Frame goal = ToWorld(r, Target(L, 1, 2, "movej"));
     PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, r.planner->Ik(r.q_ref, goal), limits, t); });
     return 0;
   }
   if (!lua_istable(L, 1))
     ScriptError(L, "movej: expected a table of joint angles (deg) or a frame, got %s", luaL_typename(L, 1));
+  if (HasOption(L, 2, "ref"))
+    ScriptError(L, "movej: option ref is for a target frame: joint angles (deg) have no frame");
   const int n = r.model->dof();
   if (static_cast<int>(lua_rawlen(L, 1)) != n) {
     ScriptError(L, "movej: expected %d joint angles (deg), got %d", n, static_cast<int>(lua_rawlen(L, 1)));
@@ -351,35 +452,26 @@ void SetBlend(lua_State* L, Robot& r, const Eigen::Vector3d& target, double radi
   r.segment_m = segment;
 }
 
-int MoveL(lua_State* L) {
-  Robot& r = NeedRobot(L, "movel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
-  static const Refused refused[] = {
-      {"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
-      {nullptr, nullptr}};
-  static const char* const speeds[] = {"v", "a", "w", nullptr};
-  CheckOptions(L, 2, "movel", known, refused);
-  CheckDurationAlone(L, 2, "movel", speeds);
-  CheckWrenchNeedsForce(L, 2, "movel");
-  CheckFinite(L, CheckFrame(L, 1, "movel"), "movel", "target");
-  const Frame goal = ToWorld(r, CheckFrame(L, 1, "movel"));
-  const MotionLimits limits = MoveLimits(L, r, 2, "movel");
-  const double t = Duration(L, 2, "movel");
-  const double radius = Option(L, 2, "r", r.blend_setting_m, "movel");
-  if (radius < 0) ScriptError(L, "movel: the blend radius r must be >= 0 m, got %g", radius);
-  if (radius > 0 && Option(L, 2, "force", 0, "movel") > 0) {
-    ScriptError(L, "movel: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
+// plans a straight move to `goal` (world) with the options at `options` (checked by the
+// caller), from the blend of the move before when there is one (movel, movel_rel)
+void PlanLinear(lua_State* L, Robot& r, const Frame& goal, int options, const char* what) {
+  const MotionLimits limits = MoveLimits(L, r, options, what);
+  const double t = Duration(L, options, what);
+  const double radius = Option(L, options, "r", r.blend_setting_m, what);
+  if (radius < 0) ScriptError(L, "%s: the blend radius r must be >= 0 m, got %g", what, radius);
+  if (radius > 0 && Option(L, options, "force", 0, what) > 0) {
+    ScriptError(L, "%s: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", what, radius);
   }
   if (BlendReady(r)) {
     // entered from the previous move's blend: its radius must fit in this segment too
     const double seg = (goal.p - r.blend_corner_W).norm();
     if (r.blend_radius_m > seg / 2 + 1e-12) {
       ScriptError(L,
-                  "movel: the blend radius r = %g m of the move before is larger than half of this move "
+                  "%s: the blend radius r = %g m of the move before is larger than half of this move "
                   "(%g m from the corner): at most %g m",
-                  r.blend_radius_m, seg, seg / 2);
+                  what, r.blend_radius_m, seg, seg / 2);
     }
-    if (t > 0) ScriptError(L, "movel: a move entered from a blend takes its speed (v), not a duration (t)");
+    if (t > 0) ScriptError(L, "%s: a move entered from a blend takes its speed (v), not a duration (t)", what);
     BlendStart b;
     b.q = r.q_ref;
     b.entry = r.plan.tool_W[r.next - 1];
@@ -391,23 +483,75 @@ int MoveL(lua_State* L) {
     const Eigen::Vector3d after = r.plan.tool_W[std::min(i + 1, r.plan.tool_W.size() - 1)].p;
     const Eigen::Vector3d before = i > 0 ? r.plan.tool_W[i - 1].p : r.planner->ToolPose(r.q_ref).p;
     if ((after - before).norm() > 1e-12) b.tangent = (after - before).normalized();
-    PlanOrFail(L, r, "movel", [&] { return r.planner->FromBlend(b, goal, limits); });
+    PlanOrFail(L, r, what, [&] { return r.planner->FromBlend(b, goal, limits); });
     r.segment_m = seg;
   } else {
     const double seg = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
-    PlanOrFail(L, r, "movel", [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
+    PlanOrFail(L, r, what, [&] { return r.planner->Linear(r.q_ref, goal, limits, t); });
     r.segment_m = seg;
   }
-  if (radius > 0) SetBlend(L, r, goal.p, radius, r.segment_m, "movel");
-  SetGuard(L, r, 2, "movel");
+  if (radius > 0) SetBlend(L, r, goal.p, radius, r.segment_m, what);
+  SetGuard(L, r, options, what);
+}
+
+int MoveL(lua_State* L) {
+  Robot& r = NeedRobot(L, "movel");
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", nullptr};
+  static const Refused refused[] = {
+      {"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
+      {"rel", "movel's target is absolute; movel_rel(delta, {rel = ...}) moves relative to the planned pose"},
+      {nullptr, nullptr}};
+  static const char* const speeds[] = {"v", "a", "w", nullptr};
+  CheckOptions(L, 2, "movel", known, refused);
+  CheckDurationAlone(L, 2, "movel", speeds);
+  CheckWrenchNeedsForce(L, 2, "movel");
+  PlanLinear(L, r, ToWorld(r, Target(L, 1, 2, "movel")), 2, "movel");
+  return 0;
+}
+
+// movel_rel(delta [, opts]): movel to the planned pose moved by delta, along the tool's
+// axes (rel = "tool", default: planned * delta) or the base's (rel = "base": the position
+// offset by delta.pos in base axes, the rotation turned by delta.rot about base axes)
+int MoveLRel(lua_State* L) {
+  Robot& r = NeedRobot(L, "movel_rel");
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "rel", nullptr};
+  static const Refused refused[] = {
+      {"jv", "movel_rel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
+      {"ref", "movel_rel's delta is relative to the planned pose; rel = \"tool\" (default) or \"base\" names its axes"},
+      {nullptr, nullptr}};
+  static const char* const speeds[] = {"v", "a", "w", nullptr};
+  CheckOptions(L, 2, "movel_rel", known, refused);
+  CheckDurationAlone(L, 2, "movel_rel", speeds);
+  CheckWrenchNeedsForce(L, 2, "movel_rel");
+  const Frame& delta = CheckFrame(L, 1, "movel_rel");
+  CheckFinite(L, delta, "movel_rel", "offset");
+  bool in_base = false;
+  if (HasOption(L, 2, "rel")) {
+    lua_getfield(L, 2, "rel");
+    const char* rel = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : nullptr;
+    in_base = rel && !std::strcmp(rel, "base");
+    if (!in_base && !(rel && !std::strcmp(rel, "tool"))) {
+      ScriptError(L, "movel_rel: option rel must be \"tool\" or \"base\", got %s", luaL_tolstring(L, -1, nullptr));
+    }
+    lua_pop(L, 1);
+  }
+  const Frame from = AsValue(ToBase(r, PlannedEnd(r)));
+  Frame goal = Compose(from, delta);
+  if (in_base) {
+    goal.p = from.p + delta.p;
+    goal.q = (delta.q * from.q).normalized();
+  }
+  CheckFinite(L, goal, "movel_rel", "target");
+  PlanLinear(L, r, ToWorld(r, goal), 2, "movel_rel");
   return 0;
 }
 
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", nullptr};
   static const Refused refused[] = {
       {"jv", "movec moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
+      {"rel", "only movel_rel moves relative to the planned pose"},
       {nullptr, nullptr}};
   static const char* const speeds[] = {"v", "a", "w", nullptr};
   CheckOptions(L, 3, "movec", known, refused);
@@ -418,17 +562,18 @@ int MoveC(lua_State* L) {
   if (radius > 0 && Option(L, 3, "force", 0, "movec") > 0) {
     ScriptError(L, "movec: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
   }
-  Eigen::Vector3d via;
+  // the via point and the target: in the user frame of option ref when there is one
+  const Frame* user = RefFrame(L, 3, "movec");
+  Frame point;
   if (const Frame* f = ToFrame(L, 1)) {
-    via = ToWorld(r, *f).p;
+    point.p = f->p;
   } else {
-    Frame point;
     point.p = CheckVec3(L, 1, "movec");
-    via = ToWorld(r, point).p;
   }
+  if (user) point = Compose(*user, point);
+  const Eigen::Vector3d via = ToWorld(r, point).p;
   if (!via.allFinite()) ScriptError(L, "movec: the via point (%g, %g, %g) m is not finite", via.x(), via.y(), via.z());
-  CheckFinite(L, CheckFrame(L, 2, "movec"), "movec", "target");
-  const Frame goal = ToWorld(r, CheckFrame(L, 2, "movec"));
+  const Frame goal = ToWorld(r, Target(L, 2, 3, "movec"));
   const MotionLimits limits = MoveLimits(L, r, 3, "movec");
   const double t = Duration(L, 3, "movec");
   const double chord = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
@@ -448,6 +593,8 @@ int SelfMove(lua_State* L) {
                                     {"r", "only movel and movec blend"},
                                     {"force", "only movel and movec are guarded moves"},
                                     {"wrench", "only movel and movec are guarded moves"},
+                                    {"ref", "selfmove holds the tool where it is: it has no target"},
+                                    {"rel", "selfmove holds the tool where it is: it has no target"},
                                     {nullptr, nullptr}};
   if (!lua_istable(L, 1)) ScriptError(L, "selfmove: expected {joint = N, by = DEG, t = S}");
   CheckOptions(L, 1, "selfmove", known, refused);
@@ -480,17 +627,50 @@ int Joints(lua_State* L) {
   return 1;
 }
 
-// a world frame in the script's base frame (the inverse of ToWorld)
-Frame ToBase(const Robot& r, const Frame& w) {
-  Frame b;
-  b.q = (r.base_W.q.conjugate() * w.q).normalized();
-  b.p = r.base_W.q.conjugate() * (w.p - r.base_W.p);
-  return b;
-}
-
 int Pose(lua_State* L) {  // measured tool pose in the base frame
   Robot& r = NeedRobot(L, "pose");
   PushFrame(L, ToBase(r, r.planner->ToolPose(r.q_meas)));
+  return 1;
+}
+
+int Planned(lua_State* L) {  // planned (commanded) tool pose in the base frame
+  Robot& r = NeedRobot(L, "planned");
+  PushFrame(L, ToBase(r, PlannedTool(r)));
+  return 1;
+}
+
+int PlannedJoints(lua_State* L) {  // planned (commanded) joint angles, deg, chain order
+  Robot& r = NeedRobot(L, "planned_joints");
+  lua_createtable(L, static_cast<int>(r.q_ref.size()), 0);
+  for (int i = 0; i < r.q_ref.size(); ++i) {
+    lua_pushnumber(L, r.q_ref[i] / kDeg);
+    lua_rawseti(L, -2, i + 1);
+  }
+  return 1;
+}
+
+// ---- user frames (work objects): frame_def(name, frame), frame_of(name)
+int FrameDef(lua_State* L) {
+  if (lua_type(L, 1) != LUA_TSTRING || lua_rawlen(L, 1) == 0) {
+    ScriptError(L, "frame_def: argument 1 must be the frame's name (a non-empty string), got %s", luaL_typename(L, 1));
+  }
+  CheckFinite(L, CheckFrame(L, 2, "frame_def"), "frame_def", "frame's");
+  // the value itself (frames are immutable): moves with ref use the very numbers given
+  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
+  lua_pushvalue(L, 1);
+  lua_pushvalue(L, 2);
+  lua_rawset(L, -3);
+  lua_pop(L, 1);
+  return 0;
+}
+
+int FrameOf(lua_State* L) {
+  if (lua_type(L, 1) != LUA_TSTRING) {
+    ScriptError(L, "frame_of: argument 1 must be a user frame's name, got %s", luaL_typename(L, 1));
+  }
+  UserFrame(L, lua_tostring(L, 1), "frame_of");
+  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
+  lua_getfield(L, -1, lua_tostring(L, 1));
   return 1;
 }
 
@@ -665,8 +845,15 @@ int WrenchPart(lua_State* L) {
   return 1;
 }
 
+// a setting's getter form (no argument): pushes the values in force, in the setter's units
+int Get(lua_State* L, std::initializer_list<double> values) {
+  for (const double v : values) lua_pushnumber(L, v);
+  return static_cast<int>(values.size());
+}
+
 int SetSpeed(lua_State* L) {
   Robot& r = NeedRobot(L, "speed");
+  if (lua_gettop(L) == 0) return Get(L, {r.limits.speed_mps, r.limits.rot_speed_rps / kDeg});
   const double v = Number(L, 1, "speed");
   if (!(v > 0)) ScriptError(L, "speed: must be > 0 m/s");
   r.limits.speed_mps = v;
@@ -675,6 +862,7 @@ int SetSpeed(lua_State* L) {
 }
 int SetAccel(lua_State* L) {
   Robot& r = NeedRobot(L, "accel");
+  if (lua_gettop(L) == 0) return Get(L, {r.limits.accel_mps2, r.limits.rot_accel_rps2 / kDeg});
   const double a = Number(L, 1, "accel");
   if (!(a > 0)) ScriptError(L, "accel: must be > 0 m/s^2");
   r.limits.accel_mps2 = a;
@@ -683,6 +871,7 @@ int SetAccel(lua_State* L) {
 }
 int SetJointSpeed(lua_State* L) {
   Robot& r = NeedRobot(L, "jspeed");
+  if (lua_gettop(L) == 0) return Get(L, {r.limits.joint_speed_rps / kDeg, r.limits.joint_accel_rps2 / kDeg});
   const double v = Number(L, 1, "jspeed");
   if (!(v > 0)) ScriptError(L, "jspeed: must be > 0 deg/s");
   r.limits.joint_speed_rps = v * kDeg;
@@ -691,6 +880,10 @@ int SetJointSpeed(lua_State* L) {
 }
 int SetRateLimits(lua_State* L) {  // limits("slow" | "refuse"): what a move beyond the joints' limits does
   Robot& r = NeedRobot(L, "limits");
+  if (lua_gettop(L) == 0) {
+    lua_pushstring(L, r.planner->rate_limits().refuse ? "refuse" : "slow");
+    return 1;
+  }
   const char* mode = lua_tostring(L, 1);
   const bool slow = mode && !std::strcmp(mode, "slow"), refuse = mode && !std::strcmp(mode, "refuse");
   if (!slow && !refuse)
@@ -702,11 +895,18 @@ int SetRateLimits(lua_State* L) {  // limits("slow" | "refuse"): what a move bey
 }
 int SetTool(lua_State* L) {
   Robot& r = NeedRobot(L, "tool");
+  if (lua_gettop(L) == 0) {
+    PushFrame(L, r.planner->tool());
+    return 1;
+  }
   r.planner->set_tool(CheckFrame(L, 1, "tool"));
+  // a finished plan's tool poses are of the tool before: the planned pose is forward kinematics from here
+  if (!r.moving) r.plan.tool_W.clear();
   return 0;
 }
 int SetBlend(lua_State* L) {
   Robot& r = NeedRobot(L, "blend");
+  if (lua_gettop(L) == 0) return Get(L, {r.blend_setting_m});
   const double v = Number(L, 1, "blend");
   if (v < 0) ScriptError(L, "blend: the radius must be >= 0 m (0: every move stops at its target)");
   r.blend_setting_m = v;
@@ -714,6 +914,10 @@ int SetBlend(lua_State* L) {
 }
 int SetBase(lua_State* L) {
   Robot& r = NeedRobot(L, "base");
+  if (lua_gettop(L) == 0) {
+    PushFrame(L, r.base_W);
+    return 1;
+  }
   r.base_W = CheckFrame(L, 1, "base");
   return 0;
 }
@@ -1050,6 +1254,7 @@ void OpenApi(Program* p) {
   lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
   static const luaL_Reg functions[] = {{"_movej", MoveJ},
                                        {"_movel", MoveL},
+                                       {"_movel_rel", MoveLRel},
                                        {"_movec", MoveC},
                                        {"_selfmove", SelfMove},
                                        {"_moving", Moving},
@@ -1061,6 +1266,10 @@ void OpenApi(Program* p) {
                                        {"now", Now},
                                        {"joints", Joints},
                                        {"pose", Pose},
+                                       {"planned", Planned},
+                                       {"planned_joints", PlannedJoints},
+                                       {"frame_def", FrameDef},
+                                       {"frame_of", FrameOf},
                                        {"fk", Fk},
                                        {"ik", Ik},
                                        {"reachable", Reachable},
@@ -1087,6 +1296,8 @@ void OpenApi(Program* p) {
   lua_setglobal(L, "PERIOD");
   lua_pushstring(L, p->config.robot.c_str());
   lua_setglobal(L, "ROBOT");
+  lua_newtable(L);
+  lua_setfield(L, LUA_REGISTRYINDEX, kFramesKey);
   // PARAMS: the program's parameters, numbers and booleans where the text reads as one
   lua_newtable(L);
   for (const auto& [name, text] : p->config.params) {
