@@ -6,18 +6,17 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "bridge/bridge_protocol.h"
+#include "render/image_codec.h"
 
 namespace vlab::bridge {
 
 struct CameraClient::Impl {
   explicit Impl(const AssemblerConfig& config) : assembler(config) {}
   FrameAssembler assembler;
-  CameraFrame pending;  // a frame being passed over by ReceiveLatest
-  cv::Mat bgr;          // JPEG decoder output
+  CameraFrame pending;    // a frame being passed over by ReceiveLatest
+  render::Image decoded;  // JPEG decoder output (its buffer reused)
 };
 
 namespace {
@@ -178,18 +177,14 @@ bool CameraClient::Decode(Frame* frame) {
     frame->rgb.assign(frame->data.begin(), frame->data.end());
     return true;
   }
-  const cv::Mat jpeg(1, static_cast<int>(frame->data.size()), CV_8U, frame->data.data());
   try {
-    cv::imdecode(jpeg, cv::IMREAD_COLOR, &impl_->bgr);
-  } catch (const cv::Exception&) {
+    render::DecodeImage(frame->data.data(), frame->data.size(), render::DecodeMode::kColor, &impl_->decoded);
+  } catch (const render::ImageCodecError&) {
     return false;
   }
-  if (impl_->bgr.cols != frame->width || impl_->bgr.rows != frame->height || impl_->bgr.type() != CV_8UC3) {
-    return false;
-  }
-  frame->rgb.resize(bytes);
-  cv::Mat rgb(frame->height, frame->width, CV_8UC3, frame->rgb.data());
-  cv::cvtColor(impl_->bgr, rgb, cv::COLOR_BGR2RGB);
+  const render::Image& image = impl_->decoded;
+  if (image.width != frame->width || image.height != frame->height || image.bytes.size() != bytes) return false;
+  frame->rgb.assign(image.bytes.begin(), image.bytes.end());
   return true;
 }
 

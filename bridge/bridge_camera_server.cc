@@ -7,19 +7,17 @@
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
+
+#include "render/image_codec.h"
 
 namespace vlab::bridge {
 
 struct FrameEncoder::Jpeg {
-  cv::Mat bgr;
-  std::vector<uchar> bytes;
-  std::vector<int> params;
+  int quality = 95;
 };
 
 FrameEncoder::FrameEncoder(CameraEncoding encoding, int jpeg_quality) : encoding_(encoding), jpeg_(new Jpeg) {
-  jpeg_->params = {cv::IMWRITE_JPEG_QUALITY, jpeg_quality};
+  jpeg_->quality = jpeg_quality;
 }
 
 FrameEncoder::~FrameEncoder() = default;
@@ -31,14 +29,11 @@ bool FrameEncoder::Encode(int width, int height, const std::uint8_t* rgb, std::v
     return true;
   }
   try {
-    const cv::Mat view(height, width, CV_8UC3, const_cast<std::uint8_t*>(rgb));
-    cv::cvtColor(view, jpeg_->bgr, cv::COLOR_RGB2BGR);
-    if (!cv::imencode(".jpg", jpeg_->bgr, jpeg_->bytes, jpeg_->params) || jpeg_->bytes.empty()) return false;
-  } catch (const cv::Exception&) {
+    render::EncodeJpeg({width, height, 3, 8, rgb, 0}, jpeg_->quality, out);
+  } catch (const render::ImageCodecError&) {
     return false;  // (never with a valid image; counted by the caller, never thrown)
   }
-  out->assign(jpeg_->bytes.begin(), jpeg_->bytes.end());
-  return true;
+  return !out->empty();
 }
 
 std::string CameraDescribeJson(const CameraDescription& d, const std::string& address, int port,

@@ -9,30 +9,24 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 namespace vlab::render {
 
 namespace fs = std::filesystem;
 
 namespace {
 
-// a read-only view of the caller's RGB pixels (no copy)
-cv::Mat View(const RgbImage& rgb) {
-  return cv::Mat(rgb.height, rgb.width, CV_8UC3, const_cast<std::uint8_t*>(rgb.pixels.data()));
+void EncodeAndWrite(const std::string& path, const ImageView& image) {
+  std::vector<std::uint8_t> bytes;
+  try {
+    EncodePng(image, -1, &bytes);
+  } catch (const ImageCodecError& e) {
+    throw std::runtime_error("image '" + path + "': " + e.what());
+  }
+  WriteFileAtomic(path, bytes);
 }
 
-void EncodeAndWrite(const std::string& path, const cv::Mat& image) {
-  std::vector<std::uint8_t> bytes;
-  bool ok = false;
-  try {
-    ok = cv::imencode(".png", image, bytes);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error("image '" + path + "': PNG encoding failed: " + e.what());
-  }
-  if (!ok) throw std::runtime_error("image '" + path + "': PNG encoding failed");
-  WriteFileAtomic(path, bytes);
+ImageView Gray16(const std::vector<std::uint16_t>& samples, int width, int height) {
+  return {width, height, 1, 16, samples.data(), 0};
 }
 
 }  // namespace
@@ -43,21 +37,21 @@ std::uint16_t DepthToMillimetres(float metres) {
   return mm >= 65535.0 ? 65535 : static_cast<std::uint16_t>(mm);
 }
 
-void ToBgr(const RgbImage& rgb, cv::Mat* bgr) { cv::cvtColor(View(rgb), *bgr, cv::COLOR_RGB2BGR); }
+ImageView View(const RgbImage& rgb) { return {rgb.width, rgb.height, 3, 8, rgb.pixels.data(), 0}; }
 
-void ToMillimetres(const DepthImage& depth, cv::Mat* mm) {
-  mm->create(depth.height, depth.width, CV_16UC1);
+void ToMillimetres(const DepthImage& depth, std::vector<std::uint16_t>* mm) {
+  mm->resize(static_cast<std::size_t>(depth.width) * depth.height);
   for (int y = 0; y < depth.height; ++y) {
-    std::uint16_t* row = mm->ptr<std::uint16_t>(y);
+    std::uint16_t* row = mm->data() + static_cast<std::size_t>(depth.width) * y;
     const float* src = depth.metres.data() + static_cast<std::size_t>(depth.width) * y;
     for (int x = 0; x < depth.width; ++x) row[x] = DepthToMillimetres(src[x]);
   }
 }
 
-void ToGeomIdPlusOne(const SegmentationImage& seg, cv::Mat* ids) {
-  ids->create(seg.height, seg.width, CV_16UC1);
+void ToGeomIdPlusOne(const SegmentationImage& seg, std::vector<std::uint16_t>* ids) {
+  ids->resize(static_cast<std::size_t>(seg.width) * seg.height);
   for (int y = 0; y < seg.height; ++y) {
-    std::uint16_t* row = ids->ptr<std::uint16_t>(y);
+    std::uint16_t* row = ids->data() + static_cast<std::size_t>(seg.width) * y;
     const std::int32_t* src = seg.geom.data() + static_cast<std::size_t>(seg.width) * y;
     for (int x = 0; x < seg.width; ++x) {
       const std::int32_t id = src[x] < 0 ? 0 : src[x] + 1;
@@ -89,31 +83,22 @@ void WriteFileAtomic(const std::string& path, const std::vector<std::uint8_t>& b
   }
 }
 
-void WritePng(const std::string& path, const RgbImage& rgb) {
-  cv::Mat bgr;
-  ToBgr(rgb, &bgr);
-  EncodeAndWrite(path, bgr);
-}
+void WritePng(const std::string& path, const RgbImage& rgb) { EncodeAndWrite(path, View(rgb)); }
 
 void WriteDepthPng(const std::string& path, const DepthImage& depth) {
-  cv::Mat mm;
+  std::vector<std::uint16_t> mm;
   ToMillimetres(depth, &mm);
-  EncodeAndWrite(path, mm);
+  EncodeAndWrite(path, Gray16(mm, depth.width, depth.height));
 }
 
 void WriteSegmentationPng(const std::string& path, const SegmentationImage& seg) {
-  cv::Mat ids;
+  std::vector<std::uint16_t> ids;
   ToGeomIdPlusOne(seg, &ids);
-  EncodeAndWrite(path, ids);
+  EncodeAndWrite(path, Gray16(ids, seg.width, seg.height));
 }
 
 void EncodeJpeg(const RgbImage& rgb, int quality, std::vector<std::uint8_t>* jpeg) {
-  // imencode takes BGR; a thread-local scratch image keeps repeated calls allocation-free
-  thread_local cv::Mat bgr;
-  ToBgr(rgb, &bgr);
-  if (!cv::imencode(".jpg", bgr, *jpeg, {cv::IMWRITE_JPEG_QUALITY, quality})) {
-    throw std::runtime_error("JPEG encoding failed");
-  }
+  EncodeJpeg(View(rgb), quality, jpeg);
 }
 
 }  // namespace vlab::render

@@ -7,6 +7,7 @@
 // - Segmentation: 16-bit single-channel PNG, geom id + 1; 0 where no geom was
 //   drawn (ids above 65534 saturate at 65535).
 //
+// Encoding: image_codec.h (libpng; its fast default, as OpenCV's imencode).
 // Errors: std::runtime_error naming the file when encoding or writing fails.
 #pragma once
 
@@ -14,8 +15,7 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
+#include "render/image_codec.h"
 #include "render/renderer.h"
 
 namespace vlab::render {
@@ -23,12 +23,13 @@ namespace vlab::render {
 /// Depth value of one pixel as written to the 16-bit PNG, mm.
 std::uint16_t DepthToMillimetres(float metres);
 
-/// A BGR view for OpenCV (copies and swaps channels into *bgr, reusing its buffer).
-void ToBgr(const RgbImage& rgb, cv::Mat* bgr);
-/// 16-bit depth image in millimetres (see DepthToMillimetres), reusing *mm's buffer.
-void ToMillimetres(const DepthImage& depth, cv::Mat* mm);
-/// 16-bit segmentation image, geom id + 1, reusing *ids's buffer.
-void ToGeomIdPlusOne(const SegmentationImage& seg, cv::Mat* ids);
+/// A codec view of an RGB image's pixels (not copied; valid while rgb lives).
+ImageView View(const RgbImage& rgb);
+/// 16-bit depth image in millimetres (see DepthToMillimetres), row after row,
+/// reusing *mm's buffer.
+void ToMillimetres(const DepthImage& depth, std::vector<std::uint16_t>* mm);
+/// 16-bit segmentation image, geom id + 1, row after row, reusing *ids's buffer.
+void ToGeomIdPlusOne(const SegmentationImage& seg, std::vector<std::uint16_t>* ids);
 
 /// Writes `bytes` to `path` through a temporary file in the same folder.
 void WriteFileAtomic(const std::string& path, const std::vector<std::uint8_t>& bytes);
@@ -38,7 +39,8 @@ void WritePng(const std::string& path, const RgbImage& rgb);
 void WriteDepthPng(const std::string& path, const DepthImage& depth);
 void WriteSegmentationPng(const std::string& path, const SegmentationImage& seg);
 
-/// JPEG bytes of an RGB image, quality 1-100 (cv::imencode), into *jpeg.
+/// JPEG bytes of an RGB image, quality 1-100 (image_codec.h's settings), into
+/// *jpeg. Throws ImageCodecError for an empty image.
 void EncodeJpeg(const RgbImage& rgb, int quality, std::vector<std::uint8_t>* jpeg);
 
 }  // namespace vlab::render

@@ -16,6 +16,9 @@ VLAB_APT_PACKAGES=(
 VLAB_APT_PACKAGES+=(liblua5.4-dev)
 # run logs in HDF5 and MATLAB .mat besides CSV (src/lab/outputs/lab_log_hdf5.*, lab_log_mat.*)
 VLAB_APT_PACKAGES+=(libhdf5-dev libmatio-dev)
+# PNG and JPEG through libpng and libjpeg (render/image_codec.*), not OpenCV's imgcodecs, whose
+# dependencies every program linking it loads at start-up
+VLAB_APT_PACKAGES+=(libpng-dev libjpeg62-turbo-dev)
 
 # for the tests only: Octave runs the MATLAB/Octave example (tests/serve/octave_client_test.sh)
 VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)

@@ -5,7 +5,7 @@
 // (default 2 s):
 //   a. Render() (scene update, GL render, read-back, row flip) at 640x480 and
 //      320x240 in the fast and the quality profile, and at 640x480 in the draft one;
-//   b. render + JPEG encoding (cv::imencode, quality 90) at 640x480, fast;
+//   b. render + JPEG encoding (libjpeg, render/image_codec.h, quality 90) at 640x480, fast;
 //   c. render + JPEG + send over the camera wire: a camera server on loopback
 //      (the one `vlab serve` and `vlab camera` use) sends every frame in chunks
 //      to a camera client in another thread, which reassembles them; the

@@ -3,11 +3,10 @@
 #include <cstring>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "render/image_codec.h"
 #include "scene/scene_geometry.h"
 #include "scene/scene_pose_frame.h"
 
@@ -63,12 +62,13 @@ bool ViewModel::MeshBytes(int id, std::string* out) const {
 bool ViewModel::TexturePng(int id, std::string* out) const {
   if (id < 0 || id >= m_->ntex) return false;
   const int w = m_->tex_width[id], h = m_->tex_height[id];
-  // MuJoCo keeps RGB rows top-down; OpenCV writes BGR
-  cv::Mat rgb(h, w, CV_8UC3, m_->tex_rgb + m_->tex_adr[id]);
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  std::vector<unsigned char> png;
-  if (!cv::imencode(".png", bgr, png)) return false;
+  // MuJoCo keeps RGB rows top-down
+  std::vector<std::uint8_t> png;
+  try {
+    render::EncodePng({w, h, 3, 8, m_->tex_rgb + m_->tex_adr[id], 0}, -1, &png);
+  } catch (const render::ImageCodecError&) {
+    return false;
+  }
   out->assign(png.begin(), png.end());
   return true;
 }

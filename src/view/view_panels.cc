@@ -5,11 +5,8 @@
 #include <cstring>
 #include <sstream>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "core/core_errors.h"
+#include "render/image_codec.h"
 #include "scene/scene_csv.h"
 
 namespace vlab::view {
@@ -35,12 +32,9 @@ std::string EncodeCameraMessage(const bridge::CameraFrame& frame) {
     out.append(reinterpret_cast<const char*>(frame.data.data()), frame.data.size());
     return out;
   }
-  // raw RGB8 -> PNG (OpenCV writes BGR)
-  const cv::Mat rgb(frame.height, frame.width, CV_8UC3, const_cast<std::uint8_t*>(frame.data.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  std::vector<unsigned char> png;
-  cv::imencode(".png", bgr, png, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  // raw RGB8 -> PNG, zlib level 1 (fast)
+  std::vector<std::uint8_t> png;
+  render::EncodePng({frame.width, frame.height, 3, 8, frame.data.data(), 0}, 1, &png);
   out.append(reinterpret_cast<const char*>(png.data()), png.size());
   return out;
 }

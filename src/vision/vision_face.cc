@@ -4,11 +4,11 @@
 #include <string>
 
 #include <opencv2/aruco.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "bridge/bridge_markers.h"
 #include "core/core_errors.h"
+#include "render/image_codec.h"
 
 namespace vlab::vision {
 
@@ -130,10 +130,14 @@ cv::Mat DrawFace(const FaceSpec& face, const FaceLayout& layout) {
 }
 
 std::vector<std::uint8_t> EncodePng(const cv::Mat& image) {
+  if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
+    throw std::runtime_error("PNG encoding failed: an 8-bit grey or BGR image expected");
+  }
+  // OpenCV draws BGR; PNG holds RGB
+  cv::Mat rgb = image;
+  if (image.channels() == 3) cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
   std::vector<std::uint8_t> bytes;
-  const std::vector<int> params = {cv::IMWRITE_PNG_COMPRESSION, 9, cv::IMWRITE_PNG_STRATEGY,
-                                   cv::IMWRITE_PNG_STRATEGY_DEFAULT};
-  if (!cv::imencode(".png", image, bytes, params)) throw std::runtime_error("PNG encoding failed");
+  render::EncodePng({rgb.cols, rgb.rows, rgb.channels(), 8, rgb.data, rgb.step}, 9, &bytes);  // zlib level 9
   return bytes;
 }
 

@@ -15,12 +15,11 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_camera_server.h"
 #include "camera_test_util.h"
+#include "render/image_codec.h"
 
 namespace vlab::bridge {
 namespace {
@@ -46,11 +45,9 @@ void FillSmooth(std::int64_t id, std::vector<std::uint8_t>* rgb) {
   }
 }
 
-std::vector<uchar> EncodeJpeg(const std::vector<std::uint8_t>& rgb) {
-  cv::Mat bgr;
-  cv::cvtColor(cv::Mat(kH, kW, CV_8UC3, const_cast<std::uint8_t*>(rgb.data())), bgr, cv::COLOR_RGB2BGR);
-  std::vector<uchar> out;
-  cv::imencode(".jpg", bgr, out, {cv::IMWRITE_JPEG_QUALITY, kJpegQuality});
+std::vector<std::uint8_t> EncodeJpeg(const std::vector<std::uint8_t>& rgb) {
+  std::vector<std::uint8_t> out;
+  render::EncodeJpeg({kW, kH, 3, 8, rgb.data(), 0}, kJpegQuality, &out);
   return out;
 }
 
@@ -129,7 +126,7 @@ void Receive(int port, bool jpeg, Received* r) {
     }
     // the JPEG file byte for byte as the server encoded it, and its picture close to the original
     FillSmooth(f.id, &expected);
-    const std::vector<uchar> file = EncodeJpeg(expected);
+    const std::vector<std::uint8_t> file = EncodeJpeg(expected);
     if (f.encoding != CameraEncoding::kJpeg || f.data.size() != file.size() ||
         !std::equal(file.begin(), file.end(), f.data.begin())) {
       ++r->torn;

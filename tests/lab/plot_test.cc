@@ -9,14 +9,23 @@
 #include <string>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
 #include "lab/outputs/lab_plot.h"
+#include "render/image_codec.h"
 #include "test_util.h"
 
 namespace vlab::lab {
 namespace {
+
+// a PNG file as OpenCV's imread gave it: 8-bit BGR
+cv::Mat ReadBgr(const std::string& path) {
+  render::Image rgb = render::ReadImageFile(path, render::DecodeMode::kColor);
+  cv::Mat bgr;
+  cv::cvtColor(cv::Mat(rgb.height, rgb.width, CV_8UC3, rgb.bytes.data()), bgr, cv::COLOR_RGB2BGR);
+  return bgr;
+}
 
 TEST(PlotTest, NiceTicks) {
   EXPECT_EQ(NiceTicks(0, 10, 10), (std::vector<double>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10}));
@@ -39,7 +48,7 @@ TEST(PlotTest, DrawsTheCurveWhereTheAxesPutIt) {
   p.y = {"a", "b"};
   p.title = "a test";
   WritePlot(dir.path(), p);
-  const cv::Mat img = cv::imread(dir / "p.png");
+  const cv::Mat img = ReadBgr(dir / "p.png");
   ASSERT_FALSE(img.empty());
   EXPECT_EQ(img.cols, 1000);
   EXPECT_EQ(img.rows, 520);
@@ -107,8 +116,8 @@ TEST(PlotTest, RunWritesThePlotAndNamesIt) {
   const testing::ProcessResult r = RunJointPdWithPlot(dir, "{file: q.png, y: [pa10.q.S1, pa10.q.E1]}");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("plot: " + (dir / "out/q.png") + "\n"), std::string::npos) << r.out;
-  const cv::Mat png = cv::imread(dir / "out/q.png", cv::IMREAD_UNCHANGED);
-  EXPECT_FALSE(png.empty());
+  const render::Image png = render::ReadImageFile(dir / "out/q.png", render::DecodeMode::kUnchanged);
+  EXPECT_FALSE(png.bytes.empty());
 }
 
 }  // namespace

@@ -8,9 +8,10 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "render/image_codec.h"
 #include "test_util.h"
 
 namespace vlab::testing {
@@ -30,8 +31,15 @@ int VideoFrames(const std::string& path, int width, int height) {
   return frames;
 }
 
+// a PNG file as it is stored, in a cv::Mat (which owns a copy)
+cv::Mat ReadPng(const std::string& path) {
+  render::Image image = render::ReadImageFile(path, render::DecodeMode::kUnchanged);
+  const int type = CV_MAKETYPE(image.depth == 16 ? CV_16U : CV_8U, image.channels);
+  return cv::Mat(image.height, image.width, type, image.bytes.data()).clone();
+}
+
 void ExpectPng(const std::string& path, int type, int width, int height) {
-  const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
+  const cv::Mat img = ReadPng(path);
   ASSERT_FALSE(img.empty()) << path;
   EXPECT_EQ(img.type(), type) << path;
   EXPECT_EQ(img.cols, width) << path;
@@ -63,7 +71,7 @@ TEST(CliRender, WritesFramesAndVideo) {
   EXPECT_NE(meta["gl_renderer"].get<std::string>(), "");
   EXPECT_EQ(VideoFrames(dir / "v.mp4", 320, 240), 4);
   // the depth image holds millimetres: the scene is metres away, the sky 0
-  const cv::Mat mm = cv::imread(dir / "frames/depth_000000.png", cv::IMREAD_UNCHANGED);
+  const cv::Mat mm = ReadPng(dir / "frames/depth_000000.png");
   double lo = 0, hi = 0;
   cv::minMaxLoc(mm, &lo, &hi);
   EXPECT_EQ(lo, 0);

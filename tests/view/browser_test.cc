@@ -26,9 +26,9 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "cdp_client.h"
+#include "render/image_codec.h"
 #include "render/renderer.h"
 #include "test_process.h"
 #include "test_util.h"
@@ -103,12 +103,16 @@ double IoU(const Mask& a, const Mask& b) {
 }
 
 Mask BrowserMask(const std::string& png) {
-  const cv::Mat image = cv::imdecode(std::vector<unsigned char>(png.begin(), png.end()), cv::IMREAD_GRAYSCALE);
+  render::Image image;  // grey
   Mask mask;
-  if (image.cols != kWidth || image.rows != kHeight) return mask;
-  for (int r = 0; r < image.rows; ++r) {
-    for (int c = 0; c < image.cols; ++c) mask.push_back(image.at<unsigned char>(r, c) > 127);
+  try {
+    render::DecodeImage(reinterpret_cast<const std::uint8_t*>(png.data()), png.size(), render::DecodeMode::kGray,
+                        &image);
+  } catch (const render::ImageCodecError&) {
+    return mask;
   }
+  if (image.width != kWidth || image.height != kHeight) return mask;
+  for (std::uint8_t grey : image.bytes) mask.push_back(grey > 127);
   return mask;
 }
 

@@ -26,13 +26,13 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
 
 #include "bridge/bridge_camera_client.h"
+#include "render/image_codec.h"
 #include "scene/scene_csv.h"
 #include "test_process.h"
 #include "test_util.h"
@@ -158,9 +158,10 @@ TEST(ViewPanelsTest, CameraBytesRelayedUnchangedAndPlotSamplesEqualTheLog) {
     EXPECT_EQ(At<std::uint32_t>(m, 20), static_cast<std::uint32_t>(kCameraHeight));
     const std::string picture = m.substr(view::kCameraHeaderBytes);
     EXPECT_TRUE(picture == std::string(f->second.data.begin(), f->second.data.end())) << "frame " << id;
-    const cv::Mat image = cv::imdecode(std::vector<unsigned char>(picture.begin(), picture.end()), cv::IMREAD_COLOR);
-    EXPECT_EQ(image.cols, kCameraWidth);
-    EXPECT_EQ(image.rows, kCameraHeight);
+    const render::Image image =
+        render::DecodeImage(std::vector<std::uint8_t>(picture.begin(), picture.end()), render::DecodeMode::kColor);
+    EXPECT_EQ(image.width, kCameraWidth);
+    EXPECT_EQ(image.height, kCameraHeight);
   }
   // newest wins: a client reading at once on loopback gets most frames
   EXPECT_GE(matched, static_cast<int>(sent.size() / 2)) << pictures.size() << " pictures relayed";
@@ -217,13 +218,14 @@ TEST(ViewPanelsTest, ARawFrameGoesOutAsPngOfTheSamePixels) {
   EXPECT_EQ(At<double>(m, 8), 42.0);
   const std::string png = m.substr(view::kCameraHeaderBytes);
   ASSERT_EQ(png.substr(1, 3), "PNG");
-  const cv::Mat bgr = cv::imdecode(std::vector<unsigned char>(png.begin(), png.end()), cv::IMREAD_COLOR);
-  ASSERT_EQ(bgr.cols, 7);
-  ASSERT_EQ(bgr.rows, 5);
+  const render::Image rgb =
+      render::DecodeImage(std::vector<std::uint8_t>(png.begin(), png.end()), render::DecodeMode::kColor);
+  ASSERT_EQ(rgb.width, 7);
+  ASSERT_EQ(rgb.height, 5);
   for (int v = 0; v < 5; ++v) {
     for (int u = 0; u < 7; ++u) {
       for (int c = 0; c < 3; ++c) {
-        EXPECT_EQ(bgr.at<cv::Vec3b>(v, u)[2 - c], f.data[3 * (v * 7 + u) + c]) << u << "," << v << " channel " << c;
+        EXPECT_EQ(rgb.bytes[3 * (v * 7 + u) + c], f.data[3 * (v * 7 + u) + c]) << u << "," << v << " channel " << c;
       }
     }
   }

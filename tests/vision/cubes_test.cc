@@ -7,9 +7,10 @@
 
 #include <gtest/gtest.h>
 
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
+#include "render/image_codec.h"
 #include "test_util.h"
 #include "vision/vision_cubes.h"
 
@@ -140,7 +141,9 @@ TEST(Cubes, AlphabetBlocksCarryOneLetterPerFace) {
     const auto file = std::find_if(files.begin(), files.end(), [&](const GeneratedFile& g) { return g.name == name; });
     ASSERT_NE(file, files.end()) << name;
     const std::vector<std::uint8_t> png(file->bytes.begin(), file->bytes.end());
-    const cv::Mat image = cv::imdecode(png, cv::IMREAD_COLOR);
+    render::Image rgb = render::DecodeImage(png, render::DecodeMode::kColor);
+    cv::Mat image;  // BGR, as OpenCV draws
+    cv::cvtColor(cv::Mat(rgb.height, rgb.width, CV_8UC3, rgb.bytes.data()), image, cv::COLOR_RGB2BGR);
     ASSERT_FALSE(image.empty()) << name;
     FaceSpec spec;
     spec.id = 6 + f;

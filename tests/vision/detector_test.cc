@@ -8,10 +8,10 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/aruco.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
+#include "render/image_codec.h"
 #include "vision/vision_detector.h"
 #include "vision/vision_edges.h"
 
@@ -152,8 +152,9 @@ TEST(MarkerDetector, FindsSmallNoisyMarkers) {
     noisy += noise;
     noisy.convertTo(image, CV_8UC1);  // rounds and saturates
     std::vector<std::uint8_t> jpeg;
-    cv::imencode(".jpg", image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});
-    image = cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE);
+    render::EncodeJpeg({image.cols, image.rows, 1, 8, image.data, image.step}, 90, &jpeg);
+    render::Image decoded = render::DecodeImage(jpeg, render::DecodeMode::kGray);
+    image = cv::Mat(decoded.height, decoded.width, CV_8UC1, decoded.bytes.data()).clone();
 
     std::vector<std::vector<cv::Point2f>> corners;
     std::vector<int> ids;

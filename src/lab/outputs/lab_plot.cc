@@ -7,11 +7,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/core_errors.h"
 #include "core/core_input_file.h"
+#include "render/image_io.h"
 
 namespace vlab::lab {
 
@@ -147,7 +147,16 @@ void WritePlot(const std::string& dir, const PlotConfig& plot) {
   cv::putText(img, plot.x, {kLeft + w / 2 - 20, kHeight - 15}, font, 0.5, ink, 1, cv::LINE_AA);
   if (!plot.ylabel.empty()) cv::putText(img, plot.ylabel, {kLeft + w - 200, 30}, font, 0.5, ink, 1, cv::LINE_AA);
   const std::string out = dir + "/" + plot.file;
-  if (!cv::imwrite(out, img)) throw std::runtime_error("plot '" + plot.file + "': cannot write '" + out + "'");
+  // PNG of the RGB pixels (OpenCV drew BGR), written whole
+  cv::Mat rgb;
+  cv::cvtColor(img, rgb, cv::COLOR_BGR2RGB);
+  std::vector<std::uint8_t> png;
+  try {
+    render::EncodePng({rgb.cols, rgb.rows, 3, 8, rgb.data, rgb.step}, -1, &png);
+    render::WriteFileAtomic(out, png);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("plot '" + plot.file + "': cannot write '" + out + "': " + e.what());
+  }
 }
 
 }  // namespace vlab::lab
