@@ -18,13 +18,11 @@
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
-#include <boost/asio.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 
 #include "bridge/bridge_client.h"
 #include "scene/scene_geometry.h"
 #include "test_process.h"
+#include "view_clients.h"
 
 namespace vlab {
 namespace {
@@ -66,16 +64,10 @@ TEST(ArmViewTest, PosesFromAnArmDevicesJointStatesByKinematics) {
   mj_deleteData(d);
   mj_deleteModel(m);
 
-  namespace asio = boost::asio;
-  asio::io_context io;
-  boost::beast::websocket::stream<asio::ip::tcp::socket> ws(io);
-  ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(http_port)});
-  ws.handshake("127.0.0.1", "/ws");
+  view::view_test::WsClient ws(http_port, view::view_test::ViewerOptions("/ws"));
   std::vector<double> times;
   for (int k = 0; k < 6; ++k) {
-    boost::beast::flat_buffer b;
-    ws.read(b);
-    const std::string f = boost::beast::buffers_to_string(b.data());
+    const std::string f = ws.Read();
     ASSERT_EQ(f.size(), 16 + 28 * bodies.size());
     double t = 0;
     std::memcpy(&t, f.data(), 8);
@@ -92,14 +84,10 @@ TEST(ArmViewTest, PosesFromAnArmDevicesJointStatesByKinematics) {
   }
 
   // the plot channel: S1 and E1 as the arm sends them
-  boost::beast::websocket::stream<asio::ip::tcp::socket> plot(io);
-  plot.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(http_port)});
-  plot.handshake("127.0.0.1", "/plot");
+  view::view_test::WsClient plot(http_port, view::view_test::ViewerOptions("/plot"));
   std::vector<double> plot_times;
   for (int k = 0; k < 5; ++k) {
-    boost::beast::flat_buffer b;
-    plot.read(b);
-    const std::string p = boost::beast::buffers_to_string(b.data());
+    const std::string p = plot.Read();
     ASSERT_EQ(p.size(), 32u);
     double v[4];
     std::memcpy(v, p.data(), 32);

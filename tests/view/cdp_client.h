@@ -1,183 +1,48 @@
 // A headless Chromium driven over the Chrome DevTools Protocol, for the
-// browser test of vlab view: start it, open a page, evaluate JavaScript,
+// browser tests of vlab view: start it, open a page, evaluate JavaScript,
 // take PNG screenshots. Chromium is found as $VLAB_CHROMIUM or `chromium` on
-// the PATH; when there is none, Start() throws with what to install (the test
-// fails: it must not pass silently where the browser is missing).
+// the PATH; when there is none, the constructor throws with what to install
+// (the test fails: it must not pass silently where the browser is missing).
+// The DevTools connection lives in cdp_client.cc (library
+// vlab_view_test_clients), so that a test unit does not parse Boost.
 #pragma once
 
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
-#include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <stdexcept>
+#include <memory>
 #include <string>
-#include <thread>
-#include <vector>
 
-#include <boost/asio.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/http.hpp>
-#include <boost/beast/websocket.hpp>
 #include <nlohmann/json.hpp>
 
 namespace vlab::testing {
 
 class Chromium {
  public:
-  /// Starts headless Chromium (SwiftShader WebGL, window width x height) with
-  /// its profile in `profile_dir`, and attaches to its first page. Throws
-  /// std::runtime_error when it is missing or does not start within 30 s.
-  Chromium(const std::string& profile_dir, int width, int height) : ws_(io_) {
-    const std::string exe = Find();
-    const std::string size = "--window-size=" + std::to_string(width) + "," + std::to_string(height);
-    std::vector<std::string> args = {exe,
-                                     "--headless",
-                                     "--no-sandbox",
-                                     "--disable-dev-shm-usage",
-                                     "--enable-unsafe-swiftshader",
-                                     "--use-angle=swiftshader",
-                                     "--disable-gpu-vsync",
-                                     "--hide-scrollbars",
-                                     "--no-first-run",
-                                     "--remote-debugging-port=0",
-                                     "--user-data-dir=" + profile_dir,
-                                     size,
-                                     "about:blank"};
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      const int null = ::open("/dev/null", O_WRONLY);
-      ::dup2(null, STDOUT_FILENO);
-      ::dup2(null, STDERR_FILENO);
-      ::setpgid(0, 0);
-      std::vector<char*> argv;
-      for (std::string& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    // its DevTools port, then its page's WebSocket
-    const std::string port_file = profile_dir + "/DevToolsActivePort";
-    int port = 0;
-    for (int i = 0; i < 300 && port == 0; ++i) {
-      std::ifstream in(port_file);
-      if (!(in >> port)) {
-        port = 0;
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      }
-    }
-    if (port == 0) throw std::runtime_error("chromium (" + exe + ") did not start within 30 s");
-    const nlohmann::json targets = nlohmann::json::parse(HttpGet(port, "/json/list"));
-    std::string url;
-    for (const auto& t : targets) {
-      if (t.value("type", "") == "page") url = t.value("webSocketDebuggerUrl", "");
-    }
-    if (url.empty()) throw std::runtime_error("chromium: no page target in /json/list");
-    const std::string path = url.substr(url.find('/', std::string("ws://").size()));
-    ws_.next_layer().connect({boost::asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-    ws_.read_message_max(64 << 20);
-    ws_.handshake("127.0.0.1:" + std::to_string(port), path);
-  }
-  ~Chromium() {
-    if (pid_ > 0) {
-      ::kill(-pid_, SIGKILL);
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
+  /// Starts headless Chromium (SwiftShader WebGL, window width x height pixels)
+  /// with its profile in `profile_dir`, and attaches to its first page. Throws
+  /// std::runtime_error when it is missing or does not start within 30 s; a
+  /// browser that was started is killed again then.
+  Chromium(const std::string& profile_dir, int width, int height);
+  /// Kills the browser (its whole process group) and reaps it.
+  ~Chromium();
+  Chromium(const Chromium&) = delete;
+  Chromium& operator=(const Chromium&) = delete;
 
-  /// A DevTools command; returns its "result" (throws on an "error" reply).
-  nlohmann::json Call(const std::string& method, const nlohmann::json& params = nlohmann::json::object()) {
-    const int id = ++id_;
-    ws_.write(boost::asio::buffer(nlohmann::json{{"id", id}, {"method", method}, {"params", params}}.dump()));
-    for (;;) {
-      boost::beast::flat_buffer b;
-      ws_.read(b);
-      const nlohmann::json reply = nlohmann::json::parse(boost::beast::buffers_to_string(b.data()));
-      if (reply.value("id", -1) != id) continue;  // an event
-      if (reply.contains("error")) throw std::runtime_error(method + ": " + reply["error"].dump());
-      return reply["result"];
-    }
-  }
-  /// The value of a JavaScript expression (a promise is awaited).
-  nlohmann::json Evaluate(const std::string& expression) {
-    const nlohmann::json r =
-        Call("Runtime.evaluate", {{"expression", expression}, {"returnByValue", true}, {"awaitPromise", true}});
-    if (r.contains("exceptionDetails")) throw std::runtime_error("javascript: " + r["exceptionDetails"].dump());
-    return r["result"].value("value", nlohmann::json());
-  }
+  /// A DevTools command; returns its "result", skipping the events that come
+  /// before it. Throws std::runtime_error on an "error" reply (message:
+  /// method and error), and the socket's error when the connection fails.
+  nlohmann::json Call(const std::string& method, const nlohmann::json& params = nlohmann::json::object());
+  /// The value of a JavaScript expression (a promise is awaited). Throws
+  /// std::runtime_error "javascript: ..." when the expression throws.
+  nlohmann::json Evaluate(const std::string& expression);
   /// The page as PNG bytes.
-  std::string Screenshot() {
-    return Base64Decode(Call("Page.captureScreenshot", {{"format", "png"}})["data"].get<std::string>());
-  }
+  std::string Screenshot();
 
-  static std::string Find() {
-    if (const char* env = std::getenv("VLAB_CHROMIUM"); env && *env) return env;
-    const char* path = std::getenv("PATH");
-    std::string dirs = path ? path : "/usr/bin";
-    for (std::size_t start = 0; start <= dirs.size();) {
-      const std::size_t end = dirs.find(':', start);
-      const std::string dir = dirs.substr(start, end == std::string::npos ? std::string::npos : end - start);
-      for (const char* name : {"chromium", "chromium-browser"}) {
-        const std::string candidate = dir + "/" + name;
-        if (::access(candidate.c_str(), X_OK) == 0) return candidate;
-      }
-      if (end == std::string::npos) break;
-      start = end + 1;
-    }
-    throw std::runtime_error(
-        "no chromium on the PATH (nor $VLAB_CHROMIUM): the browser test needs Debian's chromium, one of "
-        "tools/setup.sh's VLAB_TEST_APT_PACKAGES (apt-get install chromium)");
-  }
+  /// The browser's executable: $VLAB_CHROMIUM, or chromium / chromium-browser
+  /// on the PATH. Throws std::runtime_error naming the package when none is.
+  static std::string Find();
 
  private:
-  static std::string HttpGet(int port, const std::string& target) {
-    namespace http = boost::beast::http;
-    boost::asio::io_context io;
-    boost::beast::tcp_stream stream(io);
-    stream.connect({boost::asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-    http::request<http::empty_body> request(http::verb::get, target, 11);
-    request.set(http::field::host, "127.0.0.1");
-    http::write(stream, request);
-    boost::beast::flat_buffer b;
-    http::response<http::string_body> response;
-    http::read(stream, b, response);
-    return response.body();
-  }
-  static std::string Base64Decode(const std::string& in) {
-    std::string out;
-    int bits = 0, value = 0;
-    for (const char c : in) {
-      int v = -1;
-      if (c >= 'A' && c <= 'Z')
-        v = c - 'A';
-      else if (c >= 'a' && c <= 'z')
-        v = c - 'a' + 26;
-      else if (c >= '0' && c <= '9')
-        v = c - '0' + 52;
-      else if (c == '+')
-        v = 62;
-      else if (c == '/')
-        v = 63;
-      if (v < 0) continue;
-      value = (value << 6) | v;
-      bits += 6;
-      if (bits >= 8) {
-        bits -= 8;
-        out.push_back(static_cast<char>((value >> bits) & 0xff));
-      }
-    }
-    return out;
-  }
-
-  boost::asio::io_context io_;
-  boost::beast::websocket::stream<boost::asio::ip::tcp::socket> ws_;
-  pid_t pid_ = -1;
-  int id_ = 0;
+  struct Impl;  // the process and its DevTools WebSocket (cdp_client.cc)
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace vlab::testing

@@ -23,13 +23,10 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
-
-#include <boost/asio.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 
 #include "bridge/bridge_camera_client.h"
 #include "render/image_codec.h"
@@ -37,6 +34,7 @@
 #include "test_process.h"
 #include "test_util.h"
 #include "view/view_panels.h"
+#include "view_clients.h"
 
 namespace vlab {
 namespace {
@@ -72,17 +70,13 @@ int PortOf(const std::string& line, const std::string& label) {
 // a WebSocket client of one channel of the view, reading on its own thread until the view goes
 class ChannelReader {
  public:
-  ChannelReader(int port, const std::string& path) : ws_(io_) {
-    ws_.next_layer().connect({boost::asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-    ws_.handshake("127.0.0.1", path);
+  ChannelReader(int port, const std::string& path) : ws_(port, view::view_test::ViewerOptions(path)) {
     thread_ = std::thread([this] {
-      boost::beast::error_code ec;
       for (;;) {
-        boost::beast::flat_buffer b;
-        ws_.read(b, ec);
-        if (ec) return;
+        std::string m;
+        if (!ws_.TryRead(&m)) return;
         std::lock_guard<std::mutex> lock(mutex_);
-        messages_.push_back(boost::beast::buffers_to_string(b.data()));
+        messages_.push_back(std::move(m));
       }
     });
   }
@@ -96,8 +90,7 @@ class ChannelReader {
   }
 
  private:
-  boost::asio::io_context io_;
-  boost::beast::websocket::stream<boost::asio::ip::tcp::socket> ws_;
+  view::view_test::WsClient ws_;
   std::thread thread_;
   std::mutex mutex_;
   std::vector<std::string> messages_;

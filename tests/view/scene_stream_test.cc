@@ -25,14 +25,12 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
-#include <boost/asio.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_client_device.h"
 #include "test_process.h"
 #include "test_util.h"
+#include "view_clients.h"
 
 namespace vlab {
 namespace {
@@ -113,19 +111,12 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
       {VLAB_BINARY_DIR "/vlab", "view", "--scene", "127.0.0.1:" + std::to_string(port), "--http", "0", "-q"});
   const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
   ASSERT_GT(http_port, 0) << view.start_line();
-  namespace asio = boost::asio;
-  asio::io_context io;
-  boost::beast::websocket::stream<asio::ip::tcp::socket> ws(io);
-  ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(http_port)});
-  ws.handshake("127.0.0.1", "/ws");
+  view::view_test::WsClient ws(http_port, view::view_test::ViewerOptions("/ws"));
   std::thread reader([&ws, this] {
     // the page's frames: float64 time, float64 seq, 7 float32 (lab_poses.h)
-    boost::beast::error_code ec;
     for (;;) {
-      boost::beast::flat_buffer b;
-      ws.read(b, ec);
-      if (ec) return;
-      const std::string m = boost::beast::buffers_to_string(b.data());
+      std::string m;
+      if (!ws.TryRead(&m)) return;
       if (m.size() != 16 + 28) continue;
       WsFrame f;
       std::memcpy(&f.time, m.data(), 8);

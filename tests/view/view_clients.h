@@ -1,87 +1,49 @@
-// Clients of the view's server for its tests (view_server_test.cc,
-// view_server_limits_test.cc): a raw TCP client that sends bytes and reads
-// what comes back, a Beast WebSocket client, and a server on a free port
-// serving a small page.
+// Clients of the view's server for its tests: a raw TCP client that sends
+// bytes and reads what comes back, a WebSocket client of one channel, and a
+// server on a free port serving a small page. The sockets live in
+// view_clients.cc (library vlab_view_test_clients), so that a test unit does
+// not parse Boost.
 #pragma once
-
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
-#include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
-#include <vector>
-
-#include <boost/asio.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 
 #include "view/view_server.h"
 
 namespace vlab::view::view_test {
 
-namespace asio = boost::asio;
-namespace beast = boost::beast;
-using tcp = asio::ip::tcp;
-
 constexpr const char* kPage = "<html>vlab view test page</html>";
+
+/// The WebSocket close code of a server that is full ("try again later").
+constexpr int kCloseTryAgainLater = 1013;
 
 /// A server on a free loopback port with `config`'s bounds (its port and
 /// channels as given), serving kPage at / and "{}" at /scene.json.
-inline std::unique_ptr<ViewServer> StartServer(ViewServerConfig config) {
-  config.port = 0;
-  std::map<std::string, StaticFile> files{{"/index.html", {"text/html", kPage}},
-                                          {"/view.js", {"text/javascript", "//"}}};
-  auto resources = [](const std::string& path, std::string* type, std::string* body) {
-    if (path != "/scene.json") return false;
-    *type = "application/json";
-    *body = "{}";
-    return true;
-  };
-  return ViewServer::Create(config, std::move(files), resources);
-}
+std::unique_ptr<ViewServer> StartServer(ViewServerConfig config);
 
 /// A raw TCP client of 127.0.0.1:port (from `source`, another loopback
 /// address, when given): sends bytes, reads until the server closes or the
-/// timeout passes.
+/// timeout passes. The constructor throws std::runtime_error (the socket's
+/// error) when it cannot connect.
 class Raw {
  public:
-  explicit Raw(int port, const std::string& source = "") : socket_(io_) {
-    socket_.open(tcp::v4());
-    if (!source.empty()) socket_.bind({asio::ip::make_address(source), 0});
-    socket_.connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-  }
-  Raw& Send(const std::string& bytes) {
-    boost::system::error_code ec;
-    asio::write(socket_, asio::buffer(bytes), ec);  // the server may close before all is sent
-    return *this;
-  }
-  std::string ReadAll(double timeout_s = 3) {
-    std::string out;
-    closed_ = false;
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    char buffer[4096];
-    while (std::chrono::steady_clock::now() < end) {
-      pollfd p{socket_.native_handle(), POLLIN, 0};
-      if (::poll(&p, 1, 50) <= 0) continue;
-      const ssize_t n = ::recv(socket_.native_handle(), buffer, sizeof(buffer), 0);
-      if (n <= 0) {
-        closed_ = true;
-        break;
-      }
-      out.append(buffer, static_cast<std::size_t>(n));
-    }
-    return out;
-  }
+  explicit Raw(int port, const std::string& source = "");
+  ~Raw();
+  Raw(const Raw&) = delete;
+  Raw& operator=(const Raw&) = delete;
+  /// Sends `bytes`; an error is ignored (the server may close before all is sent).
+  Raw& Send(const std::string& bytes);
+  /// What arrives until the server closes or `timeout_s` seconds pass.
+  std::string ReadAll(double timeout_s = 3);
   /// True when the last ReadAll ended because the server closed.
   bool closed() const { return closed_; }
 
  private:
-  asio::io_context io_;
-  tcp::socket socket_;
+  struct Impl;  // the socket (view_clients.cc)
+  std::unique_ptr<Impl> impl_;
   bool closed_ = false;
 };
 
@@ -92,12 +54,9 @@ inline int Status(const std::string& response) {
   return space == std::string::npos ? 0 : std::atoi(response.c_str() + space + 1);
 }
 
-/// GET target with Host 127.0.0.1 (and `extra` header lines), Connection: close.
-inline std::string Get(int port, const std::string& target, const std::string& extra = "") {
-  return Raw(port)
-      .Send("GET " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + extra + "Connection: close\r\n\r\n")
-      .ReadAll();
-}
+/// GET target with Host 127.0.0.1 (and `extra` header lines), Connection: close;
+/// the raw response.
+std::string Get(int port, const std::string& target, const std::string& extra = "");
 
 /// A WebSocket upgrade request for `path` with the given Host and extra header lines.
 inline std::string Upgrade(const std::string& path, const std::string& host, const std::string& extra = "") {
@@ -105,31 +64,74 @@ inline std::string Upgrade(const std::string& path, const std::string& host, con
          "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
 }
 
-/// A WebSocket client of /ws (or another channel), from `source` when given;
-/// a read that waits longer than 20 s fails (SO_RCVTIMEO): a hang is a failure.
-struct WsClient {
+/// A WebSocket error (refused handshake, closed session, socket error, a read
+/// past the timeout); what() is the WebSocket library's message.
+class WsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// How a WsClient connects to 127.0.0.1:port.
+struct WsOptions {
+  std::string path = "/ws";  ///< the channel
+  std::string origin;        ///< the Origin header; empty: none
+  std::string source;        ///< the local address to bind; empty: any
+  std::string host;          ///< the Host header; empty: "127.0.0.1:PORT"
+  /// A read that waits longer fails (SO_RCVTIMEO): a hang is a failure. Zero: no limit.
+  std::chrono::seconds read_timeout{20};
+};
+
+/// The options of a plain viewer of `path`: Host "127.0.0.1" without the
+/// port, reads without a time limit (the test's own timeout ends a hang).
+inline WsOptions ViewerOptions(const std::string& path) {
+  WsOptions options;
+  options.path = path;
+  options.host = "127.0.0.1";
+  options.read_timeout = std::chrono::seconds(0);
+  return options;
+}
+
+/// The code and reason of the close frame a server sent (code 0: none came).
+struct WsCloseReason {
+  int code = 0;
+  std::string reason;
+};
+
+/// A WebSocket client of one of the view's channels; it sends binary messages.
+/// Not thread-safe: one thread reads, and no other uses it meanwhile.
+class WsClient {
+ public:
+  /// Connects to /ws (or another channel), with an Origin and from `source`
+  /// when given; reads wait at most 20 s. Throws WsError when the connection
+  /// or the handshake fails (a refused upgrade included).
   explicit WsClient(int port, const std::string& path = "/ws", const std::string& origin = "",
-                    const std::string& source = "")
-      : ws(io) {
-    ws.next_layer().open(tcp::v4());
-    if (!source.empty()) ws.next_layer().bind({asio::ip::make_address(source), 0});
-    ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-    const timeval limit{20, 0};
-    ::setsockopt(ws.next_layer().native_handle(), SOL_SOCKET, SO_RCVTIMEO, &limit, sizeof(limit));
-    if (!origin.empty()) {
-      ws.set_option(beast::websocket::stream_base::decorator(
-          [origin](beast::websocket::request_type& r) { r.set(beast::http::field::origin, origin); }));
-    }
-    ws.handshake("127.0.0.1:" + std::to_string(port), path);
-    ws.binary(true);
-  }
-  std::string Read() {
-    beast::flat_buffer b;
-    ws.read(b);
-    return beast::buffers_to_string(b.data());
-  }
-  asio::io_context io;
-  beast::websocket::stream<tcp::socket> ws;
+                    const std::string& source = "");
+  /// Connects as `options` say. Throws WsError as above.
+  WsClient(int port, const WsOptions& options);
+  ~WsClient();
+  WsClient(const WsClient&) = delete;
+  WsClient& operator=(const WsClient&) = delete;
+
+  /// The next message. Throws WsError when the session ends (a close frame:
+  /// see close_reason()), on a socket error or past the read timeout.
+  std::string Read();
+  /// The next message into `message` (when given); false instead of a throw.
+  bool TryRead(std::string* message = nullptr);
+  /// Sends a binary message. Throws WsError on an error.
+  void Write(const std::string& message);
+  /// Sends a binary message; false on an error (the server may close while it is sent).
+  bool TryWrite(const std::string& message);
+  /// Sends `bytes` on the socket itself, past the WebSocket framing (a
+  /// malformed frame); false on an error.
+  bool SendRaw(const std::string& bytes);
+  /// The close frame the server sent, once a read failed on it.
+  WsCloseReason close_reason() const;
+  /// The socket's file descriptor (to watch it at the TCP level).
+  int native_handle();
+
+ private:
+  struct Impl;  // the WebSocket stream (view_clients.cc)
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace vlab::view::view_test
