@@ -16,9 +16,13 @@ lane_pid=""
 lane_out="build/sanitize-build.out"
 if [ "${VLAB_SANITIZE:-0}" = 1 ]; then
   echo "vlab: sanitizer lane: building beside the suite, idle class (log: $lane_out)"
-  # a session of its own, so that an interrupted suite stops the whole build with it
-  setsid chrt --idle 0 nice -n 19 tools/sanitize.sh --build-only >"$lane_out" 2>&1 &
+  # in a process group of its own (set -m), so that an interrupted suite stops the whole build
+  # with it; in the suite's session all the same: the kernel shares the CPU fairly between
+  # sessions (autogroups), and only within one does the idle class yield to the tests
+  set -m
+  chrt --idle 0 nice -n 19 tools/sanitize.sh --build-only >"$lane_out" 2>&1 &
   lane_pid=$!
+  set +m
   trap 'kill -- "-$lane_pid" 2>/dev/null || true' EXIT
 fi
 (cd build && ctest --output-on-failure -j "$(nproc)" "$@") || status=$?
