@@ -1,7 +1,9 @@
-// The task language's robot, device, waiting and blackboard functions (the
-// Lua side of task_program.h). Blocking commands are Lua functions of the
-// prelude below: they start something here, then yield once per period
-// until it is done.
+// The task language's robot functions: moves, poses, user frames, settings,
+// and the prelude (the Lua side of task_program.h). Blocking commands are Lua
+// functions of the prelude below: they start something here, then yield once
+// per period until it is done. Devices, markers and the blackboard:
+// task_api_io.cc; fk, ik, reachable: task_api_query.cc; payload():
+// task_payload.cc; the argument helpers they share: task_api_args.h.
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -16,7 +18,7 @@
 
 #include <lua.hpp>
 
-#include "task/task_kinematics.h"
+#include "task/task_api_args.h"
 #include "task/task_lua.h"
 #include "task/task_program.h"
 
@@ -24,7 +26,6 @@ namespace vlab::task {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
 constexpr const char* kProgramKey = "vlab.program";
 constexpr const char* kFramesKey = "vlab.frames";  // registry: the program's user frames, name -> frame
 
@@ -110,76 +111,6 @@ end
 
 Program* P(lua_State* L) { return ProgramOf(L); }
 
-Robot& NeedRobot(lua_State* L, const char* what) {
-  Program* p = P(L);
-  if (!p->robot) ScriptError(L, "%s: this program has no robot (scenario: programs[].robot)", what);
-  return *p->robot;
-}
-
-double Number(lua_State* L, int i, const char* what) {
-  if (!lua_isnumber(L, i)) ScriptError(L, "%s: argument %d must be a number, got %s", what, i, luaL_typename(L, i));
-  const double v = lua_tonumber(L, i);
-  if (!std::isfinite(v)) ScriptError(L, "%s: argument %d is not finite", what, i);
-  return v;
-}
-
-// options table field as a number (or `fallback` when absent)
-double Option(lua_State* L, int options, const char* key, double fallback, const char* what) {
-  if (lua_isnoneornil(L, options)) return fallback;
-  lua_getfield(L, options, key);
-  double v = fallback;
-  if (!lua_isnil(L, -1)) {
-    if (!lua_isnumber(L, -1)) ScriptError(L, "%s: option %s must be a number, got %s", what, key, luaL_typename(L, -1));
-    v = lua_tonumber(L, -1);
-    if (!std::isfinite(v)) ScriptError(L, "%s: option %s is not finite", what, key);
-  }
-  lua_pop(L, 1);
-  return v;
-}
-
-// an option a move does not take, and why (named in its error)
-struct Refused {
-  const char* key;
-  const char* why;
-};
-
-// every key of an options table must be one the move honours: a refused one says why, an
-// unknown one lists the known ones
-void CheckOptions(lua_State* L, int options, const char* what, const char* const* known,
-                  const Refused* refused = nullptr) {
-  if (lua_isnoneornil(L, options)) return;
-  if (!lua_istable(L, options)) ScriptError(L, "%s: options must be a table, got %s", what, luaL_typename(L, options));
-  lua_pushnil(L);
-  while (lua_next(L, options)) {
-    lua_pop(L, 1);
-    if (lua_type(L, -1) != LUA_TSTRING) {
-      ScriptError(L, "%s: option keys are names (v = ..., t = ...), got a %s key", what, luaL_typename(L, -1));
-    }
-    const char* key = lua_tostring(L, -1);
-    bool found = false;
-    for (const char* const* k = known; *k; ++k) found = found || !std::strcmp(*k, key);
-    if (found) continue;
-    for (const Refused* r = refused; r && r->key; ++r) {
-      if (!std::strcmp(r->key, key)) ScriptError(L, "%s: option '%s' is not supported: %s", what, key, r->why);
-    }
-    char list[256] = "";
-    for (const char* const* k = known; *k; ++k) {
-      std::strncat(list, k == known ? "" : ", ", sizeof list - std::strlen(list) - 1);
-      std::strncat(list, *k, sizeof list - std::strlen(list) - 1);
-    }
-    ScriptError(L, "%s: unknown option '%s' (options: %s)", what, key, list);
-  }
-}
-
-// whether the options table has `key`
-bool HasOption(lua_State* L, int options, const char* key) {
-  if (lua_isnoneornil(L, options)) return false;
-  lua_getfield(L, options, key);
-  const bool has = !lua_isnil(L, -1);
-  lua_pop(L, 1);
-  return has;
-}
-
 // a duration (t) replaces the speed limits: an option that would then be ignored is an error
 void CheckDurationAlone(lua_State* L, int options, const char* what, const char* const* speed_keys) {
   if (!HasOption(L, options, "t")) return;
@@ -196,14 +127,6 @@ void CheckWrenchNeedsForce(lua_State* L, int options, const char* what) {
   if (HasOption(L, options, "wrench") && !HasOption(L, options, "force")) {
     ScriptError(L, "%s: option 'wrench' names the sensor of a guarded move: give 'force' (N) too", what);
   }
-}
-
-// a move's target frame: every number finite (a NaN or inf would reach the inverse kinematics)
-void CheckFinite(lua_State* L, const Frame& f, const char* what, const char* which) {
-  if (!f.p.allFinite()) {
-    ScriptError(L, "%s: the %s position (%g, %g, %g) m is not finite", what, which, f.p.x(), f.p.y(), f.p.z());
-  }
-  if (!f.q.coeffs().allFinite()) ScriptError(L, "%s: the %s rotation is not finite (a NaN or inf)", what, which);
 }
 
 // a frame as a script's frame value holds it (PushFrame normalises the rotation once more): a
@@ -311,22 +234,6 @@ double Duration(lua_State* L, int options, const char* what) {
   const double t = Option(L, options, "t", 0, what);
   if (HasOption(L, options, "t") && !(t > 0)) ScriptError(L, "%s: option t must be > 0 s, got %g", what, t);
   return t;
-}
-
-// the world frame of a target given in the script's base frame
-Frame ToWorld(const Robot& r, const Frame& f) {
-  Frame w;
-  w.p = r.base_W.p + r.base_W.q * f.p;
-  w.q = (r.base_W.q * f.q).normalized();
-  return w;
-}
-
-// a world frame in the script's base frame (the inverse of ToWorld)
-Frame ToBase(const Robot& r, const Frame& w) {
-  Frame b;
-  b.q = (r.base_W.q.conjugate() * w.q).normalized();
-  b.p = r.base_W.q.conjugate() * (w.p - r.base_W.p);
-  return b;
 }
 
 // the planned tool pose (world) at the planned joints q_ref: the plan's own sample (the
@@ -674,159 +581,6 @@ int FrameOf(lua_State* L) {
   return 1;
 }
 
-// ---- kinematics queries (no motion): fk, ik, reachable (task_kinematics.h). The Lua
-// errors are raised by the callers, once the workers' C++ objects are gone.
-constexpr int kErrorSize = 512;
-
-// the joint angles (deg, one per chain joint) of the table at `index`, in rad; false with
-// `error` set ("expected 7 joint angles (deg), got 6", "joint E1 is nan, ...")
-bool JointTable(lua_State* L, int index, const Robot& r, const char* which, Eigen::VectorXd* q, char* error) {
-  const int n = r.model->dof();
-  if (!lua_istable(L, index)) {
-    std::snprintf(error, kErrorSize, "%sexpected a table of %d joint angles (deg), got %s", which, n,
-                  luaL_typename(L, index));
-    return false;
-  }
-  const int got = static_cast<int>(lua_rawlen(L, index));
-  if (got != n) {
-    std::snprintf(error, kErrorSize, "%sexpected %d joint angles (deg), got %d", which, n, got);
-    return false;
-  }
-  q->resize(n);
-  for (int i = 0; i < n; ++i) {
-    lua_rawgeti(L, index, i + 1);
-    const bool number = lua_isnumber(L, -1);
-    const double deg = number ? lua_tonumber(L, -1) : 0.0;
-    const char* type = luaL_typename(L, -1);
-    lua_pop(L, 1);
-    const char* name = r.model->joint_names()[i].c_str();
-    if (!number) {
-      std::snprintf(error, kErrorSize, "%sjoint %s must be a number (deg), got %s", which, name, type);
-      return false;
-    }
-    if (!std::isfinite(deg)) {
-      std::snprintf(error, kErrorSize, "%sjoint %s is %g, not a finite angle (deg)", which, name, deg);
-      return false;
-    }
-    (*q)[i] = deg * kDeg;
-  }
-  return true;
-}
-
-void PushDegrees(lua_State* L, const Eigen::VectorXd& q) {
-  lua_createtable(L, static_cast<int>(q.size()), 0);
-  for (int i = 0; i < q.size(); ++i) {
-    lua_pushnumber(L, q[i] / kDeg);
-    lua_rawseti(L, -2, i + 1);
-  }
-}
-
-void FkWork(lua_State* L, const Robot& r, char* error) {
-  Eigen::VectorXd q;
-  if (!JointTable(L, 1, r, "", &q, error)) return;
-  try {
-    const Kinematics k(r.model.get(), r.planner.get());
-    const Frame w = k.Fk(q);
-    PushFrame(L, ToBase(r, w));
-  } catch (const std::exception& e) {
-    std::snprintf(error, kErrorSize, "%s", e.what());
-  }
-}
-
-int Fk(lua_State* L) {  // fk(q): the tool frame (base frame) at joints q (deg)
-  const Robot& r = NeedRobot(L, "fk");
-  char error[kErrorSize] = "";
-  FkWork(L, r, error);
-  if (error[0]) ScriptError(L, "fk: %s", error);
-  return 1;
-}
-
-// ik's and reachable's options: {seed = {...}} (ik: and all = true|false); they move nothing
-void CheckQueryOptions(lua_State* L, const char* what, bool takes_all) {
-  static const char* const with_all[] = {"seed", "all", nullptr};
-  static const char* const seed_only[] = {"seed", nullptr};
-  static const Refused refused[] = {
-      {"all", "reachable tries every branch already (ik(frame, {all = true}) lists them)"},
-      {"v", "it moves nothing"},
-      {"a", "it moves nothing"},
-      {"w", "it moves nothing"},
-      {"jv", "it moves nothing"},
-      {"t", "it moves nothing"},
-      {"r", "it moves nothing"},
-      {"force", "it moves nothing"},
-      {"wrench", "it moves nothing"},
-      {nullptr, nullptr}};
-  CheckOptions(L, 2, what, takes_all ? with_all : seed_only, takes_all ? refused + 1 : refused);
-  if (HasOption(L, 2, "all")) {
-    lua_getfield(L, 2, "all");
-    const bool boolean = lua_isboolean(L, -1);
-    const char* type = luaL_typename(L, -1);
-    lua_pop(L, 1);
-    if (!boolean) ScriptError(L, "%s: option all must be true or false, got %s", what, type);
-  }
-  CheckFinite(L, CheckFrame(L, 1, what), what, "target");
-}
-
-// the seed of ik/reachable: option seed (deg), else the planned joints
-bool Seed(lua_State* L, const Robot& r, Eigen::VectorXd* seed, char* error) {
-  if (!HasOption(L, 2, "seed")) {
-    *seed = r.q_ref;
-    return true;
-  }
-  lua_getfield(L, 2, "seed");
-  const bool ok = JointTable(L, lua_gettop(L), r, "option seed: ", seed, error);
-  lua_pop(L, 1);
-  return ok;
-}
-
-// ik (query 0: nearest, 1: all) or reachable (2): pushes the result
-void IkWork(lua_State* L, const Robot& r, int query, char* error) {
-  Eigen::VectorXd seed;
-  if (!Seed(L, r, &seed, error)) return;
-  try {
-    const Kinematics k(r.model.get(), r.planner.get());
-    const Frame goal = ToWorld(r, *ToFrame(L, 1));
-    if (query == 2) {
-      lua_pushboolean(L, k.Reachable(goal, seed));
-    } else if (query == 1) {
-      const std::vector<Eigen::VectorXd> all = k.All(goal, seed);
-      lua_createtable(L, static_cast<int>(all.size()), 0);
-      for (std::size_t i = 0; i < all.size(); ++i) {
-        PushDegrees(L, all[i]);
-        lua_rawseti(L, -2, static_cast<lua_Integer>(i + 1));
-      }
-    } else {
-      PushDegrees(L, k.Nearest(goal, seed));
-    }
-  } catch (const std::exception& e) {
-    std::snprintf(error, kErrorSize, "%s", e.what());
-  }
-}
-
-int Ik(lua_State* L) {  // ik(frame [, {seed = q, all = true}]): joints (deg), or a list of them
-  const Robot& r = NeedRobot(L, "ik");
-  CheckQueryOptions(L, "ik", true);
-  bool all = false;
-  if (!lua_isnoneornil(L, 2)) {
-    lua_getfield(L, 2, "all");
-    all = lua_toboolean(L, -1);
-    lua_pop(L, 1);
-  }
-  char error[kErrorSize] = "";
-  IkWork(L, r, all ? 1 : 0, error);
-  if (error[0]) ScriptError(L, "ik: %s", error);
-  return 1;
-}
-
-int Reachable(lua_State* L) {  // reachable(frame [, {seed = q}]): whether ik finds joints
-  const Robot& r = NeedRobot(L, "reachable");
-  CheckQueryOptions(L, "reachable", false);
-  char error[kErrorSize] = "";
-  IkWork(L, r, 2, error);
-  if (error[0]) ScriptError(L, "reachable: %s", error);
-  return 1;
-}
-
 template <bool kForce>
 int WrenchPart(lua_State* L) {
   Program* p = P(L);
@@ -854,28 +608,28 @@ int Get(lua_State* L, std::initializer_list<double> values) {
 int SetSpeed(lua_State* L) {
   Robot& r = NeedRobot(L, "speed");
   if (lua_gettop(L) == 0) return Get(L, {r.limits.speed_mps, r.limits.rot_speed_rps / kDeg});
-  const double v = Number(L, 1, "speed");
+  const double v = NumberArg(L, 1, "speed");
   if (!(v > 0)) ScriptError(L, "speed: must be > 0 m/s");
   r.limits.speed_mps = v;
-  if (!lua_isnoneornil(L, 2)) r.limits.rot_speed_rps = Number(L, 2, "speed") * kDeg;
+  if (!lua_isnoneornil(L, 2)) r.limits.rot_speed_rps = NumberArg(L, 2, "speed") * kDeg;
   return 0;
 }
 int SetAccel(lua_State* L) {
   Robot& r = NeedRobot(L, "accel");
   if (lua_gettop(L) == 0) return Get(L, {r.limits.accel_mps2, r.limits.rot_accel_rps2 / kDeg});
-  const double a = Number(L, 1, "accel");
+  const double a = NumberArg(L, 1, "accel");
   if (!(a > 0)) ScriptError(L, "accel: must be > 0 m/s^2");
   r.limits.accel_mps2 = a;
-  if (!lua_isnoneornil(L, 2)) r.limits.rot_accel_rps2 = Number(L, 2, "accel") * kDeg;
+  if (!lua_isnoneornil(L, 2)) r.limits.rot_accel_rps2 = NumberArg(L, 2, "accel") * kDeg;
   return 0;
 }
 int SetJointSpeed(lua_State* L) {
   Robot& r = NeedRobot(L, "jspeed");
   if (lua_gettop(L) == 0) return Get(L, {r.limits.joint_speed_rps / kDeg, r.limits.joint_accel_rps2 / kDeg});
-  const double v = Number(L, 1, "jspeed");
+  const double v = NumberArg(L, 1, "jspeed");
   if (!(v > 0)) ScriptError(L, "jspeed: must be > 0 deg/s");
   r.limits.joint_speed_rps = v * kDeg;
-  if (!lua_isnoneornil(L, 2)) r.limits.joint_accel_rps2 = Number(L, 2, "jspeed") * kDeg;
+  if (!lua_isnoneornil(L, 2)) r.limits.joint_accel_rps2 = NumberArg(L, 2, "jspeed") * kDeg;
   return 0;
 }
 int SetRateLimits(lua_State* L) {  // limits("slow" | "refuse"): what a move beyond the joints' limits does
@@ -907,7 +661,7 @@ int SetTool(lua_State* L) {
 int SetBlend(lua_State* L) {
   Robot& r = NeedRobot(L, "blend");
   if (lua_gettop(L) == 0) return Get(L, {r.blend_setting_m});
-  const double v = Number(L, 1, "blend");
+  const double v = NumberArg(L, 1, "blend");
   if (v < 0) ScriptError(L, "blend: the radius must be >= 0 m (0: every move stops at its target)");
   r.blend_setting_m = v;
   return 0;
@@ -927,300 +681,9 @@ int Now(lua_State* L) {
   return 1;
 }
 int Periods(lua_State* L) {  // whole periods in a duration (s)
-  const double s = Number(L, 1, "wait");
+  const double s = NumberArg(L, 1, "wait");
   if (s < 0) ScriptError(L, "wait: the time must be >= 0 s, got %g", s);
   lua_pushinteger(L, static_cast<lua_Integer>(std::llround(s / P(L)->period_s)));
-  return 1;
-}
-
-// ---- devices by name: device(NAME) -> {get, read, send}
-Channel* DeviceArg(lua_State* L) {
-  luaL_checktype(L, 1, LUA_TTABLE);
-  lua_getfield(L, 1, "name");
-  Channel* c = P(L)->devices->Find(lua_tostring(L, -1) ? lua_tostring(L, -1) : "");
-  lua_pop(L, 1);
-  if (!c) ScriptError(L, "device: not a device object (use d:get(...), not d.get(...))");
-  return c;
-}
-int DeviceGet(lua_State* L) {
-  Channel* c = DeviceArg(L);
-  const char* field = luaL_checkstring(L, 2);
-  double value = 0;
-  int found = -2;
-  {
-    std::vector<double> v;
-    if (c->Read(&v)) {
-      found = IndexOf(c->state_names(), field);
-      if (found >= 0) value = v[found];
-    }
-  }
-  if (found == -2) ScriptError(L, "device '%s' has sent no state yet (reading '%s')", c->name().c_str(), field);
-  if (found < 0) ScriptError(L, "device '%s' has no state field '%s'", c->name().c_str(), field);
-  lua_pushnumber(L, value);
-  return 1;
-}
-int DeviceRead(lua_State* L) {
-  Channel* c = DeviceArg(L);
-  // (the Lua calls below raise only on memory exhaustion)
-  std::vector<double> v;
-  const bool ok = c->Read(&v);
-  lua_createtable(L, 0, static_cast<int>(c->state_names().size()));
-  for (std::size_t i = 0; ok && i < v.size() && i < c->state_names().size(); ++i) {
-    lua_pushnumber(L, v[i]);
-    lua_setfield(L, -2, c->state_names()[i].c_str());
-  }
-  return 1;
-}
-int DeviceSend(lua_State* L) {
-  Channel* c = DeviceArg(L);
-  luaL_checktype(L, 2, LUA_TTABLE);
-  const std::vector<std::string>& names = c->command_names();
-  if (names.empty()) ScriptError(L, "device '%s' takes no commands", c->name().c_str());
-  Program* p = P(L);
-  std::vector<double>& command = p->device_commands[c->name()];
-  command.assign(names.size(), 0.0);
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    lua_getfield(L, 2, names[i].c_str());
-    if (!lua_isnumber(L, -1)) {
-      p->device_commands.erase(c->name());
-      ScriptError(L, "device '%s': command field '%s' must be a number", c->name().c_str(), names[i].c_str());
-    }
-    command[i] = lua_tonumber(L, -1);
-    lua_pop(L, 1);
-  }
-  return 0;
-}
-int Device(lua_State* L) {
-  const char* name = luaL_checkstring(L, 1);
-  Channel* c = P(L)->devices->Find(name);
-  if (!c) ScriptError(L, "device: no device named '%s'", name);
-  if (c->kind() == bridge::DeviceKind::kArm && P(L)->robot && c == P(L)->robot->arm) {
-    ScriptError(L, "device: '%s' is this program's robot: use movej/movel and joints()", name);
-  }
-  lua_createtable(L, 0, 4);
-  lua_pushstring(L, name);
-  lua_setfield(L, -2, "name");
-  static const luaL_Reg methods[] = {
-      {"get", DeviceGet}, {"read", DeviceRead}, {"send", DeviceSend}, {nullptr, nullptr}};
-  luaL_setfuncs(L, methods, 0);
-  return 1;
-}
-
-// ---- markers(NAME): a markers device (kind 5), through task_markers.h
-MarkerChannel* MarkersArg(lua_State* L) {
-  const char* name = luaL_checkstring(L, 1);
-  MarkerChannel* m = P(L)->devices->FindMarkers(name);
-  if (!m) ScriptError(L, "markers: no markers device named '%s'", name);
-  return m;
-}
-int MarkersOpen(lua_State* L) {
-  MarkerChannel* m = MarkersArg(L);
-  char why[512] = "";
-  try {
-    m->Open();
-  } catch (const std::exception& e) {
-    std::snprintf(why, sizeof why, "%s", e.what());
-  }
-  if (why[0]) ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
-  return 0;
-}
-void PushMarkerFrame(lua_State* L, const Eigen::Matrix4d& T) {
-  Frame f;
-  f.p = T.block<3, 1>(0, 3);
-  f.q = Eigen::Quaterniond(Eigen::Matrix3d(T.block<3, 3>(0, 0))).normalized();
-  PushFrame(L, f);
-}
-// {seq, time, described, unknown, markers = {{dictionary, id, valid, error, camera, world}, ...}}
-void PushMarkersState(lua_State* L, const bridge::MarkersClient::State& s) {
-  lua_createtable(L, 0, 5);
-  lua_pushinteger(L, static_cast<lua_Integer>(s.seq));
-  lua_setfield(L, -2, "seq");
-  lua_pushnumber(L, s.time);
-  lua_setfield(L, -2, "time");
-  lua_pushinteger(L, s.described);
-  lua_setfield(L, -2, "described");
-  lua_pushinteger(L, s.unknown);
-  lua_setfield(L, -2, "unknown");
-  lua_createtable(L, static_cast<int>(s.markers.size()), 0);
-  for (std::size_t i = 0; i < s.markers.size(); ++i) {
-    const bridge::MarkersClient::Marker& m = s.markers[i];
-    lua_createtable(L, 0, 6);
-    const bridge::MarkerDictionary* d = bridge::FindMarkerDictionary(m.dictionary);
-    lua_pushstring(L, d ? d->name : "?");
-    lua_setfield(L, -2, "dictionary");
-    lua_pushinteger(L, m.id);
-    lua_setfield(L, -2, "id");
-    lua_pushboolean(L, m.valid);
-    lua_setfield(L, -2, "valid");
-    lua_pushnumber(L, m.reprojection_error_px);
-    lua_setfield(L, -2, "error");
-    PushMarkerFrame(L, m.T_camera_marker);
-    lua_setfield(L, -2, "camera");
-    if (m.world_valid) {
-      PushMarkerFrame(L, m.T_world_marker);
-      lua_setfield(L, -2, "world");
-    }
-    lua_rawseti(L, -2, static_cast<lua_Integer>(i + 1));
-  }
-  lua_setfield(L, -2, "markers");
-}
-// (due, frame_time): the period that delivers the wanted frame; nothing when not holding
-int MarkersDue(lua_State* L) {
-  MarkerChannel* m = MarkersArg(L);
-  const double t0 = Number(L, 2, "markers:next");
-  char why[512] = "";
-  try {
-    m->Renew();  // the frame wanted is exposed from now on: subscribed by then, however long the script was away
-  } catch (const std::exception& e) {
-    std::snprintf(why, sizeof why, "%s", e.what());
-  }
-  if (why[0]) ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
-  const CameraTiming timing = m->timing();
-  if (!P(L)->markers_hold || !(timing.fps > 0)) return 0;
-  double frame_time = 0;
-  const double due = MarkersFrameDue(timing, P(L)->period_s, t0, &frame_time);
-  lua_pushnumber(L, due);
-  lua_pushnumber(L, frame_time);
-  return 2;
-}
-// the markers state of the frame stamped frame_time: waits (wall time) while the period is held
-int MarkersTake(lua_State* L) {
-  MarkerChannel* m = MarkersArg(L);
-  const double frame_time = Number(L, 2, "markers:next");
-  const double wait_s = P(L)->markers_wait_s;
-  auto s = std::make_unique<bridge::MarkersClient::State>();
-  char why[512] = "";
-  try {
-    if (!m->WaitFor(frame_time, wait_s, s.get())) {
-      std::snprintf(why, sizeof why,
-                    "no markers state of the camera frame stamped %.6g s within %g s of waiting (is the vision "
-                    "program running, and its camera served?)",
-                    frame_time, wait_s);
-    } else if (std::fabs(s->time - frame_time) > 1e-6) {
-      std::snprintf(why, sizeof why,
-                    "waited for the camera frame stamped %.6g s and got the one stamped %.6g s: the camera's schedule "
-                    "is not the one its describe reply gives (fps, exposure_s, latency_s)",
-                    frame_time, s->time);
-    }
-  } catch (const std::exception& e) {
-    std::snprintf(why, sizeof why, "%s", e.what());
-  }
-  if (why[0]) {
-    s.reset();
-    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
-  }
-  PushMarkersState(L, *s);
-  return 1;
-}
-// calls read(state), a markers channel's read that does not wait, and pushes the state it
-// got (1 result) or nothing (0). An exception is a script error, raised once every C++
-// object here is gone (lua_error does not unwind C++ frames).
-template <typename Read>
-int PushMarkersRead(lua_State* L, Read read) {
-  auto s = std::make_unique<bridge::MarkersClient::State>();
-  char why[512] = "";
-  bool got = false;
-  try {
-    got = read(s.get());
-  } catch (const std::exception& e) {
-    std::snprintf(why, sizeof why, "%s", e.what());
-  }
-  if (why[0]) {
-    s.reset();
-    ScriptError(L, "markers '%s': %s", lua_tostring(L, 1), why);
-  }
-  if (!got) return 0;
-  PushMarkersState(L, *s);
-  return 1;
-}
-int MarkersPoll(lua_State* L) {
-  MarkerChannel* m = MarkersArg(L);
-  const double t0 = Number(L, 2, "markers:next");
-  return PushMarkersRead(L, [m, t0](bridge::MarkersClient::State* s) { return m->Poll(t0, s); });
-}
-int MarkersLatest(lua_State* L) {
-  MarkerChannel* m = MarkersArg(L);
-  return PushMarkersRead(L, [m](bridge::MarkersClient::State* s) { return m->Latest(s); });
-}
-
-// ---- blackboard
-int SharedIndex(lua_State* L) {
-  const char* key = luaL_checkstring(L, 2);
-  Blackboard* b = P(L)->board;
-  const auto it = b->values.find(key);
-  if (it == b->values.end()) {
-    lua_pushnil(L);
-    return 1;
-  }
-  const SharedValue& v = it->second;
-  switch (v.type) {
-    case SharedValue::kNumber:
-      lua_pushnumber(L, v.number);
-      break;
-    case SharedValue::kString:
-      lua_pushlstring(L, v.text.data(), v.text.size());
-      break;
-    case SharedValue::kBoolean:
-      lua_pushboolean(L, v.number != 0);
-      break;
-    case SharedValue::kVec3:
-      PushVec3(L, v.frame.p);
-      break;
-    case SharedValue::kQuat:
-      PushQuat(L, v.frame.q);
-      break;
-    case SharedValue::kFrame:
-      PushFrame(L, v.frame);
-      break;
-  }
-  return 1;
-}
-int SharedNewIndex(lua_State* L) {
-  const char* key = luaL_checkstring(L, 2);
-  Blackboard* b = P(L)->board;
-  if (lua_isnil(L, 3)) {
-    b->values.erase(key);
-    return 0;
-  }
-  SharedValue v;
-  if (lua_type(L, 3) == LUA_TNUMBER) {
-    v.type = SharedValue::kNumber;
-    v.number = lua_tonumber(L, 3);
-  } else if (lua_type(L, 3) == LUA_TSTRING) {
-    v.type = SharedValue::kString;
-    v.text = lua_tostring(L, 3);
-  } else if (lua_type(L, 3) == LUA_TBOOLEAN) {
-    v.type = SharedValue::kBoolean;
-    v.number = lua_toboolean(L, 3);
-  } else if (const Eigen::Vector3d* p = ToVec3(L, 3)) {
-    v.type = SharedValue::kVec3;
-    v.frame.p = *p;
-  } else if (const Eigen::Quaterniond* q = ToQuat(L, 3)) {
-    v.type = SharedValue::kQuat;
-    v.frame.q = *q;
-  } else if (const Frame* f = ToFrame(L, 3)) {
-    v.type = SharedValue::kFrame;
-    v.frame = *f;
-  } else {
-    const char* type = luaL_typename(L, 3);
-    v = SharedValue();
-    ScriptError(L, "shared.%s: a %s cannot be shared (numbers, strings, booleans, vec3, quat, frame)", key, type);
-  }
-  b->values[key] = std::move(v);
-  return 0;
-}
-int Signal(lua_State* L) {
-  const char* name = luaL_checkstring(L, 1);
-  ++P(L)->board->signals[name];
-  return 0;
-}
-int TakeSignal(lua_State* L) {  // true (and one signal taken) when `name` was raised
-  const char* name = luaL_checkstring(L, 1);
-  auto& signals = P(L)->board->signals;
-  const auto it = signals.find(name);
-  const bool raised = it != signals.end() && it->second > 0;
-  if (raised) --it->second;
-  lua_pushboolean(L, raised);
   return 1;
 }
 
@@ -1252,43 +715,19 @@ void OpenApi(Program* p) {
   lua_State* L = p->L;
   lua_pushlightuserdata(L, p);
   lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
-  static const luaL_Reg functions[] = {{"_movej", MoveJ},
-                                       {"_movel", MoveL},
-                                       {"_movel_rel", MoveLRel},
-                                       {"_movec", MoveC},
-                                       {"_selfmove", SelfMove},
-                                       {"_moving", Moving},
-                                       {"_outcome", Outcome},
-                                       {"_now", Now},
-                                       {"_periods", Periods},
-                                       {"_signal", Signal},
-                                       {"_take_signal", TakeSignal},
-                                       {"now", Now},
-                                       {"joints", Joints},
-                                       {"pose", Pose},
-                                       {"planned", Planned},
-                                       {"planned_joints", PlannedJoints},
-                                       {"frame_def", FrameDef},
-                                       {"frame_of", FrameOf},
-                                       {"fk", Fk},
-                                       {"ik", Ik},
-                                       {"reachable", Reachable},
-                                       {"force", WrenchPart<true>},
-                                       {"torque", WrenchPart<false>},
-                                       {"speed", SetSpeed},
-                                       {"accel", SetAccel},
-                                       {"jspeed", SetJointSpeed},
-                                       {"limits", SetRateLimits},
-                                       {"tool", SetTool},
-                                       {"base", SetBase},
-                                       {"blend", SetBlend},
-                                       {"device", Device},
-                                       {"_markers_open", MarkersOpen},
-                                       {"_markers_due", MarkersDue},
-                                       {"_markers_take", MarkersTake},
-                                       {"_markers_poll", MarkersPoll},
-                                       {"_markers_latest", MarkersLatest},
-                                       {nullptr, nullptr}};
+  static const luaL_Reg functions[] = {{"_movej", MoveJ},           {"_movel", MoveL},
+                                       {"_movel_rel", MoveLRel},    {"_movec", MoveC},
+                                       {"_selfmove", SelfMove},     {"_moving", Moving},
+                                       {"_outcome", Outcome},       {"_now", Now},
+                                       {"_periods", Periods},       {"now", Now},
+                                       {"joints", Joints},          {"pose", Pose},
+                                       {"planned", Planned},        {"planned_joints", PlannedJoints},
+                                       {"frame_def", FrameDef},     {"frame_of", FrameOf},
+                                       {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
+                                       {"speed", SetSpeed},         {"accel", SetAccel},
+                                       {"jspeed", SetJointSpeed},   {"limits", SetRateLimits},
+                                       {"tool", SetTool},           {"base", SetBase},
+                                       {"blend", SetBlend},         {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, functions, 0);
   lua_pop(L, 1);
@@ -1321,15 +760,8 @@ void OpenApi(Program* p) {
     lua_setfield(L, -2, name.c_str());
   }
   lua_setglobal(L, "PARAMS");
-  // shared: a proxy of the blackboard
-  lua_newtable(L);
-  lua_newtable(L);
-  lua_pushcfunction(L, SharedIndex);
-  lua_setfield(L, -2, "__index");
-  lua_pushcfunction(L, SharedNewIndex);
-  lua_setfield(L, -2, "__newindex");
-  lua_setmetatable(L, -2);
-  lua_setglobal(L, "shared");
+  OpenIo(L);
+  OpenQueries(L);
   OpenPayload(L);
   if (luaL_loadbufferx(L, kPrelude, std::strlen(kPrelude), "=vlab", "t") != LUA_OK) {
     throw std::logic_error(std::string("task prelude: ") + lua_tostring(L, -1));

@@ -1,5 +1,6 @@
 #include "task/task_lua.h"
 
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
@@ -33,6 +34,13 @@ void ScriptError(lua_State* L, const char* format, ...) {
   lua_error(L);
   for (;;) {
   }  // lua_error does not return
+}
+
+double NumberArg(lua_State* L, int i, const char* what) {
+  if (!lua_isnumber(L, i)) ScriptError(L, "%s: argument %d must be a number, got %s", what, i, luaL_typename(L, i));
+  const double v = lua_tonumber(L, i);
+  if (!std::isfinite(v)) ScriptError(L, "%s: argument %d is not finite", what, i);
+  return v;
 }
 
 }  // namespace vlab::task

@@ -16,4 +16,9 @@ namespace vlab::task {
 /// Writes into `out` (at least 256 bytes).
 void ScriptWhere(lua_State* L, char* out, int size);
 
+/// Argument `i` of a Lua call as a finite number; otherwise a ScriptError
+/// naming `what` ("speed: argument 1 must be a number, got string", "... is
+/// not finite").
+double NumberArg(lua_State* L, int i, const char* what);
+
 }  // namespace vlab::task

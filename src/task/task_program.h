@@ -93,6 +93,14 @@ struct Program {
 /// blocking moves) in the program's state.
 void OpenApi(Program* program);
 
+/// Registers device(), the markers functions the prelude wraps, signal and
+/// the `shared` blackboard proxy (task_api_io.cc); before the prelude runs.
+void OpenIo(lua_State* L);
+
+/// Registers fk, ik and reachable (task_api_query.cc): kinematics queries
+/// that never move the robot.
+void OpenQueries(lua_State* L);
+
 /// Registers payload() (task_payload.cc): the robot arm's load at its flange.
 void OpenPayload(lua_State* L);
 
