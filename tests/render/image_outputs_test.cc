@@ -11,6 +11,7 @@
 #include "core/core_mujoco.h"
 #include "lab/outputs/lab_images.h"
 #include "lab/outputs/lab_output.h"
+#include "render/video.h"
 #include "test_util.h"
 
 namespace vlab::lab {
@@ -85,6 +86,22 @@ TEST(ImageOutputsTest, AFrameThatCannotBeWrittenIsReportedByFileAndEndsTheOutput
   images->Finish();
   EXPECT_EQ(Lines(ReadFile(camera + "/frames.csv")), (std::vector<std::string>{"frame,time", "0,0"}));
   EXPECT_EQ(images->frame_times(0).size(), 1u);
+}
+
+// this program does not link the MP4 writer (vlab_render_video): a video is refused by name,
+// and nothing is written
+TEST(ImageOutputsTest, AProgramWithoutTheVideoWriterRefusesAVideoAndWritesNothing) {
+  TempDir dir;
+  const std::string path = dir / "clip.mp4";
+  try {
+    render::VideoFile::Create(path, 30, 64, 48);
+    FAIL() << "a video was opened without a writer";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "video '" + path +
+                                         "': this program has no video writer (it is built without "
+                                         "vlab_render_video)");
+  }
+  EXPECT_TRUE(Entries(dir.path()).empty());
 }
 
 }  // namespace
