@@ -4,7 +4,7 @@
 # the packages only the tests need (VLAB_TEST_APT_PACKAGES); ./run.sh does not.
 
 VLAB_APT_PACKAGES=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config ninja-build
   libmujoco-dev libqhull-dev libosmesa6-dev
   libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libboost-dev
   python3 clang libclang-rt-14-dev lld
@@ -66,13 +66,20 @@ vlab_install_packages() {
   rm -f "$log"
 }
 
+# vlab_generator DIR: "-G Ninja" for a build folder not configured yet when ninja is there (one
+# scheduler over the whole tree keeps both cores busy, where make's recursion waits at each
+# target's boundary), else nothing (a configured folder keeps the generator it was made with)
+vlab_generator() {
+  if [ ! -f "$1/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; then echo "-G Ninja"; fi
+}
+
 # vlab_build [CMAKE_OPTION...]: configures build/ on its first build, and again whenever
 # options are given (./test.sh gives -DVLAB_WERROR=ON), then builds everything
 vlab_build() {
   local jobs log
   jobs="$(nproc 2>/dev/null || echo 2)"
   if [ ! -f build/CMakeCache.txt ] || [ $# -gt 0 ]; then
-    cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
+    cmake -S . -B build $(vlab_generator build) -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
   fi
   log="build/build.log"
   echo "vlab: building (log: $log)"
