@@ -4,20 +4,12 @@
 # UndefinedBehaviorSanitizer into build-asan/, then `ctest -L unit` there. Any sanitizer
 # report fails its test. Run from anywhere; ./test.sh runs it when VLAB_SANITIZE=1.
 #   tools/sanitize.sh [ctest options]      e.g. tools/sanitize.sh -R CsvLogTest
-#   tools/sanitize.sh --build-only         configure and build, run nothing
-#   tools/sanitize.sh --test-only [ctest options]   ctest -L unit in the built folder
-# (./test.sh builds the lane beside its own suite, at the idle scheduling class, then tests it.)
 # Environment: VLAB_ASAN_BUILD (default build-asan) is the build folder.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 build="${VLAB_ASAN_BUILD:-build-asan}"
 case "$build" in /*) ;; *) build="$PWD/$build" ;; esac
 jobs="$(nproc 2>/dev/null || echo 2)"
-step=all
-case "${1:-}" in
-  --build-only) step=build; shift ;;
-  --test-only) step=test; shift ;;
-esac
 
 # -O1 without debug information keeps the build short; the stacks still name functions.
 # (-O0 compiles about 40 % faster but its tests ran 316 s against 186 s, and CI as a whole
@@ -43,26 +35,20 @@ export ASAN_OPTIONS="detect_leaks=1"
 export LSAN_OPTIONS="suppressions=$build/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 
-lane_build() {
-  echo "vlab: sanitizer lane: configuring $build"
-  cmake -S . -B "$build" "${launcher[@]}" -DCMAKE_BUILD_TYPE=Sanitize \
-    "-DCMAKE_CXX_FLAGS_SANITIZE=-O1 $sanitize" \
-    "-DCMAKE_EXE_LINKER_FLAGS_SANITIZE=$sanitize" "-DCMAKE_SHARED_LINKER_FLAGS_SANITIZE=$sanitize" \
-    -DVLAB_WERROR=OFF >/dev/null
-  local log="$build/build.log"
-  echo "vlab: sanitizer lane: building the libraries and unit tests (log: $log)"
-  if ! cmake --build "$build" -j "$jobs" --target vlab_unit_tests >"$log" 2>&1; then
-    grep -E -B2 -A8 "error|Error" "$log" | head -80 >&2
-    echo "vlab: sanitizer lane: build failed, see $log" >&2
-    return 1
-  fi
-  echo "vlab: sanitizer lane: configured and built in ${SECONDS} s"
-}
+echo "vlab: sanitizer lane: configuring $build"
+cmake -S . -B "$build" "${launcher[@]}" -DCMAKE_BUILD_TYPE=Sanitize \
+  "-DCMAKE_CXX_FLAGS_SANITIZE=-O1 $sanitize" \
+  "-DCMAKE_EXE_LINKER_FLAGS_SANITIZE=$sanitize" "-DCMAKE_SHARED_LINKER_FLAGS_SANITIZE=$sanitize" \
+  -DVLAB_WERROR=OFF >/dev/null
 
-if [ "$step" != test ]; then
-  lane_build
+log="$build/build.log"
+echo "vlab: sanitizer lane: building the libraries and unit tests (log: $log)"
+if ! cmake --build "$build" -j "$jobs" --target vlab_unit_tests >"$log" 2>&1; then
+  grep -E -B2 -A8 "error|Error" "$log" | head -80 >&2
+  echo "vlab: sanitizer lane: build failed, see $log" >&2
+  exit 1
 fi
-[ "$step" = build ] && exit 0
+echo "vlab: sanitizer lane: configured and built in ${SECONDS} s"
 
 echo "vlab: sanitizer lane: ctest -L unit"
 cd "$build"
