@@ -45,7 +45,10 @@ std::unique_ptr<LabBridge> LabBridge::Create(const Scenario& scenario, const Bri
     throw InputError("--subscribers " + std::to_string(options.max_subscribers) + ": must be at least 1");
   }
   for (const auto& [name, port] : options.ports) {
-    const bool known = std::any_of(devices.begin(), devices.end(), [&](const Device* d) { return d->name() == name; });
+    // (a lambda captures a structured binding only from C++20: capture a reference to it)
+    const std::string& wanted = name;
+    const bool known =
+        std::any_of(devices.begin(), devices.end(), [&wanted](const Device* d) { return d->name() == wanted; });
     if (!known)
       throw InputError("--port " + name + "=" + std::to_string(port) + ": the scenario has no device '" + name + "'");
   }
