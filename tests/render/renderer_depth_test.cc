@@ -74,7 +74,8 @@ TEST_F(DepthTest, TiltedPlaneMatchesTheRayIntersection) {
       r->RenderSegmentation(d_, cam, &seg);
       ASSERT_EQ(depth.width, w);
       const Intrinsics k = CameraIntrinsics(m_, cam, w, h);
-      auto at = [&](int u, int v) { return seg.geom[static_cast<std::size_t>(v) * w + u]; };
+      const int width = w;  // (a lambda captures a structured binding only from C++20)
+      auto at = [&seg, width](int u, int v) { return seg.geom[static_cast<std::size_t>(v) * width + u]; };
       long checked = 0, sky = 0;
       double worst = 0;
       for (int v = 1; v < h - 1; ++v) {
