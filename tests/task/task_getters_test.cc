@@ -20,41 +20,6 @@ namespace {
 
 constexpr double kDegree = M_PI / 180.0;
 
-// an arm whose position servo lags: each period the joints go 5 % of the way to the command
-// (a first-order lag of 40 ms at 2 ms periods)
-class LaggingArm final : public Channel {
- public:
-  explicit LaggingArm(Eigen::VectorXd q) : q_(std::move(q)) {
-    state_names_.push_back("status");
-    for (const char* g : {"q", "qd", "tau"}) {
-      for (int i = 0; i < q_.size(); ++i) state_names_.push_back(std::string(g) + "[" + std::to_string(i) + "]");
-    }
-    command_names_.push_back("mode");
-    for (int i = 0; i < q_.size(); ++i) command_names_.push_back("value[" + std::to_string(i) + "]");
-  }
-  const std::string& name() const override { return name_; }
-  bridge::DeviceKind kind() const override { return bridge::DeviceKind::kArm; }
-  const std::vector<std::string>& state_names() const override { return state_names_; }
-  const std::vector<std::string>& command_names() const override { return command_names_; }
-  std::vector<std::string> joint_names() const override { return {"S1", "S2", "S3", "E1", "E2", "W1", "W2"}; }
-  bool Read(std::vector<double>* v) override {
-    v->assign(1 + 3 * q_.size(), 0.0);
-    for (int i = 0; i < q_.size(); ++i) (*v)[1 + i] = q_[i];
-    return true;
-  }
-  bool Write(const std::vector<double>& v, std::string*) override {
-    commands.emplace_back(Eigen::Map<const Eigen::VectorXd>(v.data() + 1, q_.size()));
-    q_ += 0.05 * (commands.back() - q_);
-    return true;
-  }
-  std::vector<Eigen::VectorXd> commands;  ///< every period's command, rad
-
- private:
-  std::string name_ = "pa10";
-  Eigen::VectorXd q_;
-  std::vector<std::string> state_names_, command_names_;
-};
-
 // the number after "NAME=" in a printed line
 double Field(const std::string& line, const std::string& name) {
   const auto at = line.find(name + "=");
@@ -114,7 +79,9 @@ TEST_F(RuntimeTest, EachSettingsGetterGivesTheDefaultThenWhatWasSet) {
 TEST_F(RuntimeTest, PlannedIsTheTargetWhilePoseLagsBehindTheServo) {
   Eigen::VectorXd ready(7);
   ready << 0, 0.523599, 0, 1.047198, 0, 1.570796, 0;
-  LaggingArm lagging(ready);
+  // a servo that lags: each period the joints go 5 % of the way to the command (a first-order
+  // lag of 40 ms at 2 ms periods)
+  FakeArm lagging("pa10", ready, 0.05);
   devices_.channels["pa10"] = &lagging;
   auto r = Make({{"pa10", kDiff + "print(string.format('start pos=%.3e rot=%.3e', dpos(planned(), pose()), "
                                   "drot(planned(), pose())))\n"
@@ -151,7 +118,7 @@ TEST_F(RuntimeTest, PlannedIsTheTargetWhilePoseLagsBehindTheServo) {
   // (printed in period N, before its command: the one of period N - 1)
   const int period = std::stoi(printed_[2].substr(printed_[2].find('@') + 1));
   ASSERT_GT(period, 0);
-  const Eigen::VectorXd& command = lagging.commands.at(period - 1);
+  const Eigen::VectorXd& command = lagging.commands().at(period - 1);
   for (int i = 0; i < 7; ++i) EXPECT_NEAR(q[i], command[i] / kDegree, 1e-12) << i;
   EXPECT_GT(std::abs(Field(printed_[3], "E1") - q[3]), 1e-3) << printed_[3];
   EXPECT_LT(Field(printed_[4], "pos"), 1e-12) << printed_[4];

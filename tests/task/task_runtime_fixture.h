@@ -23,7 +23,10 @@ constexpr double kPeriod = 0.002;
 
 class FakeArm final : public Channel {
  public:
-  FakeArm(std::string name, Eigen::VectorXd q) : name_(std::move(name)), q_(std::move(q)) {
+  /// `follow`: the fraction of the way to a position command the arm moves in a period (1: all of
+  /// it at once; below 1: a first-order lag, as a servo behind its reference).
+  FakeArm(std::string name, Eigen::VectorXd q, double follow = 1.0)
+      : name_(std::move(name)), q_(std::move(q)), follow_(follow) {
     const int n = static_cast<int>(q_.size());
     state_names_.push_back("status");
     for (const char* g : {"q", "qd", "tau"}) {
@@ -43,16 +46,27 @@ class FakeArm final : public Channel {
     return true;
   }
   bool Write(const std::vector<double>& v, std::string*) override {
-    if (v[0] == 1) q_ = Eigen::Map<const Eigen::VectorXd>(v.data() + 1, q_.size());
+    if (v[0] == 1) {
+      commands_.emplace_back(Eigen::Map<const Eigen::VectorXd>(v.data() + 1, q_.size()));
+      if (follow_ == 1.0) {
+        q_ = commands_.back();
+      } else {
+        q_ += follow_ * (commands_.back() - q_);
+      }
+    }
     history_.push_back(q_);
     return true;
   }
   const Eigen::VectorXd& q() const { return q_; }
   const std::vector<Eigen::VectorXd>& history() const { return history_; }
+  /// Every position command, rad, in the order written.
+  const std::vector<Eigen::VectorXd>& commands() const { return commands_; }
 
  private:
   std::string name_;
   Eigen::VectorXd q_;
+  double follow_ = 1.0;
+  std::vector<Eigen::VectorXd> commands_;
   std::vector<std::string> state_names_, command_names_;
   std::vector<Eigen::VectorXd> history_;
 };
