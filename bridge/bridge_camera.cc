@@ -12,8 +12,6 @@ constexpr double kMaxSeq = 9007199254740992.0;  // 2^53
 // a raw frame of the largest image; any frame must be smaller than this
 constexpr double kMaxFrameBytes = 3.0 * kMaxImageSide * kMaxImageSide;
 
-bool IsWhole(double v, double lo, double hi) { return v >= lo && v <= hi && v == std::floor(v); }
-
 }  // namespace
 
 const char* EncodingName(CameraEncoding encoding) { return encoding == CameraEncoding::kJpeg ? "jpeg" : "raw"; }

@@ -21,14 +21,6 @@ struct CameraClient::Impl {
 
 namespace {
 
-constexpr std::size_t kBufferBytes = 65536;  // any UDP datagram fits
-
-std::string Number(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
-
 double Seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 std::chrono::steady_clock::time_point After(std::chrono::steady_clock::time_point t, double s) {
@@ -51,7 +43,7 @@ CameraClient CameraClient::Connect(const std::string& address, int port, const C
 
 CameraClient::CameraClient(const std::string& address, int port, const CameraClientOptions& options)
     : options_(options), device_(UdpSocket::Resolve(address, port)), impl_(new Impl(options.assembler)),
-      buffer_(kBufferBytes), start_(Clock::now()) {
+      buffer_(kDatagramBufferBytes), start_(Clock::now()) {
   const bool any_v4 = options.bind_address == "0.0.0.0";
   socket_ = UdpSocket::Bind(any_v4 && device_.address().is_v6() ? "::" : options.bind_address, 0);
   receive_buffer_bytes_ = SetSocketBuffer(socket_->fd(), SO_RCVBUF, options.receive_buffer_bytes);
@@ -161,7 +153,7 @@ bool CameraClient::NextFrame(Clock::time_point deadline, bool queued_only, Camer
     assembler.Add(buffer_.data(), static_cast<std::size_t>(n), Seconds(now - start_), &error);
     if (error == ChunkError::kBadVersion) {
       throw VersionMismatch(Label() + ": the device sent a chunk of protocol version " +
-                            Number(GetDouble(buffer_.data() + 8)) + ", this client speaks version " +
+                            ErrorNumber(GetDouble(buffer_.data() + 8)) + ", this client speaks version " +
                             std::to_string(kProtocolVersion));
     }
   }
@@ -190,7 +182,7 @@ bool CameraClient::Decode(Frame* frame) {
 
 void CameraClient::ThrowTimeout(double timeout_s) const {
   const AssemblerCounters& c = counters();
-  throw TimeoutError(Label() + ": no whole frame within " + Number(timeout_s) + " s (" + std::to_string(c.chunks) +
+  throw TimeoutError(Label() + ": no whole frame within " + ErrorSeconds(timeout_s) + " (" + std::to_string(c.chunks) +
                      " chunks so far, " + std::to_string(c.frames_dropped) + " frames dropped incomplete, " +
                      std::to_string(c.refused) + " chunks refused)");
 }

@@ -17,16 +17,7 @@ namespace vlab::bridge {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr std::size_t kBufferBytes = 65536;     // any UDP datagram fits
 constexpr double kMaxSeq = 9007199254740992.0;  // 2^53: the largest whole seq a double holds exactly
-
-std::string Number(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
-
-std::string Seconds(double s) { return Number(s) + " s"; }
 
 Clock::time_point After(Clock::time_point t, double s) {
   return t + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s > 0 ? s : 0));
@@ -56,7 +47,7 @@ DeviceClient& DeviceClient::operator=(DeviceClient&&) noexcept = default;
 
 DeviceClient::DeviceClient(DeviceKind kind, const std::string& address, int port, double timeout_s,
                            const std::string& bind_address)
-    : kind_(kind), device_(UdpSocket::Resolve(address, port)), start_(Clock::now()), buffer_(kBufferBytes) {
+    : kind_(kind), device_(UdpSocket::Resolve(address, port)), start_(Clock::now()), buffer_(kDatagramBufferBytes) {
   payload_.reserve(kMaxPacketValues);
   // an IPv6 device needs an IPv6 socket
   const bool any_v4 = bind_address == "0.0.0.0";
@@ -155,7 +146,7 @@ bool DeviceClient::AcceptState(long size, bool parse) {
   DecodeError e = DecodePacket(buffer_.data(), static_cast<std::size_t>(size), &header, &payload_);
   if (e == DecodeError::kBadVersion) {
     throw VersionMismatch(Label() + ": the device sent a packet of protocol version " +
-                          Number(GetDouble(buffer_.data() + 8)) + ", this client speaks version " +
+                          ErrorNumber(GetDouble(buffer_.data() + 8)) + ", this client speaks version " +
                           std::to_string(kProtocolVersion));
   }
   if (e == DecodeError::kNone && header.kind != static_cast<int>(kind_)) e = DecodeError::kBadKind;
@@ -174,7 +165,8 @@ const Header& DeviceClient::ReceiveState(double timeout_s, bool latest) {
   const Clock::time_point deadline = After(Clock::now(), timeout_s);
   for (;;) {
     long size = 0;
-    if (!ReceiveFromDevice(deadline, &size)) throw TimeoutError(Label() + ": no state within " + Seconds(timeout_s));
+    if (!ReceiveFromDevice(deadline, &size))
+      throw TimeoutError(Label() + ": no state within " + ErrorSeconds(timeout_s));
     if (AcceptState(size, true)) break;
   }
   // drain what is already queued: the newest state wins

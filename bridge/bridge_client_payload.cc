@@ -15,12 +15,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string Seconds(double s) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g s", s);
-  return text;
-}
-
 }  // namespace
 
 SessionResult DeviceClient::AwaitSessionResult(SessionResult yes, SessionResult no, double timeout_s,
@@ -32,7 +26,7 @@ SessionResult DeviceClient::AwaitSessionResult(SessionResult yes, SessionResult 
   for (;;) {
     long size = 0;
     if (!ReceiveFromDevice(deadline, &size)) {
-      throw TimeoutError(Label() + ": no answer to the " + what + " within " + Seconds(timeout_s));
+      throw TimeoutError(Label() + ": no answer to the " + what + " within " + ErrorSeconds(timeout_s));
     }
     double cookie = 0;
     SessionResult result = SessionResult::kChallenge;

@@ -2,18 +2,11 @@
 
 namespace vlab::bridge {
 
-namespace {
-
-// any UDP datagram fits; a longer one than a valid packet is refused as too long
-constexpr std::size_t kBufferBytes = 65536;
-
-}  // namespace
-
 std::unique_ptr<DeviceServer> DeviceServer::Bind(const DeviceServerConfig& config) {
   std::unique_ptr<DeviceServer> s(new DeviceServer());
   s->config_ = config;
   s->socket_ = UdpSocket::Bind(config.bind_address, config.port);  // throws NetworkError naming the address
-  s->buffer_.resize(kBufferBytes);
+  s->buffer_.resize(kDatagramBufferBytes);  // a longer datagram than a valid packet is refused as too long
   s->latest_.reserve(kMaxPacketValues * sizeof(double));
   s->payload_.reserve(kMaxPacketValues);
   return s;

@@ -8,6 +8,7 @@
 // The device side never throws in its real-time path: it counts faults.
 #pragma once
 
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -37,5 +38,13 @@ class RefusedError : public BridgeError {
  public:
   using BridgeError::BridgeError;
 };
+
+/// A number as the errors' messages print it (%g: six significant digits), and "N s".
+inline std::string ErrorNumber(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+inline std::string ErrorSeconds(double s) { return ErrorNumber(s) + " s"; }
 
 }  // namespace vlab::bridge

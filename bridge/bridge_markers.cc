@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "bridge/bridge_protocol.h"
+
 namespace vlab::bridge {
 
 namespace {
@@ -35,7 +37,6 @@ const std::vector<MarkerDictionary> kDictionaries = {
     {20, "APRILTAG_36h11", 6, 587},
 };
 
-bool IsWhole(double v, double lo, double hi) { return v >= lo && v <= hi && v == std::floor(v); }
 bool IsFlag(double v) { return v == 0.0 || v == 1.0; }
 
 std::string Upper(std::string s) {

@@ -21,9 +21,9 @@ double GetDouble(const unsigned char* in) {
   return v;
 }
 
-namespace {
-
 bool IsWhole(double v, double lo, double hi) { return v >= lo && v <= hi && v == std::floor(v); }
+
+namespace {
 
 // payload positions of the wrench and sim fields (bridge_layouts.h), compile-time constants
 constexpr int kWrenchFx = StateIndex(DeviceKind::kWrench, "Fx");

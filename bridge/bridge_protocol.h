@@ -125,6 +125,9 @@ enum class DecodeError {
 };
 const char* DecodeErrorName(DecodeError error);
 
+/// True when `v` is a whole number within [lo, hi] (a field of a decoded datagram).
+bool IsWhole(double v, double lo, double hi);
+
 /// One float64 to / from 8 little-endian bytes, whatever the host's byte order.
 void PutDouble(double value, unsigned char* out);
 double GetDouble(const unsigned char* in);

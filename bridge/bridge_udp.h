@@ -66,6 +66,9 @@ class Endpoint {
   Storage storage_;
 };
 
+/// Bytes of a receive buffer that any UDP datagram fits (IPv4 and IPv6 payloads are at most 65,535 bytes).
+inline constexpr std::size_t kDatagramBufferBytes = 65536;
+
 /// Most file descriptors WaitReadable watches (the rest are ignored).
 inline constexpr int kMaxWaitFds = 64;
 

@@ -14,8 +14,7 @@
 #include <mutex>
 #include <stdexcept>
 
-#define GL_GLEXT_PROTOTYPES  // (glBindFramebuffer: GL 3.0, exported by libOSMesa)
-#include <GL/gl.h>
+#include <GL/gl.h>  // with GL_GLEXT_PROTOTYPES (render/CMakeLists.txt): glBindFramebuffer, GL 3.0, exported by libOSMesa
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 

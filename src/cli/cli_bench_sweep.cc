@@ -13,6 +13,7 @@
 
 #include "cli/cli_commands.h"
 #include "cli/cli_cpus.h"
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "core/core_realtime.h"
 #include "lab/scenario/lab_scenario.h"
@@ -25,8 +26,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kDefaultSweep = "scenes/sweeps/pa10_gains_bench.yaml";
-
-double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 }  // namespace
 
@@ -51,9 +50,9 @@ int BenchSweep(const BenchArgs& args) {
       for (int r = 0; r < args.repeat; ++r) {
         for (int jobs : {1, 2}) {
           const std::string out = work + "/j" + std::to_string(jobs) + "_" + std::to_string(r);
-          const double t0 = Now();
+          const double t0 = WallNow();
           failures += RunSweepHere(sweep, out, jobs, true) != 0;
-          best[jobs] = std::min(best[jobs], Now() - t0);
+          best[jobs] = std::min(best[jobs], WallNow() - t0);
           fs::remove_all(out);
         }
       }

@@ -8,6 +8,7 @@
 
 #include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "lab/outputs/lab_log.h"
 #include "lab/run/lab_runner.h"
@@ -16,8 +17,6 @@
 namespace vlab::cli {
 
 namespace {
-
-double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 std::string Bound(const lab::CheckConfig& c) {
   std::string text;
@@ -28,10 +27,10 @@ std::string Bound(const lab::CheckConfig& c) {
 
 }  // namespace
 
-ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && ::isatty(2)), start_s_(Now()) {}
+ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && ::isatty(2)), start_s_(WallNow()) {}
 
 void ProgressBar::Update(double fraction) {
-  if (!enabled_ || Now() - start_s_ < 1.0) return;
+  if (!enabled_ || WallNow() - start_s_ < 1.0) return;
   constexpr int kWidth = 40;
   const int filled = static_cast<int>(fraction * kWidth);
   std::string bar(filled, '#');

@@ -18,6 +18,7 @@
 
 #include "bridge/bridge_signals.h"
 #include "cli/cli_commands.h"
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "lab/sweep/lab_sweep.h"
 #include "lab/sweep/lab_sweep_text.h"
@@ -36,8 +37,6 @@ struct SweepArgs {
   int jobs = 1;
   std::string vlab;  // program named in --list ("" = this binary)
 };
-
-double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 std::string SelfPath() {
   std::error_code ec;
@@ -145,7 +144,7 @@ int RunSweepHere(const lab::Sweep& sweep, const std::string& out, int jobs, bool
     while (!g_stop_requested && next < todo.size() && static_cast<int>(running.size()) < jobs) {
       const lab::SweepRun& run = sweep.runs[todo[next++]];
       running[Start(self, lab::RunArguments(sweep, run, out), out + "/logs/" + run.id + ".txt")] = {todo[next - 1],
-                                                                                                    Now()};
+                                                                                                    WallNow()};
     }
     if (g_stop_requested && !forwarded) {
       for (const auto& r : running) ::kill(r.first, g_stop_requested);
@@ -160,7 +159,7 @@ int RunSweepHere(const lab::Sweep& sweep, const std::string& out, int jobs, bool
     auto it = running.find(pid);
     if (it == running.end()) continue;
     const lab::SweepRun& run = sweep.runs[it->second.first];
-    const double wall = Now() - it->second.second;
+    const double wall = WallNow() - it->second.second;
     running.erase(it);
     ++done;
     busy_s += wall;

@@ -55,6 +55,9 @@ struct RealtimeConfig {
   int priority = 0;
 };
 
+/// Simulated times closer than this, s, are one instant (a period's boundary, a frame or log time).
+inline constexpr double kSameTime_s = 1e-9;
+
 /// Longest a clock waits without looking at its stop flag, s.
 inline constexpr double kStopCheck_s = 0.05;
 

@@ -6,14 +6,12 @@
 #pragma once
 
 #include "task/task_program.h"
+#include "task/task_units.h"
 #include "task/task_values.h"
 
 struct lua_State;
 
 namespace vlab::task {
-
-/// Degrees to radians: scripts speak degrees, the planner radians.
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 /// The program's robot; an error naming `what` when the program has none.
 Robot& NeedRobot(lua_State* L, const char* what);

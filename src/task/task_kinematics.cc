@@ -10,33 +10,19 @@
 #include <Eigen/LU>
 
 #include "control/trajectory.h"
+#include "task/task_units.h"
 
 namespace vlab::task {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-constexpr double kTol = 1e-9;         // m and rad: a solution's residual
-constexpr double kMeet_m = 1e-7;      // axes closer than this meet
-constexpr double kSame_rad = 1e-6;    // two solutions closer than this (each joint) are one
-constexpr double kSingular = 1e-6;    // a vector this close to a rotation axis (relative) leaves it free
-constexpr double kDamping = 1e-6;     // of the Newton steps
-constexpr double kMaxStep_rad = 0.3;  // per Newton step (norm)
-constexpr int kSeeds = 64;            // Newton seeds when the closed form does not apply
-
-std::string Fmt(double v, const char* format = "%.4g") {
-  char b[48];
-  std::snprintf(b, sizeof b, format, v);
-  return b;
-}
+constexpr double kTol = 1e-9;       // m and rad: a solution's residual
+constexpr double kMeet_m = 1e-7;    // axes closer than this meet
+constexpr double kSame_rad = 1e-6;  // two solutions closer than this (each joint) are one
+constexpr double kSingular = 1e-6;  // a vector this close to a rotation axis (relative) leaves it free
+constexpr int kSeeds = 64;          // Newton seeds when the closed form does not apply
 
 Eigen::Matrix3d Rot(const Eigen::Vector3d& w, double angle) { return Eigen::AngleAxisd(angle, w).toRotationMatrix(); }
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& r) {
-  Eigen::Matrix3d S;
-  S << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-  return S;
-}
 
 // the part of v perpendicular to the unit axis w
 Eigen::Vector3d Across(const Eigen::Vector3d& w, const Eigen::Vector3d& v) { return v - w * w.dot(v); }
@@ -86,8 +72,8 @@ std::vector<std::pair<double, double>> TurnTwice(const Eigen::Vector3d& w1, cons
 // "joint E1 = 150 deg is beyond its upper limit 137 deg"
 std::string Beyond(const std::string& name, double value, double lo, double hi) {
   const bool below = value < lo;
-  return "joint " + name + " = " + Fmt(value / kDeg) + " deg is beyond its " + (below ? "lower" : "upper") + " limit " +
-         Fmt((below ? lo : hi) / kDeg) + " deg";
+  return "joint " + name + " = " + FormatNumber(value / kDeg) + " deg is beyond its " + (below ? "lower" : "upper") +
+         " limit " + FormatNumber((below ? lo : hi) / kDeg) + " deg";
 }
 
 // the i-th point (from 1) of the Halton sequence of `base`, in [0, 1)
@@ -126,7 +112,7 @@ std::string Kinematics::ClosedFormMisfit() const {
     const double off = Across(g.w[first + 2], point - g.r[first + 2]).norm();
     if (off > kMeet_m) {
       return "the axis of " + names[first + 2] + " misses the point where those of " + names[first] + " and " +
-             names[first + 1] + " meet by " + Fmt(off, "%.3g") + " m";
+             names[first + 1] + " meet by " + FormatNumber(off, "%.3g") + " m";
     }
   }
   if (g.w[5].cross(g.w[6]).norm() < 1e-3) return "the axes of " + names[5] + " and " + names[6] + " are parallel";
@@ -165,7 +151,7 @@ Frame Kinematics::Fk(const Eigen::VectorXd& q) const {
   for (int i = 0; i < n; ++i) {
     const std::string& name = model_->joint_names()[i];
     if (!std::isfinite(q[i]))
-      throw std::invalid_argument("joint " + name + " is " + Fmt(q[i]) + ", not a finite angle");
+      throw std::invalid_argument("joint " + name + " is " + FormatNumber(q[i]) + ", not a finite angle");
     const double lo = model_->lower_limits()[i], hi = model_->upper_limits()[i];
     if (q[i] < lo - kTol || q[i] > hi + kTol) throw std::invalid_argument(Beyond(name, q[i], lo, hi));
   }
@@ -205,9 +191,9 @@ std::vector<Eigen::VectorXd> Kinematics::ClosedForm(const Frame& goal_W, double 
   if (std::abs(C) > rho * (1 + 1e-12)) {
     const double base = p.squaredNorm() + s.squaredNorm() - 2 * we.dot(s) * we.dot(p);
     const double far = std::sqrt(base + 2 * rho), near = std::sqrt(std::max(0.0, base - 2 * rho));
-    out->reach = "the wrist centre would be " + Fmt(u.norm(), "%.3f") + " m from the shoulder, " +
-                 (C < 0 ? "the arm reaches " + Fmt(far, "%.3f") + " m"
-                        : "the arm folds to no closer than " + Fmt(near, "%.3f") + " m");
+    out->reach = "the wrist centre would be " + FormatNumber(u.norm(), "%.3f") + " m from the shoulder, " +
+                 (C < 0 ? "the arm reaches " + FormatNumber(far, "%.3f") + " m"
+                        : "the arm folds to no closer than " + FormatNumber(near, "%.3f") + " m");
     return {};
   }
   const double phi = std::atan2(B, A), delta = std::acos(std::clamp(C / rho, -1.0, 1.0));
@@ -233,7 +219,7 @@ std::vector<Eigen::VectorXd> Kinematics::ClosedForm(const Frame& goal_W, double 
     }
   }
   if (candidates.empty() && shoulder_none) {
-    out->other = "with " + model_->joint_names()[2] + " held at " + Fmt(held / kDeg) +
+    out->other = "with " + model_->joint_names()[2] + " held at " + FormatNumber(held / kDeg) +
                  " deg the shoulder cannot turn the wrist centre there (another " + model_->joint_names()[2] + " may)";
   }
   if (!candidates.empty() && (shoulder_free || wrist_free)) out->singular = "singular";  // named once refined
@@ -270,9 +256,9 @@ bool Kinematics::Refine(const Frame& goal_W, int held, int iterations, Eigen::Ve
     J.topRows(3) -= Skew(x.p - model_->TipPose().p_W) * J.bottomRows(3);  // the tool point
     if (held >= 0) J.col(held).setZero();
     const Eigen::Matrix<double, 6, 6> JJt =
-        J * J.transpose() + kDamping * kDamping * Eigen::Matrix<double, 6, 6>::Identity();
+        J * J.transpose() + kIkDamping * kIkDamping * Eigen::Matrix<double, 6, 6>::Identity();
     Eigen::VectorXd dq = J.transpose() * JJt.partialPivLu().solve(e);
-    if (dq.norm() > kMaxStep_rad) dq *= kMaxStep_rad / dq.norm();
+    if (dq.norm() > kIkMaxStep_rad) dq *= kIkMaxStep_rad / dq.norm();
     *q += dq;
   }
 }

@@ -7,32 +7,18 @@
 
 #include "control/time_scaling.h"
 #include "control/trajectory.h"
+#include "task/task_units.h"
 
 namespace vlab::task {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
 constexpr double kTolPos_m = 1e-9;
 constexpr double kTolRot_rad = 1e-9;
 constexpr int kMaxIterations = 200;
-constexpr double kDamping = 1e-6;
-constexpr double kMaxStep_rad = 0.3;  // per Newton step (norm), keeps far targets on the near branch
-constexpr int kStretchRounds = 8;     // plans tried with a longer timing before giving up
+constexpr int kStretchRounds = 8;  // plans tried with a longer timing before giving up
 
-std::string Fmt(double v, const char* format = "%.4g") {
-  char b[32];
-  std::snprintf(b, sizeof b, format, v);
-  return b;
-}
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& r) {
-  Eigen::Matrix3d S;
-  S << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-  return S;
-}
-
-std::string Percent(int i, int n) { return "at " + Fmt(100.0 * (i + 1) / n, "%.0f") + "% of the path"; }
+std::string Percent(int i, int n) { return "at " + FormatNumber(100.0 * (i + 1) / n, "%.0f") + "% of the path"; }
 
 // a speed profile over a path of length L that starts at speed v0 (m/s),
 // ramps to the peak vp at a, cruises, and stops at a (or, when it cannot stop
@@ -143,7 +129,8 @@ Plan MotionPlanner::Within(const Eigen::VectorXd& q_before, const Eigen::VectorX
     const std::string name = model_->joint_names()[e.joint];
     if (rates_.refuse) throw std::invalid_argument(ExcessMessage(rates, rates_, e, name));
     if (round == kStretchRounds) {
-      throw std::invalid_argument("slowing the move down by " + Fmt(k, "%.3g") + " times does not keep joint " + name +
+      throw std::invalid_argument("slowing the move down by " + FormatNumber(k, "%.3g") +
+                                  " times does not keep joint " + name +
                                   " within its limits (a move entered from a blend keeps the speed it enters with): " +
                                   ExcessMessage(rates, rates_, e, name));
     }
@@ -179,9 +166,9 @@ Eigen::VectorXd MotionPlanner::Solve(const Eigen::VectorXd& q_start, const Frame
     const Eigen::Vector3d r = x.p - model_->TipPose().p_W;
     J.topRows(3) -= Skew(r) * J.bottomRows(3);  // the tool point: v = v_tip + ω × r
     const Eigen::Matrix<double, 6, 6> JJt =
-        J * J.transpose() + kDamping * kDamping * Eigen::Matrix<double, 6, 6>::Identity();
+        J * J.transpose() + kIkDamping * kIkDamping * Eigen::Matrix<double, 6, 6>::Identity();
     Eigen::VectorXd dq = J.transpose() * JJt.ldlt().solve(e);
-    if (dq.norm() > kMaxStep_rad) dq *= kMaxStep_rad / dq.norm();
+    if (dq.norm() > kIkMaxStep_rad) dq *= kIkMaxStep_rad / dq.norm();
     q += dq;
     (void)n;
   }
@@ -226,7 +213,7 @@ std::string MotionPlanner::Singularity(const Eigen::VectorXd& q) const {
       const char* kind = k_best >= n - 3 ? "wrist" : (k_best <= 1 ? "shoulder" : "elbow");
       best_angle = angle;
       best = std::string(kind) + " singularity near " + model_->joint_names()[k_best] + " = " +
-             Fmt(q[k_best] / kDeg, "%.3g") + " deg (the axes of " + model_->joint_names()[i] + " and " +
+             FormatNumber(q[k_best] / kDeg, "%.3g") + " deg (the axes of " + model_->joint_names()[i] + " and " +
              model_->joint_names()[j] + " line up)";
     }
   }
@@ -234,9 +221,9 @@ std::string MotionPlanner::Singularity(const Eigen::VectorXd& q) const {
 }
 
 std::string MotionPlanner::Unreached(const Eigen::VectorXd& q_end, double pe, double re, int it) const {
-  std::string s = "out of reach: the IK's closest pose is " + Fmt(pe, "%.3g") + " m from the target position and " +
-                  Fmt(re / kDeg, "%.3g") + " deg from its orientation (final residual after " + std::to_string(it) +
-                  " iterations)";
+  std::string s = "out of reach: the IK's closest pose is " + FormatNumber(pe, "%.3g") +
+                  " m from the target position and " + FormatNumber(re / kDeg, "%.3g") +
+                  " deg from its orientation (final residual after " + std::to_string(it) + " iterations)";
   const std::string sing = Singularity(q_end);
   if (!sing.empty()) s += "; it ended near a singularity: " + sing;
   return s;
@@ -276,9 +263,9 @@ void MotionPlanner::CheckLimits(const Eigen::VectorXd& q, const std::string& whe
     const double lo = model_->lower_limits()[i], hi = model_->upper_limits()[i];
     if (!std::isfinite(q[i]) || q[i] < lo - 1e-9 || q[i] > hi + 1e-9) {
       const bool below = q[i] < lo;
-      throw std::invalid_argument(where + ": joint " + model_->joint_names()[i] + " = " + Fmt(q[i] / kDeg) +
+      throw std::invalid_argument(where + ": joint " + model_->joint_names()[i] + " = " + FormatNumber(q[i] / kDeg) +
                                   " deg is beyond its " + (below ? "lower" : "upper") + " limit " +
-                                  Fmt((below ? lo : hi) / kDeg) + " deg");
+                                  FormatNumber((below ? lo : hi) / kDeg) + " deg");
     }
   }
 }
@@ -354,8 +341,8 @@ Plan MotionPlanner::SolvePath(const Eigen::VectorXd& q0, const std::vector<Frame
     const Eigen::VectorXd& q_good = i > 0 ? plan.q[i - 1] : q0;
     if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
       throw std::invalid_argument(PathFailure(i, N, q_good, goals.back(),
-                                              "the IK cannot reach this pose of the path (" + Fmt(pe, "%.3g") +
-                                                  " m and " + Fmt(re / kDeg, "%.3g") +
+                                              "the IK cannot reach this pose of the path (" + FormatNumber(pe, "%.3g") +
+                                                  " m and " + FormatNumber(re / kDeg, "%.3g") +
                                                   " deg away, its final residual)"));
     }
     try {

@@ -4,11 +4,9 @@
 #include <cmath>
 #include <cstdio>
 
-namespace vlab::task {
+#include "task/task_units.h"
 
-namespace {
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
-}  // namespace
+namespace vlab::task {
 
 JointRateLimits DefaultRateLimits(int dof) {
   JointRateLimits l;

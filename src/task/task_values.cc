@@ -8,6 +8,7 @@
 #include <lua.hpp>
 
 #include "task/task_lua.h"
+#include "task/task_units.h"
 
 namespace vlab::task {
 
@@ -16,7 +17,6 @@ namespace {
 constexpr const char* kVec3 = "vlab.vec3";
 constexpr const char* kQuat = "vlab.quat";
 constexpr const char* kFrame = "vlab.frame";
-constexpr double kDeg = M_PI / 180.0;
 
 template <class T>
 T* New(lua_State* L, const char* type) {

@@ -18,6 +18,7 @@
 #include "bridge/bridge_camera_client.h"
 #include "bridge/bridge_client.h"
 #include "bridge/bridge_client_device.h"
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "scene/scene_geometry.h"
 #include "view/view_access.h"
@@ -70,8 +71,6 @@ int IdAfter(const std::string& path, const std::string& prefix) {
   if (digits.empty() || digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
   return std::stoi(digits);
 }
-
-double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 // the WebSocket channels (ViewServerConfig::channels)
 constexpr int kPoseChannel = 0, kCameraChannel = 1, kPlotChannel = 2;
@@ -312,11 +311,11 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   }
 
   // feed the newest frame until stopped
-  const double start = Now();
+  const double start = WallNow();
   double last_keepalive = start, next_arm_frame = -1;
   long frames = 0, timeouts = 0, plot_samples = 0;
   std::vector<double> poses(7 * bodies.size());
-  while (!*stop && (o.duration_s <= 0 || Now() - start < o.duration_s)) {
+  while (!*stop && (o.duration_s <= 0 || WallNow() - start < o.duration_s)) {
     try {
       if (scene_device) {
         const bridge::Device::State s = scene_device->ReadLatest(0.1);
@@ -343,10 +342,10 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     } catch (const bridge::TimeoutError&) {
       ++timeouts;  // the lab paused or ended: keep serving the last pose
     }
-    if ((scene_device || arm) && Now() - last_keepalive > kKeepAlive_s) {
+    if ((scene_device || arm) && WallNow() - last_keepalive > kKeepAlive_s) {
       if (scene_device) scene_device->KeepAlive();
       if (arm) arm->KeepAlive();
-      last_keepalive = Now();
+      last_keepalive = WallNow();
     }
   }
   const long camera_frames = camera_feed ? camera_feed->count() : 0,

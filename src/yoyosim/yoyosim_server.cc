@@ -21,7 +21,6 @@ constexpr double kPollSlice_s = 0.05;
 constexpr bridge::DeviceKind kPoint = bridge::DeviceKind::kPoint, kYoyo = bridge::DeviceKind::kYoyo;
 constexpr int kPointValues = bridge::ValueCount(bridge::LayoutOf(kPoint).state);
 constexpr int kPointCommandValues = bridge::ValueCount(bridge::LayoutOf(kPoint).command);
-constexpr int kPointStatus = bridge::StateIndex(kPoint, "status");
 static_assert(bridge::CommandIndex(kPoint, "x") == 0 && bridge::CommandIndex(kPoint, "y") == 1 &&
                   bridge::CommandIndex(kPoint, "z") == 2 && kPointCommandValues == 3,
               "a point command is the set-point [x, y, z] YoyoSim takes");
@@ -175,8 +174,9 @@ void YoyoSimServer::Publish(long k) {
                 static_cast<std::size_t>(std::max(kPointValues, bridge::kYoyoValues)));
   const double seq = static_cast<double>(k), time = static_cast<double>(k) * sim_->period_s();
   sim_->SamplePoint(values_);
-  const std::uint32_t status = static_cast<std::uint32_t>(values_[kPointStatus]) | point_->endpoint().status_bits();
-  values_[kPointStatus] = static_cast<double>(status);
+  constexpr int kStatus = bridge::StateIndex(kPoint, "status");
+  const std::uint32_t status = static_cast<std::uint32_t>(values_[kStatus]) | point_->endpoint().status_bits();
+  values_[kStatus] = static_cast<double>(status);
   point_->Publish(seq, time, values_, kPointValues);
   sim_->SampleYoyo(values_);
   yoyo_->Publish(seq, time, values_, bridge::kYoyoValues);

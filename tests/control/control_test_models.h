@@ -1,8 +1,17 @@
 // Inline MJCF test models for the control tests (loaded with the MuJoCo fixture's
-// LoadModelFromString, tests/mujoco_fixture.h).
+// LoadModelFromString, tests/mujoco_fixture.h), and the rotations they build poses with.
 #pragma once
 
+#include <Eigen/Geometry>
+
 namespace vlab::control::testing {
+
+inline constexpr double kPi = 3.14159265358979323846;
+
+/// The rotation by `angle` (rad) about `axis` (any length but zero).
+inline Eigen::Matrix3d Rot(double angle, const Eigen::Vector3d& axis) {
+  return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+}
 
 // A free-floating box first (so the arm's qpos and dof addresses differ and a
 // free joint exists for error tests), then a 7-DOF spatial arm with hinges

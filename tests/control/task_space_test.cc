@@ -29,12 +29,9 @@ extern "C" void* malloc(size_t size) {
 namespace vlab::control {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using testing::kPi;
+using testing::Rot;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
-
-Eigen::Matrix3d Rot(double angle, const Eigen::Vector3d& axis) {
-  return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
-}
 
 class TaskSpaceTest : public vlab::test::MujocoTest {
  protected:

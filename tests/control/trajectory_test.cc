@@ -8,14 +8,13 @@
 
 #include <gtest/gtest.h>
 
+#include "control_test_models.h"
+
 namespace vlab::control {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-Eigen::Matrix3d Rot(double angle, const Eigen::Vector3d& axis) {
-  return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
-}
+using testing::kPi;
+using testing::Rot;
 
 Pose MakePose(const Eigen::Vector3d& p, const Eigen::Matrix3d& R) {
   Pose pose;

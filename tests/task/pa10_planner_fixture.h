@@ -12,11 +12,10 @@
 #include "control/robot_model.h"
 #include "mujoco_fixture.h"
 #include "task/task_motion.h"
+#include "task/task_units.h"
+#include "task_test_period.h"
 
 namespace vlab::task {
-
-inline constexpr double kDeg = M_PI / 180.0;
-inline constexpr double kPeriod = 0.002;  // s, the planner's control period
 
 class Pa10PlannerTest : public test::MujocoTest {
  protected:

@@ -17,26 +17,27 @@
 namespace vlab::task {
 namespace {
 
-struct Frame {
+struct CameraFrame {
   double time;      // the boundary that rendered it: the stamp its markers state carries
   double delivery;  // the boundary that delivered it
 };
 
 // the lab camera's schedule, by its own rules, over `duration_s`
-std::vector<Frame> LabSchedule(double fps, double exposure_s, double latency_s, double period_s, double duration_s) {
+std::vector<CameraFrame> LabSchedule(double fps, double exposure_s, double latency_s, double period_s,
+                                     double duration_s) {
   sensors::CameraModelConfig c;
   c.fps = fps;
   c.exposure_s = exposure_s;
   c.latency_s = latency_s;
   const auto m = sensors::CameraModel::Create(c);
-  std::vector<Frame> frames;
+  std::vector<CameraFrame> frames;
   double t_prev = -1;
   const long periods = std::lround(duration_s / period_s);
   for (long k = 0; k <= periods; ++k) {
     const double t = static_cast<double>(k) * period_s;
     const sensors::FrameRange r = m->DueForRender(t_prev, t);
     for (std::int64_t i = r.first; i < r.end; ++i) frames.push_back({t, -1});
-    for (Frame& f : frames) {
+    for (CameraFrame& f : frames) {
       if (f.delivery < 0 && f.time + latency_s <= t + 1e-9) f.delivery = t;
     }
     t_prev = t;
@@ -46,7 +47,7 @@ std::vector<Frame> LabSchedule(double fps, double exposure_s, double latency_s, 
 
 void CheckRule(double fps, double exposure_s, double latency_s, double period_s) {
   const double duration_s = 3.0;
-  const std::vector<Frame> frames = LabSchedule(fps, exposure_s, latency_s, period_s, duration_s + 1.0);
+  const std::vector<CameraFrame> frames = LabSchedule(fps, exposure_s, latency_s, period_s, duration_s + 1.0);
   const CameraTiming timing{fps, exposure_s, latency_s};
   const long periods = std::lround(duration_s / period_s);
   for (long k = 0; k <= periods; ++k) {

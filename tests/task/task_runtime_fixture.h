@@ -15,11 +15,10 @@
 
 #include "mujoco_fixture.h"
 #include "task/task_runtime.h"
+#include "task_test_period.h"
 #include "test_util.h"
 
 namespace vlab::task {
-
-constexpr double kPeriod = 0.002;
 
 class FakeArm final : public Channel {
  public:

@@ -7,12 +7,11 @@
 #include <lua.hpp>
 
 #include "task/task_sandbox.h"
+#include "task/task_units.h"
 #include "task/task_values.h"
 
 namespace vlab::task {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 class ValuesTest : public ::testing::Test {
  protected:

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "bridge/bridge_errors.h"
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
 #include "core/core_realtime.h"
@@ -24,7 +25,6 @@
 namespace vlab::lab {
 
 namespace {
-constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 // the nice value of a worker (and the rasterizer threads) under a control thread that is not realtime
 constexpr int kWorkerNice = 10;
 

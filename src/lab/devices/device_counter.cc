@@ -23,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_layouts.h"
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_counter.h"
 #include "lab/devices/powerball_truth.h"
@@ -34,7 +35,6 @@ namespace vlab::lab {
 namespace {
 
 constexpr double kRpmPerRadPerSecond = 60.0 / (2.0 * M_PI);
-constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
 
 class SimCounter final : public Device {
  public:

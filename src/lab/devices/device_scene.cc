@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bridge/bridge_layouts.h"
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_scene.h"
 #include "lab/outputs/lab_log.h"
@@ -30,8 +31,7 @@ namespace vlab::lab {
 
 namespace {
 
-constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
-using scene::kPoseValues;             // x, y, z, qw, qx, qy, qz
+using scene::kPoseValues;  // x, y, z, qw, qx, qy, qz
 
 std::string NameOf(const mjModel* m, mjtObj type, int id) {
   const char* name = mj_id2name(m, type, id);

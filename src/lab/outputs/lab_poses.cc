@@ -7,17 +7,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_scene.h"
 #include "lab/outputs/lab_log.h"
 #include "lab/outputs/lab_output.h"
 
 namespace vlab::lab {
-
-namespace {
-constexpr double kSameTime_s = 1e-9;  // times closer than this are one instant
-
-}  // namespace
 
 std::unique_ptr<PoseRecorder> PoseRecorder::Create(const mjModel* m, double rate_hz, double period_s,
                                                    const std::string& scene, const std::string& where) {
