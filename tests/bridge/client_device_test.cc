@@ -17,7 +17,7 @@
 #include "bridge/bridge_udp.h"
 #include "wire_session.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::client_device_test {
 namespace {
 
 using Bytes = std::vector<unsigned char>;
@@ -150,4 +150,4 @@ TEST(ClientDeviceTest, CameraAndMarkersHaveTheirOwnClients) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::client_device_test

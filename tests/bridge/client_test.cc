@@ -21,7 +21,7 @@
 #include "bridge/bridge_session.h"
 #include "wire_session.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::client_test {
 namespace {
 
 using Bytes = std::vector<unsigned char>;
@@ -421,4 +421,4 @@ TEST(FixedRateLoopTest, CountsOverrunsAndKeepsThePhase) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::client_test

@@ -10,7 +10,7 @@
 
 #include "bridge/endpoint_fixture.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::endpoint_gate_test {
 namespace {
 
 EndpointConfig SimConfig(const double* now_s) {
@@ -122,4 +122,4 @@ TEST_F(EndpointGateTest, APacedWatchdogCountsWallTimeNotPeriodsRunBackToBack) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::endpoint_gate_test

@@ -12,7 +12,7 @@
 #include "bridge/bridge_payload.h"
 #include "bridge/payload_fixture.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::endpoint_payload_seq_test {
 namespace {
 
 using PayloadSeqTest = PayloadTest;
@@ -118,4 +118,4 @@ TEST_F(PayloadSeqTest, AFirstPayloadThatTakesTheArmStartsTheRecord) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::endpoint_payload_seq_test

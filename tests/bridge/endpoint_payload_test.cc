@@ -17,7 +17,7 @@
 #include "bridge/endpoint_fixture.h"
 #include "bridge/payload_fixture.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::endpoint_payload_test {
 namespace {
 
 EndpointConfig ArmConfig() { return PayloadArmConfig(); }
@@ -144,4 +144,4 @@ TEST(PayloadCodecTest, RoundTripsAndChecksLikeARigidBody) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::endpoint_payload_test

@@ -16,7 +16,7 @@
 #include "bridge/bridge_layouts.h"
 #include "bridge/endpoint_fixture.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::endpoint_test {
 namespace {
 
 TEST_F(EndpointTest, BaseCommandsAreCheckedAndTaken) {
@@ -284,4 +284,4 @@ TEST(UdpSocketTest, IsClosedOnExec) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::endpoint_test

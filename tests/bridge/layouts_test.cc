@@ -14,7 +14,7 @@
 
 #include "bridge/bridge_yoyo.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::layouts_test {
 namespace {
 
 using nlohmann::json;
@@ -135,4 +135,4 @@ TEST(LayoutsTest, EveryFloat64KindHasAStateAndEveryFieldAUnitString) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::layouts_test

@@ -22,7 +22,7 @@
 #include "bridge/bridge_session.h"
 #include "core/core_clock.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::protocol_doc_numbers_test {
 namespace {
 
 std::string ReadPage(const std::string& page) {
@@ -145,4 +145,4 @@ TEST(ProtocolDocNumbers, TheSessionResultsAreListedInOrder) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::protocol_doc_numbers_test

@@ -25,7 +25,7 @@
 #include "bridge/bridge_protocol.h"
 #include "bridge/bridge_session.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::protocol_doc_test {
 namespace {
 
 const std::string kPage = "docs/protocol.md";
@@ -466,4 +466,4 @@ TEST(ProtocolDocTest, TheHexExamplesAreWhatTheEncodersWrite) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::protocol_doc_test

@@ -14,7 +14,7 @@
 
 #include "bridge/bridge_layouts.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::protocol_test {
 namespace {
 
 using Bytes = std::vector<unsigned char>;
@@ -350,4 +350,4 @@ TEST(ProtocolTest, NamesOfKindsAndErrors) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::protocol_test

@@ -16,7 +16,7 @@
 
 #include "bridge/bridge_row_log.h"
 
-namespace vlab::bridge::program {
+namespace vlab::bridge::program::row_log_test {
 namespace {
 
 std::string TempPath(const char* name) { return ::testing::TempDir() + name + std::to_string(::getpid()); }
@@ -95,4 +95,4 @@ TEST(RowLog, AFileThatCannotBeOpenedIsNamed) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge::program
+}  // namespace vlab::bridge::program::row_log_test

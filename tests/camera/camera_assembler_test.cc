@@ -14,7 +14,7 @@
 #include "bridge/bridge_protocol.h"
 #include "camera_test_util.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::camera_assembler_test {
 namespace {
 
 using testing::Chunks;
@@ -263,4 +263,4 @@ TEST(FrameAssemblerTest, NeverTornUnderShuffleLossAndRepeats) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::camera_assembler_test

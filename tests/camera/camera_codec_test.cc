@@ -13,7 +13,7 @@
 
 #include "bridge/bridge_protocol.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::camera_codec_test {
 namespace {
 
 using Bytes = std::vector<unsigned char>;
@@ -239,4 +239,4 @@ TEST(CameraCodecTest, ChunkSizesFitAnIpv4Datagram) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::camera_codec_test

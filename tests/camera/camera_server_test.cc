@@ -19,7 +19,7 @@
 #include "camera_test_util.h"
 #include "wait_until.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::camera_server_test {
 namespace {
 
 using testing::FirstPatternMismatch;
@@ -376,4 +376,4 @@ TEST(CameraClientTest, TwoClientsReceiveEveryFrame) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::camera_server_test

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 
-namespace vlab::sensors {
+namespace vlab::sensors::sensor_camera_test {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -324,4 +324,4 @@ TEST(CameraModelTest, BadConfigurationNamesTheField) {
 }
 
 }  // namespace
-}  // namespace vlab::sensors
+}  // namespace vlab::sensors::sensor_camera_test

@@ -14,7 +14,7 @@
 #include "core/core_mujoco.h"
 #include "mujoco_fixture.h"
 
-namespace vlab::lab {
+namespace vlab::lab::arm_device_test {
 namespace {
 
 using bridge::ArmCommand;
@@ -292,4 +292,4 @@ TEST_F(ArmDeviceCreateTest, RejectsNonMotorActuators) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::arm_device_test

@@ -18,7 +18,7 @@
 #include "lab/devices/device_arm.h"
 #include "mujoco_fixture.h"
 
-namespace vlab::lab {
+namespace vlab::lab::arm_payload_wire_test {
 namespace {
 
 // one horizontal link on a hinge about y, its centre of mass 0.2 m out along x
@@ -160,4 +160,4 @@ TEST_F(ArmPayloadWireTest, WithTheWorldsFeedForwardItIsReportedButMovesNothing) 
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::arm_payload_wire_test

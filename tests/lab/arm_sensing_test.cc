@@ -24,7 +24,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::arm_sensing_test {
 namespace {
 
 constexpr double kStep = 0.001;    // s: the PA10 scene's timestep
@@ -264,4 +264,4 @@ TEST(ArmSensingKeysTest, BadKeysNameTheDeviceAndField) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::arm_sensing_test

@@ -23,7 +23,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::arm_servo_model_test {
 namespace {
 
 // three jointed bodies (hinge, hinge with ref, slide), an unjointed spacer
@@ -265,4 +265,4 @@ TEST_F(ServoModelTest, SimArmNamesTheDeviceForBadBodiesAndPayloads) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::arm_servo_model_test

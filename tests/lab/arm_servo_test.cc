@@ -16,7 +16,7 @@
 #include "arm_servo_forces.h"
 #include "mujoco_fixture.h"
 
-namespace vlab::lab {
+namespace vlab::lab::arm_servo_test {
 namespace {
 
 using Feedforward = ServoConfig::Feedforward;
@@ -185,4 +185,4 @@ TEST_F(ArmServoTest, SetPayloadTakesEffectAtTheNextStep) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::arm_servo_test

@@ -25,7 +25,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::base_device_test {
 namespace {
 
 // the base's state payload (docs/protocol.md)
@@ -323,4 +323,4 @@ checks:
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::base_device_test

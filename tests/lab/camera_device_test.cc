@@ -20,7 +20,7 @@
 #include "lab/run/lab_runner.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::camera_device_test {
 namespace {
 
 // a camera 1 m above the floor looking straight down; a red box below it, 0.1 m right of the optical axis
@@ -214,4 +214,4 @@ TEST(CameraDeviceTest, ProfileIsDraftFastOrQuality) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::camera_device_test

@@ -31,7 +31,7 @@
 #include "lab/devices/device_camera.h"
 #include "render/renderer.h"
 
-namespace vlab::lab {
+namespace vlab::lab::camera_worker_test {
 namespace {
 
 // a ball falling past a camera that looks at it from the side: every frame differs
@@ -241,9 +241,9 @@ TEST(CameraWorkerTest, RealtimeNeverWaitsSendsEveryFrameInOrderAndCountsTheLateO
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::camera_worker_test
 
-namespace vlab::lab {
+namespace vlab::lab::camera_worker_test {
 namespace {
 
 // the camera's fault injection (drop_frames, late_frames, late_by), which tests of
@@ -280,9 +280,9 @@ TEST(CameraWorkerTest, InjectedDropAndLateFramesGoOutAsConfigured) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::camera_worker_test
 
-namespace vlab::lab {
+namespace vlab::lab::camera_worker_test {
 namespace {
 
 // the worker's scheduling once it has set it (it does so first thing): waits at most 5 s
@@ -327,4 +327,4 @@ TEST(CameraWorkerTest, TheWorkerRunsBelowTheControlThread) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::camera_worker_test

@@ -13,7 +13,7 @@
 #include "core/core_errors.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::checks_test {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -322,4 +322,4 @@ TEST(CheckSetTest, AWindowAfterTheRunsEndIsSkippedOneWithinItFails) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::checks_test

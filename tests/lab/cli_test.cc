@@ -16,7 +16,7 @@
 #include "test_run_output.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -387,4 +387,4 @@ TEST(CliTest, WrongThingsGivenSayWhatTheyAre) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::cli_test

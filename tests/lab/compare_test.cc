@@ -10,7 +10,7 @@
 #include "core/core_errors.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::compare_test {
 namespace {
 
 using vlab::testing::TempDir;
@@ -183,4 +183,4 @@ TEST(GoldenSpecTest, ThinnedLogKeepsHeaderRowZeroAndEveryNthByteForByte) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::compare_test

@@ -23,7 +23,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::counter_device_test {
 namespace {
 
 constexpr double kRpm = 60.0 / (2.0 * M_PI);  // rpm per rad/s
@@ -196,4 +196,4 @@ TEST(CounterScenario, KeysAreReadAndCheckedByTheKindsReader) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::counter_device_test

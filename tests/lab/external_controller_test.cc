@@ -23,7 +23,7 @@
 #include "test_run_output.h"
 #include "test_util.h"
 
-namespace vlab::testing {
+namespace vlab::testing::external_controller_test {
 namespace {
 
 // the PA10 served on port 50010 (vlab run binds a free port instead), a JR3
@@ -367,4 +367,4 @@ TEST(ExpandCommand, PlaceholdersAnywhereInAnArgument) {
 }
 
 }  // namespace
-}  // namespace vlab::testing
+}  // namespace vlab::testing::external_controller_test

@@ -26,7 +26,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::feet_device_test {
 namespace {
 
 constexpr double kA = 0.10, kB = 0.08;  // pads at (+-kA, +-kB) from the block's origin, m
@@ -219,4 +219,4 @@ TEST_F(FeetScenarioTest, BadKeysNameTheFileLineAndKey) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::feet_device_test

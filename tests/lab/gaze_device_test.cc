@@ -18,7 +18,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::gaze_device_test {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
@@ -267,4 +267,4 @@ TEST(GazeScenarioTest, KeysAreReadAndCheckedAndTheProbeIsLoggedAndServed) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::gaze_device_test

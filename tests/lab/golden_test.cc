@@ -10,7 +10,7 @@
 
 #include "test_util.h"
 
-namespace vlab {
+namespace vlab::golden_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -181,4 +181,4 @@ TEST(GoldenTest, ScenarioGoldenCheckPassesFailsAndSkipsLikeAnyCheck) {
 }
 
 }  // namespace
-}  // namespace vlab
+}  // namespace vlab::golden_test

@@ -25,7 +25,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::gripper_device_test {
 namespace {
 
 constexpr double kCubeMass = 0.1;  // kg
@@ -236,4 +236,4 @@ TEST_F(GripperDeviceTest, BadBindingsNameTheElement) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::gripper_device_test

@@ -28,7 +28,7 @@
 #include "test_util.h"
 #include "wait_until.h"
 
-namespace vlab::lab {
+namespace vlab::lab::log_formats_test {
 namespace {
 
 using vlab::testing::Bits;
@@ -250,4 +250,4 @@ TEST(LogFormats, ConvertWritesEachFormatAndRefuses) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::log_formats_test

@@ -21,7 +21,7 @@
 
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::log_handover_test {
 namespace {
 
 // the scheduler state of thread `tid` of this process ('R' running, 'S' sleeping, ...)
@@ -79,4 +79,4 @@ TEST(CsvLogHandover, WaitsForAStalledWriterAndLosesNoRow) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::log_handover_test

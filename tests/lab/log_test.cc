@@ -22,7 +22,7 @@
 
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::log_test {
 namespace {
 
 using vlab::testing::Bits;
@@ -179,4 +179,4 @@ TEST(CsvLogTest, WriteErrorShowsBeforeClose) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::log_test

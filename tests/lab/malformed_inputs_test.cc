@@ -28,7 +28,7 @@
 
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::malformed_inputs_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -328,4 +328,4 @@ TEST(MalformedInputs, EveryCorpusFileIsUsed) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::malformed_inputs_test

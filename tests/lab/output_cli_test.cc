@@ -23,7 +23,7 @@
 #include "test_run_output.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::output_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -266,4 +266,4 @@ TEST(OutputCliTest, StagingFolderOfAKilledRunIsRemoved) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::output_cli_test

@@ -17,7 +17,7 @@
 
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::output_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -292,4 +292,4 @@ TEST(OutputDirTest, StagingFoldersOfDeadRunsAreRemoved) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::output_test

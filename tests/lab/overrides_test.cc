@@ -12,7 +12,7 @@
 #include "core/core_errors.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::overrides_test {
 namespace {
 
 using vlab::testing::TempDir;
@@ -141,4 +141,4 @@ TEST(OverridesCliTest, RunRecordsOverridesInSummary) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::overrides_test

@@ -16,7 +16,7 @@
 #include "render/image_codec.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::plot_test {
 namespace {
 
 // a PNG file as OpenCV's imread gave it: 8-bit BGR
@@ -121,4 +121,4 @@ TEST(PlotTest, RunWritesThePlotAndNamesIt) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::plot_test

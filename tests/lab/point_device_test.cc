@@ -15,7 +15,7 @@
 #include "lab/run/lab_command_writer.h"
 #include "mujoco_fixture.h"
 
-namespace vlab::lab {
+namespace vlab::lab::point_device_test {
 namespace {
 
 using namespace arm_driver_rig;  // kPeriod, ColumnOf, ArmConfig, ArmDriverRig, Pa10ScenarioError
@@ -247,4 +247,4 @@ TEST(ClaimTableTest, RefusesASecondClaimantByName) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::point_device_test

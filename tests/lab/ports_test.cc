@@ -15,7 +15,7 @@
 #include "test_process.h"
 #include "test_util.h"
 
-namespace vlab::testing {
+namespace vlab::testing::ports_test {
 namespace {
 
 using nlohmann::json;
@@ -177,4 +177,4 @@ TEST(Ports, DevicesDescribesThePortsAServerWouldTake) {
 }
 
 }  // namespace
-}  // namespace vlab::testing
+}  // namespace vlab::testing::ports_test

@@ -15,7 +15,7 @@
 #include "lab/scenario/lab_scenario.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::randomize_test {
 namespace {
 
 using vlab::testing::ReadFile;
@@ -253,4 +253,4 @@ TEST(RandomizeTest, RunSeedGivesTheTable) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::randomize_test

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-namespace vlab::lab {
+namespace vlab::lab::run_record_test {
 namespace {
 
 RunRecord Base() { return {"0.1.0", "scene: a.xml\nduration: 1\n", 3, 2.5}; }
@@ -62,4 +62,4 @@ TEST(RunRecordTest, TheHashDiffersWhenAnyFieldDoes) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::run_record_test

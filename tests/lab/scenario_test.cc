@@ -9,7 +9,7 @@
 #include "core/core_errors.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::scenario_test {
 namespace {
 
 using vlab::testing::TempDir;
@@ -160,4 +160,4 @@ TEST(ScenarioTest, MalformedYamlAndMissingFile) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::scenario_test

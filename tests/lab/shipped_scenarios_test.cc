@@ -15,7 +15,7 @@
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
 
-namespace vlab::lab {
+namespace vlab::lab::shipped_scenarios_test {
 namespace {
 
 // scenes/*.yaml and every case study's cases/NAME/*.yaml, sorted
@@ -68,4 +68,4 @@ TEST(ShippedScenarios, EveryDeviceBindsToItsScene) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::shipped_scenarios_test

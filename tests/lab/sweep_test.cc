@@ -14,7 +14,7 @@
 #include "core/core_errors.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::sweep_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -300,4 +300,4 @@ TEST(SweepCliTest, AnEditedSweepRunsAgainWhatChangedAndSaysWhy) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::sweep_test

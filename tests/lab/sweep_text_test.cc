@@ -10,7 +10,7 @@
 
 #include "core/core_errors.h"
 
-namespace vlab::lab {
+namespace vlab::lab::sweep_text_test {
 namespace {
 
 // the strings a hostile sweep file would try: every control byte alone and
@@ -110,4 +110,4 @@ TEST(SweepTextTest, AJobLineRefusesAWordWithAControlCharacter) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::sweep_text_test

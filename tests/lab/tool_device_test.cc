@@ -18,7 +18,7 @@
 #include "lab/devices/device_tool.h"
 #include "mujoco_fixture.h"
 
-namespace vlab::lab {
+namespace vlab::lab::tool_device_test {
 namespace {
 
 using namespace arm_driver_rig;  // kPeriod, ColumnOf, ArmConfig, ArmDriverRig, Pa10ScenarioError
@@ -266,4 +266,4 @@ TEST(ToolScenarioTest, ScenarioKeysAndRules) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::tool_device_test

@@ -23,7 +23,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::word_device_test {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
@@ -350,4 +350,4 @@ TEST(WordScenario, KeysAreReadAndCheckedByTheKindsReader) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::word_device_test

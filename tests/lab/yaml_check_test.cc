@@ -13,7 +13,7 @@
 #include "lab/scenario/lab_yaml_check.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::yaml_check_test {
 namespace {
 
 using vlab::testing::TempDir;
@@ -117,4 +117,4 @@ TEST(YamlSeed, TheWholeRangeAndNothingElse) {
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::yaml_check_test

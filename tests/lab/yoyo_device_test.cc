@@ -22,7 +22,7 @@
 #include "mujoco_fixture.h"
 #include "test_util.h"
 
-namespace vlab::lab {
+namespace vlab::lab::yoyo_device_test {
 namespace {
 
 constexpr const char* kScene = VLAB_SOURCE_DIR "/scenes/pa10_yoyo.xml";
@@ -285,4 +285,4 @@ devices:
 }
 
 }  // namespace
-}  // namespace vlab::lab
+}  // namespace vlab::lab::yoyo_device_test

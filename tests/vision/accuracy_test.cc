@@ -21,7 +21,7 @@
 #include "vision/vision_locate.h"
 #include "vision_test_scene.h"
 
-namespace vlab::testing {
+namespace vlab::testing::accuracy_test {
 namespace {
 
 constexpr int kPoses = 150;
@@ -135,4 +135,4 @@ TEST_F(VisionAccuracy, RandomCubePosesAtThirtyToFiftyCentimetres) {
 }
 
 }  // namespace
-}  // namespace vlab::testing
+}  // namespace vlab::testing::accuracy_test

@@ -14,7 +14,7 @@
 #include "test_util.h"
 #include "vision/vision_cubes.h"
 
-namespace vlab::vision {
+namespace vlab::vision::cubes_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -207,4 +207,4 @@ TEST(CubesCommand, BadOptionsExitTwoAndWriteNothing) {
 }
 
 }  // namespace
-}  // namespace vlab::vision
+}  // namespace vlab::vision::cubes_test

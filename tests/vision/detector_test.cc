@@ -15,7 +15,7 @@
 #include "vision/vision_detector.h"
 #include "vision/vision_edges.h"
 
-namespace vlab::vision {
+namespace vlab::vision::detector_test {
 namespace {
 
 constexpr int kCell = 40;           // source pixels per marker cell
@@ -280,4 +280,4 @@ TEST(CameraModelCheck, RefusesUnusableIntrinsics) {
 }
 
 }  // namespace
-}  // namespace vlab::vision
+}  // namespace vlab::vision::detector_test

@@ -12,7 +12,7 @@
 #include "vision/vision_detector.h"
 #include "vision/vision_face.h"
 
-namespace vlab::vision {
+namespace vlab::vision::face_test {
 namespace {
 
 FaceSpec Spec(char letter, int dictionary, int id) {
@@ -109,4 +109,4 @@ TEST(Face, BadInputNamed) {
 }
 
 }  // namespace
-}  // namespace vlab::vision
+}  // namespace vlab::vision::face_test

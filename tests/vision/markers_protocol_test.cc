@@ -11,7 +11,7 @@
 
 #include "bridge/bridge_markers.h"
 
-namespace vlab::bridge {
+namespace vlab::bridge::markers_protocol_test {
 namespace {
 
 std::string Hex(const std::vector<unsigned char>& bytes) {
@@ -227,4 +227,4 @@ TEST(MarkersState, EveryRefusalReason) {
 }
 
 }  // namespace
-}  // namespace vlab::bridge
+}  // namespace vlab::bridge::markers_protocol_test

@@ -18,7 +18,7 @@
 #include "vision/vision_locate.h"
 #include "vision/vision_scene.h"
 
-namespace vlab::vision {
+namespace vlab::vision::scene_test {
 namespace {
 
 TEST(CubeScene, PlacementsRespectTableKeepOutAndEachOther) {
@@ -192,4 +192,4 @@ TEST_F(CommittedCubeScene, WebcamLocatesTheCubesInTheWorld) {
 }
 
 }  // namespace
-}  // namespace vlab::vision
+}  // namespace vlab::vision::scene_test

@@ -14,7 +14,7 @@
 #include "vision/vision_server.h"
 #include "wire_session.h"
 
-namespace vlab::vision {
+namespace vlab::vision::server_test {
 namespace {
 
 using bridge::MarkerDescriptionMsg;
@@ -185,4 +185,4 @@ TEST_F(MarkersServerTest, StatesReachSubscribersUntilTheyFallSilent) {
 }
 
 }  // namespace
-}  // namespace vlab::vision
+}  // namespace vlab::vision::server_test

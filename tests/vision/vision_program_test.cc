@@ -21,7 +21,7 @@
 #include "vision/vision_detector.h"
 #include "vision_test_scene.h"
 
-namespace vlab::testing {
+namespace vlab::testing::vision_program_test {
 namespace {
 
 constexpr int kFrames = 24;
@@ -163,4 +163,4 @@ TEST(VisionCommand, NoCameraFailsWithOneLine) {
 }
 
 }  // namespace
-}  // namespace vlab::testing
+}  // namespace vlab::testing::vision_program_test

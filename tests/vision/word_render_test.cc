@@ -24,7 +24,7 @@
 #include "vision/vision_locate.h"
 #include "vision/vision_scene.h"
 
-namespace vlab::testing {
+namespace vlab::testing::word_render_test {
 namespace {
 
 constexpr double kDeg = M_PI / 180;
@@ -145,4 +145,4 @@ TEST_F(WordRender, TheDevicesReadingDirectionIsTheRenderedFacesUp) {
 }
 
 }  // namespace
-}  // namespace vlab::testing
+}  // namespace vlab::testing::word_render_test

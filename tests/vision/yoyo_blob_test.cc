@@ -21,7 +21,7 @@
 #include "vision/vision_blob.h"
 #include "yoyo_test_scene.h"
 
-namespace vlab::testing {
+namespace vlab::testing::yoyo_blob_test {
 namespace {
 
 // positions in the yoyo state the tracker fills (bridge/bridge_layouts.h)
@@ -192,4 +192,4 @@ TEST(YoyoBlob, RayMeetsTheVerticalPlaneThroughTheLine) {
 }
 
 }  // namespace
-}  // namespace vlab::testing
+}  // namespace vlab::testing::yoyo_blob_test
