@@ -9,6 +9,7 @@
 // itself is checked directly.
 #include <sched.h>
 #include <signal.h>
+#include <sys/stat.h>
 
 #include <cerrno>
 #include <filesystem>
@@ -193,10 +194,15 @@ TEST(ExternalController, ItsVerdictAfterTheEndOfTheRunCounts) {
 TEST(ExternalController, WithHelperEndsItsHelperAndReportsItsFailure) {
   TempDir dir;
   const std::string with = R"([")" VLAB_SOURCE_DIR R"(/examples/with_helper.sh", )";
-  // the helper notes its end in {out}; the controller answers every period until SIGTERM
+  // the helper notes its end in {out}; the controller answers every period until SIGTERM. The
+  // controller starts once the helper has set its trap (it opens a FIFO the helper writes after
+  // the trap), so the end-of-run SIGTERM cannot reach the helper before its trap is set.
+  const std::string ready = dir / "helper_ready";
+  ASSERT_EQ(::mkfifo(ready.c_str(), 0600), 0) << ready;
   WriteFile(dir / "ends.yaml",
-            Scenario(with + R"("sh", "-c", "trap 'echo helper ended > {out}/helper.txt; exit 0' TERM; sleep 100 & wait",
-                     "--", "{bin}/examples/joint_control", "--arm", "{pa10}", "--duration", "100"])",
+            Scenario(with + R"("sh", "-c", "trap 'echo helper ended > {out}/helper.txt; exit 0' TERM; echo > )" +
+                         ready + R"(; sleep 100 & wait", "--", "sh", "-c", "read x < )" + ready +
+                         R"(; exec {bin}/examples/joint_control --arm {pa10} --duration 100"])",
                      0.1));
   ProcessResult r = RunVlab("run " + (dir / "ends.yaml") + " -q --out " + (dir / "a"));
   EXPECT_EQ(r.exit_code, 0) << r.err;
