@@ -90,14 +90,33 @@ vlab_build() {
   fi
 }
 
+# vlab_install_node_packages: the tests' Node packages (tests/node/package.json: the MCAP
+# reference reader, the Foxglove WebSocket client, ROS 2 message decoders, Khronos' glTF
+# validator) into tests/node/node_modules, from the npm registry, exactly as package-lock.json
+# pins them (npm ci); again only when the lock file changed. Node.js and npm come from Debian
+# when the machine has none.
+vlab_install_node_packages() {
+  local dir=tests/node
+  if [ -f "$dir/node_modules/.package-lock.json" ] && [ ! "$dir/package-lock.json" -nt "$dir/node_modules/.package-lock.json" ]; then
+    return 0
+  fi
+  echo "vlab: installing the tests' Node packages into $dir/node_modules"
+  if ! npm ci --prefix "$dir" --no-audit --no-fund --loglevel=error >/dev/null; then
+    echo "vlab: npm ci failed in $dir (the tests that read MCAP, speak Foxglove's protocol or validate glTF need it)" >&2
+    return 1
+  fi
+}
+
 # vlab_setup [--tests]: --tests (./test.sh) also installs the packages only the tests need
 # and builds with -Werror (VLAB_WERROR: any compiler warning fails the build)
 vlab_setup() {
   local options=()
   if [ "${1:-}" = --tests ]; then
     VLAB_APT_PACKAGES+=("${VLAB_TEST_APT_PACKAGES[@]}")
+    command -v npm >/dev/null 2>&1 || VLAB_APT_PACKAGES+=(nodejs npm)
     options=(-DVLAB_WERROR=ON)
   fi
   vlab_install_packages
+  if [ "${1:-}" = --tests ]; then vlab_install_node_packages; fi
   vlab_build "${options[@]}"
 }
