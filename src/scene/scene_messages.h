@@ -76,7 +76,7 @@ MessageSchema TfMessageSchema();
 /// One body's pose in its parent's frame.
 struct FrameTransform {
   std::string parent;       ///< "world"
-  std::string child;        ///< the body's name
+  std::string child;        ///< the body's frame (BodyFrames)
   double translation[3];    ///< m
   double rotation_wxyz[4];  ///< unit quaternion, w first (MuJoCo's order)
 };
