@@ -48,6 +48,10 @@ Subcommand AddViewCommand(CLI::App& app) {
                   "128 at once; a request head must come whole within 5 s; when full, a new connection closes the one "
                   "that has waited longest for its request. A WebSocket that does not read is closed (no pong in 10 s, "
                   "or a frame not taken in 5 s)");
+  cmd->add_flag_function(
+      "--no-shadows", [o](std::int64_t) { o->shadows = false; },
+      "The page starts without shadows (default: the MJCF's lights with castshadow cast them; the "
+      "page's 'shadows' box, or ?shadows=off in its address, turns them off and on)");
   cmd->add_option("--web", o->web, "Folder of the page's files (default: view_web beside the vlab binary)");
   cmd->add_option("--connect-timeout", o->connect_timeout_s, "Wait this long for the device, s (default 10)");
   cmd->add_option("--duration", o->duration_s, "Stop after this many seconds (default: run until interrupted)");
