@@ -129,7 +129,7 @@ TEST(LogFormats, HdfAndMatEqualCsvBitForBit) {
   ExpectSameBits(csv, ReadMat(tmp / "run/log.mat", &units));
   EXPECT_EQ(units["pa10.q.S1"], "rad");
   EXPECT_EQ(units["time"], "s");
-  EXPECT_FALSE(fs::exists(tmp / "run/.log.mat.rows"));  // the rows file is gone
+  EXPECT_FALSE(fs::exists(tmp / "run/.log.mat.part"));  // the file of compressed pieces is gone
 }
 
 TEST(LogFormats, ScenarioKeyRefusals) {
@@ -206,6 +206,11 @@ TEST(LogFormats, ConvertWritesEachFormatAndRefuses) {
   EXPECT_NE(c.out.find("(MAT 5 (compressed))"), std::string::npos) << c.out;
   std::map<std::string, std::string> units;
   ExpectSameBits(csv, ReadMat(run + "/log.mat", &units));
+  // the same rows give the same bytes (no date in the header)
+  const std::string first = ReadFile(run + "/log.mat");
+  c = RunVlab("convert '" + run + "' --to mat --force");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(ReadFile(run + "/log.mat"), first);
   const std::string other = tmp / "other";
   fs::create_directories(other);
   fs::copy_file(run + "/log.h5", other + "/log.h5");
