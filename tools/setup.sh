@@ -16,6 +16,8 @@ VLAB_APT_PACKAGES=(
 VLAB_APT_PACKAGES+=(liblua5.4-dev)
 # run logs in HDF5 and MATLAB .mat besides CSV (src/lab/outputs/lab_log_hdf5.*, lab_log_mat.*)
 VLAB_APT_PACKAGES+=(libhdf5-dev libmatio-dev)
+# run logs in MCAP: zstd-compressed chunks and zlib's CRC-32 (src/lab/outputs/lab_mcap.*)
+VLAB_APT_PACKAGES+=(libzstd-dev zlib1g-dev)
 # PNG and JPEG through libpng and libjpeg (render/image_codec.*), not OpenCV's imgcodecs, whose
 # dependencies every program linking it loads at start-up
 VLAB_APT_PACKAGES+=(libpng-dev libjpeg62-turbo-dev)
