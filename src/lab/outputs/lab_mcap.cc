@@ -16,40 +16,40 @@ constexpr char kMagic[] = "\x89MCAP0\r\n";  // 8 bytes
 constexpr std::size_t kMagicSize = 8;
 
 // record opcodes
-enum Op : std::uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kMessageIndex = 0x07,
-  kChunkIndex = 0x08,
-  kStatistics = 0x0B,
-  kSummaryOffset = 0x0E,
-  kDataEnd = 0x0F,
+enum McapOp : std::uint8_t {
+  kOpHeader = 0x01,
+  kOpFooter = 0x02,
+  kOpSchema = 0x03,
+  kOpChannel = 0x04,
+  kOpMessage = 0x05,
+  kOpChunk = 0x06,
+  kOpMessageIndex = 0x07,
+  kOpChunkIndex = 0x08,
+  kOpStatistics = 0x0B,
+  kOpSummaryOffset = 0x0E,
+  kOpDataEnd = 0x0F,
 };
 
 // little-endian fields appended to a record's bytes
 template <typename T>
-void Put(std::string* out, T value) {
+void PutLe(std::string* out, T value) {
   char bytes[sizeof(T)];
   std::memcpy(bytes, &value, sizeof(T));
   out->append(bytes, sizeof(T));
 }
-void PutString(std::string* out, const std::string& s) {
-  Put<std::uint32_t>(out, static_cast<std::uint32_t>(s.size()));
+void PutMcapString(std::string* out, const std::string& s) {
+  PutLe<std::uint32_t>(out, static_cast<std::uint32_t>(s.size()));
   out->append(s);
 }
 
 // a record: opcode, uint64 content length, content
-void Record(std::string* out, Op op, const std::string& content) {
-  Put<std::uint8_t>(out, op);
-  Put<std::uint64_t>(out, content.size());
+void PutRecord(std::string* out, McapOp op, const std::string& content) {
+  PutLe<std::uint8_t>(out, op);
+  PutLe<std::uint64_t>(out, content.size());
   out->append(content);
 }
 
-std::uint32_t Crc(std::uint32_t crc, const void* data, std::size_t size) {
+std::uint32_t Crc32Of(std::uint32_t crc, const void* data, std::size_t size) {
   // zlib's crc32 takes uInt lengths: large buffers in pieces
   const auto* bytes = static_cast<const Bytef*>(data);
   while (size > 0) {
@@ -71,9 +71,9 @@ std::unique_ptr<McapWriter> McapWriter::Create(const std::string& path, const st
   w->zstd_ = ZSTD_createCCtx();
   if (!w->zstd_) throw std::runtime_error(name + ": cannot make a zstd context");
   std::string bytes(kMagic, kMagicSize), header;
-  PutString(&header, options.profile);
-  PutString(&header, "vlab");
-  Record(&bytes, kHeader, header);
+  PutMcapString(&header, options.profile);
+  PutMcapString(&header, "vlab");
+  PutRecord(&bytes, kOpHeader, header);
   w->Emit(bytes);
   return w;
 }
@@ -100,18 +100,18 @@ void McapWriter::Emit(const std::string& bytes) {
     Error(std::strerror(errno ? errno : EIO));
     return;
   }
-  data_crc_ = Crc(data_crc_, bytes.data(), bytes.size());
+  data_crc_ = Crc32Of(data_crc_, bytes.data(), bytes.size());
   position_ += bytes.size();
 }
 
 std::uint16_t McapWriter::AddSchema(const std::string& name, const std::string& encoding, const std::string& data) {
   const auto id = static_cast<std::uint16_t>(schemas_.size() + 1);
   std::string content, record;
-  Put<std::uint16_t>(&content, id);
-  PutString(&content, name);
-  PutString(&content, encoding);
-  PutString(&content, data);  // (uint32 length-prefixed bytes)
-  Record(&record, kSchema, content);
+  PutLe<std::uint16_t>(&content, id);
+  PutMcapString(&content, name);
+  PutMcapString(&content, encoding);
+  PutMcapString(&content, data);  // (uint32 length-prefixed bytes)
+  PutRecord(&record, kOpSchema, content);
   Emit(record);
   schemas_.push_back(record);
   return id;
@@ -121,12 +121,12 @@ std::uint16_t McapWriter::AddChannel(std::uint16_t schema, const std::string& to
                                      const std::string& message_encoding) {
   const auto id = static_cast<std::uint16_t>(channels_.size());
   std::string content, record;
-  Put<std::uint16_t>(&content, id);
-  Put<std::uint16_t>(&content, schema);
-  PutString(&content, topic);
-  PutString(&content, message_encoding);
-  Put<std::uint32_t>(&content, 0);  // metadata: an empty map
-  Record(&record, kChannel, content);
+  PutLe<std::uint16_t>(&content, id);
+  PutLe<std::uint16_t>(&content, schema);
+  PutMcapString(&content, topic);
+  PutMcapString(&content, message_encoding);
+  PutLe<std::uint32_t>(&content, 0);  // metadata: an empty map
+  PutRecord(&record, kOpChannel, content);
   Emit(record);
   channels_.push_back(record);
   channel_counts_.push_back(0);
@@ -142,12 +142,12 @@ std::string McapWriter::Write(std::uint16_t channel, std::uint64_t time_ns, cons
     chunk_index_[channel].push_back(chunk_.size());
   }
   // the Message record: channel, sequence, log time, publish time, data
-  Put<std::uint8_t>(&chunk_, kMessage);
-  Put<std::uint64_t>(&chunk_, 2 + 4 + 8 + 8 + size);
-  Put<std::uint16_t>(&chunk_, channel);
-  Put<std::uint32_t>(&chunk_, static_cast<std::uint32_t>(channel_counts_[channel]));
-  Put<std::uint64_t>(&chunk_, time_ns);
-  Put<std::uint64_t>(&chunk_, time_ns);
+  PutLe<std::uint8_t>(&chunk_, kOpMessage);
+  PutLe<std::uint64_t>(&chunk_, 2 + 4 + 8 + 8 + size);
+  PutLe<std::uint16_t>(&chunk_, channel);
+  PutLe<std::uint32_t>(&chunk_, static_cast<std::uint32_t>(channel_counts_[channel]));
+  PutLe<std::uint64_t>(&chunk_, time_ns);
+  PutLe<std::uint64_t>(&chunk_, time_ns);
   chunk_.append(static_cast<const char*>(data), size);
   ++channel_counts_[channel];
   chunk_start_ns_ = chunk_has_messages_ ? std::min(chunk_start_ns_, time_ns) : time_ns;
@@ -176,14 +176,14 @@ std::string McapWriter::FlushChunk() {
   // the Chunk record, its head then the records
   record_.clear();
   std::string head;
-  Put<std::uint64_t>(&head, chunk_start_ns_);
-  Put<std::uint64_t>(&head, chunk_end_ns_);
-  Put<std::uint64_t>(&head, chunk_.size());
-  Put<std::uint32_t>(&head, Crc(0, chunk_.data(), chunk_.size()));
-  PutString(&head, index.compression);
-  Put<std::uint64_t>(&head, records_size);
-  Put<std::uint8_t>(&record_, kChunk);
-  Put<std::uint64_t>(&record_, head.size() + records_size);
+  PutLe<std::uint64_t>(&head, chunk_start_ns_);
+  PutLe<std::uint64_t>(&head, chunk_end_ns_);
+  PutLe<std::uint64_t>(&head, chunk_.size());
+  PutLe<std::uint32_t>(&head, Crc32Of(0, chunk_.data(), chunk_.size()));
+  PutMcapString(&head, index.compression);
+  PutLe<std::uint64_t>(&head, records_size);
+  PutLe<std::uint8_t>(&record_, kOpChunk);
+  PutLe<std::uint64_t>(&record_, head.size() + records_size);
   record_.append(head);
   record_.append(records.data(), records_size);
   Emit(record_);
@@ -196,10 +196,10 @@ std::string McapWriter::FlushChunk() {
       if (pairs.empty()) continue;
       index.index_offsets.emplace_back(static_cast<std::uint16_t>(c), position_ + indexes.size());
       std::string content;
-      Put<std::uint16_t>(&content, static_cast<std::uint16_t>(c));
-      Put<std::uint32_t>(&content, static_cast<std::uint32_t>(pairs.size() * 8));
-      for (std::uint64_t v : pairs) Put<std::uint64_t>(&content, v);
-      Record(&indexes, kMessageIndex, content);
+      PutLe<std::uint16_t>(&content, static_cast<std::uint16_t>(c));
+      PutLe<std::uint32_t>(&content, static_cast<std::uint32_t>(pairs.size() * 8));
+      for (std::uint64_t v : pairs) PutLe<std::uint64_t>(&content, v);
+      PutRecord(&indexes, kOpMessageIndex, content);
       pairs.clear();
     }
     Emit(indexes);
@@ -219,74 +219,74 @@ std::string McapWriter::Close() {
   FlushChunk();
   // Data End: the CRC of everything before it
   std::string bytes, content;
-  Put<std::uint32_t>(&content, data_crc_);
-  Record(&bytes, kDataEnd, content);
+  PutLe<std::uint32_t>(&content, data_crc_);
+  PutRecord(&bytes, kOpDataEnd, content);
   Emit(bytes);
   // the summary, grouped by opcode, and where each group starts
   const std::uint64_t summary_start = position_;
   std::string summary;
-  std::vector<std::pair<Op, std::pair<std::uint64_t, std::uint64_t>>> groups;
-  const auto group = [&](Op op, const std::string& records) {
+  std::vector<std::pair<McapOp, std::pair<std::uint64_t, std::uint64_t>>> groups;
+  const auto group = [&](McapOp op, const std::string& records) {
     if (records.empty()) return;
     groups.push_back({op, {summary_start + summary.size(), records.size()}});
     summary.append(records);
   };
   std::string records;
   for (const std::string& s : schemas_) records += s;
-  group(kSchema, records);
+  group(kOpSchema, records);
   records.clear();
   for (const std::string& c : channels_) records += c;
-  group(kChannel, records);
+  group(kOpChannel, records);
   content.clear();
-  Put<std::uint64_t>(&content, messages_);
-  Put<std::uint16_t>(&content, static_cast<std::uint16_t>(schemas_.size()));
-  Put<std::uint32_t>(&content, static_cast<std::uint32_t>(channels_.size()));
-  Put<std::uint32_t>(&content, 0);  // attachments
-  Put<std::uint32_t>(&content, 0);  // metadata
-  Put<std::uint32_t>(&content, static_cast<std::uint32_t>(chunks_.size()));
-  Put<std::uint64_t>(&content, start_ns_);
-  Put<std::uint64_t>(&content, end_ns_);
-  Put<std::uint32_t>(&content, static_cast<std::uint32_t>(channel_counts_.size() * 10));
+  PutLe<std::uint64_t>(&content, messages_);
+  PutLe<std::uint16_t>(&content, static_cast<std::uint16_t>(schemas_.size()));
+  PutLe<std::uint32_t>(&content, static_cast<std::uint32_t>(channels_.size()));
+  PutLe<std::uint32_t>(&content, 0);  // attachments
+  PutLe<std::uint32_t>(&content, 0);  // metadata
+  PutLe<std::uint32_t>(&content, static_cast<std::uint32_t>(chunks_.size()));
+  PutLe<std::uint64_t>(&content, start_ns_);
+  PutLe<std::uint64_t>(&content, end_ns_);
+  PutLe<std::uint32_t>(&content, static_cast<std::uint32_t>(channel_counts_.size() * 10));
   for (std::size_t c = 0; c < channel_counts_.size(); ++c) {
-    Put<std::uint16_t>(&content, static_cast<std::uint16_t>(c));
-    Put<std::uint64_t>(&content, channel_counts_[c]);
+    PutLe<std::uint16_t>(&content, static_cast<std::uint16_t>(c));
+    PutLe<std::uint64_t>(&content, channel_counts_[c]);
   }
   records.clear();
-  Record(&records, kStatistics, content);
-  group(kStatistics, records);
+  PutRecord(&records, kOpStatistics, content);
+  group(kOpStatistics, records);
   records.clear();
   for (const ChunkIndex& chunk : chunks_) {
     content.clear();
-    Put<std::uint64_t>(&content, chunk.start_ns);
-    Put<std::uint64_t>(&content, chunk.end_ns);
-    Put<std::uint64_t>(&content, chunk.offset);
-    Put<std::uint64_t>(&content, chunk.length);
-    Put<std::uint32_t>(&content, static_cast<std::uint32_t>(chunk.index_offsets.size() * 10));
+    PutLe<std::uint64_t>(&content, chunk.start_ns);
+    PutLe<std::uint64_t>(&content, chunk.end_ns);
+    PutLe<std::uint64_t>(&content, chunk.offset);
+    PutLe<std::uint64_t>(&content, chunk.length);
+    PutLe<std::uint32_t>(&content, static_cast<std::uint32_t>(chunk.index_offsets.size() * 10));
     for (const auto& [channel, offset] : chunk.index_offsets) {
-      Put<std::uint16_t>(&content, channel);
-      Put<std::uint64_t>(&content, offset);
+      PutLe<std::uint16_t>(&content, channel);
+      PutLe<std::uint64_t>(&content, offset);
     }
-    Put<std::uint64_t>(&content, chunk.index_length);
-    PutString(&content, chunk.compression);
-    Put<std::uint64_t>(&content, chunk.compressed);
-    Put<std::uint64_t>(&content, chunk.uncompressed);
-    Record(&records, kChunkIndex, content);
+    PutLe<std::uint64_t>(&content, chunk.index_length);
+    PutMcapString(&content, chunk.compression);
+    PutLe<std::uint64_t>(&content, chunk.compressed);
+    PutLe<std::uint64_t>(&content, chunk.uncompressed);
+    PutRecord(&records, kOpChunkIndex, content);
   }
-  group(kChunkIndex, records);
+  group(kOpChunkIndex, records);
   const std::uint64_t offsets_start = summary_start + summary.size();
   for (const auto& [op, where] : groups) {
     content.clear();
-    Put<std::uint8_t>(&content, op);
-    Put<std::uint64_t>(&content, where.first);
-    Put<std::uint64_t>(&content, where.second);
-    Record(&summary, kSummaryOffset, content);
+    PutLe<std::uint8_t>(&content, op);
+    PutLe<std::uint64_t>(&content, where.first);
+    PutLe<std::uint64_t>(&content, where.second);
+    PutRecord(&summary, kOpSummaryOffset, content);
   }
   // the footer; its CRC covers the summary up to its own summary_offset_start field
-  Put<std::uint8_t>(&summary, kFooter);
-  Put<std::uint64_t>(&summary, 8 + 8 + 4);
-  Put<std::uint64_t>(&summary, summary_start);
-  Put<std::uint64_t>(&summary, offsets_start);
-  Put<std::uint32_t>(&summary, Crc(0, summary.data(), summary.size()));
+  PutLe<std::uint8_t>(&summary, kOpFooter);
+  PutLe<std::uint64_t>(&summary, 8 + 8 + 4);
+  PutLe<std::uint64_t>(&summary, summary_start);
+  PutLe<std::uint64_t>(&summary, offsets_start);
+  PutLe<std::uint32_t>(&summary, Crc32Of(0, summary.data(), summary.size()));
   summary.append(kMagic, kMagicSize);
   Emit(summary);
   errno = 0;
