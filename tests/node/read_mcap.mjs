@@ -8,6 +8,8 @@
 //     with the row's time, and each field (named in the schema's comment after it)
 //     equals the column's value bit for bit (JS parses the shortest round-trip
 //     decimal exactly)
+//   - /scene holds one SceneUpdate at t = 0: an entity per body of scene.json with
+//     a geom, locked to its frame, a primitive per geom (a capsule: three);
 //   - /tf holds one message per frame of poses.bin, the bodies of scene.json as
 //     child frames of "world", each value poses.bin's float32 (none without poses.bin)
 //   - each /camera/NAME message is CAMERA/rgb_NNNNNN.png byte for byte, a PNG of
@@ -159,7 +161,27 @@ const posesFile = path.join(dir, "poses.bin");
 let tfCount = 0;
 if (fs.existsSync(posesFile)) {
   check(tf, () => "poses.bin, but no /tf");
-  const bodies = JSON.parse(fs.readFileSync(path.join(dir, "scene.json"), "utf8")).bodies;
+  const sceneJson = JSON.parse(fs.readFileSync(path.join(dir, "scene.json"), "utf8"));
+  const bodies = sceneJson.bodies;
+  // the frames of /tf and /scene: a body's name, or body_N when it has none, or its name is taken or "world"
+  const frameNames = [];
+  bodies.forEach((b, i) => frameNames.push(b === "" || b === "world" || frameNames.includes(b) ? `body_${i}` : b));
+  // /scene: one SceneUpdate at t = 0, an entity per body with a geom (locked to its frame) and the world's
+  const scene = topic("/scene");
+  check(scene && scene.schema.name === "foxglove_msgs/msg/SceneUpdate", () => "poses.bin, but no /scene");
+  const updates = decoded.get(scene.channel.id) ?? [];
+  check(updates.length === 1 && updates[0].time === 0n, () => `/scene: ${updates.length} messages, not one at t = 0`);
+  const entities = updates[0].msg.entities;
+  const primitives = { box: 1, sphere: 1, ellipsoid: 1, cylinder: 1, plane: 1, capsule: 3 };  // meshes: none (no model)
+  const withGeoms = new Set(sceneJson.geoms.filter((g) => primitives[g.type]).map((g) => g.body));
+  const geomsOf = (e) => e.cubes.length + e.spheres.length + e.cylinders.length + e.triangles.length;
+  check(entities.length === withGeoms.size, () => `/scene: ${entities.length} entities for ${withGeoms.size} bodies`);
+  for (const e of entities) {
+    const b = e.frame_id === "world" ? -1 : frameNames.indexOf(e.frame_id);
+    check(e.id === e.frame_id && e.frame_locked && withGeoms.has(b), () => `/scene: entity ${e.id}`);
+    const drawn = sceneJson.geoms.filter((g) => g.body === b).reduce((n, g) => n + (primitives[g.type] ?? 0), 0);
+    check(geomsOf(e) === drawn, () => `/scene ${e.id}: ${geomsOf(e)} primitives for ${drawn} geoms`);
+  }
   const poses = fs.readFileSync(posesFile);
   const frameSize = 16 + 28 * bodies.length;
   const frames = poses.length / frameSize;
@@ -171,7 +193,7 @@ if (fs.existsSync(posesFile)) {
     check(time === ns(t), () => `/tf message ${i}: time ${time}, poses.bin ${t}`);
     check(msg.transforms.length === bodies.length, () => `/tf message ${i}: ${msg.transforms.length} transforms`);
     msg.transforms.forEach((x, b) => {
-      const name = bodies[b] === "" ? `body_${b}` : bodies[b];
+      const name = frameNames[b];
       check(x.header.frame_id === "world" && x.child_frame_id === name, () => `/tf ${i}: frame ${x.child_frame_id}`);
       check(stampNs(x.header.stamp) === ns(t), () => `/tf ${i} ${name}: stamp`);
       const v = [x.transform.translation.x, x.transform.translation.y, x.transform.translation.z,
@@ -184,7 +206,7 @@ if (fs.existsSync(posesFile)) {
   });
   tfCount = got.length;
 } else {
-  check(!tf, () => "/tf without poses.bin");
+  check(!tf && !topic("/scene"), () => "/tf or /scene without poses.bin");
 }
 
 // the cameras against their PNG files, frames.csv and summary.json
@@ -211,8 +233,8 @@ for (const o of outputs) {
   images += got.length;
 }
 check(
-  readers.size === signalChannels + (tf ? 1 : 0) + outputs.length,
-  () => `${readers.size} channels, expected ${signalChannels} devices, /tf and ${outputs.length} cameras`,
+  readers.size === signalChannels + (tf ? 2 : 0) + outputs.length,
+  () => `${readers.size} channels, expected ${signalChannels} devices, /scene, /tf and ${outputs.length} cameras`,
 );
 console.log(
   `read_mcap: ${dir}/log.mcap: ${messages.length} messages (${rows.length} rows on ${signalChannels} devices, ` +

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -22,6 +23,7 @@
 #include "lab/outputs/lab_output.h"
 #include "lab/outputs/lab_output_fs.h"
 #include "scene/scene_csv.h"
+#include "scene/scene_messages.h"
 
 namespace vlab::lab {
 
@@ -70,6 +72,13 @@ RunExtras ReadRunExtras(const std::string& run_dir) {
       if (!body.is_string()) throw InputError(scene + ": a body's name is not a string");
       x.content.bodies.push_back(body.get<std::string>());
     }
+    std::string update;  // the /scene message: a geometry it cannot encode is refused here, by name
+    try {
+      scene::EncodeSceneUpdate(0.0, j, nullptr, &update);
+    } catch (const std::exception& e) {
+      throw InputError(scene + ": not a scene's geometry (bodies, geoms): " + e.what());
+    }
+    x.content.scene = std::make_shared<const nlohmann::json>(std::move(j));
     CheckInputFile(poses, "poses '" + poses + "'", kMaxCsvBytes);
     std::ifstream in(poses, std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

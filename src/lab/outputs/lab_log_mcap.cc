@@ -1,5 +1,7 @@
 #include "lab/outputs/lab_log_mcap.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -53,14 +55,32 @@ std::unique_ptr<McapLog> McapLog::Open(const std::string& path, const std::vecto
     w.AddChannel(w.AddSchema(s.schema.name, scene::kSchemaEncoding, s.schema.text), s.topic, scene::kMessageEncoding);
   }
   const std::vector<std::string>& bodies = log->content_.bodies;
+  const nlohmann::json* geometry = log->content_.scene.get();
+  std::string scene_update;  // written once every channel is there
+  std::uint16_t scene_channel = 0;
+  if (geometry) {
+    const scene::MessageSchema update = scene::SceneUpdateSchema();
+    scene_channel =
+        w.AddChannel(w.AddSchema(update.name, scene::kSchemaEncoding, update.text), "/scene", scene::kMessageEncoding);
+    try {
+      scene::EncodeSceneUpdate(0.0, *geometry, nullptr, &scene_update);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("log '" + path + "': the scene's geometry: " + e.what());
+    }
+  }
   if (!bodies.empty()) {
     const scene::MessageSchema tf = scene::TfMessageSchema();
     log->tf_channel_ =
         w.AddChannel(w.AddSchema(tf.name, scene::kSchemaEncoding, tf.text), "/tf", scene::kMessageEncoding);
+    const std::vector<std::string> frames = geometry ? scene::BodyFrames(*geometry) : std::vector<std::string>();
+    if (geometry && frames.size() != bodies.size()) {
+      throw std::runtime_error("log '" + path + "': the scene's geometry has " + std::to_string(frames.size()) +
+                               " bodies, the poses " + std::to_string(bodies.size()));
+    }
     for (std::size_t b = 0; b < bodies.size(); ++b) {
       scene::FrameTransform& transform = log->transforms_.emplace_back();
       transform.parent = "world";
-      transform.child = bodies[b].empty() ? "body_" + std::to_string(b) : bodies[b];
+      transform.child = geometry ? frames[b] : bodies[b].empty() ? "body_" + std::to_string(b) : bodies[b];
     }
   }
   if (!log->content_.cameras.empty()) {
@@ -73,6 +93,10 @@ std::unique_ptr<McapLog> McapLog::Open(const std::string& path, const std::vecto
     }
   }
   log->frames_.resize(log->content_.cameras.size());
+  if (geometry) {
+    const std::string why = w.Write(scene_channel, 0, scene_update.data(), scene_update.size());
+    if (!why.empty()) throw std::runtime_error(why);
+  }
   return log;
 }
 

@@ -4,9 +4,15 @@
 // one timeline:
 //   /DEVICE        vlab_msgs/msg/<Device>: each device's log columns at every
 //                  row (SignalChannels; the column "time" is the stamp)
+//   /scene         foxglove_msgs/msg/SceneUpdate: the visual geometry of
+//                  scene.json once at t = 0, an entity per body locked to its
+//                  /tf frame (EncodeSceneUpdate; meshes left out: the file
+//                  follows from the run folder alone, which has no mesh
+//                  vertices); absent without outputs.poses
 //   /tf            tf2_msgs/msg/TFMessage: every visual body's pose in
 //                  "world" at outputs.poses' rate (the float32 values of
-//                  poses.bin; absent without outputs.poses)
+//                  poses.bin, frames named by BodyFrames; absent without
+//                  outputs.poses)
 //   /camera/NAME   sensor_msgs/msg/CompressedImage: each frame of an
 //                  outputs.images camera with png: true, the bytes of its
 //                  CAMERA/rgb_NNNNNN.png (cameras in name order)
@@ -35,6 +41,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "lab/outputs/lab_log.h"
 #include "lab/outputs/lab_mcap.h"
 #include "scene/scene_messages.h"
@@ -53,6 +61,10 @@ struct McapLogContent {
   /// The bodies of poses.bin, in order (an empty name becomes "body_N", N its
   /// index); empty: no /tf.
   std::vector<std::string> bodies;
+  /// The scene's visual geometry (scene.json, scene::SceneGeometry), whose
+  /// "bodies" are `bodies`: a /scene message at t = 0, and the /tf frames are
+  /// BodyFrames'. Null: no /scene.
+  std::shared_ptr<const nlohmann::json> scene;
   double poses_interval_s = 0;  ///< the live ring's sizing: one pose per interval
   std::vector<McapCamera> cameras;
   double period_s = 0;  ///< the control period (the live rings' sizing)

@@ -36,8 +36,10 @@ PoseRecorder::~PoseRecorder() {
   if (file_) std::fclose(file_);
 }
 
+nlohmann::json PoseRecorder::Geometry() const { return SceneGeometry(m_, bodies_); }
+
 void PoseRecorder::Open(const OutputDir& out) {
-  nlohmann::json scene = SceneGeometry(m_, bodies_);
+  nlohmann::json scene = Geometry();
   scene["model"] = scene_;
   scene["rate_hz"] = rate_hz_;
   const std::string json_path = out.File("scene.json");

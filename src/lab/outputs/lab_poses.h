@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <mujoco/mujoco.h>
+#include <nlohmann/json_fwd.hpp>
 
 #include "scene/scene_pose_frame.h"
 
@@ -52,6 +53,9 @@ class PoseRecorder {
   const std::vector<double>& poses() const { return poses_; }
   /// The bodies' MJCF names, in frame order ("" for an unnamed body).
   std::vector<std::string> body_names() const;
+  /// The visual geometry of the recorded bodies, as scene.json holds it less
+  /// "model" and "rate_hz" (scene::SceneGeometry).
+  nlohmann::json Geometry() const;
   /// The time between frames, s.
   double interval_s() const { return interval_s_; }
 

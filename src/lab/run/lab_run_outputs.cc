@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -33,6 +34,7 @@ McapLogContent RunSession::McapContent() const {
   content.period_s = period_;
   if (poses_) {
     content.bodies = poses_->body_names();
+    content.scene = std::make_shared<const nlohmann::json>(poses_->Geometry());
     content.poses_interval_s = poses_->interval_s();
   }
   for (const ImageOutputConfig& image : s_.scenario.outputs.images) {
