@@ -13,6 +13,7 @@
 #include <cstring>
 #include <initializer_list>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -50,12 +51,13 @@ function wait(a, timeout)
 end
 local function await() while moving() do yield() end return outcome() end
 local function settle() while moving(true) do yield() end end  -- a blended move's end: at rest
-local mj, ml, mlr, mc, sm = _movej, _movel, _movel_rel, _movec, _selfmove
-_movej, _movel, _movel_rel, _movec, _selfmove = nil, nil, nil, nil, nil
+local mj, ml, mlr, mc, mp, sm = _movej, _movel, _movel_rel, _movec, _movep, _selfmove
+_movej, _movel, _movel_rel, _movec, _movep, _selfmove = nil, nil, nil, nil, nil, nil
 function movej(target, options) settle() mj(target, options) return await() end
 function movel(target, options) ml(target, options) return await() end
 function movel_rel(delta, options) mlr(delta, options) return await() end
 function movec(via, target, options) settle() mc(via, target, options) return await() end
+function movep(points, options) settle() mp(points, options) return await() end
 function selfmove(options) settle() sm(options) return await() end
 local raise = _signal
 _signal = nil
@@ -418,6 +420,48 @@ int MoveC(lua_State* L) {
   return 0;
 }
 
+// movep(points [, opts]): through a list of frames at constant tool speed, each corner rounded
+// by an arc starting r before it (MotionPlanner::Path)
+constexpr double kPathRadius_m = 0.01;  // movep's default corner radius
+constexpr int kMaxPathPoints = 10000;
+
+int MoveP(lua_State* L) {
+  Robot& r = NeedRobot(L, "movep");
+  static const char* const known[] = {"v", "a", "w", "r", "ref", nullptr};
+  static const Refused refused[] = {
+      {"t", "movep holds the tool speed v (m/s): its duration follows from the path's length"},
+      {"jv", "movep moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
+      {"force", "only movel and movec are guarded moves"},
+      {"wrench", "only movel and movec are guarded moves"},
+      {"rel", "only movel_rel moves relative to the planned pose"},
+      {nullptr, nullptr}};
+  CheckOptions(L, 2, "movep", known, refused);
+  if (!lua_istable(L, 1) || ToFrame(L, 1)) {
+    ScriptError(L, "movep: expected a list of frames, got %s", ToFrame(L, 1) ? "one frame" : luaL_typename(L, 1));
+  }
+  const int count = static_cast<int>(lua_rawlen(L, 1));
+  if (count < 1) ScriptError(L, "movep: the list of points is empty");
+  if (count > kMaxPathPoints) ScriptError(L, "movep: %d points, at most %d", count, kMaxPathPoints);
+  const double radius = Option(L, 2, "r", kPathRadius_m, "movep");
+  if (!(radius > 0)) ScriptError(L, "movep: the corner radius r must be > 0 m, got %g", radius);
+  const MotionLimits limits = MoveLimits(L, r, 2, "movep");
+  // the points (world), in a Lua-owned buffer: a script error below leaves no C++ object behind
+  auto* points = static_cast<Frame*>(lua_newuserdatauv(L, sizeof(Frame) * static_cast<std::size_t>(count), 0));
+  const int buffer = lua_gettop(L);
+  for (int i = 0; i < count; ++i) {
+    lua_rawgeti(L, 1, i + 1);
+    char what[48];
+    std::snprintf(what, sizeof what, "movep: point %d", i + 1);
+    if (!ToFrame(L, -1)) ScriptError(L, "%s: expected a frame, got %s", what, luaL_typename(L, -1));
+    new (&points[i]) Frame(ToWorld(r, Target(L, lua_gettop(L), 2, what)));
+    lua_pop(L, 1);
+  }
+  PlanOrFail(L, r, "movep",
+             [&] { return r.planner->Path(r.q_ref, std::vector<Frame>(points, points + count), radius, limits); });
+  lua_remove(L, buffer);
+  return 0;
+}
+
 int SelfMove(lua_State* L) {
   Robot& r = NeedRobot(L, "selfmove");
   static const char* const known[] = {"joint", "by", "t", nullptr};
@@ -643,19 +687,33 @@ void OpenApi(Program* p) {
   lua_State* L = p->L;
   lua_pushlightuserdata(L, p);
   lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
-  static const luaL_Reg functions[] = {{"_movej", MoveJ},           {"_movel", MoveL},
-                                       {"_movel_rel", MoveLRel},    {"_movec", MoveC},
-                                       {"_selfmove", SelfMove},     {"_moving", Moving},
-                                       {"_outcome", Outcome},       {"_now", Now},
-                                       {"_periods", Periods},       {"now", Now},
-                                       {"joints", Joints},          {"pose", Pose},
-                                       {"planned", Planned},        {"planned_joints", PlannedJoints},
-                                       {"frame_def", FrameDef},     {"frame_of", FrameOf},
-                                       {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
-                                       {"speed", SetSpeed},         {"accel", SetAccel},
-                                       {"jspeed", SetJointSpeed},   {"limits", SetRateLimits},
-                                       {"tool", SetTool},           {"base", SetBase},
-                                       {"blend", SetBlend},         {nullptr, nullptr}};
+  static const luaL_Reg functions[] = {{"_movej", MoveJ},
+                                       {"_movel", MoveL},
+                                       {"_movel_rel", MoveLRel},
+                                       {"_movec", MoveC},
+                                       {"_movep", MoveP},
+                                       {"_selfmove", SelfMove},
+                                       {"_moving", Moving},
+                                       {"_outcome", Outcome},
+                                       {"_now", Now},
+                                       {"_periods", Periods},
+                                       {"now", Now},
+                                       {"joints", Joints},
+                                       {"pose", Pose},
+                                       {"planned", Planned},
+                                       {"planned_joints", PlannedJoints},
+                                       {"frame_def", FrameDef},
+                                       {"frame_of", FrameOf},
+                                       {"force", WrenchPart<true>},
+                                       {"torque", WrenchPart<false>},
+                                       {"speed", SetSpeed},
+                                       {"accel", SetAccel},
+                                       {"jspeed", SetJointSpeed},
+                                       {"limits", SetRateLimits},
+                                       {"tool", SetTool},
+                                       {"base", SetBase},
+                                       {"blend", SetBlend},
+                                       {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, functions, 0);
   lua_pop(L, 1);

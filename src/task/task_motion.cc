@@ -474,6 +474,130 @@ Plan MotionPlanner::FromBlend(const BlendStart& b, const Frame& goal_W, const Mo
   });
 }
 
+namespace {
+
+// one piece of a path: a line from a to b, or an arc from a (tangent d) turning by `angle` about
+// its centre c (radius R, the turn's in-plane normal m: from the arc's start towards c)
+struct PathPiece {
+  bool arc = false;
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero(), c = Eigen::Vector3d::Zero(),
+                  d = Eigen::Vector3d::Zero(), m = Eigen::Vector3d::Zero();
+  double radius = 0, angle = 0, length = 0;
+  Eigen::Vector3d At(double sigma) const {  // the point `sigma` m along the piece
+    if (!arc) return a + (b - a) * (length > 0 ? sigma / length : 0.0);
+    const double phi = sigma / radius;
+    return c - radius * m * std::cos(phi) + radius * d * std::sin(phi);
+  }
+};
+
+}  // namespace
+
+double PathCornerGap(double l, double theta) {
+  if (theta <= 0) return 0;
+  const double radius = l / std::tan(theta / 2);
+  return radius / std::cos(theta / 2) - radius;
+}
+
+Plan MotionPlanner::Path(const Eigen::VectorXd& q0, const std::vector<Frame>& points, double radius_m,
+                         const MotionLimits& limits) const {
+  if (points.empty()) throw std::invalid_argument("no point to move through");
+  if (points.size() > 1 && !(radius_m > 0)) {
+    throw std::invalid_argument("a path through several points needs a corner radius r > 0 m (got " +
+                                FormatNumber(radius_m, "%g") +
+                                "): a sharp corner at constant speed is an infinite "
+                                "acceleration");
+  }
+  std::vector<Frame> p;  // the start, then the points
+  p.push_back(ToolPose(q0));
+  p.insert(p.end(), points.begin(), points.end());
+  const std::size_t n = p.size();
+  for (std::size_t k = 1; k < n; ++k) {
+    if ((p[k].p - p[k - 1].p).norm() < 1e-6) {
+      throw std::invalid_argument("point " + std::to_string(k) + " is where the path already is (" +
+                                  (k == 1 ? std::string("the start") : "point " + std::to_string(k - 1)) +
+                                  "): every line of the path must be at least 1e-6 m long");
+    }
+  }
+  // the corners: an arc at each interior point, starting l before it
+  std::vector<PathPiece> pieces;
+  std::vector<double> at_point(n, 0.0);  // path length where each point's orientation is reached
+  Eigen::Vector3d from = p[0].p;
+  double length = 0, min_radius = 1e300;
+  for (std::size_t k = 1; k < n; ++k) {
+    const Eigen::Vector3d d_in = (p[k].p - p[k - 1].p).normalized();
+    double l = 0, theta = 0;
+    Eigen::Vector3d d_out = d_in;
+    if (k + 1 < n) {
+      d_out = (p[k + 1].p - p[k].p).normalized();
+      theta = std::acos(std::clamp(d_in.dot(d_out), -1.0, 1.0));
+      if (theta > M_PI - 1e-6) {
+        throw std::invalid_argument("the path turns back on itself at point " + std::to_string(k) +
+                                    ": no arc rounds a 180 deg corner");
+      }
+      if (theta > 1e-9) {
+        l = std::min({radius_m, (p[k].p - p[k - 1].p).norm() / 2, (p[k + 1].p - p[k].p).norm() / 2});
+      }
+    }
+    PathPiece line;
+    line.a = from;
+    line.b = p[k].p - l * d_in;
+    line.length = (line.b - line.a).norm();
+    length += line.length;
+    pieces.push_back(line);
+    if (l > 0) {
+      PathPiece arc;
+      arc.arc = true;
+      arc.a = line.b;
+      arc.d = d_in;
+      arc.m = (d_out - d_out.dot(d_in) * d_in).normalized();
+      arc.radius = l / std::tan(theta / 2);
+      arc.c = arc.a + arc.radius * arc.m;
+      arc.angle = theta;
+      arc.length = arc.radius * theta;
+      min_radius = std::min(min_radius, arc.radius);
+      at_point[k] = length + arc.length / 2;
+      length += arc.length;
+      pieces.push_back(arc);
+      from = p[k].p + l * d_out;
+    } else {
+      at_point[k] = length;
+      from = p[k].p;
+    }
+  }
+  at_point[n - 1] = length;
+  // orientations along the path: SLERP between the points' (shorter arcs)
+  std::vector<Eigen::Quaterniond> q(n);
+  q[0] = p[0].q;
+  for (std::size_t k = 1; k < n; ++k) q[k] = q[k - 1].dot(p[k].q) < 0 ? Eigen::Quaterniond(-p[k].q.coeffs()) : p[k].q;
+  // the cruise speed: the settings', the arcs' acceleration across the path, the tool's turn
+  double v = limits.speed_mps;
+  if (min_radius < 1e300) v = std::min(v, std::sqrt(limits.accel_mps2 * min_radius));
+  for (std::size_t k = 1; k < n; ++k) {
+    const double turn = q[k - 1].angularDistance(q[k]), span = at_point[k] - at_point[k - 1];
+    if (turn > 1e-12) v = std::min(v, limits.rot_speed_rps * span / turn);
+  }
+  double T = 0, frac = 0.25;
+  TrapezoidTiming(length, v, limits.accel_mps2, &T, &frac);
+  const auto pose_at = [&](double s) {
+    const double sigma = std::clamp(s, 0.0, 1.0) * length;
+    Frame f;
+    double left = sigma;
+    std::size_t i = 0;
+    while (i + 1 < pieces.size() && left > pieces[i].length) left -= pieces[i++].length;
+    f.p = pieces[i].At(std::min(left, pieces[i].length));
+    std::size_t k = 1;
+    while (k + 1 < n && sigma > at_point[k]) ++k;
+    const double span = at_point[k] - at_point[k - 1];
+    f.q = q[k - 1].slerp(span > 0 ? std::clamp((sigma - at_point[k - 1]) / span, 0.0, 1.0) : 1.0, q[k]);
+    return f;
+  };
+  return Within(q0, q0, [&](double k) {
+    Plan plan = Cartesian(q0, T * k, frac, length, pose_at);
+    plan.tool_W.back() = p[n - 1];  // equal up to rounding
+    return plan;
+  });
+}
+
 Plan MotionPlanner::Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const {
   const int n = model_->dof();
   if (n != 7)

@@ -20,6 +20,9 @@
 //   self       null-space motion: one joint driven by a quintic while the tool
 //              pose is held (7-DOF arm: the elbow swings about the
 //              shoulder-wrist line)
+//   path       through a list of points at constant tool speed (movep): lines
+//              joined by circular arcs tangent to both, each starting r before
+//              its corner; the path speed is a trapezoid over the whole length
 //   blend      the next straight move entered from a blended one (movel's r):
 //              a quadratic Bézier round the corner, then the line; the path
 //              speed carries over (FromBlend)
@@ -116,6 +119,21 @@ class MotionPlanner {
   /// The path speed starts at b.speed_mps (no stop) and follows a trapezoid
   /// to rest; orientation by SLERP from P1's to the goal's over the path.
   Plan FromBlend(const BlendStart& b, const Frame& goal_W, const MotionLimits& limits) const;
+  /// Through `points` (world; the last is the goal) at constant tool speed:
+  /// the polyline start, points[0], ..., points[n-1], each corner rounded by a
+  /// circular arc tangent to both of its lines, which starts and ends
+  /// l = min(r, half of either line) from the corner (radius l / tan(θ/2), θ
+  /// the turn; the tool passes the corner at PathCornerGap(l, θ)).
+  /// Orientation by SLERP from one point's to the next, each point's reached
+  /// at the middle of its arc. One trapezoid of the path speed over the whole
+  /// length: accelerate at limits.accel_mps2 to the cruise speed, hold it, stop at
+  /// the goal. The cruise speed is limits.speed_mps, lowered so that no arc
+  /// needs more than limits.accel_mps2 across the path (v²/R) and no piece
+  /// turns the tool faster than limits.rot_speed_rps (then the rate limits, as
+  /// every plan). r <= 0 with more than one point, a repeated point and a
+  /// line shorter than 1e-6 m are refused.
+  Plan Path(const Eigen::VectorXd& q0, const std::vector<Frame>& points, double radius_m,
+            const MotionLimits& limits) const;
   /// Moves chain joint `joint` by `delta` rad over `duration_s` with the tool held.
   Plan Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const;
 
@@ -156,6 +174,12 @@ class MotionPlanner {
   JointRateLimits rates_;
   Eigen::VectorXd zero_;  // joint velocities of every evaluation (kinematics only)
 };
+
+/// The distance (m) by which a path (MotionPlanner::Path) passes a corner it
+/// rounds with an arc starting `l` before it, the lines turning by `theta`
+/// rad: R / cos(θ/2) - R with R = l / tan(θ/2), which is l·tan(θ/4) (a right
+/// angle: 0.414·l).
+double PathCornerGap(double l, double theta);
 
 /// Duration (s) and acceleration fraction of a trapezoidal speed profile over
 /// distance `d` with peak speed v and acceleration a (a triangle when d <

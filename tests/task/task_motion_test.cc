@@ -87,6 +87,59 @@ TEST_F(MotionTest, ArcKeepsRadiusAndPassesTheViaPoint) {
   EXPECT_LT((Fk(plan.q.back()).p - end).norm(), 1e-8);
 }
 
+// movep: through a square's corners at constant tool speed. Away from the ends (the trapezoid's
+// ramps) the tool's speed, measured through the independent chain from sample to sample, is
+// the cruise speed within 2 %, on the lines and on the arcs alike; each corner is passed at
+// PathCornerGap(r, 90 deg) = 0.414 r; the path ends on the last point.
+TEST_F(MotionTest, PathHoldsTheToolSpeedThroughThePoints) {
+  JointRateLimits wide = DefaultRateLimits(7);  // the path's own timing, not the joints'
+  wide.v_rps.setConstant(100.0);
+  wide.a_rps2.setConstant(1000.0);
+  planner_->set_rate_limits(wide);
+  const Eigen::VectorXd q1 = planner_->Ik(q0_, Pose(0.50, -0.10, 0.50, Down()));
+  const std::vector<Frame> corners = {Pose(0.60, -0.10, 0.50, Down()), Pose(0.60, 0.05, 0.50, Down(20)),
+                                      Pose(0.50, 0.05, 0.50, Down(20)), Pose(0.50, -0.10, 0.50, Down())};
+  MotionLimits limits;
+  limits.speed_mps = 0.1;
+  limits.accel_mps2 = 0.5;
+  const double r = 0.02;
+  const Plan plan = planner_->Path(q1, corners, r, limits);
+  // cruise: v = 0.1 m/s (an arc of radius 0.02 m needs v^2/R = 0.5 m/s^2: just allowed)
+  const double v = 0.1, ramp = v / limits.accel_mps2;
+  std::vector<Eigen::Vector3d> p = {Fk(q1).p};
+  for (const Eigen::VectorXd& q : plan.q) p.push_back(Fk(q).p);
+  double worst = 0;
+  int cruising = 0;
+  for (std::size_t i = 1; i < p.size(); ++i) {
+    const double t = i * kPeriod;
+    if (t < ramp + 2 * kPeriod || t > plan.duration_s - ramp - 2 * kPeriod) continue;
+    worst = std::max(worst, std::abs((p[i] - p[i - 1]).norm() / kPeriod - v) / v);
+    ++cruising;
+  }
+  EXPECT_GT(cruising, 2000);  // 0.5 m of path at 0.1 m/s: most of it
+  EXPECT_LT(worst, 0.02);
+  // the corners (the first three: the last point is the goal) are passed at 0.414 r
+  for (int k = 0; k < 3; ++k) {
+    double nearest = 1;
+    for (const Eigen::Vector3d& x : p) nearest = std::min(nearest, (x - corners[k].p).norm());
+    EXPECT_NEAR(nearest, PathCornerGap(r, M_PI / 2), 2e-4) << "corner " << k;
+  }
+  EXPECT_NEAR(PathCornerGap(r, M_PI / 2), (std::sqrt(2.0) - 1) * r, 1e-15);
+  EXPECT_LT((Fk(plan.q.back()).p - corners.back().p).norm(), 1e-8);
+  EXPECT_LT(Fk(plan.q.back()).q.angularDistance(corners.back().q), 1e-8);
+  // a tighter corner lowers the cruise speed to sqrt(a R): r = 0.005 m -> R 0.005, 0.05 m/s
+  const Plan tight = planner_->Path(q1, corners, 0.005, limits);
+  double fastest = 0;
+  for (std::size_t i = 1; i < tight.q.size(); ++i) {
+    fastest = std::max(fastest, (Fk(tight.q[i]).p - Fk(tight.q[i - 1]).p).norm() / kPeriod);
+  }
+  EXPECT_NEAR(fastest, std::sqrt(0.5 * 0.005), 0.001);
+  // refused: no radius with several points, a point where the path already is, a U-turn
+  EXPECT_THROW(planner_->Path(q1, corners, 0, limits), std::invalid_argument);
+  EXPECT_THROW(planner_->Path(q1, {corners[0], corners[0]}, r, limits), std::invalid_argument);
+  EXPECT_THROW(planner_->Path(q1, {corners[0], Pose(0.50, -0.10, 0.50, Down())}, r, limits), std::invalid_argument);
+}
+
 // movej: every sample on the joint-space segment; a frame target by IK lands on the frame.
 TEST_F(MotionTest, JointMoveIsStraightInJointSpaceAndIkHitsTheFrame) {
   const Frame goal = Pose(0.4, 0.3, 0.6, Down(-30));

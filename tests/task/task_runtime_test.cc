@@ -350,5 +350,51 @@ TEST_F(BlendTest, RadiusOverHalfASegmentIsAnErrorAtItsLine) {
       << second->error();
 }
 
+// movep from a script: through B and C of the blend corner and back towards the start, the
+// corner B passed at PathCornerGap(r, 90 deg), the commanded tool speed constant (2 %) between
+// the ramps, "done" on the last point; the options it does not take named at the line
+TEST_F(BlendTest, MovepHoldsTheToolSpeedThroughThePointsFromAScript) {
+  auto r = Make({{"pa10", std::string(kCorner) + "D = frame(a.pos + vec3(0, 0.10, 0), a.rot)\n"
+                                                 "print(movep({B, C, D}, {r = 0.02, v = 0.1}))\n"
+                                                 "print((pose().pos - D.pos):norm() < 1e-9)\n"
+                                                 "print(select(2, pcall(movep, {B, C}, {t = 2})))\n"
+                                                 "print(select(2, pcall(movep, {B, 3})))\n"
+                                                 "print(select(2, pcall(movep, B)))\n"
+                                                 "print(select(2, pcall(movep, {B, C}, {r = 0})))\n"
+                                                 "print(B.x, B.y, B.z)\n"}});
+  ASSERT_TRUE(RunFor(*r, 5000)) << r->error();
+  ASSERT_EQ(printed_.size(), 7u);
+  EXPECT_NE(printed_[0].find(": done"), std::string::npos) << printed_[0];
+  EXPECT_NE(printed_[1].find(": true"), std::string::npos) << printed_[1];
+  EXPECT_NE(printed_[2].find("pa10.lua:7: movep: option 't' is not supported: movep holds the tool speed v"),
+            std::string::npos)
+      << printed_[2];
+  EXPECT_NE(printed_[3].find("pa10.lua:8: movep: point 2: expected a frame, got number"), std::string::npos)
+      << printed_[3];
+  EXPECT_NE(printed_[4].find("pa10.lua:9: movep: expected a list of frames, got one frame"), std::string::npos)
+      << printed_[4];
+  EXPECT_NE(printed_[5].find("pa10.lua:10: movep: the corner radius r must be > 0 m, got 0"), std::string::npos)
+      << printed_[5];
+  std::istringstream in(printed_[6].substr(printed_[6].find(": ") + 2));
+  Eigen::Vector3d B;
+  in >> B[0] >> B[1] >> B[2];
+  const std::vector<Eigen::Vector3d> path = ToolPath();
+  double nearest = 1, worst = 0;
+  const double ramp = v_ / 0.5;
+  std::size_t first = path.size(), last = 0;  // the samples that move
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    if ((path[i] - path[i - 1]).norm() > 1e-12) first = std::min(first, i), last = i;
+  }
+  for (std::size_t i = first; i <= last; ++i) {
+    nearest = std::min(nearest, (path[i] - B).norm());
+    const double t = (i - first) * kPeriod, left = (last - i) * kPeriod;
+    if (t > ramp + 2 * kPeriod && left > ramp + 2 * kPeriod) {
+      worst = std::max(worst, std::abs((path[i] - path[i - 1]).norm() / kPeriod - v_) / v_);
+    }
+  }
+  EXPECT_NEAR(nearest, PathCornerGap(r_, M_PI / 2), 2e-4);
+  EXPECT_LT(worst, 0.02);
+}
+
 }  // namespace
 }  // namespace vlab::task
