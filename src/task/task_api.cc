@@ -49,18 +49,36 @@ function wait(a, timeout)
   end
   error("wait: expected seconds or a condition function, got " .. type(a), 2)
 end
-local function await() while moving() do yield() end return outcome() end
+local raise, sent = _signal, _sent
+_signal, _sent = nil, nil
+-- a move's triggers (option at): each fires once the sample it names has been commanded
+local function fire(triggers)
+  if not triggers then return end
+  local n = sent()
+  for _, tr in ipairs(triggers) do
+    if not tr.fired and tr.sample < n then
+      tr.fired = true
+      if tr.signal then raise(tr.signal) else tr.call() end
+    end
+  end
+end
+local function await(triggers)
+  while moving() do
+    fire(triggers)
+    yield()
+  end
+  fire(triggers)
+  return outcome()
+end
 local function settle() while moving(true) do yield() end end  -- a blended move's end: at rest
 local mj, ml, mlr, mc, mp, sm = _movej, _movel, _movel_rel, _movec, _movep, _selfmove
 _movej, _movel, _movel_rel, _movec, _movep, _selfmove = nil, nil, nil, nil, nil, nil
-function movej(target, options) settle() mj(target, options) return await() end
-function movel(target, options) ml(target, options) return await() end
-function movel_rel(delta, options) mlr(delta, options) return await() end
-function movec(via, target, options) settle() mc(via, target, options) return await() end
-function movep(points, options) settle() mp(points, options) return await() end
+function movej(target, options) settle() return await(mj(target, options)) end
+function movel(target, options) return await(ml(target, options)) end
+function movel_rel(delta, options) return await(mlr(delta, options)) end
+function movec(via, target, options) settle() return await(mc(via, target, options)) end
+function movep(points, options) settle() return await(mp(points, options)) end
 function selfmove(options) settle() sm(options) return await() end
-local raise = _signal
-_signal = nil
 function signal(name) raise(name) end
 function wait_signal(name, timeout)
   return wait(function() return take(name) end, timeout)
@@ -217,6 +235,116 @@ void SetGuard(lua_State* L, Robot& r, int options, const char* what) {
 }
 
 // runs a planner call; its std::invalid_argument becomes a script error
+constexpr int kMaxTriggers = 1000;  // triggers of one move
+
+// Option at of a move: a list of triggers, each {d = M or t = S, signal = NAME or call = FN}:
+// d the path length from the move's start (m; Cartesian moves), t the time from it (s). Checked
+// before the move is planned; ResolveTriggers, after, names the sample each fires at.
+void CheckTriggers(lua_State* L, int options, const char* what, bool cartesian) {
+  if (!HasOption(L, options, "at")) return;
+  lua_getfield(L, options, "at");
+  const int at = lua_gettop(L);
+  if (!lua_istable(L, at) || ToFrame(L, at)) {
+    ScriptError(L, "%s: option at must be a list of triggers {d = M or t = S, signal = NAME or call = FN}, got %s",
+                what, luaL_typename(L, at));
+  }
+  const int n = static_cast<int>(lua_rawlen(L, at));
+  if (n > kMaxTriggers) ScriptError(L, "%s: %d triggers, at most %d", what, n, kMaxTriggers);
+  for (int i = 1; i <= n; ++i) {
+    lua_rawgeti(L, at, i);
+    const int tr = lua_gettop(L);
+    if (!lua_istable(L, tr)) ScriptError(L, "%s: trigger %d must be a table, got %s", what, i, luaL_typename(L, tr));
+    static const char* const keys[] = {"d", "t", "signal", "call", nullptr};
+    char name[64];
+    std::snprintf(name, sizeof name, "%s: trigger %d", what, i);
+    CheckOptions(L, tr, name, keys);
+    const bool d = HasOption(L, tr, "d"), t = HasOption(L, tr, "t");
+    if (d == t) ScriptError(L, "%s: give d (m along the path) or t (s from the start), one of them", name);
+    if (d && !cartesian) ScriptError(L, "%s: d is a length along the tool's path: a joint move takes t", name);
+    const double value = Option(L, tr, d ? "d" : "t", 0, name);
+    if (value < 0) ScriptError(L, "%s: %s must be >= 0, got %g", name, d ? "d" : "t", value);
+    lua_getfield(L, tr, "signal");
+    const bool is_signal = !lua_isnil(L, -1);
+    if (is_signal && lua_type(L, -1) != LUA_TSTRING) {
+      ScriptError(L, "%s: signal must be a name (a string), got %s", name, luaL_typename(L, -1));
+    }
+    lua_getfield(L, tr, "call");
+    const bool is_call = !lua_isnil(L, -1);
+    if (is_call && !lua_isfunction(L, -1))
+      ScriptError(L, "%s: call must be a function, got %s", name, luaL_typename(L, -1));
+    if (is_signal == is_call) ScriptError(L, "%s: give signal (a name) or call (a function), one of them", name);
+    lua_pop(L, 3);
+  }
+  lua_pop(L, 1);
+}
+
+// the running move's triggers as the prelude fires them: pushes a list of {sample = I,
+// signal = NAME or call = FN} (nil without option at); a trigger beyond the move (d past its
+// length, t past its duration) cancels the move, which has not begun, and is an error
+void ResolveTriggers(lua_State* L, Robot& r, int options, const char* what) {
+  if (!HasOption(L, options, "at")) {
+    lua_pushnil(L);
+    return;
+  }
+  lua_getfield(L, options, "at");
+  const int at = lua_gettop(L);
+  const int n = static_cast<int>(lua_rawlen(L, at));
+  const std::size_t samples = r.plan.q.size();
+  // the path length at each sample (Cartesian moves)
+  std::vector<double> along(r.plan.tool_W.size(), 0.0);
+  Eigen::Vector3d from = r.planner->ToolPose(r.q_ref).p;
+  for (std::size_t i = 0; i < along.size(); ++i) {
+    along[i] = (i ? along[i - 1] : 0.0) + (r.plan.tool_W[i].p - from).norm();
+    from = r.plan.tool_W[i].p;
+  }
+  const double length = along.empty() ? 0.0 : along.back(), duration = samples * P(L)->period_s;
+  lua_createtable(L, n, 0);
+  const int out = lua_gettop(L);
+  char error[160] = "";
+  for (int i = 1; i <= n && !error[0]; ++i) {
+    lua_rawgeti(L, at, i);
+    const int tr = lua_gettop(L);
+    const bool by_length = HasOption(L, tr, "d");
+    const double value = Option(L, tr, by_length ? "d" : "t", 0, what);
+    std::size_t sample = 0;
+    if (by_length) {
+      if (value > length + 1e-9) {
+        std::snprintf(error, sizeof error, "trigger %d: d = %g m is beyond the move's path (%.6g m)", i, value, length);
+      }
+      while (sample + 1 < along.size() && along[sample] < value - 1e-12) ++sample;
+    } else {
+      if (value > duration + 1e-9) {
+        std::snprintf(error, sizeof error, "trigger %d: t = %g s is beyond the move's duration (%.6g s)", i, value,
+                      duration);
+      }
+      const double k = std::ceil(value / P(L)->period_s - 1e-9);
+      sample = static_cast<std::size_t>(std::clamp(k - 1, 0.0, static_cast<double>(samples ? samples - 1 : 0)));
+    }
+    lua_createtable(L, 0, 2);
+    lua_pushinteger(L, static_cast<lua_Integer>(sample));
+    lua_setfield(L, -2, "sample");
+    for (const char* key : {"signal", "call"}) {
+      lua_getfield(L, tr, key);
+      lua_setfield(L, -2, key);
+    }
+    lua_rawseti(L, out, i);
+    lua_pop(L, 1);
+  }
+  if (error[0]) {
+    r.moving = false;  // (not one sample of it was sent)
+    r.plan = Plan();
+    ScriptError(L, "%s: %s", what, error);
+  }
+  lua_remove(L, at);
+}
+
+// a trigger fires once its sample has been handed out: a blended move is left before its end
+void CheckTriggersNotBlended(lua_State* L, int options, double radius, const char* what) {
+  if (radius > 0 && HasOption(L, options, "at")) {
+    ScriptError(L, "%s: a move with triggers (at) cannot blend (r = %g m): give r = 0 (or blend(0))", what, radius);
+  }
+}
+
 template <class F>
 void PlanOrFail(lua_State* L, Robot& r, const char* what, F plan_fn) {
   char error[512] = "";
@@ -230,7 +358,7 @@ void PlanOrFail(lua_State* L, Robot& r, const char* what, F plan_fn) {
 
 int MoveJ(lua_State* L) {
   Robot& r = NeedRobot(L, "movej");
-  static const char* const known[] = {"v", "a", "jv", "t", "ref", nullptr};
+  static const char* const known[] = {"v", "a", "jv", "t", "ref", "at", nullptr};
   static const Refused refused[] = {
       {"w", "movej interpolates the joints; its speed is v (deg/s, the fastest joint) or its duration t (s)"},
       {"r", "only movel and movec blend"},
@@ -241,12 +369,14 @@ int MoveJ(lua_State* L) {
   static const char* const speeds[] = {"v", "a", "jv", nullptr};
   CheckOptions(L, 2, "movej", known, refused);
   CheckDurationAlone(L, 2, "movej", speeds);
+  CheckTriggers(L, 2, "movej", false);
   const MotionLimits limits = MoveLimits(L, r, 2, "movej", true);
   const double t = Duration(L, 2, "movej");
   if (ToFrame(L, 1)) {
     const Frame goal = ToWorld(r, Target(L, 1, 2, "movej"));
     PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, r.planner->Ik(r.q_ref, goal), limits, t); });
-    return 0;
+    ResolveTriggers(L, r, 2, "movej");
+    return 1;
   }
   if (!lua_istable(L, 1))
     ScriptError(L, "movej: expected a table of joint angles (deg) or a frame, got %s", luaL_typename(L, 1));
@@ -266,7 +396,8 @@ int MoveJ(lua_State* L) {
     lua_pop(L, 1);
   }
   PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, q, limits, t); });
-  return 0;
+  ResolveTriggers(L, r, 2, "movej");
+  return 1;
 }
 
 // a move with a blend radius: it may be left at the first sample within the radius of its
@@ -299,6 +430,7 @@ void PlanLinear(lua_State* L, Robot& r, const Frame& goal, int options, const ch
   if (radius > 0 && Option(L, options, "force", 0, what) > 0) {
     ScriptError(L, "%s: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", what, radius);
   }
+  CheckTriggersNotBlended(L, options, radius, what);
   if (BlendReady(r)) {
     // entered from the previous move's blend: its radius must fit in this segment too
     const double seg = (goal.p - r.blend_corner_W).norm();
@@ -333,7 +465,7 @@ void PlanLinear(lua_State* L, Robot& r, const Frame& goal, int options, const ch
 
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", nullptr};
   static const Refused refused[] = {
       {"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"rel", "movel's target is absolute; movel_rel(delta, {rel = ...}) moves relative to the planned pose"},
@@ -342,8 +474,10 @@ int MoveL(lua_State* L) {
   CheckOptions(L, 2, "movel", known, refused);
   CheckDurationAlone(L, 2, "movel", speeds);
   CheckWrenchNeedsForce(L, 2, "movel");
+  CheckTriggers(L, 2, "movel", true);
   PlanLinear(L, r, ToWorld(r, Target(L, 1, 2, "movel")), 2, "movel");
-  return 0;
+  ResolveTriggers(L, r, 2, "movel");
+  return 1;
 }
 
 // movel_rel(delta [, opts]): movel to the planned pose moved by delta, along the tool's
@@ -351,7 +485,7 @@ int MoveL(lua_State* L) {
 // offset by delta.pos in base axes, the rotation turned by delta.rot about base axes)
 int MoveLRel(lua_State* L) {
   Robot& r = NeedRobot(L, "movel_rel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "rel", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "rel", "at", nullptr};
   static const Refused refused[] = {
       {"jv", "movel_rel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"ref", "movel_rel's delta is relative to the planned pose; rel = \"tool\" (default) or \"base\" names its axes"},
@@ -360,6 +494,7 @@ int MoveLRel(lua_State* L) {
   CheckOptions(L, 2, "movel_rel", known, refused);
   CheckDurationAlone(L, 2, "movel_rel", speeds);
   CheckWrenchNeedsForce(L, 2, "movel_rel");
+  CheckTriggers(L, 2, "movel_rel", true);
   const Frame& delta = CheckFrame(L, 1, "movel_rel");
   CheckFinite(L, delta, "movel_rel", "offset");
   bool in_base = false;
@@ -380,12 +515,13 @@ int MoveLRel(lua_State* L) {
   }
   CheckFinite(L, goal, "movel_rel", "target");
   PlanLinear(L, r, ToWorld(r, goal), 2, "movel_rel");
-  return 0;
+  ResolveTriggers(L, r, 2, "movel_rel");
+  return 1;
 }
 
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", nullptr};
   static const Refused refused[] = {
       {"jv", "movec moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"rel", "only movel_rel moves relative to the planned pose"},
@@ -394,7 +530,9 @@ int MoveC(lua_State* L) {
   CheckOptions(L, 3, "movec", known, refused);
   CheckDurationAlone(L, 3, "movec", speeds);
   CheckWrenchNeedsForce(L, 3, "movec");
+  CheckTriggers(L, 3, "movec", true);
   const double radius = Option(L, 3, "r", r.blend_setting_m, "movec");
+  CheckTriggersNotBlended(L, 3, radius, "movec");
   if (radius < 0) ScriptError(L, "movec: the blend radius r must be >= 0 m, got %g", radius);
   if (radius > 0 && Option(L, 3, "force", 0, "movec") > 0) {
     ScriptError(L, "movec: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
@@ -417,7 +555,8 @@ int MoveC(lua_State* L) {
   PlanOrFail(L, r, "movec", [&] { return r.planner->Arc(r.q_ref, via, goal, limits, t); });
   if (radius > 0) SetBlend(L, r, goal.p, radius, chord, "movec");
   SetGuard(L, r, 3, "movec");
-  return 0;
+  ResolveTriggers(L, r, 3, "movec");
+  return 1;
 }
 
 // movep(points [, opts]): through a list of frames at constant tool speed, each corner rounded
@@ -427,7 +566,7 @@ constexpr int kMaxPathPoints = 10000;
 
 int MoveP(lua_State* L) {
   Robot& r = NeedRobot(L, "movep");
-  static const char* const known[] = {"v", "a", "w", "r", "ref", nullptr};
+  static const char* const known[] = {"v", "a", "w", "r", "ref", "at", nullptr};
   static const Refused refused[] = {
       {"t", "movep holds the tool speed v (m/s): its duration follows from the path's length"},
       {"jv", "movep moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
@@ -436,6 +575,7 @@ int MoveP(lua_State* L) {
       {"rel", "only movel_rel moves relative to the planned pose"},
       {nullptr, nullptr}};
   CheckOptions(L, 2, "movep", known, refused);
+  CheckTriggers(L, 2, "movep", true);
   if (!lua_istable(L, 1) || ToFrame(L, 1)) {
     ScriptError(L, "movep: expected a list of frames, got %s", ToFrame(L, 1) ? "one frame" : luaL_typename(L, 1));
   }
@@ -459,7 +599,8 @@ int MoveP(lua_State* L) {
   PlanOrFail(L, r, "movep",
              [&] { return r.planner->Path(r.q_ref, std::vector<Frame>(points, points + count), radius, limits); });
   lua_remove(L, buffer);
-  return 0;
+  ResolveTriggers(L, r, 2, "movep");
+  return 1;
 }
 
 int SelfMove(lua_State* L) {
@@ -489,6 +630,11 @@ int Moving(lua_State* L) {  // moving(): until done or left for a blend; moving(
   const Robot* r = P(L)->robot.get();
   const bool raw = lua_toboolean(L, 1);
   lua_pushboolean(L, r && r->moving && (raw || !BlendReady(*r)));
+  return 1;
+}
+int Sent(lua_State* L) {  // samples of the running (or last) move handed out
+  const Robot* r = P(L)->robot.get();
+  lua_pushinteger(L, r ? static_cast<lua_Integer>(r->next) : 0);
   return 1;
 }
 int Outcome(lua_State* L) {
@@ -687,33 +833,14 @@ void OpenApi(Program* p) {
   lua_State* L = p->L;
   lua_pushlightuserdata(L, p);
   lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
-  static const luaL_Reg functions[] = {{"_movej", MoveJ},
-                                       {"_movel", MoveL},
-                                       {"_movel_rel", MoveLRel},
-                                       {"_movec", MoveC},
-                                       {"_movep", MoveP},
-                                       {"_selfmove", SelfMove},
-                                       {"_moving", Moving},
-                                       {"_outcome", Outcome},
-                                       {"_now", Now},
-                                       {"_periods", Periods},
-                                       {"now", Now},
-                                       {"joints", Joints},
-                                       {"pose", Pose},
-                                       {"planned", Planned},
-                                       {"planned_joints", PlannedJoints},
-                                       {"frame_def", FrameDef},
-                                       {"frame_of", FrameOf},
-                                       {"force", WrenchPart<true>},
-                                       {"torque", WrenchPart<false>},
-                                       {"speed", SetSpeed},
-                                       {"accel", SetAccel},
-                                       {"jspeed", SetJointSpeed},
-                                       {"limits", SetRateLimits},
-                                       {"tool", SetTool},
-                                       {"base", SetBase},
-                                       {"blend", SetBlend},
-                                       {nullptr, nullptr}};
+  static const luaL_Reg functions[] = {
+      {"_movej", MoveJ},       {"_movel", MoveL},       {"_movel_rel", MoveLRel},    {"_movec", MoveC},
+      {"_movep", MoveP},       {"_selfmove", SelfMove}, {"_moving", Moving},         {"_outcome", Outcome},
+      {"_sent", Sent},         {"_now", Now},           {"_periods", Periods},       {"now", Now},
+      {"joints", Joints},      {"pose", Pose},          {"planned", Planned},        {"planned_joints", PlannedJoints},
+      {"frame_def", FrameDef}, {"frame_of", FrameOf},   {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
+      {"speed", SetSpeed},     {"accel", SetAccel},     {"jspeed", SetJointSpeed},   {"limits", SetRateLimits},
+      {"tool", SetTool},       {"base", SetBase},       {"blend", SetBlend},         {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, functions, 0);
   lua_pop(L, 1);

@@ -396,5 +396,51 @@ TEST_F(BlendTest, MovepHoldsTheToolSpeedThroughThePointsFromAScript) {
   EXPECT_LT(worst, 0.02);
 }
 
+// triggers (option at): along movel's 0.10 m from the ready pose to B, a signal at d = 0.05 m
+// (another program takes it) and a call at t = 0.6 s; each fires in the period after the sample
+// it names was commanded: the planned tool is then 0.05 m along (within one period's travel,
+// 0.2 mm at 0.1 m/s), and now() is 0.6 s after the start within one period. Triggers beyond
+// the move, with a blend, or malformed are errors at the line, before the arm moves.
+TEST_F(BlendTest, TriggersFireWithinAPeriodOfTheirDistanceAndTime) {
+  auto r = Make({{"pa10", std::string(kCorner) +
+                              "local t0, called, at_d, at_t = now()\n"
+                              "local function along() at_d, at_t = (planned().pos - a.pos):norm(), now() end\n"
+                              "print(movel(B, {at = {{d = 0.03, signal = 'near'}, {d = 0.03, call = along},\n"
+                              "                      {t = 0.6, call = function() called = now() - t0 end}}}))\n"
+                              "print(string.format('%.9f %.6f %.6f', at_d, at_t, called))\n"
+                              "print(select(2, pcall(movel, C, {at = {{d = 0.5, signal = 'x'}}})))\n"
+                              "print(select(2, pcall(movel, C, {r = 0.02, at = {{t = 0, signal = 'x'}}})))\n"
+                              "print(select(2, pcall(movel, C, {at = {{t = 0, d = 0, signal = 'x'}}})))\n"
+                              "print(select(2, pcall(movej, C, {at = {{d = 0, signal = 'x'}}})))\n"
+                              "print(select(2, pcall(movel, C, {at = {{t = 0}}})))\n"
+                              "print((planned().pos - B.pos):norm() < 1e-9)\n"},
+                 {"", "wait_signal('near')\nprint(string.format('%.6f', now()))\n"}});
+  ASSERT_TRUE(RunFor(*r, 2000)) << r->error();
+  ASSERT_EQ(printed_.size(), 9u);
+  // the signal's receiver and the call at the same distance ran in the same period, when the
+  // planned tool was 0.03 m along, past it by at most one period's travel (0.1 m/s x 2 ms)
+  const std::string received = printed_[0].substr(printed_[0].find(": ") + 2);
+  EXPECT_EQ(printed_[0].rfind("main.lua@", 0), 0u) << printed_[0];
+  std::istringstream in(printed_[2].substr(printed_[2].find(": ") + 2));
+  double at_d = 0, at_t = 0, called = 0;
+  in >> at_d >> at_t >> called;
+  EXPECT_GE(at_d, 0.03);
+  EXPECT_LE(at_d, 0.03 + v_ * kPeriod);
+  EXPECT_NEAR(std::stod(received), at_t, 1e-9);
+  // the call at t = 0.6 s: in the period after the sample of 0.6 s was commanded
+  EXPECT_GE(called, 0.6 - 1e-9);
+  EXPECT_LE(called, 0.6 + kPeriod + 1e-9);
+  EXPECT_NE(printed_[1].find(": done"), std::string::npos) << printed_[1];
+  const char* errors[] = {
+      "pa10.lua:9: movel: trigger 1: d = 0.5 m is beyond the move's path (0.1 m)",
+      "pa10.lua:10: movel: a move with triggers (at) cannot blend (r = 0.02 m): give r = 0 (or blend(0))",
+      "pa10.lua:11: movel: trigger 1: give d (m along the path) or t (s from the start), one of them",
+      "pa10.lua:12: movej: trigger 1: d is a length along the tool's path: a joint move takes t",
+      "pa10.lua:13: movel: trigger 1: give signal (a name) or call (a function), one of them"};
+  for (int k = 0; k < 5; ++k) EXPECT_NE(printed_[3 + k].find(errors[k]), std::string::npos) << printed_[3 + k];
+  // the refused moves did not move the arm: it is still at B
+  EXPECT_NE(printed_[8].find(": true"), std::string::npos) << printed_[8];
+}
+
 }  // namespace
 }  // namespace vlab::task
