@@ -205,6 +205,7 @@ void Start(Robot& r, Plan&& plan) {
   r.outcome = "done";
   r.guard = nullptr;
   r.blend_at = -1;
+  r.sent_cap = -1;
 }
 
 // whether the running move was left for a blend: its entry sample has been handed out
@@ -634,7 +635,8 @@ int Moving(lua_State* L) {  // moving(): until done or left for a blend; moving(
 }
 int Sent(lua_State* L) {  // samples of the running (or last) move handed out
   const Robot* r = P(L)->robot.get();
-  lua_pushinteger(L, r ? static_cast<lua_Integer>(r->next) : 0);
+  // (after stop(): the samples of the move that were handed out; its triggers beyond do not fire)
+  lua_pushinteger(L, !r ? 0 : r->sent_cap >= 0 ? r->sent_cap : static_cast<lua_Integer>(r->next));
   return 1;
 }
 int Outcome(lua_State* L) {
@@ -829,18 +831,115 @@ void AdvanceMotion(Robot* r) {
   if (r->next >= r->plan.q.size()) r->moving = false;
 }
 
+void StopMotion(Robot* r, double period_s) {
+  if (!r->moving || r->next >= r->plan.q.size()) return;
+  // the path left: the current reference, then the samples not yet handed out
+  std::vector<Eigen::VectorXd> path;
+  path.push_back(r->q_ref);
+  for (std::size_t i = r->next; i < r->plan.q.size(); ++i) path.push_back(r->plan.q[i]);
+  const JointRateLimits& limits = r->planner->rate_limits();
+  const int dof = static_cast<int>(r->q_ref.size());
+  const double T2 = period_s * period_s;
+  // the rate's fall per period, delta: over the samples the stop can cover (about 1/(2 delta)
+  // of them), joint j's step |dq_j| (rad per sample) must leave delta |dq_j| / T^2 within its
+  // limit less the path's own acceleration there; refined over the window it gives
+  double delta = 1.0;
+  for (int pass = 0; pass < 4; ++pass) {
+    const std::size_t window = std::min(path.size() - 1, static_cast<std::size_t>(std::ceil(0.5 / delta)) + 2);
+    double need = 1e-12;
+    for (std::size_t i = 1; i <= window; ++i) {
+      for (int j = 0; j < dof; ++j) {
+        const double step = std::abs(path[i][j] - path[i - 1][j]);
+        const double own = i + 1 < path.size() ? std::abs(path[i + 1][j] - 2 * path[i][j] + path[i - 1][j]) / T2 : 0.0;
+        const double room = std::max(0.98 * limits.a_rps2[j] - own, 0.05 * limits.a_rps2[j]);  // 2 %: interpolation
+        need = std::max(need, step / (room * T2));
+      }
+    }
+    delta = std::min(1.0, 1.0 / need);
+  }
+  Plan stop;
+  double x = 0, rate = 1;
+  const double end = static_cast<double>(path.size() - 1);
+  while (rate > 0 && x < end) {
+    rate -= delta;
+    x = std::min(end, x + std::max(rate, 0.0));
+    const std::size_t i = std::min(static_cast<std::size_t>(x), path.size() - 2);
+    const double f = x - static_cast<double>(i);
+    stop.q.push_back(path[i] + f * (path[i + 1] - path[i]));
+    stop.tool_W.push_back(r->planner->ToolPose(stop.q.back()));
+    stop.speed_mps.push_back(0);
+  }
+  if (stop.q.empty()) stop.q.push_back(r->q_ref), stop.tool_W.push_back(r->planner->ToolPose(r->q_ref));
+  stop.duration_s = stop.q.size() * period_s;
+  r->sent_cap = r->sent_cap >= 0 ? r->sent_cap : static_cast<long>(r->next);
+  r->plan = std::move(stop);
+  r->next = 0;
+  r->moving = true;
+  r->outcome = "stopped";
+  r->guard = nullptr;
+  r->blend_at = -1;
+}
+
+namespace {
+
+// stop([name]): halts the running move of robot `name` (default: this program's) on its path
+int Stop(lua_State* L) {
+  Program* p = P(L);
+  const char* name = nullptr;
+  if (lua_isnoneornil(L, 1)) {
+    if (!p->robot) ScriptError(L, "stop: this program has no robot: name the robot to stop, stop(\"pa10\")");
+    name = p->config.robot.c_str();
+  } else {
+    if (lua_type(L, 1) != LUA_TSTRING) ScriptError(L, "stop: expected a robot's name, got %s", luaL_typename(L, 1));
+    name = lua_tostring(L, 1);
+    if (!p->board->robots.count(name)) {
+      char list[256] = "";
+      for (const std::string& robot : p->board->robots) {
+        const std::size_t used = std::strlen(list);
+        std::snprintf(list + used, sizeof list - used, "%s'%s'", used ? ", " : "", robot.c_str());
+      }
+      ScriptError(L, "stop: no robot named '%s' (%s%s)", name, list[0] ? "robots: " : "no program has a robot", list);
+    }
+  }
+  p->board->stops.insert(name);
+  return 0;
+}
+
+}  // namespace
+
 void OpenApi(Program* p) {
   lua_State* L = p->L;
   lua_pushlightuserdata(L, p);
   lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
-  static const luaL_Reg functions[] = {
-      {"_movej", MoveJ},       {"_movel", MoveL},       {"_movel_rel", MoveLRel},    {"_movec", MoveC},
-      {"_movep", MoveP},       {"_selfmove", SelfMove}, {"_moving", Moving},         {"_outcome", Outcome},
-      {"_sent", Sent},         {"_now", Now},           {"_periods", Periods},       {"now", Now},
-      {"joints", Joints},      {"pose", Pose},          {"planned", Planned},        {"planned_joints", PlannedJoints},
-      {"frame_def", FrameDef}, {"frame_of", FrameOf},   {"force", WrenchPart<true>}, {"torque", WrenchPart<false>},
-      {"speed", SetSpeed},     {"accel", SetAccel},     {"jspeed", SetJointSpeed},   {"limits", SetRateLimits},
-      {"tool", SetTool},       {"base", SetBase},       {"blend", SetBlend},         {nullptr, nullptr}};
+  static const luaL_Reg functions[] = {{"_movej", MoveJ},
+                                       {"_movel", MoveL},
+                                       {"_movel_rel", MoveLRel},
+                                       {"_movec", MoveC},
+                                       {"_movep", MoveP},
+                                       {"_selfmove", SelfMove},
+                                       {"_moving", Moving},
+                                       {"_outcome", Outcome},
+                                       {"_sent", Sent},
+                                       {"stop", Stop},
+                                       {"_now", Now},
+                                       {"_periods", Periods},
+                                       {"now", Now},
+                                       {"joints", Joints},
+                                       {"pose", Pose},
+                                       {"planned", Planned},
+                                       {"planned_joints", PlannedJoints},
+                                       {"frame_def", FrameDef},
+                                       {"frame_of", FrameOf},
+                                       {"force", WrenchPart<true>},
+                                       {"torque", WrenchPart<false>},
+                                       {"speed", SetSpeed},
+                                       {"accel", SetAccel},
+                                       {"jspeed", SetJointSpeed},
+                                       {"limits", SetRateLimits},
+                                       {"tool", SetTool},
+                                       {"base", SetBase},
+                                       {"blend", SetBlend},
+                                       {nullptr, nullptr}};
   lua_pushglobaltable(L);
   luaL_setfuncs(L, functions, 0);
   lua_pop(L, 1);

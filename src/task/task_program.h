@@ -5,6 +5,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,8 @@ struct SharedValue {
 struct Blackboard {
   std::map<std::string, SharedValue> values;
   std::map<std::string, long> signals;  ///< raised and not yet taken
+  std::set<std::string> robots;         ///< every program's robot, by name
+  std::set<std::string> stops;          ///< robots whose running move stop(name) asked to halt
 };
 
 /// The robot a program commands.
@@ -52,7 +55,8 @@ struct Robot {
   Plan plan;
   std::size_t next = 0;
   bool moving = false;
-  std::string outcome = "done";  ///< of the last move: "done" or "contact"
+  std::string outcome = "done";  ///< of the last move: "done", "contact" or "stopped"
+  long sent_cap = -1;            ///< samples the move had handed out when stop() halted it (-1: not stopped)
   // blending (movel's r, blend()): the running move may be left for the next at sample
   // blend_at (-1: it runs to its end), where the tool is within blend_radius of its target
   double blend_setting_m = 0;  ///< blend(r)
@@ -110,5 +114,14 @@ Program* ProgramOf(lua_State* L);
 /// The next joint reference of the program's robot: advances the running
 /// plan, stops it when its guard trips. Never throws.
 void AdvanceMotion(Robot* robot);
+
+/// Halts the robot's running move on its own path (stop(name)): the rest of
+/// the plan is followed at a rate that falls from one sample per period to
+/// zero as fast as every joint's acceleration limit allows (the rate's fall
+/// adds |v_j|·δ/T to joint j's deceleration, the plan's own acceleration
+/// counted in), so the tool stays on the planned path and stops short of the
+/// plan's end (or at it, when that is nearer). The move's outcome is
+/// "stopped". Nothing when no move runs. Never throws.
+void StopMotion(Robot* robot, double period_s);
 
 }  // namespace vlab::task

@@ -180,7 +180,10 @@ std::unique_ptr<Runtime> Runtime::Create(const RuntimeConfig& config, const mjMo
       if (!c.robot.empty() && other->config.robot == c.robot)
         Fail(c, "robot: '" + c.robot + "' has two programs: one owner at a time");
     }
-    if (!c.robot.empty()) p->robot = BindRobot(c, model, devices, config.period_s);
+    if (!c.robot.empty()) {
+      p->robot = BindRobot(c, model, devices, config.period_s);
+      impl->board.robots.insert(c.robot);
+    }
     p->L = luaL_newstate();
     if (!p->L) throw std::runtime_error("task: cannot create a Lua state");
     impl->programs.push_back(std::move(p));
@@ -291,6 +294,7 @@ bool Runtime::Impl::ResumeAll(double t_s) {
       }
     }
     if (!s.Resume(p)) return false;
+    if (p.robot && s.board.stops.erase(p.config.robot)) StopMotion(p.robot.get(), p.period_s);
     if (p.robot) AdvanceMotion(p.robot.get());
     if (!s.SendCommands(p)) return false;
   }

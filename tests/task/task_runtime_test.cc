@@ -442,5 +442,50 @@ TEST_F(BlendTest, TriggersFireWithinAPeriodOfTheirDistanceAndTime) {
   EXPECT_NE(printed_[8].find(": true"), std::string::npos) << printed_[8];
 }
 
+// stop(name) from another program: the PA10's 0.3 m movel at 0.1 m/s is halted 0.5 s in, on
+// its line, every joint's commanded acceleration within its limit, the tool at rest within
+// the tool speed's fall at the path acceleration the joints allow; movel returns "stopped",
+// and a trigger it did not reach does not fire. Unknown names are errors at the line.
+TEST_F(BlendTest, StopHaltsAnotherProgramsMoveOnItsPathWithinTheJointLimits) {
+  auto r = Make(
+      {{"pa10", std::string(kCorner) + "local far = frame(a.pos + vec3(-0.30, 0, 0), a.rot)\n"
+                                       "local late = false\n"
+                                       "print(movel(far, {at = {{d = 0.25, call = function() late = true end}}}))\n"
+                                       "print(late)\n"},
+       {"", "wait(0.5)\nstop('pa10')\nprint(select(2, pcall(stop, 'pa11')))\nprint(select(2, pcall(stop)))\n"}});
+  ASSERT_TRUE(RunFor(*r, 3000)) << r->error();
+  ASSERT_EQ(printed_.size(), 4u);
+  EXPECT_NE(printed_[0].find("main.lua:3: stop: no robot named 'pa11' (robots: 'pa10')"), std::string::npos)
+      << printed_[0];
+  EXPECT_NE(printed_[1].find("main.lua:4: stop: this program has no robot"), std::string::npos) << printed_[1];
+  EXPECT_NE(printed_[2].find(": stopped"), std::string::npos) << printed_[2];
+  EXPECT_NE(printed_[3].find(": false"), std::string::npos) << printed_[3];
+  // the commands: on the line from the start along -x, joint accelerations within the limits
+  const std::vector<Eigen::VectorXd>& q = arm_->history();
+  const std::vector<Eigen::Vector3d> path = ToolPath();
+  ASSERT_GT(q.size(), 260u);
+  const JointRateLimits limits = DefaultRateLimits(7);
+  double worst = 0, off_line = 0;
+  for (std::size_t i = 2; i < q.size(); ++i) {
+    const Eigen::VectorXd acc = (q[i] - 2 * q[i - 1] + q[i - 2]) / (kPeriod * kPeriod);
+    for (int j = 0; j < 7; ++j) worst = std::max(worst, std::abs(acc[j]) / limits.a_rps2[j]);
+  }
+  for (const Eigen::Vector3d& p : path) {
+    off_line = std::max(off_line, std::hypot(p.y() - path.front().y(), p.z() - path.front().z()));
+  }
+  EXPECT_LE(worst, 1.0 + 1e-9);
+  EXPECT_LT(off_line, 1e-6);
+  // halted: where it stopped it stays, short of the 0.25 m the trigger wanted
+  std::size_t moving = 0;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    if ((path[i] - path[i - 1]).norm() > 1e-12) moving = i;
+  }
+  const double travelled = (path[moving] - path.front()).norm();
+  EXPECT_LT(travelled, 0.25);
+  EXPECT_GT(travelled, 0.03);  // it ran 0.5 s, of which 0.2 s speeding up: 0.04 m
+  std::printf("stop: worst acceleration %.3f of its limit, halted %.1f ms after the request, at %.4f m\n", worst,
+              (moving * kPeriod - 0.5) * 1e3, travelled);
+}
+
 }  // namespace
 }  // namespace vlab::task
