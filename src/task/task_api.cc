@@ -31,24 +31,8 @@ constexpr const char* kProgramKey = "vlab.program";
 
 // the runtime's own Lua code: blocking commands and waits
 constexpr const char* kPrelude = R"lua(
-local yield, moving, outcome, clock, periods, take = coroutine.yield, _moving, _outcome, _now, _periods, _take_signal
+local co_yield, moving, outcome, clock, periods, take = coroutine.yield, _moving, _outcome, _now, _periods, _take_signal
 _moving, _outcome, _now, _periods, _take_signal = nil, nil, nil, nil, nil
-function sync() yield() end
-function wait(a, timeout)
-  if type(a) == "number" then
-    for _ = 1, periods(a) do yield() end
-    return true
-  elseif type(a) == "function" then
-    local t_end = timeout and (clock() + periods(timeout) * PERIOD - PERIOD / 2)
-    while true do
-      local v = a()
-      if v then return v end
-      if t_end and clock() >= t_end then return nil end
-      yield()
-    end
-  end
-  error("wait: expected seconds or a condition function, got " .. type(a), 2)
-end
 local raise, sent = _signal, _sent
 _signal, _sent = nil, nil
 -- a move's triggers (option at): each fires once the sample it names has been commanded
@@ -62,6 +46,13 @@ local function fire(triggers)
     end
   end
 end
+-- the running asynchronous move (option async), whose triggers fire at every wait of the program
+local async_move
+local function yield()
+  if async_move then fire(async_move.triggers) end
+  co_yield()
+end
+function sync() yield() end
 local function await(triggers)
   while moving() do
     fire(triggers)
@@ -70,15 +61,54 @@ local function await(triggers)
   fire(triggers)
   return outcome()
 end
+-- an asynchronous move's handle: m:done(), m:wait() (or wait(m)): its outcome
+local Move = {}
+Move.__index = Move
+function Move:done() return self.result ~= nil or not (async_move == self and moving()) end
+function Move:wait()
+  while not self.result and async_move == self and moving() do yield() end
+  if not self.result then
+    fire(self.triggers)
+    self.result = outcome()
+    if async_move == self then async_move = nil end
+  end
+  return self.result
+end
+local function finish_async() if async_move then async_move:wait() end end
+local function run(triggers, options)
+  if options and options.async then
+    async_move = setmetatable({triggers = triggers}, Move)
+    return async_move
+  end
+  return await(triggers)
+end
+function wait(a, timeout)
+  if type(a) == "number" then
+    for _ = 1, periods(a) do yield() end
+    return true
+  elseif type(a) == "function" then
+    local t_end = timeout and (clock() + periods(timeout) * PERIOD - PERIOD / 2)
+    while true do
+      local v = a()
+      if v then return v end
+      if t_end and clock() >= t_end then return nil end
+      yield()
+    end
+  elseif getmetatable(a) == Move then
+    if timeout ~= nil then error("wait: a move takes no timeout (m:done() polls it)", 2) end
+    return a:wait()
+  end
+  error("wait: expected seconds, a condition function or a move, got " .. type(a), 2)
+end
 local function settle() while moving(true) do yield() end end  -- a blended move's end: at rest
 local mj, ml, mlr, mc, mp, sm = _movej, _movel, _movel_rel, _movec, _movep, _selfmove
 _movej, _movel, _movel_rel, _movec, _movep, _selfmove = nil, nil, nil, nil, nil, nil
-function movej(target, options) settle() return await(mj(target, options)) end
-function movel(target, options) return await(ml(target, options)) end
-function movel_rel(delta, options) return await(mlr(delta, options)) end
-function movec(via, target, options) settle() return await(mc(via, target, options)) end
-function movep(points, options) settle() return await(mp(points, options)) end
-function selfmove(options) settle() sm(options) return await() end
+function movej(target, options) finish_async() settle() return run(mj(target, options), options) end
+function movel(target, options) finish_async() return run(ml(target, options), options) end
+function movel_rel(delta, options) finish_async() return run(mlr(delta, options), options) end
+function movec(via, target, options) finish_async() settle() return run(mc(via, target, options), options) end
+function movep(points, options) finish_async() settle() return run(mp(points, options), options) end
+function selfmove(options) finish_async() settle() sm(options) return await() end
 function signal(name) raise(name) end
 function wait_signal(name, timeout)
   return wait(function() return take(name) end, timeout)
@@ -238,6 +268,15 @@ void SetGuard(lua_State* L, Robot& r, int options, const char* what) {
 // runs a planner call; its std::invalid_argument becomes a script error
 constexpr int kMaxTriggers = 1000;  // triggers of one move
 
+// Option async of a move: true returns a handle at once (the prelude's Move), false or absent blocks
+void CheckAsync(lua_State* L, int options, const char* what) {
+  if (!HasOption(L, options, "async")) return;
+  lua_getfield(L, options, "async");
+  if (!lua_isboolean(L, -1))
+    ScriptError(L, "%s: option async must be true or false, got %s", what, luaL_typename(L, -1));
+  lua_pop(L, 1);
+}
+
 // Option at of a move: a list of triggers, each {d = M or t = S, signal = NAME or call = FN}:
 // d the path length from the move's start (m; Cartesian moves), t the time from it (s). Checked
 // before the move is planned; ResolveTriggers, after, names the sample each fires at.
@@ -359,7 +398,7 @@ void PlanOrFail(lua_State* L, Robot& r, const char* what, F plan_fn) {
 
 int MoveJ(lua_State* L) {
   Robot& r = NeedRobot(L, "movej");
-  static const char* const known[] = {"v", "a", "jv", "t", "ref", "at", nullptr};
+  static const char* const known[] = {"v", "a", "jv", "t", "ref", "at", "async", nullptr};
   static const Refused refused[] = {
       {"w", "movej interpolates the joints; its speed is v (deg/s, the fastest joint) or its duration t (s)"},
       {"r", "only movel and movec blend"},
@@ -371,6 +410,7 @@ int MoveJ(lua_State* L) {
   CheckOptions(L, 2, "movej", known, refused);
   CheckDurationAlone(L, 2, "movej", speeds);
   CheckTriggers(L, 2, "movej", false);
+  CheckAsync(L, 2, "movej");
   const MotionLimits limits = MoveLimits(L, r, 2, "movej", true);
   const double t = Duration(L, 2, "movej");
   if (ToFrame(L, 1)) {
@@ -466,7 +506,7 @@ void PlanLinear(lua_State* L, Robot& r, const Frame& goal, int options, const ch
 
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", "async", nullptr};
   static const Refused refused[] = {
       {"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"rel", "movel's target is absolute; movel_rel(delta, {rel = ...}) moves relative to the planned pose"},
@@ -476,6 +516,7 @@ int MoveL(lua_State* L) {
   CheckDurationAlone(L, 2, "movel", speeds);
   CheckWrenchNeedsForce(L, 2, "movel");
   CheckTriggers(L, 2, "movel", true);
+  CheckAsync(L, 2, "movel");
   PlanLinear(L, r, ToWorld(r, Target(L, 1, 2, "movel")), 2, "movel");
   ResolveTriggers(L, r, 2, "movel");
   return 1;
@@ -486,7 +527,7 @@ int MoveL(lua_State* L) {
 // offset by delta.pos in base axes, the rotation turned by delta.rot about base axes)
 int MoveLRel(lua_State* L) {
   Robot& r = NeedRobot(L, "movel_rel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "rel", "at", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "rel", "at", "async", nullptr};
   static const Refused refused[] = {
       {"jv", "movel_rel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"ref", "movel_rel's delta is relative to the planned pose; rel = \"tool\" (default) or \"base\" names its axes"},
@@ -496,6 +537,7 @@ int MoveLRel(lua_State* L) {
   CheckDurationAlone(L, 2, "movel_rel", speeds);
   CheckWrenchNeedsForce(L, 2, "movel_rel");
   CheckTriggers(L, 2, "movel_rel", true);
+  CheckAsync(L, 2, "movel_rel");
   const Frame& delta = CheckFrame(L, 1, "movel_rel");
   CheckFinite(L, delta, "movel_rel", "offset");
   bool in_base = false;
@@ -522,7 +564,7 @@ int MoveLRel(lua_State* L) {
 
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", nullptr};
+  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", "async", nullptr};
   static const Refused refused[] = {
       {"jv", "movec moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"rel", "only movel_rel moves relative to the planned pose"},
@@ -532,6 +574,7 @@ int MoveC(lua_State* L) {
   CheckDurationAlone(L, 3, "movec", speeds);
   CheckWrenchNeedsForce(L, 3, "movec");
   CheckTriggers(L, 3, "movec", true);
+  CheckAsync(L, 3, "movec");
   const double radius = Option(L, 3, "r", r.blend_setting_m, "movec");
   CheckTriggersNotBlended(L, 3, radius, "movec");
   if (radius < 0) ScriptError(L, "movec: the blend radius r must be >= 0 m, got %g", radius);
@@ -567,7 +610,7 @@ constexpr int kMaxPathPoints = 10000;
 
 int MoveP(lua_State* L) {
   Robot& r = NeedRobot(L, "movep");
-  static const char* const known[] = {"v", "a", "w", "r", "ref", "at", nullptr};
+  static const char* const known[] = {"v", "a", "w", "r", "ref", "at", "async", nullptr};
   static const Refused refused[] = {
       {"t", "movep holds the tool speed v (m/s): its duration follows from the path's length"},
       {"jv", "movep moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
@@ -577,6 +620,7 @@ int MoveP(lua_State* L) {
       {nullptr, nullptr}};
   CheckOptions(L, 2, "movep", known, refused);
   CheckTriggers(L, 2, "movep", true);
+  CheckAsync(L, 2, "movep");
   if (!lua_istable(L, 1) || ToFrame(L, 1)) {
     ScriptError(L, "movep: expected a list of frames, got %s", ToFrame(L, 1) ? "one frame" : luaL_typename(L, 1));
   }

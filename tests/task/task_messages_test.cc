@@ -30,7 +30,7 @@ TEST_F(MessagesTest, EveryMoveRefusesAnOptionItWouldIgnoreByName) {
       {"movej({0, 30, 0, 60, 0, 90, 0}, {a = 0})", "pa10.lua:1: movej: option a must be > 0"},
       {"movej({0, 30, 0, 60, 0, 90, 0}, {r = 0.01})", "pa10.lua:1: movej: option 'r' is not supported"},
       {"movej({0, 30, 0, 60, 0, 90, 0}, {speed = 1})",
-       "pa10.lua:1: movej: unknown option 'speed' (options: v, a, jv, t, ref, at)"},
+       "pa10.lua:1: movej: unknown option 'speed' (options: v, a, jv, t, ref, at, async)"},
       {"movej({0, 30, 0, 60, 0, 90, 0}, {t = 1, jv = 10})", "pa10.lua:1: movej: options 't' and 'jv' together"},
       {"movel(pose() * trans(0, 0, 0.01), {jv = 10})", "pa10.lua:1: movel: option 'jv' is not supported"},
       {"movel(pose() * trans(0, 0, 0.01), {vel = 1})", "pa10.lua:1: movel: unknown option 'vel'"},

@@ -487,5 +487,37 @@ TEST_F(BlendTest, StopHaltsAnotherProgramsMoveOnItsPathWithinTheJointLimits) {
               (moving * kPeriod - 0.5) * 1e3, travelled);
 }
 
+// asynchronous moves (option async): the call returns a handle at once, the program runs on
+// while the arm moves (m:done() polls, wait(m) or m:wait() gives the outcome), an asynchronous
+// move's triggers fire at the program's other waits (here waiting for the trigger's own
+// signal), and a next move lets the running one end first.
+TEST_F(BlendTest, AsynchronousMovesRunWhileTheProgramGoesOn) {
+  auto r =
+      Make({{"pa10", std::string(kCorner) + "local m = movel(B, {async = true})\n"
+                                            "local periods = 0\n"
+                                            "while not m:done() do periods = periods + 1; sync() end\n"
+                                            "print(periods, m:wait(), wait(m))\n"
+                                            "local m2 = movel(C, {async = true, at = {{d = 0.05, signal = 'mid'}}})\n"
+                                            "wait_signal('mid')\n"
+                                            "print(string.format('%.4f', (planned().pos - B.pos):norm()), m2:done())\n"
+                                            "print(wait(m2), (planned().pos - C.pos):norm() < 1e-9)\n"
+                                            "movel(B, {async = true})\n"
+                                            "print(movel(C), (planned().pos - C.pos):norm() < 1e-9)\n"
+                                            "print(select(2, pcall(movel, B, {async = 1})))\n"
+                                            "print(select(2, pcall(wait, m, 1)))\n"}});
+  ASSERT_TRUE(RunFor(*r, 4000)) << r->error();
+  ASSERT_EQ(printed_.size(), 6u);
+  // 0.10 m at 0.1 m/s, 0.5 m/s^2: 1.2 s = 600 periods, the program polled through them
+  EXPECT_NE(printed_[0].find(": 600\tdone\tdone"), std::string::npos) << printed_[0];
+  // the trigger fired at 0.05 m along (within one period's 0.2 mm), the move still running
+  EXPECT_NE(printed_[1].find(": 0.050"), std::string::npos) << printed_[1];
+  EXPECT_NE(printed_[1].find("\tfalse"), std::string::npos) << printed_[1];
+  EXPECT_NE(printed_[2].find(": done\ttrue"), std::string::npos) << printed_[2];
+  EXPECT_NE(printed_[3].find(": done\ttrue"), std::string::npos) << printed_[3];
+  EXPECT_NE(printed_[4].find("pa10.lua:14: movel: option async must be true or false, got number"), std::string::npos)
+      << printed_[4];
+  EXPECT_NE(printed_[5].find("wait: a move takes no timeout"), std::string::npos) << printed_[5];
+}
+
 }  // namespace
 }  // namespace vlab::task
