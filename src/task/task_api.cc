@@ -610,7 +610,7 @@ constexpr int kMaxPathPoints = 10000;
 
 int MoveP(lua_State* L) {
   Robot& r = NeedRobot(L, "movep");
-  static const char* const known[] = {"v", "a", "w", "r", "ref", "at", "async", nullptr};
+  static const char* const known[] = {"v", "a", "w", "r", "ref", "at", "async", "spline", nullptr};
   static const Refused refused[] = {
       {"t", "movep holds the tool speed v (m/s): its duration follows from the path's length"},
       {"jv", "movep moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
@@ -627,6 +627,16 @@ int MoveP(lua_State* L) {
   const int count = static_cast<int>(lua_rawlen(L, 1));
   if (count < 1) ScriptError(L, "movep: the list of points is empty");
   if (count > kMaxPathPoints) ScriptError(L, "movep: %d points, at most %d", count, kMaxPathPoints);
+  bool spline = false;
+  if (HasOption(L, 2, "spline")) {
+    lua_getfield(L, 2, "spline");
+    if (!lua_isboolean(L, -1))
+      ScriptError(L, "movep: option spline must be true or false, got %s", luaL_typename(L, -1));
+    spline = lua_toboolean(L, -1);
+    lua_pop(L, 1);
+  }
+  if (spline && HasOption(L, 2, "r"))
+    ScriptError(L, "movep: a spline passes through every point: it has no corner radius r");
   const double radius = Option(L, 2, "r", kPathRadius_m, "movep");
   if (!(radius > 0)) ScriptError(L, "movep: the corner radius r must be > 0 m, got %g", radius);
   const MotionLimits limits = MoveLimits(L, r, 2, "movep");
@@ -641,8 +651,9 @@ int MoveP(lua_State* L) {
     new (&points[i]) Frame(ToWorld(r, Target(L, lua_gettop(L), 2, what)));
     lua_pop(L, 1);
   }
-  PlanOrFail(L, r, "movep",
-             [&] { return r.planner->Path(r.q_ref, std::vector<Frame>(points, points + count), radius, limits); });
+  PlanOrFail(L, r, "movep", [&] {
+    return r.planner->Path(r.q_ref, std::vector<Frame>(points, points + count), radius, limits, spline);
+  });
   lua_remove(L, buffer);
   ResolveTriggers(L, r, 2, "movep");
   return 1;

@@ -490,6 +490,72 @@ struct PathPiece {
   }
 };
 
+constexpr std::size_t kSplineSteps = 400;  // table samples per spline segment
+
+// a natural cubic spline through points in 3-D, parametrised by chord length, tabulated by arc
+// length: point i of the table at u[i], with its arc length; the least radius of curvature
+struct SplineTable {
+  std::vector<double> u, length;
+  std::vector<Eigen::Vector3d> point;
+  double min_radius = 1e300;
+  Eigen::Vector3d At(double sigma) const {  // the point `sigma` m along (linear between samples)
+    const auto it = std::upper_bound(length.begin(), length.end(), sigma);
+    if (it == length.begin()) return point.front();
+    if (it == length.end()) return point.back();
+    const std::size_t i = static_cast<std::size_t>(it - length.begin());
+    const double span = length[i] - length[i - 1];
+    return point[i - 1] + (span > 0 ? (sigma - length[i - 1]) / span : 0.0) * (point[i] - point[i - 1]);
+  }
+};
+
+SplineTable SplineThrough(const std::vector<Frame>& p) {
+  const std::size_t n = p.size();
+  std::vector<double> knot(n, 0.0);  // chord length
+  for (std::size_t k = 1; k < n; ++k) knot[k] = knot[k - 1] + (p[k].p - p[k - 1].p).norm();
+  // second derivatives m (natural ends: m = 0) by the tridiagonal system, per coordinate
+  std::vector<Eigen::Vector3d> m(n, Eigen::Vector3d::Zero());
+  if (n > 2) {
+    std::vector<double> diag(n, 0.0), upper(n, 0.0);
+    std::vector<Eigen::Vector3d> rhs(n, Eigen::Vector3d::Zero());
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+      const double h0 = knot[k] - knot[k - 1], h1 = knot[k + 1] - knot[k];
+      diag[k] = 2 * (h0 + h1);
+      upper[k] = h1;
+      rhs[k] = 6 * ((p[k + 1].p - p[k].p) / h1 - (p[k].p - p[k - 1].p) / h0);
+    }
+    for (std::size_t k = 2; k + 1 < n; ++k) {  // forward sweep (lower of row k = h0 of row k)
+      const double lower = knot[k] - knot[k - 1], f = lower / diag[k - 1];
+      diag[k] -= f * upper[k - 1];
+      rhs[k] -= f * rhs[k - 1];
+    }
+    for (std::size_t k = n - 2; k >= 1; --k) {
+      m[k] = (rhs[k] - upper[k] * m[k + 1]) / diag[k];
+      if (k == 1) break;
+    }
+  }
+  SplineTable t;
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double h = knot[k + 1] - knot[k];
+    for (std::size_t j = 0; j < kSplineSteps; ++j) {
+      const double a = static_cast<double>(j) / kSplineSteps, b = 1 - a;  // weights of p[k+1], p[k]
+      const Eigen::Vector3d x =
+          b * p[k].p + a * p[k + 1].p + h * h / 6 * ((b * b * b - b) * m[k] + (a * a * a - a) * m[k + 1]);
+      const Eigen::Vector3d d1 =
+          (p[k + 1].p - p[k].p) / h + h / 6 * ((3 * a * a - 1) * m[k + 1] - (3 * b * b - 1) * m[k]);
+      const Eigen::Vector3d d2 = b * m[k] + a * m[k + 1];
+      const double curvature = d1.cross(d2).norm() / std::pow(d1.norm(), 3);
+      if (curvature > 1e-12) t.min_radius = std::min(t.min_radius, 1 / curvature);
+      t.u.push_back(knot[k] + a * h);
+      t.length.push_back(t.point.empty() ? 0.0 : t.length.back() + (x - t.point.back()).norm());
+      t.point.push_back(x);
+    }
+  }
+  t.u.push_back(knot[n - 1]);
+  t.length.push_back(t.length.back() + (p[n - 1].p - t.point.back()).norm());
+  t.point.push_back(p[n - 1].p);
+  return t;
+}
+
 }  // namespace
 
 double PathCornerGap(double l, double theta) {
@@ -499,9 +565,9 @@ double PathCornerGap(double l, double theta) {
 }
 
 Plan MotionPlanner::Path(const Eigen::VectorXd& q0, const std::vector<Frame>& points, double radius_m,
-                         const MotionLimits& limits) const {
+                         const MotionLimits& limits, bool spline) const {
   if (points.empty()) throw std::invalid_argument("no point to move through");
-  if (points.size() > 1 && !(radius_m > 0)) {
+  if (!spline && points.size() > 1 && !(radius_m > 0)) {
     throw std::invalid_argument("a path through several points needs a corner radius r > 0 m (got " +
                                 FormatNumber(radius_m, "%g") +
                                 "): a sharp corner at constant speed is an infinite "
@@ -523,7 +589,7 @@ Plan MotionPlanner::Path(const Eigen::VectorXd& q0, const std::vector<Frame>& po
   std::vector<double> at_point(n, 0.0);  // path length where each point's orientation is reached
   Eigen::Vector3d from = p[0].p;
   double length = 0, min_radius = 1e300;
-  for (std::size_t k = 1; k < n; ++k) {
+  for (std::size_t k = 1; k < n && !spline; ++k) {
     const Eigen::Vector3d d_in = (p[k].p - p[k - 1].p).normalized();
     double l = 0, theta = 0;
     Eigen::Vector3d d_out = d_in;
@@ -564,7 +630,16 @@ Plan MotionPlanner::Path(const Eigen::VectorXd& q0, const std::vector<Frame>& po
       from = p[k].p;
     }
   }
-  at_point[n - 1] = length;
+  if (!spline) at_point[n - 1] = length;
+  // the spline: natural cubic through every point, in the chord length u; positions by arc
+  // length from a table of kSplineSteps samples per segment (linear between them)
+  SplineTable table;
+  if (spline) {
+    table = SplineThrough(p);
+    length = table.length.back();
+    for (std::size_t k = 0; k < n; ++k) at_point[k] = table.length[k * kSplineSteps];
+    min_radius = table.min_radius;
+  }
   // orientations along the path: SLERP between the points' (shorter arcs)
   std::vector<Eigen::Quaterniond> q(n);
   q[0] = p[0].q;
@@ -581,10 +656,14 @@ Plan MotionPlanner::Path(const Eigen::VectorXd& q0, const std::vector<Frame>& po
   const auto pose_at = [&](double s) {
     const double sigma = std::clamp(s, 0.0, 1.0) * length;
     Frame f;
-    double left = sigma;
-    std::size_t i = 0;
-    while (i + 1 < pieces.size() && left > pieces[i].length) left -= pieces[i++].length;
-    f.p = pieces[i].At(std::min(left, pieces[i].length));
+    if (spline) {
+      f.p = table.At(sigma);
+    } else {
+      double left = sigma;
+      std::size_t i = 0;
+      while (i + 1 < pieces.size() && left > pieces[i].length) left -= pieces[i++].length;
+      f.p = pieces[i].At(std::min(left, pieces[i].length));
+    }
     std::size_t k = 1;
     while (k + 1 < n && sigma > at_point[k]) ++k;
     const double span = at_point[k] - at_point[k - 1];

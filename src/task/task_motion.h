@@ -22,7 +22,8 @@
 //              shoulder-wrist line)
 //   path       through a list of points at constant tool speed (movep): lines
 //              joined by circular arcs tangent to both, each starting r before
-//              its corner; the path speed is a trapezoid over the whole length
+//              its corner, or a cubic spline through every point (spline);
+//              the path speed is a trapezoid over the whole length
 //   blend      the next straight move entered from a blended one (movel's r):
 //              a quadratic Bézier round the corner, then the line; the path
 //              speed carries over (FromBlend)
@@ -132,8 +133,12 @@ class MotionPlanner {
   /// turns the tool faster than limits.rot_speed_rps (then the rate limits, as
   /// every plan). r <= 0 with more than one point, a repeated point and a
   /// line shorter than 1e-6 m are refused.
-  Plan Path(const Eigen::VectorXd& q0, const std::vector<Frame>& points, double radius_m,
-            const MotionLimits& limits) const;
+  /// With `spline`: through every point exactly, on the natural cubic spline
+  /// through the start and the points (chord-length parameter, curvature
+  /// continuous), at constant speed along its arc length; `radius_m` unused;
+  /// the cruise speed lowered to sqrt(accel / curvature) at the tightest bend.
+  Plan Path(const Eigen::VectorXd& q0, const std::vector<Frame>& points, double radius_m, const MotionLimits& limits,
+            bool spline = false) const;
   /// Moves chain joint `joint` by `delta` rad over `duration_s` with the tool held.
   Plan Self(const Eigen::VectorXd& q0, int joint, double delta, double duration_s) const;
 

@@ -140,6 +140,51 @@ TEST_F(MotionTest, PathHoldsTheToolSpeedThroughThePoints) {
   EXPECT_THROW(planner_->Path(q1, {corners[0], Pose(0.50, -0.10, 0.50, Down())}, r, limits), std::invalid_argument);
 }
 
+// movep with spline: through every point (a sample within half a period's travel of each),
+// at constant tool speed between the ramps (2 %), the speed lowered to sqrt(a R) where the
+// spline bends most; the curvature is continuous, so the speed holds through the points.
+TEST_F(MotionTest, SplinePassesThroughEveryPointAtConstantSpeed) {
+  JointRateLimits wide = DefaultRateLimits(7);
+  wide.v_rps.setConstant(100.0);
+  wide.a_rps2.setConstant(1000.0);
+  planner_->set_rate_limits(wide);
+  const Eigen::VectorXd q1 = planner_->Ik(q0_, Pose(0.50, -0.10, 0.50, Down()));
+  const std::vector<Frame> points = {Pose(0.58, -0.05, 0.52, Down()), Pose(0.55, 0.05, 0.50, Down(10)),
+                                     Pose(0.48, 0.08, 0.53, Down(10)), Pose(0.45, 0.0, 0.50, Down())};
+  MotionLimits limits;
+  limits.speed_mps = 0.05;
+  limits.accel_mps2 = 0.5;
+  const Plan plan = planner_->Path(q1, points, 0, limits, true);
+  std::vector<Eigen::Vector3d> p = {Fk(q1).p};
+  for (const Eigen::VectorXd& q : plan.q) p.push_back(Fk(q).p);
+  double top = 0;
+  for (std::size_t i = 1; i < p.size(); ++i) top = std::max(top, (p[i] - p[i - 1]).norm() / kPeriod);
+  EXPECT_LE(top, 0.05 * 1.0001);
+  const double ramp = top / limits.accel_mps2;
+  double worst = 0;
+  for (std::size_t i = 1; i < p.size(); ++i) {
+    const double t = i * kPeriod;
+    if (t < ramp + 2 * kPeriod || t > plan.duration_s - ramp - 2 * kPeriod) continue;
+    worst = std::max(worst, std::abs((p[i] - p[i - 1]).norm() / kPeriod - top) / top);
+  }
+  EXPECT_LT(worst, 0.02);
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    double nearest = 1;
+    for (const Eigen::Vector3d& x : p) nearest = std::min(nearest, (x - points[k].p).norm());
+    EXPECT_LT(nearest, top * kPeriod / 2 + 1e-6) << "point " << k;
+  }
+  EXPECT_LT((Fk(plan.q.back()).p - points.back().p).norm(), 1e-8);
+  // a tighter limit on acceleration across the path lowers the speed: sqrt(a R) < 0.05 m/s
+  limits.accel_mps2 = 0.005;
+  const Plan slow = planner_->Path(q1, points, 0, limits, true);
+  double slow_top = 0;
+  for (std::size_t i = 1; i < slow.q.size(); ++i) {
+    slow_top = std::max(slow_top, (Fk(slow.q[i]).p - Fk(slow.q[i - 1]).p).norm() / kPeriod);
+  }
+  EXPECT_LT(slow_top, 0.045);
+  std::printf("spline: %.4f m/s, worst %.5f, slowed to %.4f m/s\n", top, worst, slow_top);
+}
+
 // movej: every sample on the joint-space segment; a frame target by IK lands on the frame.
 TEST_F(MotionTest, JointMoveIsStraightInJointSpaceAndIkHitsTheFrame) {
   const Frame goal = Pose(0.4, 0.3, 0.6, Down(-30));
