@@ -26,6 +26,8 @@ class UdpArm final : public Channel {
   const std::vector<std::string>& state_names() const override { return state_names_; }
   const std::vector<std::string>& command_names() const override { return command_names_; }
   std::vector<std::string> joint_names() const override { return arm_.joint_names(); }
+  // the describe reply's limits.velocity_max (empty: the device gives none, the defaults apply)
+  std::vector<double> velocity_limits() const override { return arm_.velocity_max(); }
   bool Read(std::vector<double>* v) override {
     if (!have_) return false;
     const int n = arm_.joints();

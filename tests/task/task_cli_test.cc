@@ -45,6 +45,38 @@ TEST(TaskCli, HelloRunsAsAnExternalControllerWithTheSameMotion) {
   }
 }
 
+// the arm's joint speed limits (max_velocity) reach the task runtime over UDP too, through the
+// describe reply's limits.velocity_max: at 0.7 rad/s (1.08 unlimited) the hello task is slowed alike in process
+// and as an external controller (the same joint columns), and no joint exceeds the limit
+TEST(TaskCli, ArmSpeedLimitsReachTheRuntimeOverUdp) {
+  const std::string slow = " --set 'devices.pa10.max_velocity=[0.7, 0.7, 0.7, 0.7, 0.7, 0.7, 0.7]'";
+  TempDir in, ex;
+  ASSERT_EQ(RunVlab("run scenes/pa10_task_hello --out '" + in.path() + "'" + slow).exit_code, 0);
+  const ProcessResult r = RunVlab("run scenes/pa10_task_hello_external --out '" + ex.path() + "'" + slow);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::vector<std::string> a = Lines(ReadFile(in / "log.csv")), b = Lines(ReadFile(ex / "log.csv"));
+  ASSERT_EQ(a.size(), b.size());
+  const std::vector<std::string> header = SplitCsv(a[0]);
+  double fastest = 0;
+  std::vector<double> before;
+  for (std::size_t row = 1; row < b.size(); ++row) {
+    const std::vector<std::string> x = SplitCsv(a[row]), y = SplitCsv(b[row]);
+    std::vector<double> q;
+    for (std::size_t c = 0; c < header.size(); ++c) {
+      if (header[c].rfind("pa10.q.", 0) != 0) continue;
+      ASSERT_EQ(x[c], y[c]) << header[c] << " row " << row;
+      q.push_back(std::stod(y[c]));
+    }
+    // the servo follows the slowed reference: its joints move at most a little faster (lag)
+    for (std::size_t j = 0; !before.empty() && j < q.size(); ++j) {
+      fastest = std::max(fastest, std::abs(q[j] - before[j]) / 0.002);
+    }
+    before = q;
+  }
+  EXPECT_LT(fastest, 0.7 * 1.05) << "a joint moved at " << fastest << " rad/s";
+  EXPECT_GT(fastest, 0.7 * 0.9) << "the move never reached the limit: the test shows nothing";
+}
+
 TEST(TaskCli, HelloRunsAgainstKinsim) {
   KinsimProcess kinsim({"--scene", "scenes/pa10.xml"});
   ASSERT_TRUE(kinsim.ok()) << kinsim.start_line();
