@@ -51,13 +51,6 @@ struct Rates {
   double ratio = 0;
 };
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 // steps per second of bare mj_step replaying `controls`; sets *same when the
 // final state equals `final_qpos` bit for bit
 double BareReplay(const lab::Lab& lab, const std::vector<double>& controls, const std::vector<double>& final_qpos,
@@ -78,6 +71,13 @@ double BareReplay(const lab::Lab& lab, const std::vector<double>& controls, cons
 }
 
 }  // namespace
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
 
 int BenchCommand(const BenchArgs& args) {
   return WithErrorReport([&args] {

@@ -27,21 +27,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kDefaultScenario = "scenes/pa10_reach";
-constexpr double kDefaultDuration_s = 60;
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
-}
+constexpr const char* kLogScenario = "scenes/pa10_reach";
+constexpr double kLogDuration_s = 60;
 
 }  // namespace
 
 int BenchLog(const BenchArgs& args) {
   return WithErrorReport([&args] {
-    const std::string scenario = args.scenario.empty() ? kDefaultScenario : args.scenario;
-    const double duration_s = args.duration_s > 0 ? args.duration_s : kDefaultDuration_s;
+    const std::string scenario = args.scenario.empty() ? kLogScenario : args.scenario;
+    const double duration_s = args.duration_s > 0 ? args.duration_s : kLogDuration_s;
     const std::vector<int> cpus = ThreadCpus();
     std::printf("CPUs: %zu allowed (%s); %ld online\n", cpus.size(), CpuListText(cpus).c_str(),
                 ::sysconf(_SC_NPROCESSORS_ONLN));

@@ -54,6 +54,8 @@ struct BenchArgs {
   std::vector<std::string> sets;  ///< physics: --set KEY=VALUE scenario overrides, in order
 };
 int BenchCommand(const BenchArgs& args);
+/// The median of `v` (0 when empty): a benchmark's figure of several measurements.
+double Median(std::vector<double> v);
 int BenchBridge(const BenchArgs& args);
 int BenchRender(const BenchArgs& args);
 int BenchRealtime(const BenchArgs& args);  // cli_bench_realtime.cc
