@@ -9,8 +9,9 @@
 //     of the view's /scene.json (parent "world", unit quaternions); one /camera/CAMERA whose bytes are a JPEG or
 //     PNG of the camera's size;
 //   - a client advertise and a client message are answered with an error status, and messages keep coming;
-//   - once the run's log is in place (its folder appears by a rename: watched, not polled), every decoded field
-//     equals, bit for bit, the log.csv column of the row at the message's stamp.
+//   - it prints "collected" (the caller may now end the run); once the run's log is in place (its folder appears
+//     by a rename: watched, not polled), every decoded field equals, bit for bit, the log.csv column of the row at
+//     the message's stamp.
 // Exits 0 when all hold; otherwise prints what differs and exits 1.
 import fs from "node:fs";
 import path from "node:path";
@@ -29,7 +30,7 @@ const url = `ws://127.0.0.1:${args.foxglove}/`;
 const wanted = Number(args.messages ?? 10);
 
 function fail(message) {
-  console.error(`foxglove_client: FAIL: ${message}`);
+  console.log(`foxglove_client: FAIL: ${message}`);
   process.exit(1);
 }
 
@@ -189,7 +190,8 @@ async function main() {
   }
   if (image.header.frame_id !== args.camera) fail(`${cameraTopic}: frame_id ${image.header.frame_id}`);
 
-  // the device's messages against the log, bit for bit, at the same stamps
+  // the device's messages against the log, bit for bit, at the same stamps, once the run has ended
+  console.log(`foxglove_client: collected ${deviceMessages.length} ${deviceTopic} messages, /tf, ${cameraTopic}`);
   await fileAppears(args.log).catch((e) => fail(e.message));
   const lines = fs.readFileSync(args.log, "utf8").trim().split("\n");
   const columns = lines[0].split(",");
