@@ -59,6 +59,10 @@ Subcommand AddViewCommand(CLI::App& app) {
                   "128 at once; a request head must come whole within 5 s; when full, a new connection closes the one "
                   "that has waited longest for its request. A WebSocket that does not read is closed (no pong in 10 s, "
                   "or a frame not taken in 5 s)");
+  cmd->add_flag_function(
+      "--no-shadows", [o](std::int64_t) { o->shadows = false; },
+      "The page starts without shadows (default: the MJCF's lights with castshadow cast them; the "
+      "page's 'shadows' box, or ?shadows=off in its address, turns them off and on)");
   cmd->add_option("--web", o->web, "Folder of the page's files (default: view_web beside the vlab binary)");
   cmd->add_option("--connect-timeout", o->connect_timeout_s, "Wait this long for the device, s (default 10)");
   cmd->add_option("--duration", o->duration_s, "Stop after this many seconds (default: run until interrupted)");
@@ -85,15 +89,24 @@ Subcommand AddExportCommand(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("export",
                          "Write a run's recorded poses (outputs: {poses: ...}) as glTF 2.0 (.glb) with animation, for "
-                         "Blender and three.js");
+                         "Blender and three.js: the geoms with their colours and textures (PNG inside the .glb), the "
+                         "MJCF's cameras and its lights (KHR_lights_punctual); docs/view.md says what maps how");
   cmd->add_option("run", a->run, "The run's output folder (with scene.json and poses.bin)")->required();
   cmd->add_option("file", a->glb, "The .glb file to write (never overwritten)")->required();
-  cmd->add_option("--model", a->model, "MJCF for meshes (default: the one scene.json names)");
+  cmd->add_option("--model", a->model,
+                  "MJCF for meshes, textures, cameras and lights (default: the one scene.json names; without one "
+                  "found, a scene without meshes or textures is exported without cameras and lights)");
   return {cmd, [a] {
             return WithErrorReport([&] {
               const view::GltfSummary s = view::ExportGltf(a->run, a->glb, a->model);
-              std::printf("vlab export: %s: %d bodies, %d geoms, %ld frames over %.3f s, %ld bytes\n", a->glb.c_str(),
-                          s.bodies, s.geoms, s.frames, s.duration_s, s.bytes);
+              std::printf(
+                  "vlab export: %s: %d bodies, %d geoms, %d textures, %d cameras, %d lights, %ld frames over %.3f s, "
+                  "%ld bytes\n",
+                  a->glb.c_str(), s.bodies, s.geoms, s.textures, s.cameras, s.lights, s.frames, s.duration_s, s.bytes);
+              if (s.left_out > 0) {
+                std::printf("vlab export: %d cameras or lights left out: their bodies move and are not recorded\n",
+                            s.left_out);
+              }
               return 0;
             });
           }};

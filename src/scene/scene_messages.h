@@ -16,6 +16,9 @@
 //            (parent frame "world", child frame the body's name)
 //   images   sensor_msgs/msg/CompressedImage: a camera's frame as PNG or JPEG
 //            bytes ("png" or "jpeg"), frame_id the camera's name
+//   scene    foxglove_msgs/msg/SceneUpdate: the visual geometry (SceneGeometry)
+//            as primitives, one entity per body, locked to the body's frame,
+//            and one for the world's geoms; sent once, it holds for the run
 // A message's stamp is the simulated time of its period. Little-endian hosts
 // only. Encoding writes into a string it resizes: no allocation once the
 // string has the capacity.
@@ -25,6 +28,9 @@
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include <mujoco/mujoco.h>
+#include <nlohmann/json_fwd.hpp>
 
 namespace vlab::scene {
 
@@ -70,7 +76,7 @@ MessageSchema TfMessageSchema();
 /// One body's pose in its parent's frame.
 struct FrameTransform {
   std::string parent;       ///< "world"
-  std::string child;        ///< the body's name
+  std::string child;        ///< the body's frame (BodyFrames)
   double translation[3];    ///< m
   double rotation_wxyz[4];  ///< unit quaternion, w first (MuJoCo's order)
 };
@@ -84,5 +90,25 @@ MessageSchema CompressedImageSchema();
 /// `frame_id` the camera's name, `size` bytes of the encoded image.
 void EncodeCompressedImage(double t, const std::string& frame_id, const std::string& format, const std::uint8_t* data,
                            std::size_t size, std::string* out);
+
+/// The frame of every body of a scene's geometry (SceneGeometry's "bodies",
+/// in order): its name, or "body_N" (N its index there) when it has none or
+/// its name is taken or is "world". The frames of TFMessages and SceneUpdates.
+std::vector<std::string> BodyFrames(const nlohmann::json& geometry);
+
+MessageSchema SceneUpdateSchema();
+
+/// A foxglove_msgs/msg/SceneUpdate at time t of a scene's visual geometry
+/// (SceneGeometry): an entity per body with a geom (frame and id BodyFrames',
+/// frame locked) and one for the world's geoms ("world"), each geom a
+/// primitive in its body's frame with its rgba: box -> cube, sphere and
+/// ellipsoid -> sphere, cylinder -> cylinder, capsule -> a cylinder and two
+/// spheres, plane -> a 1 mm thick cube under its surface (an infinite plane
+/// drawn 10 m square), mesh -> a triangle list of its vertices and faces from
+/// `model` (the MJCF the geometry came from; null: meshes are left out, the
+/// geometry does not hold their vertices). Textures are not carried:
+/// Foxglove's primitives have colours only. Throws nlohmann::json's
+/// exceptions for a geometry without the fields SceneGeometry writes.
+void EncodeSceneUpdate(double t, const nlohmann::json& geometry, const mjModel* model, std::string* out);
 
 }  // namespace vlab::scene

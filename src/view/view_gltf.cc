@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
+#include "scene/scene_geometry.h"
+#include "view/view_gltf_parts.h"
 #include "view/view_model.h"
 
 namespace vlab::view {
@@ -21,13 +23,11 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kFloat = 5126, kUint = 5125;                   // glTF componentType
-constexpr int kArrayBuffer = 34962, kElementBuffer = 34963;  // bufferView targets
-
-struct Triangles {
-  std::vector<float> positions;  // x, y, z
-  std::vector<std::uint32_t> indices;
-};
+using gltf::kArrayBuffer;
+using gltf::kElementBuffer;
+using gltf::kFloat;
+using gltf::kUint;
+using gltf::Triangles;
 
 // a surface of revolution about z from a profile of (radius, z) points
 Triangles Lathe(const std::vector<std::pair<double, double>>& profile, int segments) {
@@ -113,49 +113,6 @@ Triangles GeomTriangles(const json& g, const ViewModel* model) {
   return t;
 }
 
-// the binary buffer and its views and accessors
-class Builder {
- public:
-  int Add(const void* data, std::size_t bytes, int target) {
-    while (bin_.size() % 4) bin_.push_back(0);
-    json view = {{"buffer", 0}, {"byteOffset", bin_.size()}, {"byteLength", bytes}};
-    if (target) view["target"] = target;
-    bin_.insert(bin_.end(), static_cast<const char*>(data), static_cast<const char*>(data) + bytes);
-    views_.push_back(view);
-    return static_cast<int>(views_.size()) - 1;
-  }
-  int Accessor(int view, int component, std::size_t count, const char* type, json min = nullptr, json max = nullptr) {
-    json a = {{"bufferView", view}, {"componentType", component}, {"count", count}, {"type", type}};
-    if (!min.is_null()) a["min"] = min;
-    if (!max.is_null()) a["max"] = max;
-    accessors_.push_back(a);
-    return static_cast<int>(accessors_.size()) - 1;
-  }
-  // floats as VEC3/VEC4/SCALAR, with min and max per component
-  int Floats(const std::vector<float>& v, int components, const char* type, int target, bool bounds) {
-    const int view = Add(v.data(), 4 * v.size(), target);
-    json min = nullptr, max = nullptr;
-    if (bounds) {
-      min = json::array();
-      max = json::array();
-      for (int c = 0; c < components; ++c) {
-        float lo = INFINITY, hi = -INFINITY;
-        for (std::size_t i = c; i < v.size(); i += components) lo = std::min(lo, v[i]), hi = std::max(hi, v[i]);
-        min.push_back(lo);
-        max.push_back(hi);
-      }
-    }
-    return Accessor(view, kFloat, v.size() / components, type, min, max);
-  }
-  std::string& bin() { return bin_; }
-  json& views() { return views_; }
-  json& accessors() { return accessors_; }
-
- private:
-  std::string bin_;
-  json views_ = json::array(), accessors_ = json::array();
-};
-
 std::string ReadFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("vlab export: cannot read '" + path.string() + "'");
@@ -167,6 +124,39 @@ std::string ReadFile(const fs::path& path) {
 void PutU32(std::string* out, std::uint32_t v) { out->append(reinterpret_cast<const char*>(&v), 4); }
 
 }  // namespace
+
+int gltf::Buffer::Add(const void* data, std::size_t bytes, int target) {
+  while (bin_.size() % 4) bin_.push_back(0);
+  json view = {{"buffer", 0}, {"byteOffset", bin_.size()}, {"byteLength", bytes}};
+  if (target) view["target"] = target;
+  bin_.insert(bin_.end(), static_cast<const char*>(data), static_cast<const char*>(data) + bytes);
+  views_.push_back(view);
+  return static_cast<int>(views_.size()) - 1;
+}
+
+int gltf::Buffer::Accessor(int view, int component, std::size_t count, const char* type, json min, json max) {
+  json a = {{"bufferView", view}, {"componentType", component}, {"count", count}, {"type", type}};
+  if (!min.is_null()) a["min"] = min;
+  if (!max.is_null()) a["max"] = max;
+  accessors_.push_back(a);
+  return static_cast<int>(accessors_.size()) - 1;
+}
+
+int gltf::Buffer::Floats(const std::vector<float>& v, int components, const char* type, int target, bool bounds) {
+  const int view = Add(v.data(), 4 * v.size(), target);
+  json min = nullptr, max = nullptr;
+  if (bounds) {
+    min = json::array();
+    max = json::array();
+    for (int c = 0; c < components; ++c) {
+      float lo = INFINITY, hi = -INFINITY;
+      for (std::size_t i = c; i < v.size(); i += components) lo = std::min(lo, v[i]), hi = std::max(hi, v[i]);
+      min.push_back(lo);
+      max.push_back(hi);
+    }
+  }
+  return Accessor(view, kFloat, v.size() / components, type, min, max);
+}
 
 GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, const std::string& model_path) {
   if (fs::exists(glb_path))
@@ -183,10 +173,20 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
                      " bodies");
   }
   const long frames = static_cast<long>(poses.size() / frame_bytes);
+  // the MJCF: needed for meshes and textures, used for cameras and lights where it is found
   std::unique_ptr<ViewModel> model;
-  const bool meshes =
-      std::any_of(info["geoms"].begin(), info["geoms"].end(), [](const json& g) { return g["type"] == "mesh"; });
-  if (meshes) model = ViewModel::Load(model_path.empty() ? info.value("model", std::string()) : model_path);
+  const bool needs_model = std::any_of(info["geoms"].begin(), info["geoms"].end(), [](const json& g) {
+    return g["type"] == "mesh" || g.value("texture", -1) >= 0;
+  });
+  const std::string mjcf = model_path.empty() ? info.value("model", std::string()) : model_path;
+  if (needs_model || !model_path.empty() || (!mjcf.empty() && fs::is_regular_file(mjcf))) {
+    model = ViewModel::Load(mjcf);
+    if (scene::SceneGeometry(model->model(), scene::SceneBodies(model->model()))["bodies"] != info["bodies"]) {
+      throw InputError("vlab export: the model '" + mjcf + "' is not the one '" + scene_path.string() +
+                       "' was recorded with (its bodies differ; give that MJCF with --model)");
+    }
+  }
+  const mjModel* m = model ? model->model() : nullptr;
 
   // times and each body's translations and rotations (glTF quaternions are x, y, z, w)
   std::vector<float> times(frames);
@@ -204,8 +204,9 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
     }
   }
 
-  Builder buffer;
-  json nodes = json::array(), meshes_json = json::array(), materials = json::array(), roots = json::array();
+  gltf::Buffer buffer;
+  gltf::Textures textures(m, &buffer);
+  json nodes = json::array(), meshes_json = json::array(), roots = json::array();
   for (std::size_t b = 0; b < bodies; ++b) {
     const std::vector<float>& tr = translation[b];
     const std::vector<float>& ro = rotation[b];
@@ -216,25 +217,21 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
     roots.push_back(b);
   }
   int geoms = 0;
+  json gltf_extra = json::object();  // cameras, lights
   for (const json& g : info["geoms"]) {
     const Triangles t = GeomTriangles(g, model.get());
     if (t.indices.empty()) continue;
-    const int position = buffer.Floats(t.positions, 3, "VEC3", kArrayBuffer, true);
-    const int view = buffer.Add(t.indices.data(), 4 * t.indices.size(), kElementBuffer);
-    const std::uint32_t top = *std::max_element(t.indices.begin(), t.indices.end());
-    const int index = buffer.Accessor(view, kUint, t.indices.size(), "SCALAR", {0}, {top});
-    const json& c = g["rgba"];
-    json material = {
-        {"name", g.value("name", "")},
-        {"pbrMetallicRoughness",
-         {{"baseColorFactor", {c[0], c[1], c[2], c[3]}}, {"metallicFactor", 0.0}, {"roughnessFactor", 0.8}}},
-        {"doubleSided", g["type"] == "plane"}};
-    if (c[3].get<double>() < 1) material["alphaMode"] = "BLEND";
-    materials.push_back(material);
-    meshes_json.push_back(
-        {{"name", g.value("name", "")},
-         {"primitives",
-          {{{"attributes", {{"POSITION", position}}}, {"indices", index}, {"material", materials.size() - 1}}}}});
+    const gltf::Look look = textures.LookOf(g, t);
+    json attributes = {{"POSITION", buffer.Floats(t.positions, 3, "VEC3", kArrayBuffer, true)}};
+    if (!look.uv.empty()) attributes["TEXCOORD_0"] = buffer.Floats(look.uv, 2, "VEC2", kArrayBuffer, false);
+    json primitives = json::array();
+    for (const gltf::Primitive& p : look.primitives) {
+      const int view = buffer.Add(p.indices.data(), 4 * p.indices.size(), kElementBuffer);
+      const auto [low, high] = std::minmax_element(p.indices.begin(), p.indices.end());
+      const int index = buffer.Accessor(view, kUint, p.indices.size(), "SCALAR", {*low}, {*high});
+      primitives.push_back({{"attributes", attributes}, {"indices", index}, {"material", p.material}});
+    }
+    meshes_json.push_back({{"name", g.value("name", "")}, {"primitives", primitives}});
     json node = {{"name", g.value("name", "")},
                  {"mesh", meshes_json.size() - 1},
                  {"translation", g["pos"]},
@@ -248,6 +245,9 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
       roots.push_back(nodes.size() - 1);
     ++geoms;
   }
+  std::vector<int> recorded;
+  if (m) recorded = scene::SceneBodies(m);
+  const gltf::CameraLightCounts placed = gltf::AddCamerasAndLights(m, recorded, &nodes, &roots, &gltf_extra);
   for (json& n : nodes) {
     if (n.contains("children") && n["children"].empty()) n.erase("children");
   }
@@ -267,10 +267,11 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
                {"scenes", {{{"name", "vlab"}, {"nodes", roots}}}},
                {"nodes", nodes},
                {"meshes", meshes_json},
-               {"materials", materials},
                {"animations", {{{"name", "run"}, {"samplers", samplers}, {"channels", channels}}}},
                {"accessors", buffer.accessors()},
                {"bufferViews", buffer.views()}};
+  textures.AddTo(&gltf);
+  gltf.update(gltf_extra);
   std::string& bin = buffer.bin();
   while (bin.size() % 4) bin.push_back(0);
   gltf["buffers"] = {{{"byteLength", bin.size()}}};
@@ -298,6 +299,10 @@ GltfSummary ExportGltf(const std::string& run_dir, const std::string& glb_path, 
   GltfSummary s;
   s.bodies = static_cast<int>(bodies);
   s.geoms = geoms;
+  s.textures = textures.count();
+  s.cameras = placed.cameras;
+  s.lights = placed.lights;
+  s.left_out = placed.skipped;
   s.frames = frames;
   s.duration_s = static_cast<double>(times.back()) - times.front();
   s.bytes = static_cast<long>(glb.size());

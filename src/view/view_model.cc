@@ -87,6 +87,25 @@ nlohmann::json ViewModel::Cameras() const {
   return cameras;
 }
 
+nlohmann::json ViewModel::Lights() const {
+  nlohmann::json lights = nlohmann::json::array();
+  for (int l = 0; l < m_->nlight; ++l) {
+    if (m_->light_bodyid[l] != 0 || !m_->light_active[l]) continue;
+    const char* name = mj_id2name(m_, mjOBJ_LIGHT, l);
+    const mjtNum* pos = m_->light_pos + 3 * l;
+    const mjtNum* dir = m_->light_dir + 3 * l;
+    const float* diffuse = m_->light_diffuse + 3 * l;
+    lights.push_back({{"name", name ? name : ""},
+                      {"pos", {pos[0], pos[1], pos[2]}},
+                      {"dir", {dir[0], dir[1], dir[2]}},
+                      {"directional", m_->light_directional[l] != 0},
+                      {"castshadow", m_->light_castshadow[l] != 0},
+                      {"diffuse", {diffuse[0], diffuse[1], diffuse[2]}},
+                      {"cutoff", m_->light_cutoff[l]}});
+  }
+  return lights;
+}
+
 void ViewModel::BindJoints(const std::vector<std::string>& names) {
   qpos_adr_.clear();
   for (const std::string& name : names) {

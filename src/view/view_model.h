@@ -1,5 +1,5 @@
 // What `vlab view` takes from the MJCF it draws: mesh vertices and faces,
-// texture pixels, cameras, and the poses of an arm's bodies from its joint
+// texture pixels, cameras, lights, and the poses of an arm's bodies from its joint
 // angles (MuJoCo kinematics); and the binary pose frame the page reads.
 #pragma once
 
@@ -35,6 +35,9 @@ class ViewModel {
   /// The MJCF cameras fixed in the world: name, pos, quat (MuJoCo camera
   /// frame: looking along -z, +y up), fovy (deg).
   nlohmann::json Cameras() const;
+  /// The MJCF's active lights fixed in the world: name, pos, dir (world
+  /// frame), directional, castshadow, diffuse (rgb), cutoff (deg).
+  nlohmann::json Lights() const;
 
   /// The arm's joints by name (joint names from its describe reply); throws
   /// InputError naming the first joint the model lacks or one that is not a

@@ -276,6 +276,8 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     source += "; plotting " + o.plot;
   }
   info["cameras"] = model ? model->Cameras() : nlohmann::json::array();
+  info["lights"] = model ? model->Lights() : nlohmann::json::array();
+  info["shadows"] = o.shadows;
   const std::string info_text = info.dump();
   const ViewModel* m = model.get();
   auto resources = [m, info_text, &recording, &plot_rows](const std::string& path, std::string* type,

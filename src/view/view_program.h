@@ -23,6 +23,7 @@ struct ViewOptions {
   ViewServerConfig server;
   double connect_timeout_s = 10;
   double duration_s = 0;  ///< stop after this long (0: until a signal)
+  bool shadows = true;    ///< the page casts shadows (a switch on the page turns them off and on)
   bool quiet = false;
 };
 

@@ -8,7 +8,10 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+#include <nlohmann/json.hpp>
 
+#include "scene/scene_geometry.h"
 #include "scene/scene_messages.h"
 
 namespace vlab::lab::messages_test {
@@ -123,6 +126,139 @@ TEST(SceneMessages, CompressedImageCarriesFormatAndBytes) {
   EXPECT_EQ(At<std::uint32_t>(bytes, 4 + 28), 7u);
   EXPECT_EQ(bytes.substr(4 + 32), std::string(reinterpret_cast<const char*>(png), sizeof png));
   EXPECT_EQ(scene::CompressedImageSchema().name, "sensor_msgs/msg/CompressedImage");
+}
+
+// reads CDR back as the rules say (alignment from the end of the 4-byte header)
+class CdrReader {
+ public:
+  explicit CdrReader(const std::string& bytes) : bytes_(bytes) {}
+  template <typename T>
+  T Get() {
+    if ((at_ - 4) % sizeof(T)) at_ += sizeof(T) - (at_ - 4) % sizeof(T);
+    EXPECT_LE(at_ + sizeof(T), bytes_.size());
+    T value{};
+    if (at_ + sizeof(T) <= bytes_.size()) std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return value;
+  }
+  std::string String() {
+    const auto n = Get<std::uint32_t>();
+    std::string s = bytes_.substr(at_, n ? n - 1 : 0);
+    at_ += n;
+    return s;
+  }
+  std::vector<double> Doubles(int n) {
+    std::vector<double> v;
+    for (int i = 0; i < n; ++i) v.push_back(Get<double>());
+    return v;
+  }
+  bool AtEnd() const { return at_ == bytes_.size(); }
+
+ private:
+  const std::string& bytes_;
+  std::size_t at_ = 4;
+};
+
+// a world plane, a body with a box, a capsule and a tetrahedron mesh, a body without a name
+constexpr char kSceneXml[] = R"(<mujoco>
+  <asset><mesh name="tet" vertex="0 0 0  1 0 0  0 1 0  0 0 1"/></asset>
+  <worldbody>
+    <geom type="plane" size="2 3 0.1" rgba="0.5 0.5 0.5 1"/>
+    <body name="hand" pos="0 0 1">
+      <freejoint/>
+      <geom type="box" size="0.1 0.2 0.3" pos="1 2 3" rgba="1 0 0 1"/>
+      <geom type="capsule" size="0.05 0.2" rgba="0 1 0 1"/>
+      <geom type="mesh" mesh="tet" rgba="0 0 1 0.5"/>
+    </body>
+    <body pos="1 0 0"><freejoint/><geom type="sphere" size="0.1"/></body>
+  </worldbody>
+</mujoco>)";
+
+TEST(SceneMessages, SceneUpdateCarriesEveryGeomInItsBodysFrame) {
+  char error[1000] = "";
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  ASSERT_EQ(mj_makeEmptyFileVFS(&vfs, "scene.xml", sizeof kSceneXml), 0);
+  std::memcpy(vfs.filedata[vfs.nfile - 1], kSceneXml, sizeof kSceneXml);
+  mjModel* m = mj_loadXML("scene.xml", &vfs, error, sizeof error);
+  mj_deleteVFS(&vfs);
+  ASSERT_NE(m, nullptr) << error;
+  const nlohmann::json geometry = scene::SceneGeometry(m, scene::SceneBodies(m));
+  EXPECT_EQ(scene::BodyFrames(geometry), (std::vector<std::string>{"hand", "body_1"}));
+  std::string bytes;
+  scene::EncodeSceneUpdate(2.5, geometry, m, &bytes);
+  const int mesh_vertices = m->mesh_vertnum[0], mesh_faces = m->mesh_facenum[0];
+  const std::vector<float> vertices(m->mesh_vert, m->mesh_vert + 3 * mesh_vertices);
+  const std::vector<int> faces(m->mesh_face, m->mesh_face + 3 * mesh_faces);
+  mj_deleteModel(m);
+
+  CdrReader r(bytes);
+  EXPECT_EQ(r.Get<std::uint32_t>(), 0u);  // deletions
+  ASSERT_EQ(r.Get<std::uint32_t>(), 3u);  // world, hand, body_1
+  struct Counts {
+    std::string frame;
+    std::uint32_t cubes, spheres, cylinders, triangles;
+  };
+  const Counts expected[] = {{"world", 1, 0, 0, 0}, {"hand", 1, 2, 1, 1}, {"body_1", 0, 1, 0, 0}};
+  for (const Counts& e : expected) {
+    SCOPED_TRACE(e.frame);
+    EXPECT_EQ(r.Get<std::int32_t>(), 2);
+    EXPECT_EQ(r.Get<std::uint32_t>(), 500000000u);
+    EXPECT_EQ(r.String(), e.frame);
+    EXPECT_EQ(r.String(), e.frame);
+    EXPECT_EQ(r.Get<std::int32_t>(), 0);  // lifetime
+    EXPECT_EQ(r.Get<std::uint32_t>(), 0u);
+    EXPECT_EQ(r.Get<std::uint8_t>(), 1);    // frame locked
+    EXPECT_EQ(r.Get<std::uint32_t>(), 0u);  // metadata
+    EXPECT_EQ(r.Get<std::uint32_t>(), 0u);  // arrows
+    ASSERT_EQ(r.Get<std::uint32_t>(), e.cubes);
+    for (std::uint32_t i = 0; i < e.cubes; ++i) {
+      const auto pose = r.Doubles(7), size = r.Doubles(3), rgba = r.Doubles(4);
+      if (e.frame == "world") {  // the plane: 1 mm thick, its top at z = 0
+        EXPECT_EQ(pose, (std::vector<double>{0, 0, -0.0005, 0, 0, 0, 1}));
+        EXPECT_EQ(size, (std::vector<double>{4, 6, 0.001}));
+        EXPECT_FLOAT_EQ(rgba[0], 0.5);
+      } else {
+        EXPECT_EQ(pose, (std::vector<double>{1, 2, 3, 0, 0, 0, 1}));
+        EXPECT_FLOAT_EQ(size[0], 0.2);
+        EXPECT_FLOAT_EQ(size[1], 0.4);
+        EXPECT_FLOAT_EQ(size[2], 0.6);
+        EXPECT_EQ(rgba, (std::vector<double>{1, 0, 0, 1}));
+      }
+    }
+    ASSERT_EQ(r.Get<std::uint32_t>(), e.spheres);
+    for (std::uint32_t i = 0; i < e.spheres; ++i) {
+      const auto pose = r.Doubles(7), size = r.Doubles(3);
+      r.Doubles(4);
+      if (e.frame == "hand") {  // the capsule's ends
+        EXPECT_NEAR(pose[2], i == 0 ? -0.2 : 0.2, 1e-12);
+        EXPECT_FLOAT_EQ(size[0], 0.1);
+      }
+    }
+    ASSERT_EQ(r.Get<std::uint32_t>(), e.cylinders);
+    for (std::uint32_t i = 0; i < e.cylinders; ++i) {
+      r.Doubles(7);
+      const auto size = r.Doubles(3);
+      EXPECT_FLOAT_EQ(size[2], 0.4);
+      EXPECT_EQ(r.Doubles(2), (std::vector<double>{1, 1}));
+      r.Doubles(4);
+    }
+    EXPECT_EQ(r.Get<std::uint32_t>(), 0u);  // lines
+    ASSERT_EQ(r.Get<std::uint32_t>(), e.triangles);
+    for (std::uint32_t i = 0; i < e.triangles; ++i) {
+      r.Doubles(7);
+      ASSERT_EQ(r.Get<std::uint32_t>(), static_cast<std::uint32_t>(mesh_vertices));
+      for (int v = 0; v < 3 * mesh_vertices; ++v) EXPECT_EQ(r.Get<double>(), vertices[v]);
+      EXPECT_DOUBLE_EQ(r.Doubles(4)[3], 0.5);
+      EXPECT_EQ(r.Get<std::uint32_t>(), 0u);  // colors
+      ASSERT_EQ(r.Get<std::uint32_t>(), static_cast<std::uint32_t>(3 * mesh_faces));
+      for (int f = 0; f < 3 * mesh_faces; ++f) EXPECT_EQ(r.Get<std::uint32_t>(), static_cast<std::uint32_t>(faces[f]));
+    }
+    EXPECT_EQ(r.Get<std::uint32_t>(), 0u);  // texts
+    EXPECT_EQ(r.Get<std::uint32_t>(), 0u);  // models
+  }
+  EXPECT_TRUE(r.AtEnd());
+  EXPECT_EQ(mesh_faces, 4);
 }
 
 }  // namespace

@@ -81,6 +81,12 @@ LogFormat ParseLogFormat(const std::string& name, const std::string& where) {
   throw InputError(where + ": unknown log format '" + name + "' (csv, mat or hdf5)");
 }
 
+std::vector<std::string> LogFormatNames() {
+  std::vector<std::string> names;
+  for (const FormatEntry& entry : kFormats) names.emplace_back(entry.name);
+  return names;
+}
+
 const char* LogFileName(LogFormat format) {
   for (const FormatEntry& entry : kFormats) {
     if (entry.format == format) return entry.file;

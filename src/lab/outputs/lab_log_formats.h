@@ -17,6 +17,8 @@ enum class LogFormat { kCsv, kMat, kHdf5 };
 /// The format a name gives: "csv", "mat", "hdf5". Throws InputError naming
 /// `where` for any other name ("mcap": not yet, said so).
 LogFormat ParseLogFormat(const std::string& name, const std::string& where);
+/// The names of the formats, CSV's first ("csv", "mat", "hdf5").
+std::vector<std::string> LogFormatNames();
 /// The log's file name in the output folder: log.csv, log.mat or log.h5.
 const char* LogFileName(LogFormat format);
 

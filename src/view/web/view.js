@@ -7,8 +7,14 @@
 // a JPEG or PNG file) and plots of a few signals (live: WebSocket /plot,
 // float64 time, float64 seq, float64 per signal; replay: plots.bin, rows of
 // float64 time and one float64 per signal). Newest wins everywhere.
+// Lights: the MJCF's world lights (scene.json's lights: directional,
+// spot with its cutoff, castshadow) beside a soft hemisphere light; without
+// them one key light. Shadows (three.js shadow maps): the lights with
+// castshadow cast, every geom casts and receives (planes only receive); on
+// unless `vlab view --no-shadows` (scene.json's shadows: false) or
+// shadows=off, and the 'shadows' box turns them off and on.
 // URL options: camera=NAME (an MJCF world camera's pose and field of view),
-// silhouette (bodies white, world geoms black, no lights: for tests),
+// shadows=off, silhouette (bodies white, world geoms black, no lights: for tests),
 // bare (no overlay), clock=manual (a replay advances only by vlabView.tick(ms):
 // for tests). Space pauses and resumes, wherever the focus is.
 // When the server refuses a WebSocket (its table full), it closes it with a
@@ -16,6 +22,7 @@
 (function () {
   'use strict';
   var params = new URLSearchParams(window.location.search);
+  var casters = [];  // the lights that cast shadows
   var silhouette = params.has('silhouette');
   if (silhouette || params.has('bare')) document.body.className = 'bare';
   // for tests and for the curious: what has been drawn
@@ -45,12 +52,7 @@
     document.body.appendChild(renderer.domElement);
     scene = new THREE.Scene();
     scene.background = new THREE.Color(silhouette ? 0x000000 : 0x39424e);
-    if (!silhouette) {
-      scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 0.6));
-      var key = new THREE.DirectionalLight(0xffffff, 0.7);
-      key.position.set(1.0, -1.5, 3.0);
-      scene.add(key);
-    }
+    if (!silhouette) addLights();
     camera = new THREE.PerspectiveCamera(45, window.innerWidth / window.innerHeight, 0.01, 100);
     camera.up.set(0, 0, 1);  // z up, as MuJoCo's world
     var fixed = (info.cameras || []).filter(function (c) { return c.name === params.get('camera'); })[0];
@@ -77,6 +79,8 @@
     info.geoms.forEach(function (geom) {
       var object = makeGeom(geom, makeMaterial(geom, textures));
       if (!object) return;
+      object.castShadow = !silhouette && geom.type !== 'plane';
+      object.receiveShadow = !silhouette;
       object.name = geom.name;
       object.position.set(geom.pos[0], geom.pos[1], geom.pos[2]);
       object.quaternion.set(geom.quat[1], geom.quat[2], geom.quat[3], geom.quat[0]);
@@ -105,8 +109,57 @@
       var g = groups[i];
       return [g.position.x, g.position.y, g.position.z, g.quaternion.w, g.quaternion.x, g.quaternion.y, g.quaternion.z];
     };
+    var box = document.getElementById('shadows');
+    box.checked = info.shadows !== false && params.get('shadows') !== 'off';
+    box.onchange = function () { setShadows(box.checked); box.blur(); };
+    setShadows(box.checked);
     state.ready = true;
     requestAnimationFrame(animate);
+  }
+
+  // the MJCF's world lights (scene.json), or a key light where it names none; MuJoCo's
+  // intensities are OpenGL's 0-1 diffuse, as three.js's (non-physical) light intensities
+  function addLights() {
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 0.6));
+    var lights = info.lights && info.lights.length ? info.lights :
+        [{ pos: [1.0, -1.5, 3.0], dir: [-0.3, 0.5, -1], directional: true, castshadow: true,
+           diffuse: [0.7, 0.7, 0.7] }];
+    lights.forEach(function (l) {
+      var d = l.diffuse, top = Math.max(d[0], d[1], d[2]), colour = new THREE.Color(1, 1, 1), light;
+      if (top > 0) colour.setRGB(d[0] / top, d[1] / top, d[2] / top);
+      if (l.directional) {
+        light = new THREE.DirectionalLight(colour, top);
+        // the shadow's box: 4 m across around where the light looks, 8 m deep
+        var c = light.shadow.camera;
+        c.left = c.bottom = -2; c.right = c.top = 2; c.near = 0.05; c.far = 8;
+      } else if (l.cutoff > 0 && l.cutoff < 90) {
+        light = new THREE.SpotLight(colour, top, 0, l.cutoff * Math.PI / 180, 0.3);
+        light.shadow.camera.near = 0.05;
+      } else {
+        light = new THREE.PointLight(colour, top);
+      }
+      light.position.set(l.pos[0], l.pos[1], l.pos[2]);
+      if (light.target) {
+        light.target.position.set(l.pos[0] + l.dir[0], l.pos[1] + l.dir[1], l.pos[2] + l.dir[2]);
+        scene.add(light.target);
+      }
+      light.shadow.mapSize.set(2048, 2048);
+      light.shadow.bias = -0.0005;
+      if (l.castshadow) casters.push(light);
+      scene.add(light);
+    });
+  }
+
+  function setShadows(on) {
+    state.shadows = on && !silhouette;
+    renderer.shadowMap.enabled = state.shadows;
+    renderer.shadowMap.type = THREE.PCFSoftShadowMap;
+    casters.forEach(function (l) { l.castShadow = state.shadows; });
+    // three.js compiles shadows into the materials' programs: rebuild them
+    scene.traverse(function (o) {
+      if (!o.material) return;
+      (Array.isArray(o.material) ? o.material : [o.material]).forEach(function (m) { m.needsUpdate = true; });
+    });
   }
 
   function togglePause() {
@@ -122,10 +175,9 @@
     if (rgba[3] < 1) { options.transparent = true; options.opacity = rgba[3]; }
     var tex = geom.texture >= 0 ? info.textures[geom.texture] : null;
     if (tex && tex.type === '2d') {
+      // texture coordinates: MuJoCo's texgen (texgenUv, on the geometry); the pattern repeats
       var t = new THREE.TextureLoader().load('tex/' + geom.texture);
       t.wrapS = t.wrapT = THREE.RepeatWrapping;
-      var scale = geom.texuniform ? [2 * geom.size[0], 2 * geom.size[1]] : [1, 1];
-      t.repeat.set(geom.texrepeat[0] * scale[0], geom.texrepeat[1] * scale[1]);
       options.map = t;
       options.color = new THREE.Color(1, 1, 1);
       return new THREE.MeshPhongMaterial(options);
@@ -158,6 +210,24 @@
     return materials;
   }
 
+  // a 2-D texture's coordinates as MuJoCo 2.2.2 generates them (GL_OBJECT_LINEAR in the geom's
+  // frame): s = 0.5 scl_x x - 0.5, t = -0.5 scl_y y - 0.5, scl = texrepeat / size (texuniform
+  // or a zero size: texrepeat), row 0 of the image at t = 0 (three.js flips: v = 1 - t); the
+  // same coordinates as vlab export writes
+  function texgenUv(geom, g) {
+    var s = geom.size, type = geom.type;
+    var size = type === 'sphere' ? [s[0], s[0]] : type === 'capsule' || type === 'cylinder' ? [s[0], s[0]] : [s[0], s[1]];
+    var scale = [0, 1].map(function (k) {
+      return geom.texuniform || !(size[k] > 0) ? geom.texrepeat[k] : geom.texrepeat[k] / size[k];
+    });
+    var p = g.attributes.position, uv = new Float32Array(2 * p.count);
+    for (var i = 0; i < p.count; ++i) {
+      uv[2 * i] = 0.5 * scale[0] * p.getX(i) - 0.5;
+      uv[2 * i + 1] = 1.5 + 0.5 * scale[1] * p.getY(i);
+    }
+    g.setAttribute('uv', new THREE.BufferAttribute(uv, 2));
+  }
+
   // MuJoCo's capsule: a cylinder of half-length h with hemispheres of radius r, along z
   function capsuleGeometry(r, h) {
     var points = [], n = 12, i, a;
@@ -178,6 +248,8 @@
       case 'mesh': g = new THREE.BufferGeometry(); loadMesh(geom.mesh, g); break;
       default: return null;
     }
+    var tex = geom.texture >= 0 ? info.textures[geom.texture] : null;
+    if (tex && tex.type === '2d' && geom.type !== 'mesh' && !silhouette) texgenUv(geom, g);
     return new THREE.Mesh(g, material);
   }
 
