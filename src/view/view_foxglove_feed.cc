@@ -3,15 +3,21 @@
 
 namespace vlab::view {
 
-// channel ids: /tf 0, then one per device of the signals, then the camera
-FoxgloveFeed::FoxgloveFeed(const std::vector<std::string>& bodies, const std::vector<std::string>& signals,
-                           const std::string& camera)
-    : camera_(camera) {
-  const scene::MessageSchema tf = scene::TfMessageSchema();
+namespace {
+
+// channel ids: /tf 0, /scene 1, then one per device of the signals, then the camera
+constexpr int kTfChannel = 0, kSceneChannel = 1, kFirstSignalChannel = 2;
+
+}  // namespace
+
+FoxgloveFeed::FoxgloveFeed(const nlohmann::json& geometry, const mjModel* model,
+                           const std::vector<std::string>& signals, const std::string& camera)
+    : geometry_(geometry), model_(model), camera_(camera) {
+  const scene::MessageSchema tf = scene::TfMessageSchema(), scene_update = scene::SceneUpdateSchema();
   channels_.push_back({"/tf", tf.name, tf.text});
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    scene::FrameTransform f{"world", bodies[i].empty() ? "body" + std::to_string(i) : bodies[i], {}, {1, 0, 0, 0}};
-    transforms_.push_back(f);
+  channels_.push_back({"/scene", scene_update.name, scene_update.text});
+  for (const std::string& frame : scene::BodyFrames(geometry)) {
+    transforms_.push_back({"world", frame, {0, 0, 0}, {1, 0, 0, 0}});
   }
   if (!signals.empty()) signal_channels_ = scene::SignalChannels(signals);
   for (const scene::SignalChannel& c : signal_channels_) channels_.push_back({c.topic, c.schema.name, c.schema.text});
@@ -22,6 +28,12 @@ FoxgloveFeed::FoxgloveFeed(const std::vector<std::string>& bodies, const std::ve
   }
 }
 
+void FoxgloveFeed::PublishScene(double t, ViewServer* server) {
+  std::string message;
+  scene::EncodeSceneUpdate(t, geometry_, model_, &message);
+  server->Publish(FoxgloveRecord(LogTimeNs(t), message), kSceneChannel);
+}
+
 void FoxgloveFeed::PublishFrame(double t, const double* poses, const double* signals, ViewServer* server) {
   const std::uint64_t ns = LogTimeNs(t);
   for (std::size_t i = 0; i < transforms_.size(); ++i) {
@@ -30,10 +42,10 @@ void FoxgloveFeed::PublishFrame(double t, const double* poses, const double* sig
     for (int k = 0; k < 4; ++k) transforms_[i].rotation_wxyz[k] = p[3 + k];
   }
   scene::EncodeTfMessage(t, transforms_.data(), transforms_.size(), &frame_scratch_);
-  server->Publish(FoxgloveRecord(ns, frame_scratch_), 0);
+  server->Publish(FoxgloveRecord(ns, frame_scratch_), kTfChannel);
   for (std::size_t c = 0; c < signal_channels_.size(); ++c) {
     scene::EncodeSignals(t, signal_channels_[c], signals, &frame_scratch_);
-    server->Publish(FoxgloveRecord(ns, frame_scratch_), static_cast<int>(1 + c));
+    server->Publish(FoxgloveRecord(ns, frame_scratch_), static_cast<int>(kFirstSignalChannel + c));
   }
 }
 

@@ -3,7 +3,11 @@
 // (scene_messages.h, encoding "cdr", schemas "ros2msg"):
 //   /tf             tf2_msgs/msg/TFMessage: world -> each body of the scene
 //                   stream (the scene device's poses, or the arm's by MuJoCo
-//                   kinematics), one message per pose frame
+//                   kinematics), one message per pose frame; frames named as
+//                   scene::BodyFrames names them
+//   /scene          foxglove_msgs/msg/SceneUpdate: the visual geometry, an
+//                   entity per body locked to its /tf frame; one message,
+//                   which every subscriber gets (a channel's newest message)
 //   /DEVICE         vlab_msgs/msg/<Device>: the device's log columns the view
 //                   gets (the scene device's `signals`, or an arm device's q,
 //                   qd, tau named as log.csv names them), one per frame
@@ -17,6 +21,9 @@
 #include <string>
 #include <vector>
 
+#include <mujoco/mujoco.h>
+#include <nlohmann/json.hpp>
+
 #include "scene/scene_messages.h"
 #include "view/view_foxglove.h"
 #include "view/view_server.h"
@@ -25,12 +32,18 @@ namespace vlab::view {
 
 class FoxgloveFeed {
  public:
-  /// `bodies`: the scene stream's body names in stream order (an unnamed body
-  /// is the frame "body<i>", i its place in the stream); `signals`: log column
-  /// names; `camera`: a camera device's name ("": no camera channel).
-  FoxgloveFeed(const std::vector<std::string>& bodies, const std::vector<std::string>& signals,
+  /// `geometry`: the scene's visual geometry (SceneGeometry, the scene
+  /// device's describe reply), its bodies in stream order; `model`: the MJCF
+  /// it came from, for mesh vertices (null: /scene leaves meshes out);
+  /// `signals`: log column names; `camera`: a camera device's name ("": no
+  /// camera channel). Throws nlohmann::json's exceptions for a geometry
+  /// without SceneGeometry's fields.
+  FoxgloveFeed(const nlohmann::json& geometry, const mjModel* model, const std::vector<std::string>& signals,
                const std::string& camera);
   const std::vector<FoxgloveChannel>& channels() const { return channels_; }
+
+  /// Publishes the /scene message (once: it holds for the run), stamped t (s).
+  void PublishScene(double t, ViewServer* server);
 
   /// Publishes one frame at simulated time t (s): /tf from `poses` (7 per
   /// body: x, y, z m, qw, qx, qy, qz) and each device's signals from
@@ -43,6 +56,8 @@ class FoxgloveFeed {
 
  private:
   std::vector<FoxgloveChannel> channels_;
+  nlohmann::json geometry_;
+  const mjModel* model_;
   std::vector<scene::SignalChannel> signal_channels_;
   std::vector<scene::FrameTransform> transforms_;
   std::string camera_;

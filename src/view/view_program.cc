@@ -310,7 +310,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   std::unique_ptr<ViewServer> fox;
   std::string fox_line;
   if (o.foxglove_port >= 0) {
-    fox_feed = std::make_unique<FoxgloveFeed>(info["bodies"].get<std::vector<std::string>>(), live_signals,
+    fox_feed = std::make_unique<FoxgloveFeed>(info, model ? model->model() : nullptr, live_signals,
                                               camera ? camera->name() : std::string());
     ViewServerConfig fox_config = o.server;
     fox_config.port = o.foxglove_port;
@@ -318,6 +318,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     fox_config.foxglove_channels = fox_feed->channels();
     fox_config.max_ws_message_bytes = 65536;  // a subscribe to every channel at once
     fox = ViewServer::Create(fox_config, {}, nullptr);
+    fox_feed->PublishScene(0, fox.get());
     fox_line = "; foxglove ws://" + UrlHost(fox->address()) + ":" + std::to_string(fox->port()) + " (" +
                std::to_string(fox_feed->channels().size()) + " channels)";
   }

@@ -3,11 +3,11 @@
 //        --allowed-origin ORIGIN [--messages N]
 // Checks, each with a limit on the wait (no sleeps):
 //   - a foreign Origin is refused (403) and the --allow-origin one is served;
-//   - serverInfo: no capabilities (read-only); advertise: /tf, /DEVICE, /camera/CAMERA, each "cdr" with a
+//   - serverInfo: no capabilities (read-only); advertise: /tf, /scene, /DEVICE, /camera/CAMERA, each "cdr" with a
 //     "ros2msg" schema that @foxglove/rosmsg parses;
 //   - subscribed: N messages of /DEVICE, decoded by @foxglove/rosmsg2-serialization; one /tf naming every body
-//     of the view's /scene.json (parent "world", unit quaternions); one /camera/CAMERA whose bytes are a JPEG or
-//     PNG of the camera's size;
+//     of the view's /scene.json (parent "world", unit quaternions); one /scene with an entity locked to each
+//     body's frame, with primitives; one /camera/CAMERA whose bytes are a JPEG or PNG of the camera's size;
 //   - a client advertise and a client message are answered with an error status, and messages keep coming;
 //   - it prints "collected" (the caller may now end the run); once the run's log is in place (its folder appears
 //     by a rename: watched, not polled), every decoded field equals, bit for bit, the log.csv column of the row at
@@ -118,14 +118,14 @@ async function main() {
   if (allowed !== "open") fail(`an upgrade with Origin ${args["allowed-origin"]} got ${allowed}, expected served`);
 
   const scene = await (await fetch(`http://127.0.0.1:${args.http}/scene.json`)).json();
-  const bodies = scene.bodies.map((name, i) => name || `body${i}`);
+  const bodies = scene.bodies.map((name, i) => (name && name !== "world" ? name : `body_${i}`)); // all distinct here
   const deviceTopic = `/${args.device}`, cameraTopic = `/camera/${args.camera}`;
 
   const client = new FoxgloveClient({ ws: new WebSocket(url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]) });
   const readers = new Map(); // channel id -> {topic, reader}
   const bySubscription = new Map();
   const deviceMessages = [];
-  let tf, image, statuses = [], afterRefusals = 0, refusalsSent = false;
+  let tf, sceneUpdate, image, statuses = [], afterRefusals = 0, refusalsSent = false;
   const done = within("serverInfo, advertise, messages and status answers", (resolve, reject) => {
     client.on("error", (e) => reject(e));
     client.on("close", () => reject(new Error("the server closed the connection")));
@@ -145,7 +145,7 @@ async function main() {
         readers.set(c.id, { topic: c.topic, reader: new MessageReader(definitions) });
       }
       const topics = [...readers.values()].map((r) => r.topic);
-      for (const t of ["/tf", deviceTopic, cameraTopic]) {
+      for (const t of ["/tf", "/scene", deviceTopic, cameraTopic]) {
         if (!topics.includes(t)) reject(new Error(`no channel ${t} among ${topics.join(", ")}`));
       }
       for (const id of readers.keys()) bySubscription.set(client.subscribe(id), id);
@@ -161,8 +161,9 @@ async function main() {
       if (refusalsSent && statuses.length >= 2) ++afterRefusals;
       if (topic === deviceTopic && deviceMessages.length < wanted) deviceMessages.push(message);
       if (topic === "/tf") tf = message;
+      if (topic === "/scene") sceneUpdate = message;
       if (topic === cameraTopic && !image) image = message;
-      if (deviceMessages.length >= wanted && tf && image && afterRefusals >= 3) resolve();
+      if (deviceMessages.length >= wanted && tf && sceneUpdate && image && afterRefusals >= 3) resolve();
     });
   });
   await done.catch((e) => fail(e.message));
@@ -182,6 +183,16 @@ async function main() {
     if (t.header.frame_id !== "world") fail(`/tf ${t.child_frame_id}: parent ${t.header.frame_id}`);
     if (Math.abs(Math.hypot(q.x, q.y, q.z, q.w) - 1) > 1e-9) fail(`/tf ${t.child_frame_id}: |q| != 1`);
   }
+  // /scene: an entity locked to each body's frame (and the world's), with primitives
+  const entities = sceneUpdate.entities.filter((e) => e.frame_id !== "world");
+  if (JSON.stringify(entities.map((e) => e.frame_id)) !== JSON.stringify(bodies)) {
+    fail(`/scene entities ${entities.map((e) => e.frame_id).join(",")}, the scene's bodies are ${bodies.join(",")}`);
+  }
+  const primitives = (e) =>
+    e.cubes.length + e.spheres.length + e.cylinders.length + e.triangles.length + e.lines.length + e.arrows.length;
+  for (const e of entities) {
+    if (!e.frame_locked || primitives(e) === 0) fail(`/scene entity ${e.frame_id}: not locked, or no primitives`);
+  }
   // the camera's picture: its signature and the camera's size
   const size = imageSize(image.data);
   if (!size || size.format !== image.format) fail(`${cameraTopic}: format ${image.format}, bytes ${size?.format}`);
@@ -191,7 +202,7 @@ async function main() {
   if (image.header.frame_id !== args.camera) fail(`${cameraTopic}: frame_id ${image.header.frame_id}`);
 
   // the device's messages against the log, bit for bit, at the same stamps, once the run has ended
-  console.log(`foxglove_client: collected ${deviceMessages.length} ${deviceTopic} messages, /tf, ${cameraTopic}`);
+  console.log(`foxglove_client: collected ${deviceMessages.length} ${deviceTopic} messages, /tf, /scene, ${cameraTopic}`);
   await fileAppears(args.log).catch((e) => fail(e.message));
   const lines = fs.readFileSync(args.log, "utf8").trim().split("\n");
   const columns = lines[0].split(",");
@@ -217,7 +228,8 @@ async function main() {
   if (sent === 0) fail(`no field of ${deviceTopic} is a log column`);
   console.log(
     `foxglove_client: ${deviceMessages.length} ${deviceTopic} messages (${sent} fields each, ${compared} values ` +
-      `equal to the log), /tf of ${children.length} bodies, ${cameraTopic} ${size.format} ${size.width}x${size.height}`
+      `equal to the log), /tf of ${children.length} bodies, /scene of ${sceneUpdate.entities.length} entities, ` +
+      `${cameraTopic} ${size.format} ${size.width}x${size.height}`
   );
   process.exit(0);
 }

@@ -65,7 +65,7 @@ TEST(FoxgloveTest, FoxgloveClientDecodesTheLogsJointStatesAnImageAndTheTransform
   const int foxglove_port = PortAfter(view.start_line(), "foxglove ws://127.0.0.1:");
   ASSERT_GT(http_port, 0) << view.start_line();
   ASSERT_GT(foxglove_port, 0) << view.start_line();
-  EXPECT_NE(view.start_line().find("(3 channels)"), std::string::npos) << "/tf, /pa10, /camera/webcam";
+  EXPECT_NE(view.start_line().find("(4 channels)"), std::string::npos) << "/tf, /scene, /pa10, /camera/webcam";
 
   TestProcess client(
       {VLAB_NODE, VLAB_SOURCE_DIR "/tests/node/foxglove_client.mjs", "--foxglove", std::to_string(foxglove_port),
