@@ -37,9 +37,9 @@ Subcommand AddViewCommand(CLI::App& app) {
       "--foxglove", o->foxglove_port,
       "Also serve the Foxglove WebSocket protocol (foxglove.websocket.v1) on this TCP port (0: any free "
       "port; printed), for Foxglove or Lichtblick (Open connection, Foxglove WebSocket, ws://localhost:PORT): "
-      "/tf, one channel per device of the signals the view gets (--scene: the scene device's signals; --arm: "
-      "the arm's q, qd, tau), /camera/NAME with --camera; ROS 2 messages (cdr). Read-only; --bind, "
-      "--allow-host, --allow-origin and the bounds apply to it as to the page");
+      "/tf, /scene, one channel per device of the signals the view gets (--scene: the scene device's signals; "
+      "--arm: the arm's q, qd, tau), /camera/NAME with --camera; ROS 2 messages (cdr). Read-only; --bind, "
+      "--allow-host, --allow-origin and the bounds apply to it as to the page (docs/view.md)");
   cmd->add_option("--bind", o->server.bind,
                   "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see docs/view.md; "
                   "beyond loopback anyone who can reach the port can watch, and vlab view says so on stderr)");
