@@ -97,7 +97,13 @@ class FoxgloveSession : public std::enable_shared_from_this<FoxgloveSession> {
   // a subscribe or unsubscribe is applied; anything else is answered with an error status
   void OnMessage(const std::string& message, bool binary) {
     bool read_only = false, malformed = false;
+    std::vector<std::int64_t> before(sent_.size());
+    for (std::size_t c = 0; c < sent_.size(); ++c) before[c] = subscriptions_.IdOf(static_cast<int>(c));
     const std::string why = subscriptions_.Apply(message, binary, &read_only, &malformed);
+    // a new subscription starts with the channel's newest message (a scene sent once included)
+    for (std::size_t c = 0; c < sent_.size(); ++c) {
+      if (subscriptions_.IdOf(static_cast<int>(c)) != before[c]) sent_[c] = 0;
+    }
     if (why.empty()) return;
     if (read_only) ++server_.client_refused;
     if (malformed) ++server_.client_bad;

@@ -4,9 +4,15 @@
 // client's subscriptions (one per channel, ids unique, bad entries named and
 // skipped), every write a read-only server does not offer refused, and an
 // upgrade served only with the subprotocol and an allowed Origin
-// (--allow-origin: the whole origin). The session itself, with Foxglove's own
-// client, is tested in foxglove_test.cc.
+// (--allow-origin: the whole origin); a session that sends serverInfo and
+// advertise, the newest message of each channel subscribed (again after a
+// new subscription: a /scene sent once), and an error status for each write.
+// With Foxglove's own client and a served run: foxglove_test.cc.
+#include <sys/socket.h>
+
+#include <chrono>
 #include <cstring>
+#include <future>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,6 +25,7 @@
 #include "view/view_foxglove.h"
 #include "view/view_server.h"
 #include "view_clients.h"
+#include "wait_until.h"
 
 namespace vlab::view {
 namespace foxglove_protocol_test {
@@ -169,6 +176,86 @@ TEST(FoxgloveProtocolTest, UpgradeNeedsTheSubprotocolAndAnAllowedOrigin) {
   // no page: a GET is 404
   EXPECT_EQ(Status(Raw(port).Send("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n").ReadAll()), 404);
   EXPECT_EQ(server->counters().bad_host, 4);
+}
+
+// a message data frame's subscription id, log time and payload
+struct Data {
+  std::uint32_t id = 0;
+  std::uint64_t ns = 0;
+  std::string payload;
+};
+Data DataOf(const std::string& m) {
+  Data d;
+  EXPECT_GE(m.size(), 13u);
+  if (m.size() < 13) return d;
+  EXPECT_EQ(m[0], '\x01') << "opcode: message data";
+  std::memcpy(&d.id, m.data() + 1, 4);
+  std::memcpy(&d.ns, m.data() + 5, 8);
+  d.payload = m.substr(13);
+  return d;
+}
+
+// the next message within 10 s (a guard against a hang), else "": the socket is shut down so that the read ends
+std::string ReadWithin(view_test::WsClient& client) {
+  auto next = std::async(std::launch::async, [&client] {
+    std::string m;
+    client.TryRead(&m);
+    return m;
+  });
+  if (next.wait_for(std::chrono::seconds(10)) != std::future_status::ready) {
+    ::shutdown(client.native_handle(), SHUT_RDWR);
+  }
+  return next.get();
+}
+
+TEST(FoxgloveProtocolTest, SessionSendsWhatWasSubscribedAndRefusesWrites) {
+  ViewServerConfig config;
+  config.port = 0;
+  config.foxglove = true;
+  config.foxglove_channels = {{"/scene", "a/msg/S", "S"}, {"/pa10", "a/msg/P", "P"}};
+  std::unique_ptr<ViewServer> server = ViewServer::Create(config, {}, nullptr);
+  server->Publish(FoxgloveRecord(0, "scene"), 0);  // sent once, as /scene is
+  server->Publish(FoxgloveRecord(2000000, "p1"), 1);
+  view_test::WsOptions options;
+  options.path = "/";
+  options.subprotocol = kFoxgloveSubprotocol;
+  view_test::WsClient client(server->port(), options);
+  EXPECT_EQ(nlohmann::json::parse(ReadWithin(client), nullptr, false)["op"], "serverInfo");
+  const nlohmann::json advertise = nlohmann::json::parse(ReadWithin(client), nullptr, false);
+  ASSERT_EQ(advertise["channels"].size(), 2u);
+  EXPECT_EQ(advertise["channels"][1]["topic"], "/pa10");
+  // subscribed: the channel's newest message, under the client's id, with its log time
+  client.WriteText(R"({"op":"subscribe","subscriptions":[{"id":5,"channelId":1}]})");
+  Data d = DataOf(ReadWithin(client));
+  EXPECT_EQ(d.id, 5u);
+  EXPECT_EQ(d.ns, 2000000u);
+  EXPECT_EQ(d.payload, "p1");
+  // writes: an error status each, and the session goes on
+  client.WriteText(R"({"op":"advertise","channels":[{"id":1,"topic":"/cmd","encoding":"cdr","schemaName":"x"}]})");
+  client.Write(std::string("\x01\x01\x00\x00\x00payload", 12));
+  for (int i = 0; i < 2; ++i) {
+    const nlohmann::json status = nlohmann::json::parse(ReadWithin(client), nullptr, false);
+    EXPECT_EQ(status["op"], "status");
+    EXPECT_EQ(status["level"], 2);
+    EXPECT_NE(status["message"].get<std::string>().find("read-only"), std::string::npos) << status;
+  }
+  server->Publish(FoxgloveRecord(4000000, "p2"), 1);
+  d = DataOf(ReadWithin(client));
+  EXPECT_EQ(d.payload, "p2");
+  // a message published once reaches a later subscription, and a new one after an unsubscribe
+  client.WriteText(R"({"op":"subscribe","subscriptions":[{"id":6,"channelId":0}]})");
+  d = DataOf(ReadWithin(client));
+  EXPECT_EQ(d.id, 6u);
+  EXPECT_EQ(d.payload, "scene");
+  client.WriteText(R"({"op":"unsubscribe","subscriptionIds":[6]})");
+  client.WriteText(R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":0}]})");
+  d = DataOf(ReadWithin(client));
+  EXPECT_EQ(d.id, 7u);
+  EXPECT_EQ(d.payload, "scene");
+  EXPECT_TRUE(testing::WaitUntil([&] { return server->counters().frames_sent == 4; }))
+      << "4 messages: p1, p2, scene twice";
+  EXPECT_EQ(server->counters().client_refused, 2);
+  EXPECT_EQ(server->counters().client_bad, 0);
 }
 
 TEST(FoxgloveProtocolTest, AllowOriginTakesWholeOrigins) {
