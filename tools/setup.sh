@@ -14,8 +14,11 @@ VLAB_APT_PACKAGES=(
 )
 # the robot task language embeds Lua 5.4 (src/task/)
 VLAB_APT_PACKAGES+=(liblua5.4-dev)
-# run logs in HDF5 and MATLAB .mat besides CSV (src/lab/outputs/lab_log_hdf5.*, lab_log_mat.*)
-VLAB_APT_PACKAGES+=(libhdf5-dev libmatio-dev)
+# run logs in HDF5 besides CSV (src/lab/outputs/lab_log_hdf5.*); MATLAB .mat is written by vlab
+# itself with zlib (lab_log_mat.*), and read back by the tests with libmatio (built with the rest)
+VLAB_APT_PACKAGES+=(libhdf5-dev zlib1g-dev libmatio-dev)
+# run logs in MCAP: zstd-compressed chunks and zlib's CRC-32 (src/lab/outputs/lab_mcap.*)
+VLAB_APT_PACKAGES+=(libzstd-dev)
 # PNG and JPEG through libpng and libjpeg (render/image_codec.*), not OpenCV's imgcodecs, whose
 # dependencies every program linking it loads at start-up
 VLAB_APT_PACKAGES+=(libpng-dev libjpeg62-turbo-dev)

@@ -1,4 +1,4 @@
-// vlab convert RUN_DIR --to mat|hdf5|csv: a run's log written again in another
+// vlab convert RUN_DIR --to mat|hdf5|mcap|csv: a run's log written again in another
 // format next to it (lab_log_convert.h). Exit: 0 written; 1 a write failed;
 // 2 bad input (no such folder or log, a malformed log, a target it may not
 // replace).
@@ -37,12 +37,14 @@ Subcommand AddConvertCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "convert",
       "Write a run's log in another format next to it: RUN_DIR/log.mat (MATLAB/Octave: one struct per column group "
-      "with fields data, names, units), RUN_DIR/log.h5 (HDF5: dataset /log with attributes columns and units) or "
-      "RUN_DIR/log.csv. Reads log.csv (--to csv: log.h5; --to mat: log.csv, else log.h5). Writes a temporary file "
+      "with fields data, names, units), RUN_DIR/log.h5 (HDF5: dataset /log with attributes columns and units), "
+      "RUN_DIR/log.mcap (MCAP, ROS 2 messages: the signals, and the run's poses.bin and camera PNG frames where it has "
+      "them) or RUN_DIR/log.csv. Reads log.csv (--to csv: log.h5; --to mat, mcap: log.csv, else log.h5). Writes a "
+      "temporary file "
       "and renames it into place; an existing target is refused, and replaced with --force only if vlab wrote it. "
       "Exit: 0 written; 1 a write failed; 2 bad input");
   cmd->add_option("RUN_DIR", args->run_dir, "A run's output folder (out/NAME)")->required();
-  cmd->add_option("--to", args->to, "Target format: mat, hdf5 or csv")->required();
+  cmd->add_option("--to", args->to, "Target format: mat, hdf5, mcap or csv")->required();
   cmd->add_flag("--force", args->force, "Replace the target if it exists and vlab wrote it");
   return {cmd, [args] { return WithErrorReport([&] { return Convert(*args); }); }};
 }

@@ -27,7 +27,6 @@ namespace vlab::task {
 namespace {
 
 constexpr const char* kProgramKey = "vlab.program";
-constexpr const char* kFramesKey = "vlab.frames";  // registry: the program's user frames, name -> frame
 
 // the runtime's own Lua code: blocking commands and waits
 constexpr const char* kPrelude = R"lua(
@@ -127,77 +126,6 @@ void CheckWrenchNeedsForce(lua_State* L, int options, const char* what) {
   if (HasOption(L, options, "wrench") && !HasOption(L, options, "force")) {
     ScriptError(L, "%s: option 'wrench' names the sensor of a guarded move: give 'force' (N) too", what);
   }
-}
-
-// a frame as a script's frame value holds it (PushFrame normalises the rotation once more): a
-// frame computed here and the same one computed by the script are equal to the bit
-Frame AsValue(Frame f) {
-  f.q.normalize();
-  return f;
-}
-
-// a * b as the script's `a * b` gives it (the frame type's product, then AsValue)
-Frame Compose(const Frame& a, const Frame& b) {
-  Frame c;
-  c.p = a.p + a.q * b.p;
-  c.q = (a.q * b.q).normalized();
-  return AsValue(c);
-}
-
-// the names of the user frames, sorted, as "a, b" (or a hint when there are none) into `out`
-void DefinedFrames(lua_State* L, char* out, std::size_t size) {
-  std::vector<std::string> names;
-  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
-  lua_pushnil(L);
-  while (lua_next(L, -2)) {
-    lua_pop(L, 1);
-    names.emplace_back(lua_tostring(L, -1));  // (every key is a string: frame_def)
-  }
-  lua_pop(L, 1);
-  std::sort(names.begin(), names.end());
-  std::string list;
-  for (const std::string& n : names) list += (list.empty() ? "'" : ", '") + n + "'";
-  std::snprintf(out, size, "%s",
-                names.empty() ? "none is defined: frame_def(name, frame)" : ("defined: " + list).c_str());
-}
-
-// the user frame `name`; an error naming it and the defined ones when there is none. The
-// frame stays referenced by the registry's table, so the pointer outlives the Lua stack slot.
-const Frame* UserFrame(lua_State* L, const char* name, const char* what) {
-  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
-  lua_getfield(L, -1, name);
-  const Frame* f = ToFrame(L, -1);
-  lua_pop(L, 2);
-  if (!f) {
-    char list[512];
-    DefinedFrames(L, list, sizeof list);
-    ScriptError(L, "%s: no user frame '%s' (%s)", what, name, list);
-  }
-  return f;
-}
-
-// the user frame that option ref of a move names, or null without the option
-const Frame* RefFrame(lua_State* L, int options, const char* what) {
-  if (!HasOption(L, options, "ref")) return nullptr;
-  lua_getfield(L, options, "ref");
-  if (lua_type(L, -1) != LUA_TSTRING) {
-    ScriptError(L, "%s: option ref must be the name of a user frame (frame_def), got %s", what, luaL_typename(L, -1));
-  }
-  const Frame* f = UserFrame(L, lua_tostring(L, -1), what);
-  lua_pop(L, 1);
-  return f;
-}
-
-// a move's target (the frame at `index`) in the base frame: given in the user frame of
-// option ref when there is one (user * target), checked finite
-Frame Target(lua_State* L, int index, int options, const char* what) {
-  const Frame& given = CheckFrame(L, index, what);
-  CheckFinite(L, given, what, "target");
-  const Frame* user = RefFrame(L, options, what);
-  if (!user) return given;
-  const Frame target = Compose(*user, given);
-  CheckFinite(L, target, what, "target");
-  return target;
 }
 
 // the limits of one move: the settings, overridden by its options (movej: v and jv in deg/s,

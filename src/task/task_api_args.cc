@@ -1,13 +1,38 @@
 #include "task/task_api_args.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include <lua.hpp>
 
 #include "task/task_lua.h"
 
 namespace vlab::task {
+
+namespace {
+
+// the names of the user frames, sorted, as "a, b" (or a hint when there are none) into `out`
+void DefinedFrames(lua_State* L, char* out, std::size_t size) {
+  std::vector<std::string> names;
+  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
+  lua_pushnil(L);
+  while (lua_next(L, -2)) {
+    lua_pop(L, 1);
+    names.emplace_back(lua_tostring(L, -1));  // (every key is a string: frame_def)
+  }
+  lua_pop(L, 1);
+  std::sort(names.begin(), names.end());
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "'" : ", '") + n + "'";
+  std::snprintf(out, size, "%s",
+                names.empty() ? "none is defined: frame_def(name, frame)" : ("defined: " + list).c_str());
+}
+
+}  // namespace
 
 Robot& NeedRobot(lua_State* L, const char* what) {
   Program* p = ProgramOf(L);
@@ -87,6 +112,59 @@ Frame ToBase(const Robot& r, const Frame& w) {
   b.q = (r.base_W.q.conjugate() * w.q).normalized();
   b.p = r.base_W.q.conjugate() * (w.p - r.base_W.p);
   return b;
+}
+
+Frame AsValue(Frame f) {
+  f.q.normalize();
+  return f;
+}
+
+Frame Compose(const Frame& a, const Frame& b) {
+  Frame c;
+  c.p = a.p + a.q * b.p;
+  c.q = (a.q * b.q).normalized();
+  return AsValue(c);
+}
+
+Frame Relative(const Frame& a, const Frame& b) {
+  Frame inverse;  // as frame:inv computes it, then pushed (AsValue)
+  inverse.q = a.q.conjugate();
+  inverse.p = -(inverse.q * a.p);
+  return Compose(AsValue(inverse), b);
+}
+
+const Frame* UserFrame(lua_State* L, const char* name, const char* what) {
+  lua_getfield(L, LUA_REGISTRYINDEX, kFramesKey);
+  lua_getfield(L, -1, name);
+  const Frame* f = ToFrame(L, -1);
+  lua_pop(L, 2);
+  if (!f) {
+    char list[512];
+    DefinedFrames(L, list, sizeof list);
+    ScriptError(L, "%s: no user frame '%s' (%s)", what, name, list);
+  }
+  return f;
+}
+
+const Frame* RefFrame(lua_State* L, int options, const char* what) {
+  if (!HasOption(L, options, "ref")) return nullptr;
+  lua_getfield(L, options, "ref");
+  if (lua_type(L, -1) != LUA_TSTRING) {
+    ScriptError(L, "%s: option ref must be the name of a user frame (frame_def), got %s", what, luaL_typename(L, -1));
+  }
+  const Frame* f = UserFrame(L, lua_tostring(L, -1), what);
+  lua_pop(L, 1);
+  return f;
+}
+
+Frame Target(lua_State* L, int index, int options, const char* what) {
+  const Frame& given = CheckFrame(L, index, what);
+  CheckFinite(L, given, what, "target");
+  const Frame* user = RefFrame(L, options, what);
+  if (!user) return given;
+  const Frame target = Compose(*user, given);
+  CheckFinite(L, target, what, "target");
+  return target;
 }
 
 }  // namespace vlab::task

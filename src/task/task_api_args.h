@@ -39,6 +39,27 @@ bool HasOption(lua_State* L, int options, const char* key);
 /// is finite.
 void CheckFinite(lua_State* L, const Frame& f, const char* what, const char* which);
 
+/// The registry key of the program's user frames (frame_def): a table, name -> frame.
+inline constexpr const char* kFramesKey = "vlab.frames";
+
+/// A frame as a script's frame value holds it (its rotation normalised once
+/// more, as PushFrame does): computed here or by the script, equal to the bit.
+Frame AsValue(Frame f);
+/// a * b as the script's `a * b` gives it (the frame type's product, then AsValue).
+Frame Compose(const Frame& a, const Frame& b);
+/// inverse(a) * b: the frame b seen from frame a (the script's `a:inv() * b`).
+Frame Relative(const Frame& a, const Frame& b);
+
+/// The user frame `name`; an error naming it and the defined ones when there
+/// is none. The registry's table keeps it, so the pointer outlives the stack slot.
+const Frame* UserFrame(lua_State* L, const char* name, const char* what);
+/// The user frame that option `ref` of the options table at `options` names,
+/// or null without the option; an error for a value that is not a defined name.
+const Frame* RefFrame(lua_State* L, int options, const char* what);
+/// The frame at `index` (a target) in the base frame: given in the user frame
+/// of option `ref` when there is one (user * target); checked finite.
+Frame Target(lua_State* L, int index, int options, const char* what);
+
 /// The world frame of a frame given in the script's base frame (r.base_W).
 Frame ToWorld(const Robot& r, const Frame& f);
 /// A world frame in the script's base frame (the inverse of ToWorld).

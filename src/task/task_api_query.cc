@@ -1,7 +1,8 @@
 // The task language's kinematics queries, which never move the robot (no
 // period passes, the commanded joints stay): fk(q), ik(frame [, opts]),
 // reachable(frame [, opts]) on task_kinematics.h. Angles in degrees, frames
-// in the script's base frame with its tool, as pose() gives them. The Lua
+// in the script's base frame with its tool, as pose() gives them, or in a
+// user frame (option ref: frame_def's name). The Lua
 // errors are raised by the callers, once the workers' C++ objects are gone.
 #include <cmath>
 #include <cstdio>
@@ -66,30 +67,35 @@ void PushDegrees(lua_State* L, const Eigen::VectorXd& q) {
   }
 }
 
-void FkWork(lua_State* L, const Robot& r, char* error) {
+// `user`: the user frame of option ref (the result is given in it), or null
+void FkWork(lua_State* L, const Robot& r, const Frame* user, char* error) {
   Eigen::VectorXd q;
   if (!JointTable(L, 1, r, "", &q, error)) return;
   try {
     const Kinematics k(r.model.get(), r.planner.get());
-    const Frame w = k.Fk(q);
-    PushFrame(L, ToBase(r, w));
+    const Frame base = ToBase(r, k.Fk(q));
+    PushFrame(L, user ? Relative(*user, base) : base);
   } catch (const std::exception& e) {
     std::snprintf(error, kErrorSize, "%s", e.what());
   }
 }
 
-int Fk(lua_State* L) {  // fk(q): the tool frame (base frame) at joints q (deg)
+int Fk(lua_State* L) {  // fk(q [, {ref = name}]): the tool frame (base or user frame) at joints q (deg)
   const Robot& r = NeedRobot(L, "fk");
+  static const char* const known[] = {"ref", nullptr};
+  CheckOptions(L, 2, "fk", known);
+  const Frame* user = RefFrame(L, 2, "fk");
   char error[kErrorSize] = "";
-  FkWork(L, r, error);
+  FkWork(L, r, user, error);
   if (error[0]) ScriptError(L, "fk: %s", error);
   return 1;
 }
 
-// ik's and reachable's options: {seed = {...}} (ik: and all = true|false); they move nothing
-void CheckQueryOptions(lua_State* L, const char* what, bool takes_all) {
-  static const char* const with_all[] = {"seed", "all", nullptr};
-  static const char* const seed_only[] = {"seed", nullptr};
+// ik's and reachable's options: {seed = {...}, ref = name} (ik: and all = true|false); they
+// move nothing. Returns the target in the base frame (given in the user frame of ref).
+Frame CheckQueryOptions(lua_State* L, const char* what, bool takes_all) {
+  static const char* const with_all[] = {"seed", "all", "ref", nullptr};
+  static const char* const seed_only[] = {"seed", "ref", nullptr};
   static const Refused refused[] = {
       {"all", "reachable tries every branch already (ik(frame, {all = true}) lists them)"},
       {"v", "it moves nothing"},
@@ -109,7 +115,7 @@ void CheckQueryOptions(lua_State* L, const char* what, bool takes_all) {
     lua_pop(L, 1);
     if (!boolean) ScriptError(L, "%s: option all must be true or false, got %s", what, type);
   }
-  CheckFinite(L, CheckFrame(L, 1, what), what, "target");
+  return Target(L, 1, 2, what);
 }
 
 // the seed of ik/reachable: option seed (deg), else the planned joints
@@ -124,13 +130,13 @@ bool Seed(lua_State* L, const Robot& r, Eigen::VectorXd* seed, char* error) {
   return ok;
 }
 
-// ik (query 0: nearest, 1: all) or reachable (2): pushes the result
-void IkWork(lua_State* L, const Robot& r, int query, char* error) {
+// ik (query 0: nearest, 1: all) or reachable (2) of `target` (base frame): pushes the result
+void IkWork(lua_State* L, const Robot& r, const Frame& target, int query, char* error) {
   Eigen::VectorXd seed;
   if (!Seed(L, r, &seed, error)) return;
   try {
     const Kinematics k(r.model.get(), r.planner.get());
-    const Frame goal = ToWorld(r, *ToFrame(L, 1));
+    const Frame goal = ToWorld(r, target);
     if (query == 2) {
       lua_pushboolean(L, k.Reachable(goal, seed));
     } else if (query == 1) {
@@ -148,9 +154,9 @@ void IkWork(lua_State* L, const Robot& r, int query, char* error) {
   }
 }
 
-int Ik(lua_State* L) {  // ik(frame [, {seed = q, all = true}]): joints (deg), or a list of them
+int Ik(lua_State* L) {  // ik(frame [, {seed = q, all = true, ref = name}]): joints (deg), or a list of them
   const Robot& r = NeedRobot(L, "ik");
-  CheckQueryOptions(L, "ik", true);
+  const Frame target = CheckQueryOptions(L, "ik", true);
   bool all = false;
   if (!lua_isnoneornil(L, 2)) {
     lua_getfield(L, 2, "all");
@@ -158,16 +164,16 @@ int Ik(lua_State* L) {  // ik(frame [, {seed = q, all = true}]): joints (deg), o
     lua_pop(L, 1);
   }
   char error[kErrorSize] = "";
-  IkWork(L, r, all ? 1 : 0, error);
+  IkWork(L, r, target, all ? 1 : 0, error);
   if (error[0]) ScriptError(L, "ik: %s", error);
   return 1;
 }
 
-int Reachable(lua_State* L) {  // reachable(frame [, {seed = q}]): whether ik finds joints
+int Reachable(lua_State* L) {  // reachable(frame [, {seed = q, ref = name}]): whether ik finds joints
   const Robot& r = NeedRobot(L, "reachable");
-  CheckQueryOptions(L, "reachable", false);
+  const Frame target = CheckQueryOptions(L, "reachable", false);
   char error[kErrorSize] = "";
-  IkWork(L, r, 2, error);
+  IkWork(L, r, target, 2, error);
   if (error[0]) ScriptError(L, "reachable: %s", error);
   return 1;
 }

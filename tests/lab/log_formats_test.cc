@@ -1,7 +1,9 @@
 // The run log's formats (lab_log_formats.h, lab_log_hdf5.h, lab_log_mat.h) and
 // vlab convert (lab_log_convert.h), through the real binary where a run is needed:
 // log.h5 and log.mat read back with libhdf5 and libmatio equal log.csv bit for
-// bit; a SIGINT leaves a valid log.h5 of every period written; the scenario key's
+// bit; log.mcap read by the MCAP reference reader (tests/node/read_mcap.mjs: every
+// schema and message, signals bit for bit, poses, frames) and written again byte for byte
+// by convert; a SIGINT leaves a valid log.h5 and log.mcap of every period written; the scenario key's
 // refusals; convert's refusals (an existing target, a file vlab did not write, a
 // malformed CSV, a FIFO), with nothing half-written left behind.
 #include <matio.h>
@@ -34,6 +36,7 @@ namespace {
 using vlab::testing::Bits;
 
 namespace fs = std::filesystem;
+using vlab::testing::ProcessResult;
 using vlab::testing::ReadFile;
 using vlab::testing::RunVlab;
 using vlab::testing::TempDir;
@@ -129,23 +132,73 @@ TEST(LogFormats, HdfAndMatEqualCsvBitForBit) {
   ExpectSameBits(csv, ReadMat(tmp / "run/log.mat", &units));
   EXPECT_EQ(units["pa10.q.S1"], "rad");
   EXPECT_EQ(units["time"], "s");
-  EXPECT_FALSE(fs::exists(tmp / "run/.log.mat.rows"));  // the rows file is gone
+  EXPECT_FALSE(fs::exists(tmp / "run/.log.mat.part"));  // the file of compressed pieces is gone
 }
 
 TEST(LogFormats, ScenarioKeyRefusals) {
   const std::string run = "run scenes/pa10_reach -q --duration 0.01 --out /nonexistent/never --set ";
-  auto r = RunVlab(run + "'outputs.log={format: mcap}'");
+  auto r = RunVlab(run + "'outputs.log={format: [csv, parquet]}'");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("format 'mcap' is not supported yet"), std::string::npos) << r.err;
-  r = RunVlab(run + "'outputs.log={format: [csv, parquet]}'");
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("unknown log format 'parquet'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unknown log format 'parquet' (csv, mat, hdf5 or mcap)"), std::string::npos) << r.err;
   r = RunVlab(run + "'outputs.log={format: [hdf5, hdf5]}'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("'hdf5' listed twice"), std::string::npos) << r.err;
   r = RunVlab(run + "'outputs.log={formats: csv}'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("formats"), std::string::npos) << r.err;
+}
+
+// tests/node/read_mcap.mjs on a run folder (the MCAP reference reader): its output and exit code
+ProcessResult ReadMcap(const std::string& run_dir) {
+  TempDir tmp;
+  const std::string cmd = "cd '" VLAB_SOURCE_DIR "/tests/node' && timeout 60 node read_mcap.mjs '" + run_dir + "' >'" +
+                          (tmp / "out") + "' 2>&1";
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(tmp / "out"), ""};
+}
+
+// without the Node packages (./test.sh installs them) the MCAP tests are skipped, saying so
+#define SKIP_WITHOUT_NODE_PACKAGES()                                                                                \
+  if (!fs::exists(VLAB_SOURCE_DIR "/tests/node/node_modules/@mcap/core") || std::system("node -v >/dev/null 2>&1")) \
+  GTEST_SKIP() << "no node or tests/node/node_modules (./test.sh installs them)"
+
+const char kMcapRun[] =
+    " --set 'outputs.log={format: [csv, mcap]}' --set 'outputs.poses={rate: 50}'"
+    " --set 'outputs.images=[{camera: overview, width: 64, height: 48, every: 0.25}]'";
+
+TEST(LogFormats, McapHoldsSignalsPosesAndFramesAndConvertWritesTheSameBytes) {
+  SKIP_WITHOUT_NODE_PACKAGES();
+  TempDir tmp;
+  const std::string run = tmp / "run";
+  auto r = RunVlab("run scenes/pa10_reach -q --duration 1 --out '" + run + "'" + kMcapRun);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  // the reference reader: every schema and message, signals bit for bit, /tf, frames (read_mcap.mjs)
+  const ProcessResult read = ReadMcap(run);
+  ASSERT_EQ(read.exit_code, 0) << read.out;
+  EXPECT_NE(read.out.find("(501 rows on 3 devices, 51 /tf, 5 images)"), std::string::npos) << read.out;
+  // convert from log.csv, poses.bin and the frames: the bytes the run wrote (whichever thread
+  // handed the poses and frames over when, the file follows from its contents alone)
+  fs::rename(run + "/log.mcap", tmp / "written.mcap");
+  auto c = RunVlab("convert '" + run + "' --to mcap");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_NE(c.out.find("log.mcap: written from"), std::string::npos) << c.out;
+  EXPECT_EQ(ReadFile(run + "/log.mcap"), ReadFile(tmp / "written.mcap"));
+  // refusals (an existing target: as every format's, ConvertWritesEachFormatAndRefuses): a
+  // poses.bin cut short, a frame missing; nothing written
+  fs::remove(run + "/log.mcap");
+  fs::resize_file(run + "/poses.bin", fs::file_size(run + "/poses.bin") - 1);
+  c = RunVlab("convert '" + run + "' --to mcap");
+  EXPECT_EQ(c.exit_code, 2);
+  EXPECT_NE(c.err.find("poses.bin: 15095 bytes are not whole frames of 296"), std::string::npos) << c.err;
+  fs::remove(run + "/poses.bin");
+  fs::remove(run + "/overview/rgb_000001.png");
+  c = RunVlab("convert '" + run + "' --to mcap");
+  EXPECT_EQ(c.exit_code, 2);
+  EXPECT_NE(c.err.find("overview/rgb_000001.png: missing (frames.csv lists frame 1)"), std::string::npos) << c.err;
+  EXPECT_FALSE(fs::exists(run + "/log.mcap"));
+  for (const auto& e : fs::directory_iterator(run)) {
+    EXPECT_NE(e.path().filename().string().rfind(".log.mcap", 0), 0u) << e.path();  // no temporary file left
+  }
 }
 
 // the run's staging folder (PARENT/.vlab-PID-N) while it runs
@@ -190,6 +243,42 @@ TEST(LogFormats, SigintLeavesAValidHdf5OfEveryPeriod) {
   for (std::size_t r = 0; r < h5.rows.size(); ++r) ASSERT_NEAR(h5.rows[r][0], 0.002 * r, 1e-9) << "row " << r;
 }
 
+TEST(LogFormats, SigintLeavesAValidMcapOfEveryPeriod) {
+  SKIP_WITHOUT_NODE_PACKAGES();
+  TempDir tmp;
+  fs::create_directories(tmp / "parent");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (::chdir(VLAB_SOURCE_DIR) != 0) ::_exit(126);
+    ::freopen("/dev/null", "w", stdout);
+    execl(VLAB_BINARY_DIR "/vlab", "vlab", "run", "scenes/pa10_reach", "-q", "--duration", "600", "--out",
+          (tmp / "parent/run").c_str(), "--set", "outputs.log={format: [csv, mcap]}", "--set",
+          "outputs.poses={rate: 50}", nullptr);
+    ::_exit(127);
+  }
+  // SIGINT once log.csv holds a few blocks of rows
+  const bool rows = WaitUntil(
+      [&] {
+        std::error_code ec;
+        const std::string csv = StagingFile(tmp / "parent", "log.csv");
+        return !csv.empty() && fs::file_size(csv, ec) > 300000 && !ec;
+      },
+      120);
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(rows) << "log.csv never grew";
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);  // interrupted
+  const scene::CsvTable csv = scene::ReadCsvTable(tmp / "parent/run/log.csv");
+  ASSERT_GT(csv.rows.size(), 256u);
+  // every period from t = 0 on, none missing, in log.csv; log.mcap holds them all (read_mcap.mjs)
+  for (std::size_t r = 0; r < csv.rows.size(); ++r) ASSERT_NEAR(csv.rows[r][0], 0.002 * r, 1e-9) << "row " << r;
+  const ProcessResult read = ReadMcap(tmp / "parent/run");
+  ASSERT_EQ(read.exit_code, 0) << read.out;
+  EXPECT_NE(read.out.find("(" + std::to_string(csv.rows.size()) + " rows on 3 devices"), std::string::npos) << read.out;
+}
+
 TEST(LogFormats, ConvertWritesEachFormatAndRefuses) {
   TempDir tmp;
   const std::string run = tmp / "run";
@@ -206,6 +295,11 @@ TEST(LogFormats, ConvertWritesEachFormatAndRefuses) {
   EXPECT_NE(c.out.find("(MAT 5 (compressed))"), std::string::npos) << c.out;
   std::map<std::string, std::string> units;
   ExpectSameBits(csv, ReadMat(run + "/log.mat", &units));
+  // the same rows give the same bytes (no date in the header)
+  const std::string first = ReadFile(run + "/log.mat");
+  c = RunVlab("convert '" + run + "' --to mat --force");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(ReadFile(run + "/log.mat"), first);
   const std::string other = tmp / "other";
   fs::create_directories(other);
   fs::copy_file(run + "/log.h5", other + "/log.h5");
@@ -239,9 +333,6 @@ TEST(LogFormats, ConvertWritesEachFormatAndRefuses) {
   c = RunVlab("convert '" + (tmp / "none") + "' --to mat");
   EXPECT_EQ(c.exit_code, 2);
   EXPECT_NE(c.err.find("not a folder"), std::string::npos) << c.err;
-  c = RunVlab("convert '" + run + "' --to mcap");
-  EXPECT_EQ(c.exit_code, 2);
-  EXPECT_NE(c.err.find("not supported yet"), std::string::npos) << c.err;
   for (const std::string& dir : {bad, fifo}) {
     std::vector<std::string> entries;
     for (const auto& e : fs::directory_iterator(dir)) entries.push_back(e.path().filename().string());

@@ -49,5 +49,38 @@ TEST_F(RuntimeTest, KinematicsQueriesDoNotMoveTheRobot) {
   EXPECT_EQ(arm_->q(), ready);
 }
 
+// option ref: the target of ik and reachable given in a user frame, fk's result given in it;
+// the same joints and frames, to the bit, as composing with frame_of(name) in the script
+TEST_F(RuntimeTest, KinematicsQueriesTakeAUserFrame) {
+  auto r = Make({{"pa10",
+                  "local here = pose()\n"
+                  "frame_def('table', frame(here.pos) * trans(0.02, -0.03, -0.10) * rpy(0, 0, 30))\n"
+                  "local T = trans(0.01, 0.02, 0.05) * rpy(180, 0, 10)\n"
+                  "local a, b = ik(T, {ref = 'table'}), ik(frame_of('table') * T)\n"
+                  "local same = true\n"
+                  "for i = 1, 7 do same = same and a[i] == b[i] end\n"
+                  "print(same, reachable(T, {ref = 'table'}), reachable(trans(2, 0, 0), {ref = 'table'}))\n"
+                  "local f, g = fk(a, {ref = 'table'}), frame_of('table'):inv() * fk(a)\n"
+                  "print(f.pos == g.pos, f.rot:angle(g.rot) == 0, (f.pos - T.pos):norm() < 1e-9)\n"
+                  "local all = ik(T, {ref = 'table', all = true})\n"
+                  "print(#all >= 1, (fk(all[1], {ref = 'table'}).pos - T.pos):norm() < 1e-9)\n"
+                  "print(select(2, pcall(fk, a, {ref = 'bin'})))\n"
+                  "print(select(2, pcall(ik, T, {ref = 3})))\n"
+                  "print(select(2, pcall(fk, a, {seed = a})))\n"
+                  "sync()\n"}});
+  ASSERT_TRUE(RunFor(*r, 10)) << r->error();
+  ASSERT_EQ(printed_.size(), 6u);
+  EXPECT_EQ(printed_[0], "pa10@0: true\ttrue\tfalse");
+  EXPECT_EQ(printed_[1], "pa10@0: true\ttrue\ttrue");
+  EXPECT_EQ(printed_[2], "pa10@0: true\ttrue");
+  EXPECT_NE(printed_[3].find("pa10.lua:12: fk: no user frame 'bin' (defined: 'table')"), std::string::npos)
+      << printed_[3];
+  EXPECT_NE(printed_[4].find("pa10.lua:13: ik: option ref must be the name of a user frame (frame_def), got number"),
+            std::string::npos)
+      << printed_[4];
+  EXPECT_NE(printed_[5].find("pa10.lua:14: fk: unknown option 'seed' (options: ref)"), std::string::npos)
+      << printed_[5];
+}
+
 }  // namespace
 }  // namespace vlab::task

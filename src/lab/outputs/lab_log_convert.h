@@ -2,8 +2,12 @@
 //
 // The source is the run folder's log.csv, or its log.h5 where there is no
 // log.csv (or the target is CSV). Both are user input: a FIFO, a file over the
-// cap, a malformed row are refused with the file (and line) named. The target
-// (log.csv, log.mat or log.h5) is written under a temporary name and renamed
+// cap, a malformed row are refused with the file (and line) named. log.mcap
+// also carries the folder's poses.bin (body names from scene.json) and each
+// CAMERA/ folder's frames (frames.csv, rgb_NNNNNN.png), checked the same way
+// before anything is written; from a run's own files it is the log.mcap the
+// run wrote, byte for byte. The target (log.csv, log.mat, log.h5 or log.mcap)
+// is written under a temporary name and renamed
 // into place, so nothing half-written is ever left under its name. An
 // existing target is refused, and replaced with `force` only when the run
 // folder's list (lab_output.h) says vlab wrote it.

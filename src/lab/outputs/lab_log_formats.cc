@@ -62,6 +62,7 @@ const FormatEntry kFormats[] = {
     {LogFormat::kCsv, "csv", "log.csv"},
     {LogFormat::kMat, "mat", "log.mat"},
     {LogFormat::kHdf5, "hdf5", "log.h5"},
+    {LogFormat::kMcap, "mcap", "log.mcap"},
 };
 
 const char* UnitOf(const std::string& quantity) {
@@ -77,8 +78,7 @@ LogFormat ParseLogFormat(const std::string& name, const std::string& where) {
   for (const FormatEntry& entry : kFormats) {
     if (name == entry.name) return entry.format;
   }
-  if (name == "mcap") throw InputError(where + ": format 'mcap' is not supported yet (csv, mat or hdf5)");
-  throw InputError(where + ": unknown log format '" + name + "' (csv, mat or hdf5)");
+  throw InputError(where + ": unknown log format '" + name + "' (csv, mat, hdf5 or mcap)");
 }
 
 std::vector<std::string> LogFormatNames() {
@@ -135,6 +135,8 @@ std::unique_ptr<LogSink> OpenLogSink(LogFormat format, const std::string& path,
       return OpenMatSink(path, columns);
     case LogFormat::kHdf5:
       return OpenHdf5Sink(path, columns);
+    case LogFormat::kMcap:
+      return std::make_unique<McapLogSink>(path, columns, McapLogContent{});
   }
   throw std::logic_error("log format " + std::to_string(static_cast<int>(format)));
 }
@@ -147,11 +149,24 @@ std::vector<std::unique_ptr<LogSink>> OpenLogSinks(const std::string& folder, co
 }
 
 std::unique_ptr<RunLog> OpenRunLog(const std::string& folder, const std::vector<std::string>& formats,
-                                   const std::vector<std::string>& columns) {
+                                   const std::vector<std::string>& columns, const McapLogContent& mcap,
+                                   McapLogSink** mcap_sink) {
   std::vector<LogFormat> parsed;
   for (const std::string& name : formats) parsed.push_back(ParseLogFormat(name, "outputs.log.format"));
   const std::string first = folder + "/" + (parsed.empty() ? "log.csv" : LogFileName(parsed.front()));
-  return RunLog::Open(OpenLogSinks(folder, parsed, columns), first, columns);
+  if (mcap_sink) *mcap_sink = nullptr;
+  std::vector<std::unique_ptr<LogSink>> sinks;
+  for (LogFormat format : parsed) {
+    const std::string path = folder + "/" + LogFileName(format);
+    if (format != LogFormat::kMcap) {
+      sinks.push_back(OpenLogSink(format, path, columns));
+      continue;
+    }
+    auto sink = std::make_unique<McapLogSink>(path, columns, mcap);
+    if (mcap_sink) *mcap_sink = sink.get();
+    sinks.push_back(std::move(sink));
+  }
+  return RunLog::Open(std::move(sinks), first, columns);
 }
 
 }  // namespace vlab::lab

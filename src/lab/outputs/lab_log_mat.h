@@ -1,18 +1,25 @@
-// The run log as a MATLAB file (log.mat), with Debian's libmatio.
+// The run log as a MATLAB file (log.mat), MAT 5 with zlib compression
+// (MATLAB's -v7), written here with zlib (no MAT library).
 //
 // One variable per column group (ColumnGroup: "pa10.q.S1" is in pa10.q): a
 // 1x1 struct with fields `data` (rows x columns, double), `names` and `units`
 // (char matrices, one blank-padded row per column; cellstr() makes them
 // cells), named after the group with every
 // character MATLAB does not take in a name replaced by '_' (pa10_q, jr3,
-// controller_p_des). MAT 5 with zlib compression (MATLAB's -v7), not MAT 7.3:
-// Octave 7's `load` of a MAT 7.3 file that libmatio writes reads char arrays
-// as uint16 and skips cell arrays. MAT 5 holds at most 2 GiB per variable.
+// controller_p_des). Not MAT 7.3: Octave 7's `load` of a MAT 7.3 file as
+// libmatio writes it reads char arrays as uint16 and skips cell arrays. MAT 5
+// holds at most 4 GiB per variable (refused by name beyond that).
 //
-// A .mat variable is written whole, so during the run the writer thread
-// appends the raw rows (float64, native order) to a hidden file beside the
-// .mat (.NAME.rows, flushed each block); Close builds the .mat from it, a group
-// at a time (memory: one group's matrix), and removes it.
+// A variable is one zlib stream of column-major data, so it cannot be written
+// before the run's last row. During the run the writer thread compresses each
+// column on its own (a raw deflate stream per column, level 1, 4 KiB window)
+// and spills the compressed bytes to a hidden file beside the .mat
+// (.NAME.part); Close ends each column's stream byte-aligned without a final
+// block, compresses each variable's head (its sizes are known now) and tail
+// (names, units), and writes head, columns and tail back to back as one
+// deflate stream, its Adler-32 combined from the pieces' (adler32_combine).
+// The compression thus runs beside the step loop, and the end of the run only
+// copies bytes. The same rows give the same file (no date in its header).
 #pragma once
 
 #include <memory>
@@ -30,9 +37,9 @@ std::string MatFileVersion();
 /// else '_', a leading non-letter prefixed with "v", at most 63 characters.
 std::string MatVariableName(const std::string& group);
 
-/// Creates the hidden rows file beside `path` for a .mat of `columns`; Close
-/// writes `path`. Throws std::runtime_error naming the path when the rows
-/// file cannot be created.
+/// Creates the hidden file of compressed pieces beside `path` for a .mat of
+/// `columns`; Close writes `path`. Throws std::runtime_error naming the path
+/// when that file cannot be created.
 std::unique_ptr<LogSink> OpenMatSink(const std::string& path, const std::vector<std::string>& columns);
 
 }  // namespace vlab::lab

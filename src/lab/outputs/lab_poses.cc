@@ -36,8 +36,10 @@ PoseRecorder::~PoseRecorder() {
   if (file_) std::fclose(file_);
 }
 
+nlohmann::json PoseRecorder::Geometry() const { return SceneGeometry(m_, bodies_); }
+
 void PoseRecorder::Open(const OutputDir& out) {
-  nlohmann::json scene = SceneGeometry(m_, bodies_);
+  nlohmann::json scene = Geometry();
   scene["model"] = scene_;
   scene["rate_hz"] = rate_hz_;
   const std::string json_path = out.File("scene.json");
@@ -54,6 +56,7 @@ void PoseRecorder::Observe(double t, double k, const mjData& d) {
   next_ += interval_s_;
   if (next_ < t + kSameTime_s) next_ = t + interval_s_;
   ScenePoses(d, bodies_, poses_.data());
+  last_time_s_ = t;
   EncodePoseFrame(t, k, poses_.data(), static_cast<int>(poses_.size()), &frame_);
   errno = 0;
   if (std::fwrite(frame_.data(), 1, frame_.size(), file_) != frame_.size()) write_errno_ = errno ? errno : EIO;
@@ -66,6 +69,15 @@ void PoseRecorder::Finish() {
   if (std::fclose(file_) != 0 && write_errno_ == 0) write_errno_ = errno ? errno : EIO;
   file_ = nullptr;
   if (failed()) throw std::runtime_error(error());
+}
+
+std::vector<std::string> PoseRecorder::body_names() const {
+  std::vector<std::string> names;
+  for (int b : bodies_) {
+    const char* name = mj_id2name(m_, mjOBJ_BODY, b);
+    names.push_back(name ? name : "");
+  }
+  return names;
 }
 
 std::string PoseRecorder::error() const {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <mujoco/mujoco.h>
+#include <nlohmann/json_fwd.hpp>
 
 #include "scene/scene_pose_frame.h"
 
@@ -46,6 +47,17 @@ class PoseRecorder {
   /// "poses 'PATH': write failed: ERRNO TEXT" once failed(), else "".
   std::string error() const;
   long frames() const { return frames_; }
+  /// The last frame's time (s) and poses (7 doubles per body, before their
+  /// float32 rounding in poses.bin).
+  double last_time_s() const { return last_time_s_; }
+  const std::vector<double>& poses() const { return poses_; }
+  /// The bodies' MJCF names, in frame order ("" for an unnamed body).
+  std::vector<std::string> body_names() const;
+  /// The visual geometry of the recorded bodies, as scene.json holds it less
+  /// "model" and "rate_hz" (scene::SceneGeometry).
+  nlohmann::json Geometry() const;
+  /// The time between frames, s.
+  double interval_s() const { return interval_s_; }
 
  private:
   PoseRecorder() = default;
@@ -53,7 +65,7 @@ class PoseRecorder {
   std::vector<int> bodies_;
   std::vector<double> poses_;
   std::string frame_, scene_, path_;
-  double interval_s_ = 0, next_ = 0, rate_hz_ = 0;
+  double interval_s_ = 0, next_ = 0, rate_hz_ = 0, last_time_s_ = 0;
   std::FILE* file_ = nullptr;
   long frames_ = 0;
   int write_errno_ = 0;  // the errno of the first failed write (0: none)

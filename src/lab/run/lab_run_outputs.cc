@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -27,6 +28,34 @@ std::string ReplaceAll(std::string text, const std::string& from, const std::str
 }
 
 }  // namespace
+
+McapLogContent RunSession::McapContent() const {
+  McapLogContent content;
+  content.period_s = period_;
+  if (poses_) {
+    content.bodies = poses_->body_names();
+    content.scene = std::make_shared<const nlohmann::json>(poses_->Geometry());
+    content.poses_interval_s = poses_->interval_s();
+  }
+  for (const ImageOutputConfig& image : s_.scenario.outputs.images) {
+    if (images_ && image.png) content.cameras.push_back({image.camera, out_->File(image.camera), image.every_s});
+  }
+  return content;
+}
+
+void RunSession::FeedMcap() {
+  // lock-free, never waits (lab_log_mcap.h); a frame is handed over once its files are written
+  if (poses_ && poses_->frames() > mcap_poses_) {
+    mcap_->PushPoses(poses_->last_time_s(), poses_->poses().data());
+    mcap_poses_ = poses_->frames();
+  }
+  for (McapCameraFeed& feed : mcap_cameras_) {
+    const std::vector<double>& times = images_->frame_times(feed.output);
+    for (; feed.frames < times.size(); ++feed.frames) {
+      mcap_->PushFrame(feed.camera, static_cast<long>(feed.frames), times[feed.frames]);
+    }
+  }
+}
 
 bool RunSession::Recorded(double t) {
   try {

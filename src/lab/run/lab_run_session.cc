@@ -111,7 +111,12 @@ void RunSession::Prepare() {
       std::error_code ec;
       std::filesystem::remove_all(staging, ec);
     });
-    if (sc.outputs.log) log_ = OpenRunLog(out_->staging_dir(), sc.outputs.log_formats, s_.columns);
+    if (sc.outputs.log)
+      log_ = OpenRunLog(out_->staging_dir(), sc.outputs.log_formats, s_.columns, McapContent(), &mcap_);
+    for (std::size_t i = 0; mcap_ && i < sc.outputs.images.size(); ++i) {
+      const int camera = mcap_->CameraIndex(sc.outputs.images[i].camera);
+      if (camera >= 0 && sc.outputs.images[i].png) mcap_cameras_.push_back({i, camera, 0});
+    }
     if (images_) images_->Open(*out_);
     if (poses_) poses_->Open(*out_);
   }
@@ -154,6 +159,7 @@ void RunSession::RenderAfterPublish(double t) {
   for (RenderedOutput* output : s_.rendered) output->AfterPublish(d_);
   if (images_) images_->Observe(t, d_);
   if (poses_) poses_->Observe(t, std::round(t / period_), *d_);
+  if (mcap_) FeedMcap();
 }
 
 void RunSession::Start() {

@@ -18,6 +18,7 @@
 #include "lab/judge/lab_checks.h"
 #include "lab/outputs/lab_images.h"
 #include "lab/outputs/lab_log.h"
+#include "lab/outputs/lab_log_mcap.h"
 #include "lab/outputs/lab_output.h"
 #include "lab/outputs/lab_poses.h"
 #include "lab/run/lab_bridge.h"
@@ -56,6 +57,10 @@ class RunSession {
   // the camera frames delivered later, the image outputs; after the states went out, so that
   // rendering does not delay them (the state is still that of t: the next period has not begun)
   void RenderAfterPublish(double t);
+  // the poses and frames written since the last call, to log.mcap's sink (lab_run_outputs.cc)
+  void FeedMcap();
+  // what log.mcap carries besides the columns: poses_' bodies, the PNG cameras of images_
+  McapLogContent McapContent() const;
   // RenderAfterPublish, then whether every output still writes: false (the run stops, its
   // failure set) on the first failed write or render (lab_run_outputs.cc)
   bool Recorded(double t);
@@ -101,6 +106,14 @@ class RunSession {
   std::unique_ptr<LabBridge> bridge_;
   std::unique_ptr<OutputDir> out_;
   std::unique_ptr<CsvLog> log_;
+  McapLogSink* mcap_ = nullptr;  // log.mcap's sink in log_ (outputs.log.format mcap), fed poses and frames
+  long mcap_poses_ = 0;          // poses_' frames handed to it
+  struct McapCameraFeed {
+    std::size_t output;  // index in images_
+    int camera;          // McapLogSink::CameraIndex
+    std::size_t frames;  // frames handed to it
+  };
+  std::vector<McapCameraFeed> mcap_cameras_;
   std::unique_ptr<ExternalController> controller_;
   std::vector<double> row_;
   double* controller_columns_ = nullptr;

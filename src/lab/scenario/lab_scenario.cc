@@ -60,7 +60,7 @@ void ReadLogOutput(const std::string& file, MapReader& outputs, OutputsConfig* o
   const YAML::Node format = log.Raw("format");
   const std::vector<std::string> names =
       format.IsScalar() ? std::vector<std::string>{log.String("format")} : log.Strings("format", {});
-  if (names.empty()) log.Fail("format", "expected csv, mat or hdf5, or a list of them");
+  if (names.empty()) log.Fail("format", "expected csv, mat, hdf5 or mcap, or a list of them");
   out->log = true;
   out->log_formats.clear();
   for (const std::string& name : names) {
