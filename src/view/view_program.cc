@@ -380,10 +380,14 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
         model->ArmPoses(std::vector<double>(s.q.data(), s.q.data() + s.q.size()), bodies, poses.data());
         server->Publish(EncodeFrame(s.time, static_cast<double>(s.seq), poses.data(), static_cast<int>(poses.size())));
         if (fox) {
+          // q, qd, tau, one value per joint each; a short vector padded with zeros, as the plot's
+          const std::size_t joints = live_signals.size() / 3;
           arm_signals.clear();
-          for (const Eigen::VectorXd* v : {&s.q, &s.qd, &s.tau})
-            arm_signals.insert(arm_signals.end(), v->data(), v->data() + v->size());
-          arm_signals.resize(live_signals.size(), 0.0);  // a short state: zeros, as the plot's
+          for (const Eigen::VectorXd* v : {&s.q, &s.qd, &s.tau}) {
+            const std::size_t n = std::min(joints, static_cast<std::size_t>(v->size()));
+            arm_signals.insert(arm_signals.end(), v->data(), v->data() + n);
+            arm_signals.resize(arm_signals.size() + joints - n, 0.0);
+          }
           fox_feed->PublishFrame(s.time, poses.data(), arm_signals.data(), fox.get());
         }
         ++frames;
