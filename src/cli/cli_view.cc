@@ -33,6 +33,13 @@ Subcommand AddViewCommand(CLI::App& app) {
                   "--scene: among the scene device's signals (its scenario entry's signals: [...]); --arm: the arm's "
                   "ARM.q.JOINT, ARM.qd.JOINT, ARM.tau.JOINT; --replay: any column of the run's log.csv");
   cmd->add_option("--http", o->server.port, "TCP port of the page (default 8080; 0: any free port)");
+  cmd->add_option(
+      "--foxglove", o->foxglove_port,
+      "Also serve the Foxglove WebSocket protocol (foxglove.websocket.v1) on this TCP port (0: any free "
+      "port; printed), for Foxglove or Lichtblick (Open connection, Foxglove WebSocket, ws://localhost:PORT): "
+      "/tf, /scene, one channel per device of the signals the view gets (--scene: the scene device's signals; "
+      "--arm: the arm's q, qd, tau), /camera/NAME with --camera; ROS 2 messages (cdr). Read-only; --bind, "
+      "--allow-host, --allow-origin and the bounds apply to it as to the page (docs/view.md)");
   cmd->add_option("--bind", o->server.bind,
                   "Address the page binds to (default 127.0.0.1; from another machine use ssh -L, see docs/view.md; "
                   "beyond loopback anyone who can reach the port can watch, and vlab view says so on stderr)");
@@ -40,6 +47,10 @@ Subcommand AddViewCommand(CLI::App& app) {
                   "A name the page may be opened by (Host and Origin), beside localhost, 127.0.0.0/8, [::1] and the "
                   "--bind address; repeatable. Any other name is refused (421, 403): a web page elsewhere cannot read "
                   "the view, by a cross-origin WebSocket or by DNS rebinding");
+  cmd->add_option("--allow-origin", o->server.allowed_origins,
+                  "A whole origin whose pages may read the view and the Foxglove stream (Origin header), e.g. "
+                  "https://app.foxglove.dev for Foxglove in the browser; repeatable. Clients that send no Origin (the "
+                  "Foxglove and Lichtblick desktop apps) need none");
   cmd->add_option("--max-connections", o->server.max_connections,
                   "WebSocket sessions served at once (a tab takes one, two or three: poses, camera, plot) (default 64; "
                   "more are closed at once with 'server full', which the page shows)");

@@ -73,6 +73,19 @@ bool IsLoopbackAddress(const std::string& text) {
   return a.is_loopback();
 }
 
+bool ValidOrigin(const std::string& origin) {
+  const std::string o = Lower(origin);
+  std::string rest;
+  if (o.compare(0, 7, "http://") == 0)
+    rest = o.substr(7);
+  else if (o.compare(0, 8, "https://") == 0)
+    rest = o.substr(8);
+  else
+    return false;
+  std::string name;
+  return rest.find_first_of("/?#@ ") == std::string::npos && SplitHost(rest, &name);
+}
+
 bool HostAllowed(const AccessPolicy& policy, const std::string& host) {
   std::string name;
   return SplitHost(host, &name) && NameAllowed(policy, name);
@@ -80,6 +93,9 @@ bool HostAllowed(const AccessPolicy& policy, const std::string& host) {
 
 bool OriginAllowed(const AccessPolicy& policy, const std::string& origin) {
   const std::string o = Lower(origin);
+  for (const std::string& allowed : policy.allowed_origins) {
+    if (!allowed.empty() && Lower(allowed) == o) return true;  // the whole origin, scheme and port included
+  }
   std::string rest;
   if (o.compare(0, 7, "http://") == 0)
     rest = o.substr(7);

@@ -10,6 +10,9 @@
 //   - when bound to every address (0.0.0.0, ::), any IP address literal: a
 //     rebinding page always names a host, never an address;
 //   - the names given (vlab view --allow-host NAME), compared without case.
+// An Origin is also allowed when it equals, without case, a whole origin
+// given (vlab view --allow-origin https://app.foxglove.dev: a web app of
+// another site that the user lets read the view, scheme and port compared).
 // Anything else is refused: a bad Host with 421, a bad Origin with 403. A
 // request without Host or Origin (not a browser: browsers send Host always
 // and Origin on every WebSocket upgrade) is not refused for their absence.
@@ -21,8 +24,9 @@
 namespace vlab::view {
 
 struct AccessPolicy {
-  std::string bound;                       ///< the address bound, as asio prints it ("127.0.0.1", "::")
-  std::vector<std::string> allowed_hosts;  ///< names allowed beside the loopback ones (--allow-host)
+  std::string bound;                         ///< the address bound, as asio prints it ("127.0.0.1", "::")
+  std::vector<std::string> allowed_hosts;    ///< names allowed beside the loopback ones (--allow-host)
+  std::vector<std::string> allowed_origins;  ///< whole origins allowed in Origin (--allow-origin)
 };
 
 /// True when a Host header's value names this server (see the file comment).
@@ -33,6 +37,11 @@ bool HostAllowed(const AccessPolicy& policy, const std::string& host);
 /// True when an Origin header's value ("http://NAME[:PORT]", https too) names
 /// an allowed host. "null", other schemes and values with a path are false.
 bool OriginAllowed(const AccessPolicy& policy, const std::string& origin);
+
+/// True when `origin` is "http://" or "https://" then a host as Host names
+/// it (with or without a port), and nothing else (no path, no userinfo):
+/// what --allow-origin accepts.
+bool ValidOrigin(const std::string& origin);
 
 /// True when `address` (an IP literal) is loopback: 127.0.0.0/8, ::1, or an
 /// IPv4-mapped loopback. False for anything that is not an address.

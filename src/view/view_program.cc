@@ -22,6 +22,7 @@
 #include "core/core_errors.h"
 #include "scene/scene_geometry.h"
 #include "view/view_access.h"
+#include "view/view_foxglove_feed.h"
 #include "view/view_model.h"
 #include "view/view_panels.h"
 
@@ -157,7 +158,17 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
       }
     }
   }
+  for (const std::string& origin : o.server.allowed_origins) {
+    if (!ValidOrigin(origin)) {
+      throw InputError("vlab view: --allow-origin '" + origin +
+                       "': expected a whole origin, http:// or https:// and a host, e.g. https://app.foxglove.dev");
+    }
+  }
   if (!o.replay.empty() && !o.camera.empty()) throw InputError("vlab view: --camera is for live views, not --replay");
+  if (o.foxglove_port < -1 || o.foxglove_port > 65535) throw InputError("vlab view: --foxglove must be 0 to 65535");
+  if (!o.replay.empty() && o.foxglove_port >= 0) {
+    throw InputError("vlab view: --foxglove is for live views (--scene, --arm), not --replay");
+  }
   const std::vector<std::string> plots = o.plot.empty() ? std::vector<std::string>() : ParsePlotSignals(o.plot);
   std::map<std::string, StaticFile> page = PageFiles(o.web.empty() ? DefaultWebDir() : o.web);
 
@@ -172,6 +183,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   std::size_t scene_pose_values = 0;
   std::unique_ptr<bridge::CameraClient> camera;
   std::unique_ptr<PlotFeed> plot_feed;
+  std::vector<std::string> live_signals;  // --foxglove: the log columns the source gives
   if (!o.scene.empty()) {
     std::string host;
     int port = 0;
@@ -190,6 +202,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     source = "scene device '" + scene_device->name() + "' at " + o.scene;
     scene_pose_values = 7 * info["bodies"].size();
     const std::vector<std::string> sent = d.value("signals", std::vector<std::string>());
+    live_signals = sent;
     if (static_cast<std::size_t>(scene_device->state_length()) != scene_pose_values + sent.size()) {
       throw bridge::ProtocolError("vlab view: scene device '" + scene_device->name() + "': its layout has " +
                                   std::to_string(scene_device->state_length()) +
@@ -214,6 +227,10 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
     arm = std::make_unique<bridge::Arm>(bridge::Arm::Connect(host, port, o.connect_timeout_s));
     model->BindJoints(arm->joint_names());
     if (!plots.empty()) plot_feed = std::make_unique<PlotFeed>(*arm, plots, o.rate_hz);
+    for (const char* quantity : {"q", "qd", "tau"}) {
+      for (const std::string& joint : arm->joint_names())
+        live_signals.push_back(arm->name() + "." + quantity + "." + joint);
+    }
     bodies = scene::SceneBodies(model->model());
     info = scene::SceneGeometry(model->model(), bodies);
     info["rate_hz"] = o.rate_hz;
@@ -288,8 +305,25 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   ViewServerConfig server_config = o.server;
   server_config.channels = {"/ws", "/camera", "/plot"};  // kPoseChannel, kCameraChannel, kPlotChannel
   std::unique_ptr<ViewServer> server = ViewServer::Create(server_config, std::move(page), resources);
-  std::printf("vlab view: http://%s:%d/ (%s; %zu bodies)\n", UrlHost(server->address()).c_str(), server->port(),
-              source.c_str(), info["bodies"].size());
+  // the Foxglove server: its own port, the page's bounds and Host/Origin rules
+  std::unique_ptr<FoxgloveFeed> fox_feed;
+  std::unique_ptr<ViewServer> fox;
+  std::string fox_line;
+  if (o.foxglove_port >= 0) {
+    fox_feed = std::make_unique<FoxgloveFeed>(info, model ? model->model() : nullptr, live_signals,
+                                              camera ? camera->name() : std::string());
+    ViewServerConfig fox_config = o.server;
+    fox_config.port = o.foxglove_port;
+    fox_config.foxglove = true;
+    fox_config.foxglove_channels = fox_feed->channels();
+    fox_config.max_ws_message_bytes = 65536;  // a subscribe to every channel at once
+    fox = ViewServer::Create(fox_config, {}, nullptr);
+    fox_feed->PublishScene(0, fox.get());
+    fox_line = "; foxglove ws://" + UrlHost(fox->address()) + ":" + std::to_string(fox->port()) + " (" +
+               std::to_string(fox_feed->channels().size()) + " channels)";
+  }
+  std::printf("vlab view: http://%s:%d/ (%s; %zu bodies)%s\n", UrlHost(server->address()).c_str(), server->port(),
+              source.c_str(), info["bodies"].size(), fox_line.c_str());
   std::fflush(stdout);
   if (!IsLoopbackAddress(server->address())) {
     std::fprintf(stderr,
@@ -304,10 +338,17 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   if (camera) {
     bridge::CameraClient* c = camera.get();
     ViewServer* v = server.get();
+    ViewServer* f = fox.get();
+    FoxgloveFeed* feed = fox_feed.get();
     auto frame = std::make_shared<bridge::CameraClient::Frame>();
-    camera_feed = std::make_unique<Feeder>(stop, [c, v, frame] {
+    camera_feed = std::make_unique<Feeder>(stop, [c, v, f, feed, frame] {
       c->ReceiveLatest(0.2, frame.get());
-      v->Publish(EncodeCameraMessage(*frame), kCameraChannel);
+      std::string message = EncodeCameraMessage(*frame);
+      if (f) {
+        const char* format = frame->encoding == bridge::CameraEncoding::kJpeg ? "jpeg" : "png";
+        feed->PublishCamera(frame->time_s, format, message.substr(kCameraHeaderBytes), f);
+      }
+      v->Publish(std::move(message), kCameraChannel);
       return true;
     });
   }
@@ -316,7 +357,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
   const double start = WallNow();
   double last_keepalive = start, next_arm_frame = -1;
   long frames = 0, timeouts = 0, plot_samples = 0;
-  std::vector<double> poses(7 * bodies.size());
+  std::vector<double> poses(7 * bodies.size()), arm_signals;
   while (!*stop && (o.duration_s <= 0 || WallNow() - start < o.duration_s)) {
     try {
       if (scene_device) {
@@ -329,6 +370,7 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
           server->Publish(EncodePlotMessage(s.time, static_cast<double>(s.seq), values), kPlotChannel);
           ++plot_samples;
         }
+        if (fox) fox_feed->PublishFrame(s.time, s.values.data(), s.values.data() + scene_pose_values, fox.get());
         ++frames;
       } else if (arm) {
         const bridge::Arm::State s = arm->ReadLatest(0.1);
@@ -337,6 +379,17 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
         next_arm_frame = std::max(next_arm_frame + 1.0 / o.rate_hz, s.time);
         model->ArmPoses(std::vector<double>(s.q.data(), s.q.data() + s.q.size()), bodies, poses.data());
         server->Publish(EncodeFrame(s.time, static_cast<double>(s.seq), poses.data(), static_cast<int>(poses.size())));
+        if (fox) {
+          // q, qd, tau, one value per joint each; a short vector padded with zeros, as the plot's
+          const std::size_t joints = live_signals.size() / 3;
+          arm_signals.clear();
+          for (const Eigen::VectorXd* v : {&s.q, &s.qd, &s.tau}) {
+            const std::size_t n = std::min(joints, static_cast<std::size_t>(v->size()));
+            arm_signals.insert(arm_signals.end(), v->data(), v->data() + n);
+            arm_signals.resize(arm_signals.size() + joints - n, 0.0);
+          }
+          fox_feed->PublishFrame(s.time, poses.data(), arm_signals.data(), fox.get());
+        }
         ++frames;
       } else {
         ::usleep(100000);
@@ -367,6 +420,14 @@ int RunView(const ViewOptions& o, volatile std::sig_atomic_t* stop) {
       "WebSocket sessions (%ld closed for bad messages, %ld for not reading)\n",
       frames, c.frames_sent, c.frames_skipped, c.requests, c.errors, c.bad_host, c.refused, c.evicted,
       c.header_timeouts, c.ws_sessions, c.ws_closed_bad, c.ws_closed_slow);
+  if (fox) {
+    const ViewServerCounters f = fox->counters();
+    std::printf(
+        "vlab view: foxglove: %ld messages sent, %ld skipped by slow clients; %ld WebSocket sessions (%ld refused "
+        "for their Host or Origin, %ld refused: too many); %ld client writes refused (read-only), %ld malformed client "
+        "messages\n",
+        f.frames_sent, f.frames_skipped, f.ws_sessions, f.bad_host, f.refused, f.client_refused, f.client_bad);
+  }
   return 0;
 }
 

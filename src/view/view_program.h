@@ -19,6 +19,7 @@ struct ViewOptions {
   std::string camera;   ///< HOST:PORT of a camera device: its pictures in a panel (live only)
   std::string plot;     ///< signals to plot, comma-separated log.csv names ("pa10.q.S1,pa10.q.E1")
   std::string web;      ///< the page's folder (default: view_web beside the executable)
+  int foxglove_port = -1;  ///< a Foxglove WebSocket server on this port beside the page (0: any free; -1: none)
   ViewServerConfig server;
   double connect_timeout_s = 10;
   double duration_s = 0;  ///< stop after this long (0: until a signal)
@@ -27,7 +28,8 @@ struct ViewOptions {
 };
 
 /// Runs the view until *stop is set or the duration ends; prints a start line
-/// ("vlab view: http://ADDRESS:PORT/ ...", an IPv6 address in brackets), a
+/// ("vlab view: http://ADDRESS:PORT/ ...", an IPv6 address in brackets; with
+/// --foxglove, "...; foxglove ws://ADDRESS:PORT (N channels)" ends it), a
 /// warning on stderr when bound beyond loopback, and a counter line. Throws
 /// InputError (exit 2) for bad options, a missing page file or model, an
 /// unreadable recording; bridge errors when the device does not answer.

@@ -54,7 +54,12 @@ std::unique_ptr<ViewServer> ViewServer::Create(const ViewServerConfig& config, s
   if (config.max_connections < 1 || config.max_http < 1 || config.max_per_address < 1) {
     throw InputError("vlab view: --max-connections and --max-per-address must be >= 1");
   }
-  impl->slots.resize(config.channels.size());
+  if (config.foxglove) {
+    impl->config.channels = {"/"};
+    impl->foxglove_info = FoxgloveServerInfo();
+    impl->foxglove_advertise = FoxgloveAdvertise(config.foxglove_channels);
+  }
+  impl->slots.resize(config.foxglove ? config.foxglove_channels.size() : config.channels.size());
   impl->accept_retry = std::make_unique<asio::steady_timer>(*impl->io);
   const std::string where = config.bind + ":" + std::to_string(config.port);
   try {
@@ -65,7 +70,7 @@ std::unique_ptr<ViewServer> ViewServer::Create(const ViewServerConfig& config, s
     impl->acceptor->listen(asio::socket_base::max_listen_connections);
     impl->address = impl->acceptor->local_endpoint().address().to_string();
     impl->port = impl->acceptor->local_endpoint().port();
-    impl->access = {impl->address, config.allowed_hosts};
+    impl->access = {impl->address, config.allowed_hosts, config.allowed_origins};
   } catch (const std::exception& e) {
     throw InputError("vlab view: cannot serve HTTP on " + where + ": " + e.what());
   }
@@ -114,6 +119,8 @@ ViewServerCounters ViewServer::counters() const {
   c.frames_skipped = s.frames_skipped.load();
   c.ws_closed_bad = s.ws_closed_bad.load();
   c.ws_closed_slow = s.ws_closed_slow.load();
+  c.client_refused = s.client_refused.load();
+  c.client_bad = s.client_bad.load();
   return c;
 }
 

@@ -49,6 +49,8 @@
 #include <string>
 #include <vector>
 
+#include "view/view_foxglove.h"
+
 namespace vlab::view {
 
 /// One file of the page, held in memory.
@@ -68,6 +70,9 @@ struct ViewServerConfig {
   int max_per_address = 32;  ///< WebSocket sessions, and HTTP connections, from one address
   /// names allowed in Host and Origin beside loopback and the bound address (view_access.h)
   std::vector<std::string> allowed_hosts;
+  /// whole origins allowed in Origin beside those of the allowed hosts, e.g.
+  /// "https://app.foxglove.dev" (view_access.h)
+  std::vector<std::string> allowed_origins;
   std::size_t max_header_bytes = 8192;      ///< a request's start line and headers
   std::size_t max_body_bytes = 1024;        ///< a request's body (the page sends none)
   std::size_t max_ws_message_bytes = 1024;  ///< a client's WebSocket message
@@ -79,6 +84,13 @@ struct ViewServerConfig {
   /// WebSocket paths, one channel each (index = Publish's channel); an
   /// upgrade on any other path is answered 404
   std::vector<std::string> channels = {"/ws"};
+  /// true: a Foxglove WebSocket server (view_foxglove.h) instead: it serves
+  /// no page; an upgrade on "/" that offers the subprotocol
+  /// foxglove.websocket.v1 is a session that is advertised foxglove_channels
+  /// (Publish's channel: an index into them) and sends the newest message of
+  /// each channel it subscribed to, one message at a time
+  bool foxglove = false;
+  std::vector<FoxgloveChannel> foxglove_channels;
 };
 
 struct ViewServerCounters {
@@ -93,6 +105,8 @@ struct ViewServerCounters {
   long frames_skipped = 0;   ///< frames a client did not get because a newer one came first
   long ws_closed_bad = 0;    ///< WebSocket sessions closed for a bad or oversized message
   long ws_closed_slow = 0;   ///< WebSocket sessions closed: a write not done in send_timeout_s, or no pong
+  long client_refused = 0;   ///< Foxglove: client messages refused as writes (publish, parameters, services)
+  long client_bad = 0;       ///< Foxglove: client messages refused as malformed (bad JSON, unknown op or id)
 };
 
 class ViewServer {
@@ -108,7 +122,8 @@ class ViewServer {
 
   /// Makes `frame` the newest message of channel `channel` (an index into
   /// config.channels; 0: the poses): a binary WebSocket message to every
-  /// client of that channel's path.
+  /// client of that channel's path. A Foxglove server: `frame` is a
+  /// FoxgloveRecord, `channel` an index into config.foxglove_channels.
   void Publish(std::string frame, int channel = 0);
   int port() const;
   const std::string& address() const;

@@ -19,6 +19,24 @@ namespace {
 
 using Impl = ViewServer::Impl;
 
+// true when the upgrade's Sec-WebSocket-Protocol lists foxglove.websocket.v1
+bool OffersFoxglove(const http::request<http::string_body>& request) {
+  const auto range = request.equal_range(http::field::sec_websocket_protocol);
+  for (auto at = range.first; at != range.second; ++at) {
+    const std::string list(at->value());
+    std::size_t start = 0;
+    while (start <= list.size()) {
+      const std::size_t comma = std::min(list.find(',', start), list.size());
+      std::string item = list.substr(start, comma - start);
+      item.erase(0, item.find_first_not_of(" \t"));
+      item.erase(item.find_last_not_of(" \t") + 1);
+      if (item == kFoxgloveSubprotocol) return true;
+      start = comma + 1;
+    }
+  }
+  return false;
+}
+
 // ---- HTTP: one request after another on a connection
 class HttpSession : public std::enable_shared_from_this<HttpSession>, public Impl::Waiting {
  public:
@@ -143,9 +161,18 @@ class HttpSession : public std::enable_shared_from_this<HttpSession>, public Imp
       // refusals are sessions too, briefly: beyond as many as HTTP connections, a plain 503
       if (server_.refusing >= c.max_http) return Reply(http::status::service_unavailable, "", "", false, 11);
     }
+    if (c.foxglove && !OffersFoxglove(request)) {
+      return Reply(
+          http::status::bad_request,
+          std::string("a Foxglove WebSocket server: the client must offer the subprotocol ") + kFoxgloveSubprotocol, "",
+          false, request.version());
+    }
     ++server_.requests;
     stream_.expires_never();
     Uncount();
+    if (c.foxglove) {
+      return StartFoxgloveSession(server_, stream_.release_socket(), address, refusal, std::move(request));
+    }
     StartWebSocket(server_, stream_.release_socket(), static_cast<int>(channel - channels.begin()), address, refusal,
                    std::move(request));
   }

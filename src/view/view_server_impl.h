@@ -72,7 +72,9 @@ struct ViewServer::Impl {
 
   std::atomic<int> ws_clients{0}, http_clients{0};
   std::atomic<long> requests{0}, errors{0}, refused{0}, evicted{0}, header_timeouts{0}, bad_host{0}, ws_sessions{0},
-      frames_sent{0}, frames_skipped{0}, ws_closed_bad{0}, ws_closed_slow{0};
+      frames_sent{0}, frames_skipped{0}, ws_closed_bad{0}, ws_closed_slow{0}, client_refused{0}, client_bad{0};
+  // Foxglove: the serverInfo and advertise messages every session starts with
+  std::string foxglove_info, foxglove_advertise;
 
   std::shared_ptr<const std::string> Newest(int channel, std::uint64_t* v) const {
     std::lock_guard<std::mutex> lock(frame_mutex);
@@ -96,5 +98,9 @@ void StartHttpSession(ViewServer::Impl& server, tcp::socket socket, std::string 
 /// close it at once with code 1013 and that reason.
 void StartWebSocket(ViewServer::Impl& server, tcp::socket socket, int channel, std::string address, std::string refusal,
                     http::request<http::string_body> request);
+
+/// The same for a Foxglove server's session (view_server_foxglove.cc).
+void StartFoxgloveSession(ViewServer::Impl& server, tcp::socket socket, std::string address, std::string refusal,
+                          http::request<http::string_body> request);
 
 }  // namespace vlab::view

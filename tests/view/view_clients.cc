@@ -100,9 +100,12 @@ WsClient::WsClient(int port, const WsOptions& options) : impl_(std::make_unique<
       const timeval limit{static_cast<time_t>(options.read_timeout.count()), 0};
       ::setsockopt(ws.next_layer().native_handle(), SOL_SOCKET, SO_RCVTIMEO, &limit, sizeof(limit));
     }
-    if (!options.origin.empty()) {
+    if (!options.origin.empty() || !options.subprotocol.empty()) {
       ws.set_option(beast::websocket::stream_base::decorator(
-          [origin = options.origin](beast::websocket::request_type& r) { r.set(beast::http::field::origin, origin); }));
+          [origin = options.origin, protocol = options.subprotocol](beast::websocket::request_type& r) {
+            if (!origin.empty()) r.set(beast::http::field::origin, origin);
+            if (!protocol.empty()) r.set(beast::http::field::sec_websocket_protocol, protocol);
+          }));
     }
     ws.handshake(options.host.empty() ? "127.0.0.1:" + std::to_string(port) : options.host, options.path);
     ws.binary(true);
@@ -130,6 +133,16 @@ bool WsClient::TryRead(std::string* message) {
   if (ec) return false;
   if (message) *message = beast::buffers_to_string(b.data());
   return true;
+}
+
+void WsClient::WriteText(const std::string& message) {
+  try {
+    impl_->ws.text(true);
+    impl_->ws.write(asio::buffer(message));
+    impl_->ws.binary(true);
+  } catch (const boost::system::system_error& e) {
+    throw WsError(e.what());
+  }
 }
 
 void WsClient::Write(const std::string& message) {

@@ -77,6 +77,7 @@ struct WsOptions {
   std::string origin;        ///< the Origin header; empty: none
   std::string source;        ///< the local address to bind; empty: any
   std::string host;          ///< the Host header; empty: "127.0.0.1:PORT"
+  std::string subprotocol;   ///< offered in Sec-WebSocket-Protocol; empty: none
   /// A read that waits longer fails (SO_RCVTIMEO): a hang is a failure. Zero: no limit.
   std::chrono::seconds read_timeout{20};
 };
@@ -119,6 +120,8 @@ class WsClient {
   bool TryRead(std::string* message = nullptr);
   /// Sends a binary message. Throws WsError on an error.
   void Write(const std::string& message);
+  /// Sends a text message. Throws WsError on an error.
+  void WriteText(const std::string& message);
   /// Sends a binary message; false on an error (the server may close while it is sent).
   bool TryWrite(const std::string& message);
   /// Sends `bytes` on the socket itself, past the WebSocket framing (a

@@ -235,7 +235,7 @@ TEST(ViewServerTest, ForeignOriginAndRebindingHostAreRefused) {
 
 // the rules themselves, for addresses a test on loopback cannot bind
 TEST(ViewAccessTest, BoundAddressAndAnyAddress) {
-  const AccessPolicy specific{"192.168.7.20", {}}, any{"0.0.0.0", {"labhost"}}, any6{"::", {}};
+  const AccessPolicy specific{"192.168.7.20", {}, {}}, any{"0.0.0.0", {"labhost"}, {}}, any6{"::", {}, {}};
   EXPECT_TRUE(HostAllowed(specific, "192.168.7.20:8080"));
   EXPECT_TRUE(HostAllowed(specific, "localhost:8080"));
   EXPECT_FALSE(HostAllowed(specific, "192.168.7.21:8080"));
