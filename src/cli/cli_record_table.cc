@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/core_clock.h"
+
 namespace vlab::cli::record {
 
 namespace {
@@ -84,8 +86,9 @@ bool RecordTable::Add(int device, std::int64_t seq, double stamp, const double* 
   if (c.last_seq >= 0) c.lost += seq - c.last_seq - 1;
   c.last_seq = seq;
   c.last_stamp = stamp;
-  if (stamp >= end_) c.ended = true;
-  if (stamp > end_) return false;  // past the end: not written
+  // (the end within kSameTime_s: first + duration need not be a whole number of periods in doubles)
+  if (stamp >= end_ - kSameTime_s) c.ended = true;
+  if (stamp > end_ + kSameTime_s) return false;  // past the end: not written
   if (rows_ > 0 && !(stamp > last_written_)) {
     ++c.late;
     return false;
