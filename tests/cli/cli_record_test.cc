@@ -5,16 +5,21 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "bridge/bridge_device_server.h"
+#include "bridge/bridge_layouts.h"
 #include "bridge/bridge_udp.h"
 #include "kinsim/kinsim_process.h"
 #include "test_process.h"
@@ -134,6 +139,79 @@ TEST(Record, KinsimInRealtimeEveryStateAccountedFor) {
   EXPECT_EQ(header.rfind("time,arm.status,arm.q.S1,", 0), 0u) << header;
   EXPECT_NE(header.find(",arm.tau.W2"), std::string::npos) << header;
   kinsim.Stop();
+}
+
+// A scripted device of `kind` served by this test on a free port, output only, with a describe
+// reply of the protocol's layout for the kind.
+std::unique_ptr<bridge::DeviceServer> ScriptedDevice(const std::string& name, bridge::DeviceKind kind) {
+  std::unique_ptr<bridge::DeviceServer> server = bridge::DeviceServer::Bind({});
+  nlohmann::json describe = {{"name", name},        {"kind", bridge::KindName(static_cast<int>(kind))},
+                             {"protocol", 2},       {"server", "scripted test device"},
+                             {"clock", "realtime"}, {"layout", bridge::LayoutJson(kind)}};
+  bridge::EndpointConfig e;
+  e.name = name;
+  e.kind = kind;
+  e.describe_json = describe.dump();
+  e.status_first = kind == bridge::DeviceKind::kGripper;
+  server->Serve(std::move(e));
+  return server;
+}
+
+// Two scripted devices, one thread serving both: a gripper whose states come with a duplicate,
+// a replay and a gap, and a wrench with states at some of the gripper's stamps only. The
+// duplicate and the replay are refused and counted, the gap counted as lost; rows are one per
+// stamp, the wrench's cells NaN where it sent nothing; the gripper's opening_velocity is the
+// lab's column g.velocity.
+TEST(Record, CountsDuplicatesReplaysAndGapsAndLeavesMissingCellsNaN) {
+  TempDir tmp;
+  std::unique_ptr<bridge::DeviceServer> gripper = ScriptedDevice("g", bridge::DeviceKind::kGripper);
+  std::unique_ptr<bridge::DeviceServer> wrench = ScriptedDevice("w", bridge::DeviceKind::kWrench);
+  std::atomic<bool> go{false}, stop{false};
+  std::thread server([&] {
+    while (!go) {  // the handshakes, until the recorder says it is subscribed
+      gripper->Receive(0, nullptr, 0.005);
+      wrench->Receive(0);
+    }
+    // (seq, stamp) of the gripper: 2 again (duplicate), 1 again (replay), 3 and 4 lost
+    const double g[][2] = {{0, 0.0}, {1, 0.01}, {2, 0.02}, {2, 0.02}, {1, 0.01}, {5, 0.05}, {6, 0.06}};
+    for (int i = 0; i < 7; ++i) {
+      const double values[5] = {0, 0.05 + g[i][1], -0.1, 2.0, 0};  // status, opening, opening_velocity, force, grasped
+      gripper->Publish(g[i][0], g[i][1], values, 5);
+      // the wrench at the gripper's stamps 0, 0.05 and 0.06 only
+      const double wrench_values[8] = {1, 2, 3, 0.1, 0.2, 0.3, 0, 0};
+      if (i == 0 || i >= 5) wrench->Publish(i == 0 ? 0 : i - 4, g[i][1], wrench_values, 8);
+    }
+    while (!stop) gripper->Receive(0, nullptr, 0.005);  // (renewals)
+  });
+  TestProcess record({kVlab, "record", "g=127.0.0.1:" + std::to_string(gripper->port()),
+                      "w=127.0.0.1:" + std::to_string(wrench->port()), "--duration", "0.06", "--out", tmp / "rec"});
+  go = true;
+  EXPECT_NE(record.start_line().find("vlab record: g (gripper)"), std::string::npos) << record.start_line();
+  EXPECT_EQ(record.Wait(30), 0) << record.output();
+  stop = true;
+  server.join();
+
+  const nlohmann::json summary = ReadJson(tmp / "rec/summary.json");
+  ASSERT_TRUE(summary.is_object());
+  const nlohmann::json& g = summary["devices"][0];
+  const nlohmann::json& w = summary["devices"][1];
+  EXPECT_EQ(g["states"], 5);
+  EXPECT_EQ(g["refused"], 2);
+  EXPECT_EQ(g["lost"], 2);
+  EXPECT_EQ(w["states"], 3);
+  EXPECT_EQ(w["refused"], 0);
+  EXPECT_EQ(w["lost"], 0);
+  EXPECT_EQ(summary["rows"], 5);
+  std::ifstream log(tmp / "rec/log.csv");
+  std::stringstream text;
+  text << log.rdbuf();
+  EXPECT_EQ(text.str(),
+            "time,g.status,g.opening,g.velocity,g.force,g.grasped,w.Fx,w.Fy,w.Fz,w.Mx,w.My,w.Mz,w.filter,w.saturated\n"
+            "0,0,0.05,-0.1,2,0,1,2,3,0.1,0.2,0.3,0,0\n"
+            "0.01,0,0.060000000000000005,-0.1,2,0,nan,nan,nan,nan,nan,nan,nan,nan\n"
+            "0.02,0,0.07,-0.1,2,0,nan,nan,nan,nan,nan,nan,nan,nan\n"
+            "0.05,0,0.1,-0.1,2,0,1,2,3,0.1,0.2,0.3,0,0\n"
+            "0.06,0,0.11,-0.1,2,0,1,2,3,0.1,0.2,0.3,0,0\n");
 }
 
 // Bad arguments and a port where nothing answers: exit 2, one line naming the argument, and no
