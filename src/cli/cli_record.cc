@@ -137,7 +137,11 @@ std::string DiscoverKind(const Source& s, double timeout_s) {
 
 // describes and subscribes to one source; exit 2 naming it on any failure
 void Connect(Source* s, double timeout_s) {
-  s->kind = DiscoverKind(*s, timeout_s);
+  try {
+    s->kind = DiscoverKind(*s, timeout_s);
+  } catch (const bridge::BridgeError& e) {  // an address that does not resolve, no socket
+    throw InputError("record: " + s->text + ": " + e.what());
+  }
   const bridge::KindLayout* layout = bridge::FindKindLayout(s->kind);
   if (layout == nullptr) throw InputError("record: " + s->text + ": unknown device kind '" + s->kind + "'");
   if (!layout->float64) {
@@ -168,14 +172,20 @@ void ReadDevice(int index, Source* s, const std::atomic<bool>* stop, std::mutex*
     } catch (const bridge::TimeoutError&) {
     } catch (const bridge::ProtocolError&) {
       ++s->malformed;  // a datagram that is no state of this device: counted, skipped
-    } catch (const bridge::BridgeError&) {
-      ++s->malformed;
+    } catch (const std::exception&) {
+      ++s->malformed;  // (a network error on a datagram: counted too, and the reading goes on)
     }
     if (Seconds(renewed) >= kKeepAlive_s) {
       s->device->KeepAlive();
       renewed = Clock::now();
     }
   }
+}
+
+// a describe reply's text field, or "" (a reply is the device's: any JSON)
+std::string Text(const nlohmann::json& reply, const char* field) {
+  const auto it = reply.find(field);
+  return it != reply.end() && it->is_string() ? it->get<std::string>() : std::string();
 }
 
 nlohmann::ordered_json Stamp(double t) { return std::isfinite(t) ? nlohmann::ordered_json(t) : nullptr; }
@@ -202,8 +212,8 @@ nlohmann::ordered_json Summary(const RecordArgs& a, const std::vector<std::uniqu
     e["device_name"] = s.device->name();
     e["address"] = s.address.host;
     e["port"] = s.address.port;
-    e["server"] = d.value("server", "");
-    e["clock"] = d.value("clock", "");
+    e["server"] = Text(d, "server");
+    e["clock"] = Text(d, "clock");
     e["columns"] = s.columns;
     e["states"] = c.states;
     e["lost"] = c.lost;
