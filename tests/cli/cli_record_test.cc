@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -80,7 +79,8 @@ TEST(Record, ServedRunMatchesTheRunsOwnLog) {
                       "--duration", "0.5", "--out", tmp / "rec"});
   ASSERT_NE(record.start_line().find("vlab record: pa10 (arm)"), std::string::npos) << record.start_line();
   TestProcess controller(
-      {VLAB_BINARY_DIR "/examples/joint_control", "--arm", "127.0.0.1:" + std::to_string(arm), "--quiet"});
+      {VLAB_BINARY_DIR "/examples/joint_control", "--arm", "127.0.0.1:" + std::to_string(arm), "--quiet"},
+      0);  // (it prints nothing until it ends: not waited for)
   EXPECT_EQ(serve.Wait(60), 0);
   EXPECT_EQ(record.Wait(30), 0) << record.output();
   controller.Wait(5);  // it ends when the served run stops answering
