@@ -188,6 +188,35 @@ std::string Text(const nlohmann::json& reply, const char* field) {
   return it != reply.end() && it->is_string() ? it->get<std::string>() : std::string();
 }
 
+// the reader threads of the devices and the queue they fill; stops and joins them when destroyed
+class Readers {
+ public:
+  ~Readers() { Stop(); }
+  // starts reading device `index`
+  void Start(int index, Source* source) {
+    threads_.emplace_back(ReadDevice, index, source, &stop_, &mutex_, &cv_, &queue_);
+  }
+  // moves the queued states to *out, waiting up to wait_s for the first
+  void Take(std::deque<Taken>* out, double wait_s) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait_for(lock, std::chrono::duration<double>(wait_s), [this] { return !queue_.empty(); });
+    for (Taken& t : queue_) out->push_back(std::move(t));
+    queue_.clear();
+  }
+  void Stop() {
+    stop_ = true;
+    for (std::thread& t : threads_) t.join();
+    threads_.clear();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Taken> queue_;
+  std::vector<std::thread> threads_;
+};
+
 nlohmann::ordered_json Stamp(double t) { return std::isfinite(t) ? nlohmann::ordered_json(t) : nullptr; }
 
 nlohmann::ordered_json Summary(const RecordArgs& a, const std::vector<std::unique_ptr<Source>>& sources,
@@ -246,9 +275,13 @@ int Record(const RecordArgs& a) {
     }
     sources.push_back(std::move(s));
   }
-  for (auto& s : sources) {
-    Connect(s.get(), a.timeout_s);
+  // each device's reader starts once it is subscribed, so that its states wait in the queue,
+  // not in its socket's buffer, while the next ones connect
+  Readers readers;
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    Connect(sources[i].get(), a.timeout_s);
     if (StopRequested()) return 0;  // stopped before recording: nothing to write
+    readers.Start(static_cast<int>(i), sources[i].get());
   }
   std::string out_dir = a.out_dir;
   if (out_dir.empty()) {
@@ -273,31 +306,19 @@ int Record(const RecordArgs& a) {
   std::printf("%s writing %s\n", line.c_str(), out_dir.c_str());
   std::fflush(stdout);
 
-  std::atomic<bool> stop{false};
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::deque<Taken> queue, taken;
-  std::vector<std::thread> readers;
-  for (std::size_t i = 0; i < sources.size(); ++i) {
-    readers.emplace_back(ReadDevice, static_cast<int>(i), sources[i].get(), &stop, &mutex, &cv, &queue);
-  }
+  std::deque<Taken> taken;
   const auto append = [&log](const double* row) { log->Append(row); };
   const auto take = [&] {
     for (const Taken& t : taken) table.Add(t.device, t.state.seq, t.state.time, t.state.values.data());
     taken.clear();
   };
   while (!table.Done() && !StopRequested() && !log->failed()) {
-    {
-      std::unique_lock<std::mutex> lock(mutex);
-      cv.wait_for(lock, std::chrono::milliseconds(50), [&queue] { return !queue.empty(); });
-      taken.swap(queue);
-    }
+    readers.Take(&taken, 0.05);
     take();
     table.Drain(false, append);
   }
-  stop = true;
-  for (std::thread& t : readers) t.join();
-  taken.swap(queue);  // what came before the readers stopped
+  readers.Stop();
+  readers.Take(&taken, 0);  // what came before the readers stopped
   take();
   table.Drain(true, append);
   log->Close();  // throws on a write error: the staging folder goes with `out`
