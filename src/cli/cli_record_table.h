@@ -24,8 +24,8 @@
 // Counting, per device: a state whose seq is not above the device's last one
 // (a duplicate or a replay), or whose stamp is not after its last one, is
 // refused and counted; a seq that skips values counts the skipped ones as
-// lost. A state stamped after the end of the recording (--duration) is not
-// written and not counted.
+// lost. A state stamped after the end of the recording (--duration, within
+// kSameTime_s) is not written nor counted in `states`.
 //
 // Not thread-safe: one thread adds states and takes rows.
 #pragma once
