@@ -123,11 +123,11 @@ int main(int argc, char** argv) {
 
   // subcommands that define themselves in their own files
   const std::vector<vlab::cli::Subcommand> more = {
-      vlab::cli::AddRenderCommand(app), vlab::cli::AddCameraCommand(app), vlab::cli::AddVisionCommand(app),
-      vlab::cli::AddCubesCommand(app),  vlab::cli::AddTaskCommand(app),   vlab::cli::AddCompareCommand(app),
-      vlab::cli::AddGoldenCommand(app), vlab::cli::AddSweepCommand(app),  vlab::cli::AddCollectCommand(app),
-      vlab::cli::AddViewCommand(app),   vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app),
-      vlab::cli::AddConvertCommand(app)};
+      vlab::cli::AddRenderCommand(app),  vlab::cli::AddCameraCommand(app), vlab::cli::AddVisionCommand(app),
+      vlab::cli::AddCubesCommand(app),   vlab::cli::AddTaskCommand(app),   vlab::cli::AddCompareCommand(app),
+      vlab::cli::AddGoldenCommand(app),  vlab::cli::AddSweepCommand(app),  vlab::cli::AddCollectCommand(app),
+      vlab::cli::AddViewCommand(app),    vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app),
+      vlab::cli::AddConvertCommand(app), vlab::cli::AddRecordCommand(app)};
 
   try {
     app.parse(argc, argv);
