@@ -14,8 +14,6 @@
 
 namespace vlab::view {
 
-namespace websocket = beast::websocket;
-
 namespace {
 
 using Impl = ViewServer::Impl;
@@ -27,49 +25,27 @@ constexpr std::size_t kMaxQueuedText = 8;
 class FoxgloveSession : public std::enable_shared_from_this<FoxgloveSession> {
  public:
   FoxgloveSession(Impl& server, tcp::socket socket, std::string address, std::string refusal)
-      : server_(server), ws_(std::move(socket)), timer_(ws_.get_executor()), address_(std::move(address)),
-        refusal_(std::move(refusal)), subscriptions_(static_cast<int>(server.slots.size())),
-        sent_(server.slots.size(), 0) {
-    if (refusal_.empty()) {
-      ++server_.ws_open;
-      ++server_.peers[address_].ws;
-    } else {
-      ++server_.refusing;
-    }
-  }
-  ~FoxgloveSession() {
-    if (refusal_.empty()) {
-      --server_.ws_open;
-      server_.Release(address_, true);
-    } else {
-      --server_.refusing;
-    }
-    if (counted_) --server_.ws_clients;
-  }
+      : server_(server), ws_(std::move(socket)), timer_(ws_.get_executor()),
+        seat_(server, std::move(address), std::move(refusal)), subscriptions_(static_cast<int>(server.slots.size())),
+        sent_(server.slots.size(), 0) {}
 
   void Start(http::request<http::string_body> request) {
-    ws_.read_message_max(server_.config.max_ws_message_bytes);
-    websocket::stream_base::timeout timeout;
-    timeout.handshake_timeout = Seconds(server_.config.header_timeout_s);
-    timeout.idle_timeout = Seconds(server_.config.ws_idle_timeout_s);
-    timeout.keep_alive_pings = true;
-    ws_.set_option(timeout);
+    ApplyWsBounds(ws_, server_.config);
     ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& response) {
       response.set(http::field::sec_websocket_protocol, kFoxgloveSubprotocol);
       response.set(http::field::server, "vlab view");
     }));
-    if (!refusal_.empty()) {
+    if (!seat_.refusal().empty()) {
       ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
         if (ec) return;
-        self->ws_.async_close({websocket::close_code::try_again_later, self->refusal_}, [self](beast::error_code) {});
+        self->ws_.async_close({websocket::close_code::try_again_later, self->seat_.refusal()},
+                              [self](beast::error_code) {});
       });
       return;
     }
     ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
       if (ec) return;
-      ++self->server_.ws_sessions;
-      ++self->server_.ws_clients;
-      self->counted_ = true;
+      self->seat_.Welcome();
       self->text_.push_back(self->server_.foxglove_info);
       self->text_.push_back(self->server_.foxglove_advertise);
       self->Read();
@@ -81,9 +57,7 @@ class FoxgloveSession : public std::enable_shared_from_this<FoxgloveSession> {
   void Read() {
     ws_.async_read(in_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
       if (ec) {
-        const bool websocket_error = ec.category() == websocket::make_error_code(websocket::error::closed).category();
-        if (websocket_error && ec != websocket::error::closed) ++self->server_.ws_closed_bad;
-        if (ec == beast::error::timeout && !self->done_) ++self->server_.ws_closed_slow;
+        CountWsEnd(self->server_, ec, self->done_);
         self->done_ = true;
         self->timer_.cancel();
         return;
@@ -183,14 +157,14 @@ class FoxgloveSession : public std::enable_shared_from_this<FoxgloveSession> {
   websocket::stream<beast::tcp_stream> ws_;
   asio::steady_timer timer_;
   beast::flat_buffer in_;
-  std::string address_, refusal_;
+  WsSeat seat_;
   FoxgloveSubscriptions subscriptions_;
   std::vector<std::uint64_t> sent_;  // per channel, the version last sent (0: none)
   std::deque<std::string> text_;     // JSON messages waiting, sent before any data
   char header_[5] = {};
   int next_ = -1;
   std::chrono::steady_clock::time_point write_start_;
-  bool writing_ = false, done_ = false, counted_ = false;
+  bool writing_ = false, done_ = false;
 };
 
 }  // namespace

@@ -13,8 +13,6 @@
 
 namespace vlab::view {
 
-namespace websocket = beast::websocket;
-
 namespace {
 
 using Impl = ViewServer::Impl;

@@ -17,6 +17,7 @@
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
 
 #include "view/view_access.h"
 #include "view/view_server.h"
@@ -26,6 +27,7 @@ namespace vlab::view {
 namespace asio = boost::asio;
 namespace beast = boost::beast;
 namespace http = beast::http;
+namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 
 struct ViewServer::Impl {
@@ -87,6 +89,69 @@ struct ViewServer::Impl {
 /// Seconds as the steady clock's duration (the config's timeouts).
 inline std::chrono::steady_clock::duration Seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+}
+
+/// A WebSocket session's place in the server's tables (the page's channels,
+/// view_server_ws.cc; Foxglove's, view_server_foxglove.cc): admitted (no
+/// refusal) it counts as open, for its address too; refused, as refusing;
+/// once its handshake completed (Welcome), as a client. Its destructor takes
+/// back what it counted. The server's thread only.
+class WsSeat {
+ public:
+  WsSeat(ViewServer::Impl& server, std::string address, std::string refusal)
+      : server_(server), address_(std::move(address)), refusal_(std::move(refusal)) {
+    if (refusal_.empty()) {
+      ++server_.ws_open;
+      ++server_.peers[address_].ws;
+    } else {
+      ++server_.refusing;
+    }
+  }
+  ~WsSeat() {
+    if (refusal_.empty()) {
+      --server_.ws_open;
+      server_.Release(address_, true);
+    } else {
+      --server_.refusing;
+    }
+    if (welcomed_) --server_.ws_clients;
+  }
+  WsSeat(const WsSeat&) = delete;
+  WsSeat& operator=(const WsSeat&) = delete;
+  /// The handshake completed: a session and a client.
+  void Welcome() {
+    ++server_.ws_sessions;
+    ++server_.ws_clients;
+    welcomed_ = true;
+  }
+  /// Why the session is refused ("": admitted).
+  const std::string& refusal() const { return refusal_; }
+
+ private:
+  ViewServer::Impl& server_;
+  std::string address_, refusal_;
+  bool welcomed_ = false;
+};
+
+/// The bounds every WebSocket session of the server keeps: its message size,
+/// the handshake's and a close's deadline, and silence (a ping at half of
+/// ws_idle_timeout_s; no pong within as long again: closed).
+inline void ApplyWsBounds(websocket::stream<beast::tcp_stream>& ws, const ViewServerConfig& config) {
+  ws.read_message_max(config.max_ws_message_bytes);
+  websocket::stream_base::timeout timeout;
+  timeout.handshake_timeout = Seconds(config.header_timeout_s);
+  timeout.idle_timeout = Seconds(config.ws_idle_timeout_s);
+  timeout.keep_alive_pings = true;
+  ws.set_option(timeout);
+}
+
+/// Counts how a WebSocket session's reading ended with `ec`: a protocol
+/// violation or an oversized message (not a close, a reset or a timeout) as
+/// bad, a timeout (no pong) of a session not already `done` as slow.
+inline void CountWsEnd(ViewServer::Impl& server, const beast::error_code& ec, bool done) {
+  const bool websocket_error = ec.category() == websocket::make_error_code(websocket::error::closed).category();
+  if (websocket_error && ec != websocket::error::closed) ++server.ws_closed_bad;
+  if (ec == beast::error::timeout && !done) ++server.ws_closed_slow;
 }
 
 /// Serves one accepted connection from `address`: `admitted`, it enters the

@@ -11,8 +11,6 @@
 
 namespace vlab::view {
 
-namespace websocket = beast::websocket;
-
 namespace {
 
 using Impl = ViewServer::Impl;
@@ -23,45 +21,23 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
   WsSession(Impl& server, tcp::socket socket, int channel, std::string address, std::string refusal)
       : server_(server), ws_(std::move(socket)), timer_(ws_.get_executor()), channel_(channel),
-        address_(std::move(address)), refusal_(std::move(refusal)) {
-    if (refusal_.empty()) {
-      ++server_.ws_open;
-      ++server_.peers[address_].ws;
-    } else {
-      ++server_.refusing;
-    }
-  }
-  ~WsSession() {
-    if (refusal_.empty()) {
-      --server_.ws_open;
-      server_.Release(address_, true);
-    } else {
-      --server_.refusing;
-    }
-    if (counted_) --server_.ws_clients;
-  }
+        seat_(server, std::move(address), std::move(refusal)) {}
 
   void Start(http::request<http::string_body> request) {
-    ws_.read_message_max(server_.config.max_ws_message_bytes);
+    ApplyWsBounds(ws_, server_.config);
     ws_.binary(true);
-    websocket::stream_base::timeout timeout;
-    timeout.handshake_timeout = Seconds(server_.config.header_timeout_s);  // the handshake and a close
-    timeout.idle_timeout = Seconds(server_.config.ws_idle_timeout_s);
-    timeout.keep_alive_pings = true;  // a ping at half of it; no pong (a client that does not read): closed
-    ws_.set_option(timeout);
-    if (!refusal_.empty()) {
+    if (!seat_.refusal().empty()) {
       // the browser cannot read an HTTP status of a failed upgrade, only a close's code and reason
       ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
         if (ec) return;
-        self->ws_.async_close({websocket::close_code::try_again_later, self->refusal_}, [self](beast::error_code) {});
+        self->ws_.async_close({websocket::close_code::try_again_later, self->seat_.refusal()},
+                              [self](beast::error_code) {});
       });
       return;
     }
     ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
       if (ec) return;
-      ++self->server_.ws_sessions;
-      ++self->server_.ws_clients;
-      self->counted_ = true;
+      self->seat_.Welcome();
       self->Read();
       self->Poll();
     });
@@ -71,10 +47,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void Read() {
     ws_.async_read(in_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
       if (ec) {
-        // a protocol violation or an oversized message (not a close, a reset or a timeout)
-        const bool websocket_error = ec.category() == websocket::make_error_code(websocket::error::closed).category();
-        if (websocket_error && ec != websocket::error::closed) ++self->server_.ws_closed_bad;
-        if (ec == beast::error::timeout && !self->done_) ++self->server_.ws_closed_slow;  // no pong
+        CountWsEnd(self->server_, ec, self->done_);
         self->done_ = true;
         self->timer_.cancel();
         return;
@@ -123,10 +96,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   asio::steady_timer timer_;
   beast::flat_buffer in_;
   int channel_;
-  std::string address_, refusal_;
+  WsSeat seat_;
   std::uint64_t sent_ = 0;
   std::chrono::steady_clock::time_point write_start_;
-  bool writing_ = false, done_ = false, counted_ = false;
+  bool writing_ = false, done_ = false;
 };
 
 }  // namespace
