@@ -104,4 +104,15 @@ inline ProcessResult RunVlab(const std::string& args, int timeout_s = 120, const
   return r;
 }
 
+/// Runs a command line (a shell's) to its end: its exit status (-1: not a
+/// normal exit) and, into `output`, what it wrote to stdout and stderr.
+inline int RunCapture(const std::string& command, std::string* output) {
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return -1;
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) output->append(buffer, n);
+  const int status = ::pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
 }  // namespace vlab::testing

@@ -16,6 +16,7 @@
 #include "bridge/bridge_client.h"
 #include "kinsim/kinsim_process.h"
 #include "test_process.h"
+#include "test_util.h"
 
 namespace vlab::cli {
 namespace {
@@ -23,6 +24,7 @@ namespace {
 using bridge::Arm;
 using bridge::ArmMode;
 using testing::KinsimProcess;
+using testing::RunCapture;
 using testing::TestProcess;
 using Clock = std::chrono::steady_clock;
 
@@ -33,16 +35,6 @@ const char* const kOther = "0.2,0.4,-0.1,1.2,0.1,1.3,0.3";        // within ever
 std::string Address(int port) { return "127.0.0.1:" + std::to_string(port); }
 
 double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
-
-// runs a command line to its end; its exit status and what it wrote to stdout and stderr
-int RunCapture(const std::string& command, std::string* output) {
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return -1;
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) output->append(buffer, n);
-  const int status = ::pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 // vlab follow from one kinsim to another, waiting for its start line
 std::unique_ptr<TestProcess> StartFollow(int from, int to, std::vector<std::string> more = {}) {

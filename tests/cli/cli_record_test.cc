@@ -29,20 +29,11 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::KinsimProcess;
+using testing::RunCapture;
 using testing::TempDir;
 using testing::TestProcess;
 
 const char* const kVlab = VLAB_BINARY_DIR "/vlab";
-
-// runs a command line to its end; its exit status and what it wrote to stdout and stderr
-int RunCapture(const std::string& command, std::string* output) {
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return -1;
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) output->append(buffer, n);
-  const int status = ::pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 // the port of "NAME (KIND) 127.0.0.1:PORT;" in a start line (0 when it is not there)
 int PortOf(const std::string& line, const std::string& device) {
