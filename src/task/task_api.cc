@@ -330,14 +330,24 @@ void ResolveTriggers(lua_State* L, Robot& r, int options, const char* what) {
   const int at = lua_gettop(L);
   const int n = static_cast<int>(lua_rawlen(L, at));
   const std::size_t samples = r.plan.q.size();
-  // the path length at each sample (Cartesian moves)
-  std::vector<double> along(r.plan.tool_W.size(), 0.0);
-  Eigen::Vector3d from = r.planner->ToolPose(r.q_ref).p;
-  for (std::size_t i = 0; i < along.size(); ++i) {
-    along[i] = (i ? along[i - 1] : 0.0) + (r.plan.tool_W[i].p - from).norm();
-    from = r.plan.tool_W[i].p;
-  }
-  const double length = along.empty() ? 0.0 : along.back(), duration = samples * P(L)->period_s;
+  // the path length up to each sample (Cartesian moves), summed as it is needed: no C++
+  // object that owns memory is alive here, since a script error below unwinds by longjmp
+  const Eigen::Vector3d start = r.planner->ToolPose(r.q_ref).p;
+  const auto first_at = [&r, &start](double d, double* length) {  // the first sample at >= d along
+    double along = 0;
+    Eigen::Vector3d from = start;
+    std::size_t i = 0;
+    for (; i < r.plan.tool_W.size(); ++i) {
+      along += (r.plan.tool_W[i].p - from).norm();
+      from = r.plan.tool_W[i].p;
+      if (along >= d - 1e-12) break;
+    }
+    *length = along;
+    return std::min(i, r.plan.tool_W.empty() ? std::size_t{0} : r.plan.tool_W.size() - 1);
+  };
+  double length = 0;
+  first_at(1e300, &length);
+  const double duration = samples * P(L)->period_s;
   lua_createtable(L, n, 0);
   const int out = lua_gettop(L);
   char error[160] = "";
@@ -351,7 +361,8 @@ void ResolveTriggers(lua_State* L, Robot& r, int options, const char* what) {
       if (value > length + 1e-9) {
         std::snprintf(error, sizeof error, "trigger %d: d = %g m is beyond the move's path (%.6g m)", i, value, length);
       }
-      while (sample + 1 < along.size() && along[sample] < value - 1e-12) ++sample;
+      double reached = 0;
+      sample = first_at(value, &reached);
     } else {
       if (value > duration + 1e-9) {
         std::snprintf(error, sizeof error, "trigger %d: t = %g s is beyond the move's duration (%.6g s)", i, value,
