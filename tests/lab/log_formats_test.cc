@@ -210,31 +210,46 @@ std::string StagingFile(const std::string& parent, const std::string& name) {
   return "";
 }
 
-TEST(LogFormats, SigintLeavesAValidHdf5OfEveryPeriod) {
-  TempDir tmp;
-  fs::create_directories(tmp / "parent");
+// `vlab run scenes/pa10_reach` for 600 s into parent/run with the scenario overrides `sets`,
+// stopped by SIGINT once its staged log.csv holds more than `bytes`; its wait status, and
+// whether log.csv grew so far (false: SIGINT at the 120 s bound)
+struct Interrupted {
+  bool grew = false;
+  int status = 0;
+};
+Interrupted RunUntilTheLogGrows(const std::string& parent, const std::vector<std::string>& sets, std::uintmax_t bytes) {
+  fs::create_directories(parent);
+  const std::string out = parent + "/run";
+  std::vector<const char*> argv = {"vlab", "run", "scenes/pa10_reach", "-q", "--duration", "600", "--out", out.c_str()};
+  for (const std::string& set : sets) argv.insert(argv.end(), {"--set", set.c_str()});
+  argv.push_back(nullptr);
   const pid_t pid = ::fork();
   if (pid == 0) {
     if (::chdir(VLAB_SOURCE_DIR) != 0) ::_exit(126);
     ::freopen("/dev/null", "w", stdout);
-    execl(VLAB_BINARY_DIR "/vlab", "vlab", "run", "scenes/pa10_reach", "-q", "--duration", "600", "--out",
-          (tmp / "parent/run").c_str(), "--set", "outputs.log={format: [csv, hdf5]}", nullptr);
+    ::execv(VLAB_BINARY_DIR "/vlab", const_cast<char* const*>(argv.data()));
     ::_exit(127);
   }
-  // SIGINT once log.csv holds a few blocks of rows (the HDF5 writer is at the same block)
-  const bool rows = WaitUntil(
+  Interrupted r;
+  r.grew = WaitUntil(
       [&] {
         std::error_code ec;
-        const std::string csv = StagingFile(tmp / "parent", "log.csv");
-        return !csv.empty() && fs::file_size(csv, ec) > 1000000 && !ec;
+        const std::string csv = StagingFile(parent, "log.csv");
+        return !csv.empty() && fs::file_size(csv, ec) > bytes && !ec;
       },
       120);
   ::kill(pid, SIGINT);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  ASSERT_TRUE(rows) << "log.csv never grew";
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 1);  // interrupted
+  ::waitpid(pid, &r.status, 0);
+  return r;
+}
+
+TEST(LogFormats, SigintLeavesAValidHdf5OfEveryPeriod) {
+  TempDir tmp;
+  // SIGINT once log.csv holds a few blocks of rows (the HDF5 writer is at the same block)
+  const Interrupted run = RunUntilTheLogGrows(tmp / "parent", {"outputs.log={format: [csv, hdf5]}"}, 1000000);
+  ASSERT_TRUE(run.grew) << "log.csv never grew";
+  ASSERT_TRUE(WIFEXITED(run.status));
+  EXPECT_EQ(WEXITSTATUS(run.status), 1);  // interrupted
   const scene::CsvTable csv = scene::ReadCsvTable(tmp / "parent/run/log.csv");
   const scene::CsvTable h5 = ReadHdf5Log(tmp / "parent/run/log.h5");
   ASSERT_GT(csv.rows.size(), 1000u);
@@ -246,30 +261,12 @@ TEST(LogFormats, SigintLeavesAValidHdf5OfEveryPeriod) {
 TEST(LogFormats, SigintLeavesAValidMcapOfEveryPeriod) {
   SKIP_WITHOUT_NODE_PACKAGES();
   TempDir tmp;
-  fs::create_directories(tmp / "parent");
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (::chdir(VLAB_SOURCE_DIR) != 0) ::_exit(126);
-    ::freopen("/dev/null", "w", stdout);
-    execl(VLAB_BINARY_DIR "/vlab", "vlab", "run", "scenes/pa10_reach", "-q", "--duration", "600", "--out",
-          (tmp / "parent/run").c_str(), "--set", "outputs.log={format: [csv, mcap]}", "--set",
-          "outputs.poses={rate: 50}", nullptr);
-    ::_exit(127);
-  }
   // SIGINT once log.csv holds a few blocks of rows
-  const bool rows = WaitUntil(
-      [&] {
-        std::error_code ec;
-        const std::string csv = StagingFile(tmp / "parent", "log.csv");
-        return !csv.empty() && fs::file_size(csv, ec) > 300000 && !ec;
-      },
-      120);
-  ::kill(pid, SIGINT);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  ASSERT_TRUE(rows) << "log.csv never grew";
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 1);  // interrupted
+  const Interrupted run =
+      RunUntilTheLogGrows(tmp / "parent", {"outputs.log={format: [csv, mcap]}", "outputs.poses={rate: 50}"}, 300000);
+  ASSERT_TRUE(run.grew) << "log.csv never grew";
+  ASSERT_TRUE(WIFEXITED(run.status));
+  EXPECT_EQ(WEXITSTATUS(run.status), 1);  // interrupted
   const scene::CsvTable csv = scene::ReadCsvTable(tmp / "parent/run/log.csv");
   ASSERT_GT(csv.rows.size(), 256u);
   // every period from t = 0 on, none missing, in log.csv; log.mcap holds them all (read_mcap.mjs)
