@@ -144,6 +144,30 @@ TEST_F(ForceTest, ForceModeMovesAlongTheHeldAxisOnly) {
   EXPECT_NE(printed_[0].find(": 0.009910"), std::string::npos) << printed_[0];
 }
 
+// stop() in force mode halts the move on its path (the plan's tool poses, which the
+// admittance moves along the held axes): on the line, short of its end (at 0.3 s the tool
+// has gone 20 mm at 0.1 m/s, and stops within some mm), "stopped"
+TEST_F(ForceTest, StopHaltsAMoveInForceModeOnItsPath) {
+  const std::string script =
+      "local p0 = planned()\n"
+      "force_mode({fz = 0})\n"
+      "local out = movel_rel(trans(0.05, 0, 0), {rel = 'base', at = {{t = 0.3, call = function() stop() end}}})\n"
+      "wait(0.2)\n"
+      "local d = planned().pos - p0.pos\n"
+      "print(out, d.x > 0.02 and d.x < 0.045, math.abs(d.y) < 1e-8 and math.abs(d.z) < 1e-8)\n";
+  Run(script, 2000);
+  ASSERT_EQ(printed_.size(), 1u);
+  EXPECT_NE(printed_[0].find(": stopped\ttrue\ttrue"), std::string::npos) << printed_[0];
+  EXPECT_TRUE(HeldFor(20));
+}
+
+// a pose the admittance drives out of reach ends force mode: an error at the script's wait
+TEST_F(ForceTest, ForceModeOutOfReachIsAnErrorAtTheWait) {
+  const std::string error = ErrorOf("force_mode({fz = 1000}, {v = 0.5})\nwait(5)\n");
+  EXPECT_NE(error.find("pa10.lua:2: force mode: "), std::string::npos) << error;
+  EXPECT_NE(error.find("force mode has ended, the arm holds its last command"), std::string::npos) << error;
+}
+
 TEST_F(ForceTest, BadTargetsAndOptionsAreErrorsAtTheirLine) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"force_mode(10)", "pa10.lua:1: force_mode: argument 1 must be a table of the forces to hold"},
