@@ -206,7 +206,8 @@ bool Guarded(lua_State* L, int options) {
 }
 
 // in force mode a move's path is followed along the free axes with its samples' tool poses:
-// joint moves have none, and a blend would leave the move before its end
+// joint moves have none (radius < 0 says the move is one), and a blend (radius > 0) would
+// leave the move before its end
 void CheckForceModeMove(lua_State* L, const Robot& r, const char* what, double radius = 0) {
   if (!r.force.on) return;
   if (radius < 0) {

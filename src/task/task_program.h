@@ -140,7 +140,8 @@ void OpenPayload(lua_State* L);
 Program* ProgramOf(lua_State* L);
 
 /// The next joint reference of the program's robot: advances the running
-/// plan, stops it when its guard trips. Never throws.
+/// plan, stops it when its guard trips; in force mode, AdvanceForceMode.
+/// Never throws.
 void AdvanceMotion(Robot* robot);
 
 /// The guard of the running move that has tripped this period ("contact" for
