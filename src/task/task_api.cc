@@ -35,6 +35,10 @@ local co_yield, moving, outcome, clock, periods, take = coroutine.yield, _moving
 _moving, _outcome, _now, _periods, _take_signal = nil, nil, nil, nil, nil
 local raise, sent = _signal, _sent
 _signal, _sent = nil, nil
+local fault, halt, fm, efm, srch = _fault, _halt, _force_mode, _end_force_mode, _search
+_fault, _halt, _force_mode, _end_force_mode, _search = nil, nil, nil, nil, nil
+local planned_pose = planned
+local in_condition = false  -- a move's stop_if condition runs: it must not wait
 -- a move's triggers (option at): each fires once the sample it names has been commanded
 local function fire(triggers)
   if not triggers then return end
@@ -49,13 +53,21 @@ end
 -- the running asynchronous move (option async), whose triggers fire at every wait of the program
 local async_move
 local function yield()
+  if in_condition then fault(true) end
   if async_move then fire(async_move.triggers) end
   co_yield()
+  fault()  -- force mode's pose out of reach: an error here, at the script's wait
 end
 function sync() yield() end
-local function await(triggers)
+local function await(triggers, condition)
   while moving() do
     fire(triggers)
+    if condition then
+      in_condition = true
+      local hit = condition()
+      in_condition = false
+      if hit then halt() break end
+    end
     yield()
   end
   fire(triggers)
@@ -80,7 +92,7 @@ local function run(triggers, options)
     async_move = setmetatable({triggers = triggers}, Move)
     return async_move
   end
-  return await(triggers)
+  return await(triggers, options and options.stop_if)
 end
 function wait(a, timeout)
   if type(a) == "number" then
@@ -109,6 +121,15 @@ function movel_rel(delta, options) finish_async() return run(mlr(delta, options)
 function movec(via, target, options) finish_async() settle() return run(mc(via, target, options), options) end
 function movep(points, options) finish_async() settle() return run(mp(points, options), options) end
 function selfmove(options) finish_async() settle() sm(options) return await() end
+function search(target, options)
+  finish_async() settle()
+  srch(target, options)
+  local outcome = await(nil, options and options.stop_if)
+  if outcome == "done" then return "done", nil end
+  return outcome, planned_pose()
+end
+function force_mode(target, options) finish_async() settle() fm(target, options) end
+function end_force_mode() finish_async() settle() efm() end
 function signal(name) raise(name) end
 function wait_signal(name, timeout)
   return wait(function() return take(name) end, timeout)
@@ -171,10 +192,32 @@ void CheckDurationAlone(lua_State* L, int options, const char* what, const char*
   }
 }
 
-// the wrench option names the sensor of a guarded move: without force it would be ignored
+// the wrench option names the sensor of a guarded move: without force or torque it would be ignored
 void CheckWrenchNeedsForce(lua_State* L, int options, const char* what) {
-  if (HasOption(L, options, "wrench") && !HasOption(L, options, "force")) {
-    ScriptError(L, "%s: option 'wrench' names the sensor of a guarded move: give 'force' (N) too", what);
+  if (HasOption(L, options, "wrench") && !HasOption(L, options, "force") && !HasOption(L, options, "torque")) {
+    ScriptError(L, "%s: option 'wrench' names the sensor of a guarded move: give 'force' (N) or 'torque' (N m) too",
+                what);
+  }
+}
+
+// whether a move has a guard (force, torque, stop_if): it stops where it is, so it cannot blend
+bool Guarded(lua_State* L, int options) {
+  return HasOption(L, options, "force") || HasOption(L, options, "torque") || HasOption(L, options, "stop_if");
+}
+
+// in force mode a move's path is followed along the free axes with its samples' tool poses:
+// joint moves have none (radius < 0 says the move is one), and a blend (radius > 0) would
+// leave the move before its end
+void CheckForceModeMove(lua_State* L, const Robot& r, const char* what, double radius = 0) {
+  if (!r.force.on) return;
+  if (radius < 0) {
+    ScriptError(L,
+                "%s: not in force mode: only movel, movel_rel, movec, movep and search follow a path there "
+                "(end_force_mode() first)",
+                what);
+  }
+  if (radius > 0) {
+    ScriptError(L, "%s: a move in force mode cannot blend (r = %g m): give r = 0 (or blend(0))", what, radius);
   }
 }
 
@@ -241,30 +284,6 @@ void Start(Robot& r, Plan&& plan) {
 // whether the running move was left for a blend: its entry sample has been handed out
 bool BlendReady(const Robot& r) { return r.moving && r.blend_at >= 0 && static_cast<long>(r.next) - 1 >= r.blend_at; }
 
-// the guard option of a move: force = N (and wrench = NAME)
-void SetGuard(lua_State* L, Robot& r, int options, const char* what) {
-  const double force = Option(L, options, "force", 0, what);
-  if (force <= 0) return;
-  Channel* w = r.default_wrench;
-  if (!lua_isnoneornil(L, options)) {
-    lua_getfield(L, options, "wrench");
-    if (lua_isstring(L, -1)) {
-      w = P(L)->devices->Find(lua_tostring(L, -1));
-      if (!w || w->kind() != bridge::DeviceKind::kWrench) {
-        ScriptError(L, "%s: no wrench device named '%s'", what, lua_tostring(L, -1));
-      }
-    }
-    lua_pop(L, 1);
-  }
-  if (!w) ScriptError(L, "%s: a guarded move (force = ...) needs a wrench device (option wrench = NAME)", what);
-  std::vector<double> v;
-  Eigen::Vector3d bias = Eigen::Vector3d::Zero();
-  if (w->Read(&v) && v.size() >= 3) bias = {v[0], v[1], v[2]};
-  r.guard = w;
-  r.guard_force_N = force;
-  r.guard_bias_N = bias;
-}
-
 // runs a planner call; its std::invalid_argument becomes a script error
 constexpr int kMaxTriggers = 1000;  // triggers of one move
 
@@ -274,6 +293,9 @@ void CheckAsync(lua_State* L, int options, const char* what) {
   lua_getfield(L, options, "async");
   if (!lua_isboolean(L, -1))
     ScriptError(L, "%s: option async must be true or false, got %s", what, luaL_typename(L, -1));
+  if (lua_toboolean(L, -1) && HasOption(L, options, "stop_if")) {
+    ScriptError(L, "%s: option stop_if is called while the move's call waits: not with async = true", what);
+  }
   lua_pop(L, 1);
 }
 
@@ -414,14 +436,18 @@ int MoveJ(lua_State* L) {
       {"w", "movej interpolates the joints; its speed is v (deg/s, the fastest joint) or its duration t (s)"},
       {"r", "only movel and movec blend"},
       {"rel", "only movel_rel moves relative to the planned pose"},
-      {"force", "only movel and movec are guarded moves"},
-      {"wrench", "only movel and movec are guarded moves"},
+      {"force", "only movel, movel_rel, movec and search are guarded moves"},
+      {"wrench", "only movel, movel_rel, movec and search are guarded moves"},
+      {"dir", "only movel, movel_rel, movec and search are guarded moves"},
+      {"torque", "only movel, movel_rel, movec and search are guarded moves"},
+      {"stop_if", "only movel, movel_rel, movec and search are guarded moves"},
       {nullptr, nullptr}};
   static const char* const speeds[] = {"v", "a", "jv", nullptr};
   CheckOptions(L, 2, "movej", known, refused);
   CheckDurationAlone(L, 2, "movej", speeds);
   CheckTriggers(L, 2, "movej", false);
   CheckAsync(L, 2, "movej");
+  CheckForceModeMove(L, r, "movej", -1);
   const MotionLimits limits = MoveLimits(L, r, 2, "movej", true);
   const double t = Duration(L, 2, "movej");
   if (ToFrame(L, 1)) {
@@ -474,14 +500,17 @@ void SetBlend(lua_State* L, Robot& r, const Eigen::Vector3d& target, double radi
 
 // plans a straight move to `goal` (world) with the options at `options` (checked by the
 // caller), from the blend of the move before when there is one (movel, movel_rel)
-void PlanLinear(lua_State* L, Robot& r, const Frame& goal, int options, const char* what) {
+void PlanLinear(lua_State* L, Robot& r, const Frame& goal, int options, const char* what, bool may_blend = true) {
+  CheckGuards(L, r, options, what);
   const MotionLimits limits = MoveLimits(L, r, options, what);
   const double t = Duration(L, options, what);
-  const double radius = Option(L, options, "r", r.blend_setting_m, what);
+  const double radius = may_blend ? Option(L, options, "r", r.blend_setting_m, what) : 0.0;
   if (radius < 0) ScriptError(L, "%s: the blend radius r must be >= 0 m, got %g", what, radius);
-  if (radius > 0 && Option(L, options, "force", 0, what) > 0) {
-    ScriptError(L, "%s: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", what, radius);
+  if (radius > 0 && Guarded(L, options)) {
+    ScriptError(L, "%s: a guarded move (force, torque, stop_if) stops where it is: it cannot blend (r = %g m)", what,
+                radius);
   }
+  CheckForceModeMove(L, r, what, radius);
   CheckTriggersNotBlended(L, options, radius, what);
   if (BlendReady(r)) {
     // entered from the previous move's blend: its radius must fit in this segment too
@@ -512,12 +541,13 @@ void PlanLinear(lua_State* L, Robot& r, const Frame& goal, int options, const ch
     r.segment_m = seg;
   }
   if (radius > 0) SetBlend(L, r, goal.p, radius, r.segment_m, what);
-  SetGuard(L, r, options, what);
+  SetGuards(L, r, options, what);
 }
 
 int MoveL(lua_State* L) {
   Robot& r = NeedRobot(L, "movel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", "async", nullptr};
+  static const char* const known[] = {"v",      "a",       "w", "t",   "force", "wrench", "dir",
+                                      "torque", "stop_if", "r", "ref", "at",    "async",  nullptr};
   static const Refused refused[] = {
       {"jv", "movel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"rel", "movel's target is absolute; movel_rel(delta, {rel = ...}) moves relative to the planned pose"},
@@ -538,7 +568,8 @@ int MoveL(lua_State* L) {
 // offset by delta.pos in base axes, the rotation turned by delta.rot about base axes)
 int MoveLRel(lua_State* L) {
   Robot& r = NeedRobot(L, "movel_rel");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "rel", "at", "async", nullptr};
+  static const char* const known[] = {"v",      "a",       "w", "t",   "force", "wrench", "dir",
+                                      "torque", "stop_if", "r", "rel", "at",    "async",  nullptr};
   static const Refused refused[] = {
       {"jv", "movel_rel moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"ref", "movel_rel's delta is relative to the planned pose; rel = \"tool\" (default) or \"base\" names its axes"},
@@ -575,7 +606,8 @@ int MoveLRel(lua_State* L) {
 
 int MoveC(lua_State* L) {
   Robot& r = NeedRobot(L, "movec");
-  static const char* const known[] = {"v", "a", "w", "t", "force", "wrench", "r", "ref", "at", "async", nullptr};
+  static const char* const known[] = {"v",      "a",       "w", "t",   "force", "wrench", "dir",
+                                      "torque", "stop_if", "r", "ref", "at",    "async",  nullptr};
   static const Refused refused[] = {
       {"jv", "movec moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
       {"rel", "only movel_rel moves relative to the planned pose"},
@@ -589,9 +621,12 @@ int MoveC(lua_State* L) {
   const double radius = Option(L, 3, "r", r.blend_setting_m, "movec");
   CheckTriggersNotBlended(L, 3, radius, "movec");
   if (radius < 0) ScriptError(L, "movec: the blend radius r must be >= 0 m, got %g", radius);
-  if (radius > 0 && Option(L, 3, "force", 0, "movec") > 0) {
-    ScriptError(L, "movec: a guarded move (force) stops where it touches: it cannot blend (r = %g m)", radius);
+  if (radius > 0 && Guarded(L, 3)) {
+    ScriptError(L, "movec: a guarded move (force, torque, stop_if) stops where it is: it cannot blend (r = %g m)",
+                radius);
   }
+  CheckForceModeMove(L, r, "movec", radius);
+  CheckGuards(L, r, 3, "movec");
   // the via point and the target: in the user frame of option ref when there is one
   const Frame* user = RefFrame(L, 3, "movec");
   Frame point;
@@ -609,7 +644,7 @@ int MoveC(lua_State* L) {
   const double chord = (goal.p - r.planner->ToolPose(r.q_ref).p).norm();
   PlanOrFail(L, r, "movec", [&] { return r.planner->Arc(r.q_ref, via, goal, limits, t); });
   if (radius > 0) SetBlend(L, r, goal.p, radius, chord, "movec");
-  SetGuard(L, r, 3, "movec");
+  SetGuards(L, r, 3, "movec");
   ResolveTriggers(L, r, 3, "movec");
   return 1;
 }
@@ -625,8 +660,11 @@ int MoveP(lua_State* L) {
   static const Refused refused[] = {
       {"t", "movep holds the tool speed v (m/s): its duration follows from the path's length"},
       {"jv", "movep moves the tool: its speeds are v (m/s) and w (deg/s); the joints keep their limits"},
-      {"force", "only movel and movec are guarded moves"},
-      {"wrench", "only movel and movec are guarded moves"},
+      {"force", "only movel, movel_rel, movec and search are guarded moves"},
+      {"wrench", "only movel, movel_rel, movec and search are guarded moves"},
+      {"dir", "only movel, movel_rel, movec and search are guarded moves"},
+      {"torque", "only movel, movel_rel, movec and search are guarded moves"},
+      {"stop_if", "only movel, movel_rel, movec and search are guarded moves"},
       {"rel", "only movel_rel moves relative to the planned pose"},
       {nullptr, nullptr}};
   CheckOptions(L, 2, "movep", known, refused);
@@ -678,18 +716,77 @@ int SelfMove(lua_State* L) {
                                     {"w", "selfmove's duration is t (s)"},
                                     {"jv", "selfmove's duration is t (s)"},
                                     {"r", "only movel and movec blend"},
-                                    {"force", "only movel and movec are guarded moves"},
-                                    {"wrench", "only movel and movec are guarded moves"},
+                                    {"force", "only movel, movel_rel, movec and search are guarded moves"},
+                                    {"wrench", "only movel, movel_rel, movec and search are guarded moves"},
+                                    {"dir", "only movel, movel_rel, movec and search are guarded moves"},
+                                    {"torque", "only movel, movel_rel, movec and search are guarded moves"},
+                                    {"stop_if", "only movel, movel_rel, movec and search are guarded moves"},
                                     {"ref", "selfmove holds the tool where it is: it has no target"},
                                     {"rel", "selfmove holds the tool where it is: it has no target"},
                                     {nullptr, nullptr}};
   if (!lua_istable(L, 1)) ScriptError(L, "selfmove: expected {joint = N, by = DEG, t = S}");
   CheckOptions(L, 1, "selfmove", known, refused);
+  CheckForceModeMove(L, r, "selfmove", -1);
   const int joint = static_cast<int>(Option(L, 1, "joint", 3, "selfmove")) - 1;
   const double by = Option(L, 1, "by", 0, "selfmove") * kDeg;
   const double t = Option(L, 1, "t", 0, "selfmove");
   if (!(t > 0)) ScriptError(L, "selfmove: t (s) must be given and > 0");
   PlanOrFail(L, r, "selfmove", [&] { return r.planner->Self(r.q_ref, joint, by, t); });
+  return 0;
+}
+
+// search(direction or frame [, opts]): a guarded straight move meant to stop on its guard
+// (RAPID's SearchL): along a direction (a vec3, base frame) at most `max` m, its force guard
+// on the force along that direction; or to a frame. The prelude returns the outcome and,
+// unless it reached its end ("done"), the planned pose where it stopped.
+int Search(lua_State* L) {
+  Robot& r = NeedRobot(L, "search");
+  static const char* const known[] = {"v",       "a",      "w",   "force", "dir",  "torque",
+                                      "stop_if", "wrench", "max", "ref",   nullptr};
+  static const Refused refused[] = {
+      {"t", "search moves at its speed v (m/s) until a guard stops it"},
+      {"r", "search stops where its guard fires: it cannot blend"},
+      {"jv", "search moves the tool: its speeds are v (m/s) and w (deg/s)"},
+      {"at", "search has no triggers: it returns where it stopped"},
+      {"async", "search waits for its guard: it returns the outcome and where it stopped"},
+      {"rel", "search's direction is in the base frame (or give a target frame)"},
+      {nullptr, nullptr}};
+  CheckOptions(L, 2, "search", known, refused);
+  CheckWrenchNeedsForce(L, 2, "search");
+  if (!Guarded(L, 2)) {
+    ScriptError(L, "search: needs a guard to stop it: force (N), torque (N m) or stop_if (a function)");
+  }
+  const Eigen::Vector3d* along = ToVec3(L, 1);
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  Frame goal;
+  if (along) {
+    d = *along;
+    if (!d.allFinite() || d.norm() < 1e-9) {
+      ScriptError(L, "search: the direction must be finite and non-zero, got (%g, %g, %g)", d.x(), d.y(), d.z());
+    }
+    if (!HasOption(L, 2, "max")) ScriptError(L, "search: a search along a direction needs max (m, how far it may go)");
+    const double max = Option(L, 2, "max", 0, "search");
+    if (!(max > 0)) ScriptError(L, "search: option max must be > 0 m, got %g", max);
+    if (HasOption(L, 2, "ref")) {
+      ScriptError(L, "search: option ref is for a target frame: a direction is in the base frame");
+    }
+    if (HasOption(L, 2, "dir")) {
+      ScriptError(L, "search: along a direction the force guard is along it: option dir is for a search to a frame");
+    }
+    d.normalize();
+    goal = AsValue(ToBase(r, PlannedEnd(r)));
+    goal.p += max * d;
+    goal = ToWorld(r, goal);
+  } else if (ToFrame(L, 1)) {
+    if (HasOption(L, 2, "max"))
+      ScriptError(L, "search: option max is for a search along a direction: a frame is its end");
+    goal = ToWorld(r, Target(L, 1, 2, "search"));
+  } else {
+    ScriptError(L, "search: argument 1 must be a direction (a vec3, base frame) or a target frame, got %s",
+                luaL_typename(L, 1));
+  }
+  PlanLinear(L, r, goal, 2, "search", false);
+  if (along && r.guard_force_N > 0) r.guard_dir_W = (r.base_W.q * d).normalized();
   return 0;
 }
 
@@ -883,16 +980,17 @@ Program* ProgramOf(lua_State* L) {
 }
 
 void AdvanceMotion(Robot* r) {
-  if (!r->moving) return;
-  if (r->guard) {
-    std::vector<double> w;
-    if (r->guard->Read(&w) && w.size() >= 3 &&
-        (Eigen::Vector3d(w[0], w[1], w[2]) - r->guard_bias_N).norm() > r->guard_force_N) {
+  if (r->moving) {
+    if (const char* tripped = GuardTripped(r)) {
       r->moving = false;
-      r->outcome = "contact";
-      return;
+      r->outcome = tripped;
     }
   }
+  if (r->force.on) {
+    AdvanceForceMode(r);
+    return;
+  }
+  if (!r->moving) return;
   r->q_ref = r->plan.q[r->next++];
   if (r->next >= r->plan.q.size()) r->moving = false;
 }
@@ -923,6 +1021,12 @@ void StopMotion(Robot* r, double period_s) {
     }
     delta = std::min(1.0, 1.0 / need);
   }
+  // in force mode the commands come from the plan's tool poses (the admittance moves them
+  // along the held axes): the stop follows those, from the pose of the last period
+  const bool force = r->force.on && r->plan.tool_W.size() == r->plan.q.size();
+  const auto pose_at = [r](std::size_t i) -> const Frame& {
+    return i == 0 ? r->force.nominal_W : r->plan.tool_W[r->next + i - 1];
+  };
   Plan stop;
   double x = 0, rate = 1;
   const double end = static_cast<double>(path.size() - 1);
@@ -932,10 +1036,20 @@ void StopMotion(Robot* r, double period_s) {
     const std::size_t i = std::min(static_cast<std::size_t>(x), path.size() - 2);
     const double f = x - static_cast<double>(i);
     stop.q.push_back(path[i] + f * (path[i + 1] - path[i]));
-    stop.tool_W.push_back(r->planner->ToolPose(stop.q.back()));
+    if (force) {
+      Frame pose;
+      pose.p = pose_at(i).p + f * (pose_at(i + 1).p - pose_at(i).p);
+      pose.q = pose_at(i).q.slerp(f, pose_at(i + 1).q);
+      stop.tool_W.push_back(pose);
+    } else {
+      stop.tool_W.push_back(r->planner->ToolPose(stop.q.back()));
+    }
     stop.speed_mps.push_back(0);
   }
-  if (stop.q.empty()) stop.q.push_back(r->q_ref), stop.tool_W.push_back(r->planner->ToolPose(r->q_ref));
+  if (stop.q.empty()) {
+    stop.q.push_back(r->q_ref);
+    stop.tool_W.push_back(force ? r->force.nominal_W : r->planner->ToolPose(r->q_ref));
+  }
   stop.duration_s = stop.q.size() * period_s;
   r->sent_cap = r->sent_cap >= 0 ? r->sent_cap : static_cast<long>(r->next);
   r->plan = std::move(stop);
@@ -983,6 +1097,7 @@ void OpenApi(Program* p) {
                                        {"_movec", MoveC},
                                        {"_movep", MoveP},
                                        {"_selfmove", SelfMove},
+                                       {"_search", Search},
                                        {"_moving", Moving},
                                        {"_outcome", Outcome},
                                        {"_sent", Sent},
@@ -1041,6 +1156,7 @@ void OpenApi(Program* p) {
   OpenIo(L);
   OpenQueries(L);
   OpenPayload(L);
+  OpenForce(L);
   if (luaL_loadbufferx(L, kPrelude, std::strlen(kPrelude), "=vlab", "t") != LUA_OK) {
     throw std::logic_error(std::string("task prelude: ") + lua_tostring(L, -1));
   }

@@ -258,6 +258,23 @@ Eigen::VectorXd MotionPlanner::Ik(const Eigen::VectorXd& q0, const Frame& goal_W
   return q;
 }
 
+bool MotionPlanner::Track(const Eigen::VectorXd& q0, const Frame& goal_W, Eigen::VectorXd* q, std::string* why) const {
+  int it;
+  double pe, re;
+  *q = Solve(q0, goal_W, &it, &pe, &re);
+  if (!(pe < kTolPos_m * 10 && re < kTolRot_rad * 10)) {
+    *why = Unreached(*q, pe, re, it);
+    return false;
+  }
+  try {
+    CheckLimits(*q, "the IK's solution");
+  } catch (const std::invalid_argument& e) {
+    *why = e.what();
+    return false;
+  }
+  return true;
+}
+
 void MotionPlanner::CheckLimits(const Eigen::VectorXd& q, const std::string& where) const {
   for (int i = 0; i < q.size(); ++i) {
     const double lo = model_->lower_limits()[i], hi = model_->upper_limits()[i];

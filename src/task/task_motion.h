@@ -99,6 +99,11 @@ class MotionPlanner {
   /// std::invalid_argument ("out of reach: 12.3 mm and 2.1 deg away after
   /// 200 iterations", "joint S2 beyond its limits ...").
   Eigen::VectorXd Ik(const Eigen::VectorXd& q0, const Frame& goal_W) const;
+  /// Ik for a pose one period away from the joints q0 (force mode's per-period
+  /// command): the same Newton steps, but never throws. False, with *why saying
+  /// what failed (the pose out of reach, a joint beyond its limits), when it
+  /// does not converge to 1e-8 m and 1e-8 rad within its limits.
+  bool Track(const Eigen::VectorXd& q0, const Frame& goal_W, Eigen::VectorXd* q, std::string* why) const;
 
   /// Plans; every function throws std::invalid_argument naming the problem.
   /// Every plan keeps rate_limits(): slowed down to them, or refused.

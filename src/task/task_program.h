@@ -38,6 +38,25 @@ struct Blackboard {
   std::set<std::string> stops;          ///< robots whose running move stop(name) asked to halt
 };
 
+/// Force mode of a robot (force_mode ... end_force_mode; task_force.cc): along each held
+/// axis of the task frame the commanded tool position is an admittance, moved each period
+/// at v = clamp(k (F_target - F), +-v_max) (its change limited to a_max per second); along
+/// the free axes it follows the running move's path, or rests where the path ended.
+struct ForceMode {
+  bool on = false;
+  bool held[3] = {false, false, false};                ///< task axes x, y, z held
+  Eigen::Vector3d target_N = Eigen::Vector3d::Zero();  ///< force the tool exerts on the world, task axes
+  Eigen::Matrix3d R_WT = Eigen::Matrix3d::Identity();  ///< task frame axes (columns) in the world
+  Eigen::Vector3d c_m = Eigen::Vector3d::Zero();       ///< commanded position along each task axis, m
+  Eigen::Vector3d v_mps = Eigen::Vector3d::Zero();     ///< the admittance's speed along each axis
+  double v_max_mps = 0, a_max_mps2 = 0, gain_mps_per_N = 0, period_s = 0;
+  Channel* wrench = nullptr;
+  Eigen::Vector3d bias_N = Eigen::Vector3d::Zero();   ///< sensor frame: its reading at the start
+  Eigen::Vector3d force_T = Eigen::Vector3d::Zero();  ///< the last force measured, task axes, N
+  Frame nominal_W;    ///< the path's pose of the last period (the move's sample, or where it rests)
+  std::string fault;  ///< a period's IK failed: the force mode ended, the script's next wait raises it
+};
+
 /// The robot a program commands.
 struct Robot {
   Channel* arm = nullptr;
@@ -64,11 +83,20 @@ struct Robot {
   double blend_radius_m = 0;
   Eigen::Vector3d blend_corner_W = Eigen::Vector3d::Zero();
   double segment_m = 0;  ///< length of the running move's straight segment
-  // guard of the running move
+  // guards of the running move (task_force.cc): the force's change (its norm, or its
+  // component along guard_dir_W when that is not zero), the torque's change
   Channel* guard = nullptr;
   double guard_force_N = 0;
   Eigen::Vector3d guard_bias_N = Eigen::Vector3d::Zero();
+  Eigen::Vector3d guard_dir_W = Eigen::Vector3d::Zero();  ///< unit; the force the tool exerts on the world
+  double guard_torque_Nm = 0;
+  Eigen::Vector3d guard_torque_bias_Nm = Eigen::Vector3d::Zero();
   Channel* default_wrench = nullptr;
+  ForceMode force;
+  Channel* zero_wrench = nullptr;                    ///< force_zero(): the device zeroed, and its zero
+  Eigen::Vector3d zero_N = Eigen::Vector3d::Zero();  ///< (sensor frame, N)
+  std::vector<double> reading;                       ///< a wrench reading (kept: no allocation per period)
+  Eigen::VectorXd zero_qd;                           ///< joint speeds of kinematics-only evaluations
   // the planned tool position of the log, and the q_ref it belongs to
   Eigen::Vector3d tool_ref_W = Eigen::Vector3d::Zero();
   Eigen::VectorXd tool_ref_q;
@@ -112,8 +140,36 @@ void OpenPayload(lua_State* L);
 Program* ProgramOf(lua_State* L);
 
 /// The next joint reference of the program's robot: advances the running
-/// plan, stops it when its guard trips. Never throws.
+/// plan, stops it when its guard trips; in force mode, AdvanceForceMode.
+/// Never throws.
 void AdvanceMotion(Robot* robot);
+
+/// The guard of the running move that has tripped this period ("contact" for
+/// the force, "torque"), or null. Never throws.
+const char* GuardTripped(Robot* robot);
+
+/// One period of force mode: the running move's next sample (or the pose
+/// where its path rests), moved along each held axis by the admittance, to
+/// joints by Newton steps from the last reference. A pose the IK cannot reach
+/// ends the force mode and the move, with ForceMode::fault set. Never throws.
+void AdvanceForceMode(Robot* robot);
+
+/// The force (N) the tool exerts on the world, world axes, from a wrench
+/// reading's force `f_sensor` less `bias` (sensor frame, whose axes are taken
+/// as the tip site's at the measured joints).
+Eigen::Vector3d ExertedForce_W(Robot* robot, const Eigen::Vector3d& f_sensor, const Eigen::Vector3d& bias);
+
+/// Registers force_mode's and search's functions and the move options' guard
+/// parser (task_api_force.cc).
+void OpenForce(lua_State* L);
+
+/// Checks the guard options of a move at stack index `options` (force, dir,
+/// torque, wrench, stop_if) before it is planned: script errors name `what`
+/// and the option.
+void CheckGuards(lua_State* L, Robot& r, int options, const char* what);
+/// Sets the running move's guards from its (checked) options; stop_if is the
+/// prelude's.
+void SetGuards(lua_State* L, Robot& r, int options, const char* what);
 
 /// Halts the robot's running move on its own path (stop(name)): the rest of
 /// the plan is followed at a rate that falls from one sample per period to

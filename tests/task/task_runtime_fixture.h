@@ -77,11 +77,12 @@ class FakeWrench final : public Channel {
   const std::vector<std::string>& state_names() const override { return names_; }
   const std::vector<std::string>& command_names() const override { return none_; }
   bool Read(std::vector<double>* v) override {
-    v->assign({force.x(), force.y(), force.z(), 0, 0, 0, 4, 0});
+    v->assign({force.x(), force.y(), force.z(), torque.x(), torque.y(), torque.z(), 4, 0});
     return true;
   }
   bool Write(const std::vector<double>&, std::string*) override { return false; }
-  Eigen::Vector3d force = Eigen::Vector3d(0, 0, 4.1);  // the tool's weight, N (any constant: it is tared)
+  Eigen::Vector3d force = Eigen::Vector3d(0, 0, 4.1);    // the tool's weight, N (any constant: it is tared)
+  Eigen::Vector3d torque = Eigen::Vector3d(0.02, 0, 0);  // its moment, N m (tared as well)
 
  private:
   std::string name_ = "jr3";
