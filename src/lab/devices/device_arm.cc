@@ -6,7 +6,9 @@
 
 #include "bridge/bridge_describe.h"
 #include "core/core_errors.h"
+#include "lab/outputs/lab_log.h"
 #include "lab/scenario/lab_yaml.h"
+#include "sensors/sensor_random.h"
 
 namespace vlab::lab {
 
@@ -69,6 +71,20 @@ std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r) {
   arm->initial = r.Numbers("initial", {});
   if (!arm->initial.empty() && arm->initial.size() != arm->joints.size()) {
     r.Fail("initial", "needs one value per joint (" + std::to_string(arm->joints.size()) + ")");
+  }
+  // initial_jitter: one value for every joint, or one per joint (rad)
+  const YAML::Node jitter = r.Raw("initial_jitter");
+  if (jitter.IsDefined() && !jitter.IsNull()) {
+    arm->initial_jitter = jitter.IsSequence()
+                              ? YamlNumbers(r.file(), jitter, r.Child("initial_jitter"))
+                              : std::vector<double>{YamlNumber(r.file(), jitter, r.Child("initial_jitter"))};
+    if (arm->initial_jitter.size() != 1 && arm->initial_jitter.size() != arm->joints.size()) {
+      r.Fail("initial_jitter", "needs one value or one per joint (" + std::to_string(arm->joints.size()) + ")");
+    }
+    for (double j : arm->initial_jitter) {
+      if (!(j >= 0 && j <= M_PI)) r.Fail("initial_jitter", "values must be 0 to pi rad");
+    }
+    if (arm->initial.empty()) r.Fail("initial_jitter", "needs initial: the joint angles it draws about (rad)");
   }
   MapReader servo = r.Map("servo");
   arm->max_velocity = r.Numbers("max_velocity", {});
@@ -158,6 +174,21 @@ std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const Devic
         Fail(c, "initial position of joint '" + p.joints[i] + "' is outside its range");
       }
     }
+    // the seeded start: uniform in initial +- jitter, from the device's own stream (the top 53
+    // bits of xoshiro256++, as lab_randomize.cc), drawn once
+    if (!p.initial_jitter.empty()) {
+      sensors::Xoshiro256pp rng(context.seed);
+      for (int i = 0; i < n; ++i) {
+        const double jitter = p.initial_jitter.size() == 1 ? p.initial_jitter[0] : p.initial_jitter[i];
+        if (arm->initial_[i] - jitter < arm->lower_[i] || arm->initial_[i] + jitter > arm->upper_[i]) {
+          Fail(c, "initial_jitter: joint '" + p.joints[i] + "' could start outside its range (initial " +
+                      FormatDouble(arm->initial_[i]) + " +- " + FormatDouble(jitter) + " rad, range " +
+                      FormatDouble(arm->lower_[i]) + " .. " + FormatDouble(arm->upper_[i]) + ")");
+        }
+        const double u = static_cast<double>(rng() >> 11) * 0x1.0p-53;  // [0, 1)
+        arm->initial_[i] += jitter * (2 * u - 1);
+      }
+    }
   }
   if (!p.max_velocity.empty()) {
     arm->max_velocity_ = Eigen::Map<const Eigen::VectorXd>(p.max_velocity.data(), n);
@@ -165,6 +196,7 @@ std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const Devic
   // the servo's own model, with the declared payload
   std::vector<int> joint_ids;
   for (const std::string& joint : p.joints) joint_ids.push_back(mj_name2id(m, mjOBJ_JOINT, joint.c_str()));
+  arm->welds_ = ArmWelds::Find(*m, joint_ids);
   try {
     arm->servo_model_ = ArmServoModel::Create(*m, joint_ids, p.servo.bodies);
   } catch (const InputError& e) {
@@ -199,6 +231,10 @@ std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const Devic
 void SimArm::SetInitialState(mjData& d) const {
   if (!has_initial_) return;
   for (int i = 0; i < dof(); ++i) d.qpos[qpos_adr_[i]] = initial_[i];
+  if (welds_.empty()) return;
+  // a welded gripper to its weld's pose at these joints (the arm's bodies first)
+  mj_kinematics(model_, &d);
+  welds_.Place(*model_, d);
 }
 
 void SimArm::Start(mjData& d) {

@@ -10,6 +10,10 @@
 //           every control period; q and qd are the sensed ones (below)
 //   rate    the servo runs at every physics step (model timestep); commands and
 //           outputs at the control rate
+// Start: the `initial` joints (or the keyframe's), moved by a seeded draw within
+// `initial_jitter` (from the device's seed, once: every reset starts the same);
+// with `initial`, the free bodies welded to the arm (a gripper) are put at
+// their welds' poses there (arm_welded.h).
 // Behaviour, like a real servo drive:
 //   - holds the initial position until the first command arrives;
 //   - position and velocity modes run a PD servo per joint with bias (gravity
@@ -55,6 +59,7 @@
 #include "bridge/bridge_messages.h"
 #include "lab/devices/arm_sensing.h"
 #include "lab/devices/arm_servo_model.h"
+#include "lab/devices/arm_welded.h"
 #include "lab/devices/device.h"
 
 namespace vlab::lab {
@@ -76,7 +81,10 @@ struct ArmParams : DeviceParams {
   std::vector<std::string> joints;     ///< MJCF joint names, in device order
   std::vector<std::string> actuators;  ///< MJCF motor actuators (torque), default: joint names
   std::vector<double> initial;         ///< initial joint positions, rad (default: qpos0)
-  std::vector<double> max_velocity;    ///< |qd| limits of velocity commands, rad/s (empty: none)
+  /// Seeded start: each joint starts uniform in initial +- this, rad (one value or one per
+  /// joint; empty: none). Drawn once from the device's seed; needs `initial`.
+  std::vector<double> initial_jitter;
+  std::vector<double> max_velocity;  ///< |qd| limits of velocity commands, rad/s (empty: none)
   ServoConfig servo;
   Payload payload;        ///< declared at the flange (the body of the last joint); mass 0: none
   SensingConfig sensing;  ///< encoder resolution and velocity source (empty: exact)
@@ -84,7 +92,7 @@ struct ArmParams : DeviceParams {
   bool log_following_error = false;  ///< log NAME.following_error: max |q_ref - q| of the servo, rad
 };
 
-/// Reads an arm entry's keys (joints, actuators, initial, max_velocity, servo,
+/// Reads an arm entry's keys (joints, actuators, initial, initial_jitter, max_velocity, servo,
 /// payload, sensing, watchdog_periods, owner_timeout, log_following_error). Throws
 /// InputError naming the file, line and key.
 std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r);
@@ -180,6 +188,7 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   std::vector<std::string> joint_names_;
   std::vector<int> qpos_adr_, dof_adr_, actuator_ids_;
   Eigen::VectorXd lower_, upper_, tau_min_, tau_max_, initial_, max_velocity_;
+  ArmWelds welds_;  // free bodies welded to the arm (a gripper): placed with the initial joints
   int watchdog_periods_ = 3;
   double owner_timeout_s_ = 1.0;
   bool has_initial_ = false;

@@ -17,6 +17,9 @@ struct PoseParams : DeviceParams {
   std::string site;                   ///< the tracked site
   std::string relative_to = "world";  ///< the body whose frame the pose is given in
   std::string target;                 ///< a site whose distance is logged ("": none)
+  /// Gripper bodies (lab-only truth): log how many hold the site's body (two of a gripper's
+  /// finger bodies touch it) and how long the body has touched nothing (empty: not logged).
+  std::vector<std::string> grippers;
 };
 
 /// Reads the entry's own keys.
