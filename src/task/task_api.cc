@@ -109,6 +109,9 @@ function movel_rel(delta, options) finish_async() return run(mlr(delta, options)
 function movec(via, target, options) finish_async() settle() return run(mc(via, target, options), options) end
 function movep(points, options) finish_async() settle() return run(mp(points, options), options) end
 function selfmove(options) finish_async() settle() sm(options) return await() end
+local sj = _servoj
+_servoj = nil
+function servoj(q) finish_async() settle() sj(q) await() end
 function signal(name) raise(name) end
 function wait_signal(name, timeout)
   return wait(function() return take(name) end, timeout)
@@ -882,7 +885,10 @@ Program* ProgramOf(lua_State* L) {
   return p;
 }
 
+void StartPlan(Robot* r, Plan plan) { Start(*r, std::move(plan)); }
+
 void AdvanceMotion(Robot* r) {
+  r->q_ref_before = r->q_ref;  // (sized once: no allocation after the first period)
   if (!r->moving) return;
   if (r->guard) {
     std::vector<double> w;
@@ -1041,6 +1047,7 @@ void OpenApi(Program* p) {
   OpenIo(L);
   OpenQueries(L);
   OpenPayload(L);
+  OpenServo(L);
   if (luaL_loadbufferx(L, kPrelude, std::strlen(kPrelude), "=vlab", "t") != LUA_OK) {
     throw std::logic_error(std::string("task prelude: ") + lua_tostring(L, -1));
   }
