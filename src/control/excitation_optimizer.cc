@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <random>
@@ -269,9 +270,12 @@ void Validate(const DynamicsRegressor& r, const Eigen::VectorXd& q_start, const 
     }
     if (!(q_start[i] >= limits.lower[i] + c.position_margin_rad &&
           q_start[i] <= limits.upper[i] - c.position_margin_rad)) {
-      throw std::invalid_argument("excitation: joint " + j + " starts at " + std::to_string(q_start[i] * 180 / kPi) +
-                                  " deg, not inside its range less the margin (" +
-                                  std::to_string(c.position_margin_rad * 180 / kPi) + " deg)");
+      char why[200];
+      std::snprintf(why, sizeof why,
+                    "starts at %.6g deg, not inside its range %.6g .. %.6g deg less the margin %.6g deg",
+                    q_start[i] * 180 / kPi, limits.lower[i] * 180 / kPi, limits.upper[i] * 180 / kPi,
+                    c.position_margin_rad * 180 / kPi);
+      throw std::invalid_argument("excitation: joint " + j + " " + why);
     }
   }
 }
@@ -339,9 +343,11 @@ ExcitationResult OptimizeExcitation(const mjModel* model, DynamicsRegressor* reg
   result.clearance_m = closest;
   if (pair.first >= 0) result.closest = problem.GeomName(pair.first) + " / " + problem.GeomName(pair.second);
   if (best >= 200 || intrusion > 0) {
-    throw std::invalid_argument(
-        "excitation: no trajectory found that keeps " + std::to_string(config.clearance_m * 1000).substr(0, 4) +
-        " mm from the scene: the closest came " + std::to_string(closest * 1000) + " mm near (" + result.closest + ")");
+    char why[200];
+    std::snprintf(why, sizeof why,
+                  "no trajectory found that keeps %.3g mm from the scene: the closest came within %.3g mm",
+                  config.clearance_m * 1000, closest * 1000);
+    throw std::invalid_argument(std::string("excitation: ") + why + " (" + result.closest + ")");
   }
   return result;
 }
