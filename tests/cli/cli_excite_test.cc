@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "kinsim/kinsim_process.h"
 #include "test_util.h"
 
 namespace vlab::cli {
@@ -90,6 +91,23 @@ TEST(CliExciteTest, TheScenarioRunsInTheLabWithinTheLimits) {
   }
   EXPECT_LT(fastest, kPi);
   EXPECT_GT(fastest, 0.2);
+}
+
+TEST(CliExciteTest, TheTaskRunsUnchangedAgainstAnArmOverTheWire) {
+  // vlab-kinsim stands in for the real arm (realtime, 500 Hz), away from the start pose: the
+  // task moves there, streams its period and ends (vlab task exit 0: no reference refused)
+  TempDir tmp;
+  ASSERT_EQ(RunVlab("excite scenes/pa10_task_hello.yaml --period 2 --cycles 1 --evaluations 100 --out " + (tmp / "e"))
+                .exit_code,
+            0);
+  testing::KinsimProcess kinsim({"--initial", "0", "0", "0", "0.5", "0", "1.0", "0"});
+  ASSERT_TRUE(kinsim.ok());
+  const ProcessResult r =
+      RunVlab("task " + (tmp / "e/excite.lua") + " --arm 127.0.0.1:" + std::to_string(kinsim.port()) +
+              " --scene scenes/pa10.xml --tip tool");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_HAS(r.out, "excitation: 1 periods of 2 s");
+  EXPECT_HAS(r.out, "excitation: done");
 }
 
 TEST(CliExciteTest, RefusesBadInputAndWritesNothing) {
