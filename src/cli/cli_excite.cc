@@ -35,8 +35,6 @@ namespace vlab::cli::excite {
 
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180;
-
 // the scenario's arm device: --arm, or its only arm
 const lab::DeviceConfig& FindArm(const lab::Scenario& s, const std::string& name) {
   std::vector<const lab::DeviceConfig*> arms;
@@ -203,13 +201,18 @@ Subcommand AddExciteCommand(CLI::App& app) {
   cmd->add_option("--period", args->period_s,
                   "Period of the series, s: a whole number of the scenario's control periods (default 10)");
   cmd->add_option("--cycles", args->cycles, "Periods the task runs, 1 ... 1000 (default 3)");
-  cmd->add_option("--seed", args->seed, "Seed of the search (default: the scenario's seed)");
+  cmd->add_option("--seed", args->seed, "Seed of the search, >= 0 (default: the scenario's seed)");
   cmd->add_option("--evaluations", args->evaluations, "Evaluations of the criterion, 4 ... 1e6 (default 1600)");
   cmd->add_option("--clearance", args->clearance_m,
                   "Distance the arm keeps from the scene and between its links, m (default 0.01)");
   cmd->add_option("--out", args->out_dir, "Output folder (default out/excite-ARM); replaced only as vlab run's");
   cmd->add_flag("-q,--quiet", args->quiet, "No per-joint table");
-  return {cmd, [args] { return WithErrorReport([&] { return excite::Excite(*args); }); }};
+  return {cmd, [args, cmd] {
+            return WithErrorReport([&] {
+              if (cmd->count("--seed") > 0 && args->seed < 0) throw InputError("excite: --seed must be >= 0");
+              return excite::Excite(*args);
+            });
+          }};
 }
 
 }  // namespace vlab::cli

@@ -11,6 +11,9 @@
 
 namespace vlab::cli::excite {
 
+/// Degrees to radians.
+inline constexpr double kDeg = 3.14159265358979323846 / 180;
+
 struct ExciteArgs {
   std::string scenario, arm, tip, out_dir;
   int harmonics = 5;

@@ -17,8 +17,6 @@ namespace vlab::cli::excite {
 
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180;
-
 std::string Num(double x) {
   char s[40];
   std::snprintf(s, sizeof s, "%.17g", x);

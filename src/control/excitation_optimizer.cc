@@ -16,8 +16,6 @@ namespace vlab::control {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // seeded numbers from the standard's mt19937_64 (the same on every platform), not from the
 // library's distributions (whose algorithms the standard leaves open)
 class Random {
@@ -27,7 +25,7 @@ class Random {
   double Symmetric() { return 2 * Uniform() - 1; }                               // [-1, 1)
   double Normal() {                                                              // Box-Muller
     const double u1 = 1 - Uniform(), u2 = Uniform();
-    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * kPi * u2);
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * mjPI * u2);
   }
 
  private:
@@ -104,7 +102,7 @@ class Problem {
   Problem(const mjModel* model, DynamicsRegressor* regressor, const std::vector<double>& reference,
           const Eigen::VectorXd& q_start, const JointLimits& limits, const ExcitationConfig& c)
       : regressor_(regressor), config_(c), q_start_(q_start), n_(regressor->dof()), N_(c.harmonics) {
-    w_ = 2 * kPi / c.period_s;
+    w_ = 2 * mjPI / c.period_s;
     steps_ = std::lround(c.period_s / c.control_period_s);
     // the limits, less the margin and fraction
     lower_ = limits.lower.array() + c.position_margin_rad;
@@ -130,8 +128,8 @@ class Problem {
     Eigen::VectorXd q(n_), qd(n_), qdd(n_);
     for (int k = 0; k < states; ++k) {
       for (int i = 0; i < n_; ++i) {
-        const double lo = std::isfinite(limits.lower[i]) ? limits.lower[i] : -kPi;
-        const double hi = std::isfinite(limits.upper[i]) ? limits.upper[i] : kPi;
+        const double lo = std::isfinite(limits.lower[i]) ? limits.lower[i] : -mjPI;
+        const double hi = std::isfinite(limits.upper[i]) ? limits.upper[i] : mjPI;
         q[i] = lo + (hi - lo) * random.Uniform();
         qd[i] = limits.v_max[i] * random.Symmetric();
         qdd[i] = limits.a_max[i] * random.Symmetric();
@@ -273,8 +271,8 @@ void Validate(const DynamicsRegressor& r, const Eigen::VectorXd& q_start, const 
       char why[200];
       std::snprintf(why, sizeof why,
                     "starts at %.6g deg, not inside its range %.6g .. %.6g deg less the margin %.6g deg",
-                    q_start[i] * 180 / kPi, limits.lower[i] * 180 / kPi, limits.upper[i] * 180 / kPi,
-                    c.position_margin_rad * 180 / kPi);
+                    q_start[i] * 180 / mjPI, limits.lower[i] * 180 / mjPI, limits.upper[i] * 180 / mjPI,
+                    c.position_margin_rad * 180 / mjPI);
       throw std::invalid_argument("excitation: joint " + j + " " + why);
     }
   }

@@ -123,6 +123,7 @@ TEST(CliExciteTest, RefusesBadInputAndWritesNothing) {
   refused("excite scenes/pa10_task_hello.yaml --harmonics 1", "--harmonics must be 2 ... 50");
   refused("excite scenes/pa10_task_hello.yaml --period 0.003", "--period 0.003 s is not a whole number");
   refused("excite scenes/pa10_task_hello.yaml --cycles 0", "--cycles must be 1 ... 1000");
+  refused("excite scenes/pa10_task_hello.yaml --seed -1", "--seed must be >= 0");
   refused("excite scenes/pa10_task_hello.yaml --tip nosite", "--tip nosite");
   testing::WriteFile(tmp / "noarm.yaml", "scene: " VLAB_SOURCE_DIR "/scenes/pa10.xml\nduration: 1\n");
   refused("excite " + (tmp / "noarm.yaml"), "has no arm device (kind: arm)");

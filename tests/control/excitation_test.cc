@@ -17,8 +17,8 @@
 namespace vlab::control {
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180;
-const std::vector<std::string> kPa10Joints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
+constexpr double kDegree = 3.14159265358979323846 / 180;
+const std::vector<std::string> kExcitedJoints = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
 
 // the PA10's limits as the task language keeps them (docs/tasks.md): 180 deg/s; 180 deg/s²,
 // 360 for the wrist; ranges from the model
@@ -26,15 +26,15 @@ JointLimits Pa10Limits(const DynamicsRegressor& r) {
   JointLimits l;
   l.lower = r.lower_limits();
   l.upper = r.upper_limits();
-  l.v_max = Eigen::VectorXd::Constant(7, 180 * kDeg);
-  l.a_max = Eigen::VectorXd::Constant(7, 180 * kDeg);
-  l.a_max.tail(3).setConstant(360 * kDeg);
+  l.v_max = Eigen::VectorXd::Constant(7, 180 * kDegree);
+  l.a_max = Eigen::VectorXd::Constant(7, 180 * kDegree);
+  l.a_max.tail(3).setConstant(360 * kDegree);
   return l;
 }
 
 Eigen::VectorXd ReadyPose() {
   Eigen::VectorXd q(7);
-  q << 0, 30 * kDeg, 0, 60 * kDeg, 0, 90 * kDeg, 0;
+  q << 0, 30 * kDegree, 0, 60 * kDegree, 0, 90 * kDegree, 0;
   return q;
 }
 
@@ -76,7 +76,7 @@ class ExcitationTest : public vlab::test::MujocoTest {
  protected:
   void SetUp() override {
     model_ = LoadModel("scenes/pa10.xml");
-    regressor_ = DynamicsRegressor::Create(model_, kPa10Joints);
+    regressor_ = DynamicsRegressor::Create(model_, kExcitedJoints);
     reference_.assign(model_->qpos0, model_->qpos0 + model_->nq);
     config_.evaluations = 400;
     config_.restarts = 2;
@@ -125,18 +125,19 @@ TEST_F(ExcitationTest, StaysWithinEveryLimitAndImprovesTheCondition) {
               r.cond_final, r.evaluations, seconds, r.base.independent.size(), r.clearance_m, r.closest.c_str());
   for (int i = 0; i < 7; ++i) {
     std::printf("%s: q %.1f .. %.1f deg (range %.0f .. %.0f), |qd| %.1f deg/s, |qdd| %.1f deg/s^2\n",
-                kPa10Joints[i].c_str(), r.peaks.q_min[i] / kDeg, r.peaks.q_max[i] / kDeg, limits.lower[i] / kDeg,
-                limits.upper[i] / kDeg, r.peaks.v_abs[i] / kDeg, r.peaks.a_abs[i] / kDeg);
+                kExcitedJoints[i].c_str(), r.peaks.q_min[i] / kDegree, r.peaks.q_max[i] / kDegree,
+                limits.lower[i] / kDegree, limits.upper[i] / kDegree, r.peaks.v_abs[i] / kDegree,
+                r.peaks.a_abs[i] / kDegree);
   }
   // the peaks measured again, independently of the search, within every limit less the margins
   const JointPeaks peaks = MeasurePeaks(r.trajectory, config_.control_period_s);
-  EXPECT_EQ(CheckPeaks(peaks, limits, kPa10Joints), "");
+  EXPECT_EQ(CheckPeaks(peaks, limits, kExcitedJoints), "");
   JointLimits inner = limits;
   inner.lower.array() += config_.position_margin_rad - 1e-9;
   inner.upper.array() -= config_.position_margin_rad - 1e-9;
   inner.v_max *= config_.rate_fraction * (1 + 1e-9);
   inner.a_max *= config_.rate_fraction * (1 + 1e-9);
-  EXPECT_EQ(CheckPeaks(peaks, inner, kPa10Joints), "");
+  EXPECT_EQ(CheckPeaks(peaks, inner, kExcitedJoints), "");
   EXPECT_LT(r.trajectory.ConstraintResidual(), 1e-12);
   EXPECT_TRUE(std::isfinite(r.cond_final));
   EXPECT_LT(r.cond_final, r.cond_initial);
@@ -147,12 +148,12 @@ TEST_F(ExcitationTest, StaysWithinEveryLimitAndImprovesTheCondition) {
   // and the check can fail: the same trajectory against tighter limits names the joint
   JointLimits tight = limits;
   tight.v_max *= 0.5 * config_.rate_fraction;
-  const std::string message = CheckPeaks(peaks, tight, kPa10Joints);
+  const std::string message = CheckPeaks(peaks, tight, kExcitedJoints);
   EXPECT_NE(message.find("needs"), std::string::npos) << message;
   EXPECT_NE(message.find("deg/s, its limit is 81 deg/s"), std::string::npos) << message;
   tight = limits;
   tight.upper = peaks.q_max.array() - 0.01;
-  EXPECT_NE(CheckPeaks(peaks, tight, kPa10Joints).find("joint S1 reaches"), std::string::npos);
+  EXPECT_NE(CheckPeaks(peaks, tight, kExcitedJoints).find("joint S1 reaches"), std::string::npos);
 }
 
 TEST_F(ExcitationTest, TheContactCheckSeesTheTable) {
@@ -188,7 +189,7 @@ TEST_F(ExcitationTest, RefusesWhatCannotBeKept) {
     return std::string("no error");
   };
   Eigen::VectorXd start = ReadyPose();
-  start[1] = 92 * kDeg;  // S2: 2 deg from its 94 deg limit, inside the 5 deg margin
+  start[1] = 92 * kDegree;  // S2: 2 deg from its 94 deg limit, inside the 5 deg margin
   EXPECT_NE(message(start).find("joint S2 starts at 92"), std::string::npos) << message(start);
   config_.period_s = 10.001;
   EXPECT_NE(message(ReadyPose()).find("whole number"), std::string::npos);

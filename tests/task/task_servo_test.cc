@@ -6,14 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include "task/task_units.h"
 #include "task_runtime_fixture.h"
 
 namespace vlab::task {
 namespace {
 
 #define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << (text)
-
-constexpr double kDeg = 3.14159265358979323846 / 180;
 
 using ServoTest = RuntimeTest;
 
