@@ -118,23 +118,27 @@ int Excite(const ExciteArgs& a) {
                   a.period_s, T);
     throw InputError(why);
   }
-  // the task's chain: the scenario's task program of this arm, else --tip (default tool)
-  std::string tip = a.tip, base = "world";
-  if (tip.empty() && scenario.controller.type == lab::ControllerType::kTask) {
+  // the task's chain: the scenario's task program of this arm, else --tip (default tool) and
+  // --base (default world)
+  std::string tip = a.tip, base = a.base;
+  if (scenario.controller.type == lab::ControllerType::kTask) {
     for (const auto& p : scenario.controller.programs) {
-      if (p.robot == arm_device.name) tip = p.tip_site, base = p.base_body;
+      if (p.robot != arm_device.name) continue;
+      if (tip.empty()) tip = p.tip_site;
+      if (base.empty()) base = p.base_body;
     }
   }
   if (tip.empty()) tip = "tool";
+  if (base.empty()) base = "world";
   std::unique_ptr<control::RobotModel> chain;
   try {
     chain = control::RobotModel::Create(model.get(), {base, tip});
   } catch (const std::invalid_argument& e) {
-    throw InputError(std::string("excite: --tip ") + tip + ": " + e.what());
+    throw InputError(std::string("excite: the task's chain (--base ") + base + ", --tip " + tip + "): " + e.what());
   }
   if (chain->joint_names() != arm.joints) {
-    throw InputError("excite: the chain from '" + base + "' to site '" + tip + "' is not arm '" + arm_device.name +
-                     "''s joints in order: give --tip");
+    throw InputError("excite: the chain from body '" + base + "' to site '" + tip + "' is not the joints of arm '" +
+                     arm_device.name + "' in order: give --base and --tip");
   }
   // the limits the task language keeps (task_rates.h): the arm's max_velocity, else the defaults
   const std::vector<double> qpos = StartQpos(model.get(), scenario, arm);
@@ -197,6 +201,8 @@ Subcommand AddExciteCommand(CLI::App& app) {
   cmd->add_option("--tip", args->tip,
                   "Site at the arm's tool flange, for the task (default: the scenario's task program of the arm, "
                   "else 'tool')");
+  cmd->add_option("--base", args->base,
+                  "Body the task's chain starts from (default: the scenario's task program of the arm, else 'world')");
   cmd->add_option("--harmonics", args->harmonics, "Harmonics per joint, 2 ... 50 (default 5)");
   cmd->add_option("--period", args->period_s,
                   "Period of the series, s: a whole number of the scenario's control periods (default 10)");

@@ -15,7 +15,7 @@ namespace vlab::cli::excite {
 inline constexpr double kDeg = 3.14159265358979323846 / 180;
 
 struct ExciteArgs {
-  std::string scenario, arm, tip, out_dir;
+  std::string scenario, arm, tip, base, out_dir;
   int harmonics = 5;
   double period_s = 10;
   int cycles = 3;

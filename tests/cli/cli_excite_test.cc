@@ -117,6 +117,7 @@ TEST(CliExciteTest, RefusesBadInputAndWritesNothing) {
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.out << r.err;
     EXPECT_HAS(r.err, message);
     EXPECT_FALSE(std::filesystem::exists(tmp / "x")) << args;
+    for (const std::string& entry : testing::Entries(tmp.path())) EXPECT_NE(entry.rfind(".vlab-", 0), 0u) << entry;
   };
   refused("excite scenes/pa10_task_hello.yaml --arm nope",
           "--arm nope: scenario 'scenes/pa10_task_hello.yaml' has no arm device named 'nope' (arms: pa10)");
@@ -124,7 +125,9 @@ TEST(CliExciteTest, RefusesBadInputAndWritesNothing) {
   refused("excite scenes/pa10_task_hello.yaml --period 0.003", "--period 0.003 s is not a whole number");
   refused("excite scenes/pa10_task_hello.yaml --cycles 0", "--cycles must be 1 ... 1000");
   refused("excite scenes/pa10_task_hello.yaml --seed -1", "--seed must be >= 0");
-  refused("excite scenes/pa10_task_hello.yaml --tip nosite", "--tip nosite");
+  refused("excite scenes/pa10_task_hello.yaml --tip nosite", "the task's chain (--base world, --tip nosite)");
+  refused("excite scenes/pa10_nomad_reach.yaml",
+          "the chain from body 'world' to site 'tool' is not the joints of arm 'pa10' in order: give --base and --tip");
   testing::WriteFile(tmp / "noarm.yaml", "scene: " VLAB_SOURCE_DIR "/scenes/pa10.xml\nduration: 1\n");
   refused("excite " + (tmp / "noarm.yaml"), "has no arm device (kind: arm)");
   // a start pose within the margin of a joint's limit (S2 at 92 of 94 deg)
