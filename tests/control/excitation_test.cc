@@ -78,7 +78,7 @@ class ExcitationTest : public vlab::test::MujocoTest {
     model_ = LoadModel("scenes/pa10.xml");
     regressor_ = DynamicsRegressor::Create(model_, kExcitedJoints);
     reference_.assign(model_->qpos0, model_->qpos0 + model_->nq);
-    config_.evaluations = 400;
+    config_.evaluations = 240;
     config_.restarts = 2;
     first_arm_body_ = mj_name2id(model_, mjOBJ_BODY, "pa10_link1");
   }
