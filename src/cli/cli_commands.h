@@ -85,6 +85,7 @@ Subcommand AddExportCommand(CLI::App& app);   // cli_view.cc
 Subcommand AddFollowCommand(CLI::App& app);   // cli_follow.cc
 Subcommand AddConvertCommand(CLI::App& app);  // cli_convert.cc
 Subcommand AddRecordCommand(CLI::App& app);   // cli_record.cc
+Subcommand AddExciteCommand(CLI::App& app);   // cli_excite.cc
 
 /// Runs a sweep's runs here, `jobs` at a time, into out/ID, skipping complete runs
 /// (cli_sweep.cc); quiet: no lines printed. Returns 0 when every run passed.

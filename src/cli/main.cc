@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
       vlab::cli::AddCubesCommand(app),   vlab::cli::AddTaskCommand(app),   vlab::cli::AddCompareCommand(app),
       vlab::cli::AddGoldenCommand(app),  vlab::cli::AddSweepCommand(app),  vlab::cli::AddCollectCommand(app),
       vlab::cli::AddViewCommand(app),    vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app),
-      vlab::cli::AddConvertCommand(app), vlab::cli::AddRecordCommand(app)};
+      vlab::cli::AddConvertCommand(app), vlab::cli::AddRecordCommand(app), vlab::cli::AddExciteCommand(app)};
 
   try {
     app.parse(argc, argv);

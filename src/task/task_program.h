@@ -66,6 +66,7 @@ struct Robot {
   int arm_dof = 0;
   std::vector<double> state;      ///< the arm's newest state payload
   Eigen::VectorXd q_meas, q_ref;  ///< chain joints, rad
+  Eigen::VectorXd q_ref_before;   ///< the reference of the period before q_ref's (empty: none yet)
   std::vector<double> command;    ///< [mode, arm joints...]
   bool started = false;           ///< q_ref set from a first state
   Frame base_W;                   ///< world <- the script's base frame
@@ -136,12 +137,19 @@ void OpenQueries(lua_State* L);
 /// Registers payload() (task_payload.cc): the robot arm's load at its flange.
 void OpenPayload(lua_State* L);
 
+/// Registers _servoj (task_api_servo.cc), which the prelude's servoj wraps: a
+/// streamed joint reference, checked against the joints' limits.
+void OpenServo(lua_State* L);
+
+/// Starts `plan` as the robot's running move (no blend, guard or trigger).
+void StartPlan(Robot* robot, Plan plan);
+
 /// The program of a Lua state (set by OpenApi).
 Program* ProgramOf(lua_State* L);
 
 /// The next joint reference of the program's robot: advances the running
-/// plan, stops it when its guard trips; in force mode, AdvanceForceMode.
-/// Never throws.
+/// plan, stops it when its guard trips; in force mode, AdvanceForceMode. The
+/// reference before it is kept (q_ref_before). Never throws.
 void AdvanceMotion(Robot* robot);
 
 /// The guard of the running move that has tripped this period ("contact" for
