@@ -985,196 +985,189 @@ Program* ProgramOf(lua_State* L) {
 void StartPlan(Robot* r, Plan plan) { Start(*r, std::move(plan)); }
 
 void AdvanceMotion(Robot* r) {
+  r->q_ref_before = r->q_ref;  // (sized once: no allocation after the first period)
   if (r->moving) {
     if (const char* tripped = GuardTripped(r)) {
-      r->q_ref_before = r->q_ref;  // (sized once: no allocation after the first period)
-      if (!r->moving) return;
-      if (r->guard) {
-        std::vector<double> w;
-        if (r->guard->Read(&w) && w.size() >= 3 &&
-            (Eigen::Vector3d(w[0], w[1], w[2]) - r->guard_bias_N).norm() > r->guard_force_N) {
-          r->moving = false;
-          r->outcome = tripped;
-        }
-      }
-      if (r->force.on) {
-        AdvanceForceMode(r);
-        return;
-      }
-      if (!r->moving) return;
-      r->q_ref = r->plan.q[r->next++];
-      if (r->next >= r->plan.q.size()) r->moving = false;
+      r->moving = false;
+      r->outcome = tripped;
     }
+  }
+  if (r->force.on) {
+    AdvanceForceMode(r);
+    return;
+  }
+  if (!r->moving) return;
+  r->q_ref = r->plan.q[r->next++];
+  if (r->next >= r->plan.q.size()) r->moving = false;
+}
 
-    void StopMotion(Robot * r, double period_s) {
-      if (!r->moving || r->next >= r->plan.q.size()) return;
-      // the path left: the current reference, then the samples not yet handed out
-      std::vector<Eigen::VectorXd> path;
-      path.push_back(r->q_ref);
-      for (std::size_t i = r->next; i < r->plan.q.size(); ++i) path.push_back(r->plan.q[i]);
-      const JointRateLimits& limits = r->planner->rate_limits();
-      const int dof = static_cast<int>(r->q_ref.size());
-      const double T2 = period_s * period_s;
-      // the rate's fall per period, delta: over the samples the stop can cover (about 1/(2 delta)
-      // of them), joint j's step |dq_j| (rad per sample) must leave delta |dq_j| / T^2 within its
-      // limit less the path's own acceleration there; refined over the window it gives
-      double delta = 1.0;
-      for (int pass = 0; pass < 4; ++pass) {
-        const std::size_t window = std::min(path.size() - 1, static_cast<std::size_t>(std::ceil(0.5 / delta)) + 2);
-        double need = 1e-12;
-        for (std::size_t i = 1; i <= window; ++i) {
-          for (int j = 0; j < dof; ++j) {
-            const double step = std::abs(path[i][j] - path[i - 1][j]);
-            const double own =
-                i + 1 < path.size() ? std::abs(path[i + 1][j] - 2 * path[i][j] + path[i - 1][j]) / T2 : 0.0;
-            const double room = std::max(0.98 * limits.a_rps2[j] - own, 0.05 * limits.a_rps2[j]);  // 2 %: interpolation
-            need = std::max(need, step / (room * T2));
-          }
-        }
-        delta = std::min(1.0, 1.0 / need);
+void StopMotion(Robot* r, double period_s) {
+  if (!r->moving || r->next >= r->plan.q.size()) return;
+  // the path left: the current reference, then the samples not yet handed out
+  std::vector<Eigen::VectorXd> path;
+  path.push_back(r->q_ref);
+  for (std::size_t i = r->next; i < r->plan.q.size(); ++i) path.push_back(r->plan.q[i]);
+  const JointRateLimits& limits = r->planner->rate_limits();
+  const int dof = static_cast<int>(r->q_ref.size());
+  const double T2 = period_s * period_s;
+  // the rate's fall per period, delta: over the samples the stop can cover (about 1/(2 delta)
+  // of them), joint j's step |dq_j| (rad per sample) must leave delta |dq_j| / T^2 within its
+  // limit less the path's own acceleration there; refined over the window it gives
+  double delta = 1.0;
+  for (int pass = 0; pass < 4; ++pass) {
+    const std::size_t window = std::min(path.size() - 1, static_cast<std::size_t>(std::ceil(0.5 / delta)) + 2);
+    double need = 1e-12;
+    for (std::size_t i = 1; i <= window; ++i) {
+      for (int j = 0; j < dof; ++j) {
+        const double step = std::abs(path[i][j] - path[i - 1][j]);
+        const double own = i + 1 < path.size() ? std::abs(path[i + 1][j] - 2 * path[i][j] + path[i - 1][j]) / T2 : 0.0;
+        const double room = std::max(0.98 * limits.a_rps2[j] - own, 0.05 * limits.a_rps2[j]);  // 2 %: interpolation
+        need = std::max(need, step / (room * T2));
       }
-      // in force mode the commands come from the plan's tool poses (the admittance moves them
-      // along the held axes): the stop follows those, from the pose of the last period
-      const bool force = r->force.on && r->plan.tool_W.size() == r->plan.q.size();
-      const auto pose_at = [r](std::size_t i) -> const Frame& {
-        return i == 0 ? r->force.nominal_W : r->plan.tool_W[r->next + i - 1];
-      };
-      Plan stop;
-      double x = 0, rate = 1;
-      const double end = static_cast<double>(path.size() - 1);
-      while (rate > 0 && x < end) {
-        rate -= delta;
-        x = std::min(end, x + std::max(rate, 0.0));
-        const std::size_t i = std::min(static_cast<std::size_t>(x), path.size() - 2);
-        const double f = x - static_cast<double>(i);
-        stop.q.push_back(path[i] + f * (path[i + 1] - path[i]));
-        if (force) {
-          Frame pose;
-          pose.p = pose_at(i).p + f * (pose_at(i + 1).p - pose_at(i).p);
-          pose.q = pose_at(i).q.slerp(f, pose_at(i + 1).q);
-          stop.tool_W.push_back(pose);
-        } else {
-          stop.tool_W.push_back(r->planner->ToolPose(stop.q.back()));
-        }
-        stop.speed_mps.push_back(0);
-      }
-      if (stop.q.empty()) {
-        stop.q.push_back(r->q_ref);
-        stop.tool_W.push_back(force ? r->force.nominal_W : r->planner->ToolPose(r->q_ref));
-      }
-      stop.duration_s = stop.q.size() * period_s;
-      r->sent_cap = r->sent_cap >= 0 ? r->sent_cap : static_cast<long>(r->next);
-      r->plan = std::move(stop);
-      r->next = 0;
-      r->moving = true;
-      r->outcome = "stopped";
-      r->guard = nullptr;
-      r->blend_at = -1;
     }
-
-    namespace {
-
-    // stop([name]): halts the running move of robot `name` (default: this program's) on its path
-    int Stop(lua_State* L) {
-      Program* p = P(L);
-      const char* name = nullptr;
-      if (lua_isnoneornil(L, 1)) {
-        if (!p->robot) ScriptError(L, "stop: this program has no robot: name the robot to stop, stop(\"pa10\")");
-        name = p->config.robot.c_str();
-      } else {
-        if (lua_type(L, 1) != LUA_TSTRING) ScriptError(L, "stop: expected a robot's name, got %s", luaL_typename(L, 1));
-        name = lua_tostring(L, 1);
-        if (!p->board->robots.count(name)) {
-          char list[256] = "";
-          for (const std::string& robot : p->board->robots) {
-            const std::size_t used = std::strlen(list);
-            std::snprintf(list + used, sizeof list - used, "%s'%s'", used ? ", " : "", robot.c_str());
-          }
-          ScriptError(L, "stop: no robot named '%s' (%s%s)", name, list[0] ? "robots: " : "no program has a robot",
-                      list);
-        }
-      }
-      p->board->stops.insert(name);
-      return 0;
+    delta = std::min(1.0, 1.0 / need);
+  }
+  // in force mode the commands come from the plan's tool poses (the admittance moves them
+  // along the held axes): the stop follows those, from the pose of the last period
+  const bool force = r->force.on && r->plan.tool_W.size() == r->plan.q.size();
+  const auto pose_at = [r](std::size_t i) -> const Frame& {
+    return i == 0 ? r->force.nominal_W : r->plan.tool_W[r->next + i - 1];
+  };
+  Plan stop;
+  double x = 0, rate = 1;
+  const double end = static_cast<double>(path.size() - 1);
+  while (rate > 0 && x < end) {
+    rate -= delta;
+    x = std::min(end, x + std::max(rate, 0.0));
+    const std::size_t i = std::min(static_cast<std::size_t>(x), path.size() - 2);
+    const double f = x - static_cast<double>(i);
+    stop.q.push_back(path[i] + f * (path[i + 1] - path[i]));
+    if (force) {
+      Frame pose;
+      pose.p = pose_at(i).p + f * (pose_at(i + 1).p - pose_at(i).p);
+      pose.q = pose_at(i).q.slerp(f, pose_at(i + 1).q);
+      stop.tool_W.push_back(pose);
+    } else {
+      stop.tool_W.push_back(r->planner->ToolPose(stop.q.back()));
     }
+    stop.speed_mps.push_back(0);
+  }
+  if (stop.q.empty()) {
+    stop.q.push_back(r->q_ref);
+    stop.tool_W.push_back(force ? r->force.nominal_W : r->planner->ToolPose(r->q_ref));
+  }
+  stop.duration_s = stop.q.size() * period_s;
+  r->sent_cap = r->sent_cap >= 0 ? r->sent_cap : static_cast<long>(r->next);
+  r->plan = std::move(stop);
+  r->next = 0;
+  r->moving = true;
+  r->outcome = "stopped";
+  r->guard = nullptr;
+  r->blend_at = -1;
+}
 
-    }  // namespace
+namespace {
 
-    void OpenApi(Program * p) {
-      lua_State* L = p->L;
-      lua_pushlightuserdata(L, p);
-      lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
-      static const luaL_Reg functions[] = {{"_movej", MoveJ},
-                                           {"_movel", MoveL},
-                                           {"_movel_rel", MoveLRel},
-                                           {"_movec", MoveC},
-                                           {"_movep", MoveP},
-                                           {"_selfmove", SelfMove},
-                                           {"_search", Search},
-                                           {"_moving", Moving},
-                                           {"_outcome", Outcome},
-                                           {"_sent", Sent},
-                                           {"stop", Stop},
-                                           {"_now", Now},
-                                           {"_periods", Periods},
-                                           {"now", Now},
-                                           {"joints", Joints},
-                                           {"pose", Pose},
-                                           {"planned", Planned},
-                                           {"planned_joints", PlannedJoints},
-                                           {"frame_def", FrameDef},
-                                           {"frame_of", FrameOf},
-                                           {"force", WrenchPart<true>},
-                                           {"torque", WrenchPart<false>},
-                                           {"speed", SetSpeed},
-                                           {"accel", SetAccel},
-                                           {"jspeed", SetJointSpeed},
-                                           {"limits", SetRateLimits},
-                                           {"tool", SetTool},
-                                           {"base", SetBase},
-                                           {"blend", SetBlend},
-                                           {nullptr, nullptr}};
-      lua_pushglobaltable(L);
-      luaL_setfuncs(L, functions, 0);
-      lua_pop(L, 1);
-      lua_pushnumber(L, p->period_s);
-      lua_setglobal(L, "PERIOD");
-      lua_pushstring(L, p->config.robot.c_str());
-      lua_setglobal(L, "ROBOT");
-      lua_newtable(L);
-      lua_setfield(L, LUA_REGISTRYINDEX, kFramesKey);
-      // PARAMS: the program's parameters, numbers and booleans where the text reads as one
-      lua_newtable(L);
-      for (const auto& [name, text] : p->config.params) {
-        const bool plain = !text.empty() && !std::isspace(static_cast<unsigned char>(text[0]));
-        char* end = nullptr;
-        errno = 0;
-        const long long integer = plain ? std::strtoll(text.c_str(), &end, 10) : 0;
-        const bool is_integer = plain && end && *end == '\0' && errno == 0;
-        end = nullptr;
-        const double number = plain ? std::strtod(text.c_str(), &end) : 0.0;
-        const bool is_number = plain && end && *end == '\0' && std::isfinite(number);
-        if (text == "true" || text == "false") {
-          lua_pushboolean(L, text == "true");
-        } else if (is_integer) {
-          lua_pushinteger(L, static_cast<lua_Integer>(integer));
-        } else if (is_number) {
-          lua_pushnumber(L, number);
-        } else {
-          lua_pushlstring(L, text.data(), text.size());
-        }
-        lua_setfield(L, -2, name.c_str());
+// stop([name]): halts the running move of robot `name` (default: this program's) on its path
+int Stop(lua_State* L) {
+  Program* p = P(L);
+  const char* name = nullptr;
+  if (lua_isnoneornil(L, 1)) {
+    if (!p->robot) ScriptError(L, "stop: this program has no robot: name the robot to stop, stop(\"pa10\")");
+    name = p->config.robot.c_str();
+  } else {
+    if (lua_type(L, 1) != LUA_TSTRING) ScriptError(L, "stop: expected a robot's name, got %s", luaL_typename(L, 1));
+    name = lua_tostring(L, 1);
+    if (!p->board->robots.count(name)) {
+      char list[256] = "";
+      for (const std::string& robot : p->board->robots) {
+        const std::size_t used = std::strlen(list);
+        std::snprintf(list + used, sizeof list - used, "%s'%s'", used ? ", " : "", robot.c_str());
       }
-      lua_setglobal(L, "PARAMS");
-      OpenIo(L);
-      OpenQueries(L);
-      OpenPayload(L);
-      OpenForce(L);
-      OpenServo(L);
-      if (luaL_loadbufferx(L, kPrelude, std::strlen(kPrelude), "=vlab", "t") != LUA_OK) {
-        throw std::logic_error(std::string("task prelude: ") + lua_tostring(L, -1));
-      }
-      lua_call(L, 0, 0);
+      ScriptError(L, "stop: no robot named '%s' (%s%s)", name, list[0] ? "robots: " : "no program has a robot", list);
     }
+  }
+  p->board->stops.insert(name);
+  return 0;
+}
 
-  }  // namespace vlab::task
+}  // namespace
+
+void OpenApi(Program* p) {
+  lua_State* L = p->L;
+  lua_pushlightuserdata(L, p);
+  lua_setfield(L, LUA_REGISTRYINDEX, kProgramKey);
+  static const luaL_Reg functions[] = {{"_movej", MoveJ},
+                                       {"_movel", MoveL},
+                                       {"_movel_rel", MoveLRel},
+                                       {"_movec", MoveC},
+                                       {"_movep", MoveP},
+                                       {"_selfmove", SelfMove},
+                                       {"_search", Search},
+                                       {"_moving", Moving},
+                                       {"_outcome", Outcome},
+                                       {"_sent", Sent},
+                                       {"stop", Stop},
+                                       {"_now", Now},
+                                       {"_periods", Periods},
+                                       {"now", Now},
+                                       {"joints", Joints},
+                                       {"pose", Pose},
+                                       {"planned", Planned},
+                                       {"planned_joints", PlannedJoints},
+                                       {"frame_def", FrameDef},
+                                       {"frame_of", FrameOf},
+                                       {"force", WrenchPart<true>},
+                                       {"torque", WrenchPart<false>},
+                                       {"speed", SetSpeed},
+                                       {"accel", SetAccel},
+                                       {"jspeed", SetJointSpeed},
+                                       {"limits", SetRateLimits},
+                                       {"tool", SetTool},
+                                       {"base", SetBase},
+                                       {"blend", SetBlend},
+                                       {nullptr, nullptr}};
+  lua_pushglobaltable(L);
+  luaL_setfuncs(L, functions, 0);
+  lua_pop(L, 1);
+  lua_pushnumber(L, p->period_s);
+  lua_setglobal(L, "PERIOD");
+  lua_pushstring(L, p->config.robot.c_str());
+  lua_setglobal(L, "ROBOT");
+  lua_newtable(L);
+  lua_setfield(L, LUA_REGISTRYINDEX, kFramesKey);
+  // PARAMS: the program's parameters, numbers and booleans where the text reads as one
+  lua_newtable(L);
+  for (const auto& [name, text] : p->config.params) {
+    const bool plain = !text.empty() && !std::isspace(static_cast<unsigned char>(text[0]));
+    char* end = nullptr;
+    errno = 0;
+    const long long integer = plain ? std::strtoll(text.c_str(), &end, 10) : 0;
+    const bool is_integer = plain && end && *end == '\0' && errno == 0;
+    end = nullptr;
+    const double number = plain ? std::strtod(text.c_str(), &end) : 0.0;
+    const bool is_number = plain && end && *end == '\0' && std::isfinite(number);
+    if (text == "true" || text == "false") {
+      lua_pushboolean(L, text == "true");
+    } else if (is_integer) {
+      lua_pushinteger(L, static_cast<lua_Integer>(integer));
+    } else if (is_number) {
+      lua_pushnumber(L, number);
+    } else {
+      lua_pushlstring(L, text.data(), text.size());
+    }
+    lua_setfield(L, -2, name.c_str());
+  }
+  lua_setglobal(L, "PARAMS");
+  OpenIo(L);
+  OpenQueries(L);
+  OpenPayload(L);
+  OpenForce(L);
+  OpenServo(L);
+  if (luaL_loadbufferx(L, kPrelude, std::strlen(kPrelude), "=vlab", "t") != LUA_OK) {
+    throw std::logic_error(std::string("task prelude: ") + lua_tostring(L, -1));
+  }
+  lua_call(L, 0, 0);
+}
+
+}  // namespace vlab::task

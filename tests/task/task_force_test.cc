@@ -183,6 +183,7 @@ TEST_F(ForceTest, BadTargetsAndOptionsAreErrorsAtTheirLine) {
       {"force_mode({fz = 1}, {k = 1})", "force_mode: unknown option 'k' (options: frame, v, wrench)"},
       {"force_mode({fz = 1})\nmovej({0, 30, 0, 60, 0, 90, 0})", "pa10.lua:2: movej: not in force mode"},
       {"force_mode({fz = 1})\nselfmove{by = 10, t = 1}", "pa10.lua:2: selfmove: not in force mode"},
+      {"force_mode({fz = 1})\nservoj({0, 30, 0, 60, 0, 90, 0})", "pa10.lua:2: servoj: not in force mode"},
       {"force_mode({fz = 1})\nmovel(pose() * trans(0.01, 0, 0), {r = 0.001})",
        "pa10.lua:2: movel: a move in force mode cannot blend (r = 0.001 m)"},
       {"movel(pose(), {dir = vec3(0, 0, 1)})", "movel: option dir is the direction of the force guard: give force"},
