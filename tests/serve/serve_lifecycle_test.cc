@@ -58,8 +58,11 @@ TEST(ServeLifecycle, SigintKeepsEveryPeriodThatRan) {
   while (state.periods < 250 && std::chrono::steady_clock::now() < deadline) state = watch.Read(10.0);
   ASSERT_GE(state.periods, 250) << serve.Output() << serve.Errors();
   serve.Signal(SIGINT);
-  // and a signal every 10 ms until it has exited: the files are still written whole
-  ASSERT_EQ(serve.Wait(60, SIGTERM), 1) << serve.Output() << serve.Errors();
+  // and SIGINT again every 10 ms until it has exited: the files are still written whole. (Not
+  // SIGTERM: sent microseconds after the first SIGINT, on a busy machine another thread of the
+  // process may take it before the thread the kernel woke for SIGINT runs, and either is then
+  // "the first": seen once in 948 tests run beside a build.)
+  ASSERT_EQ(serve.Wait(60, SIGINT), 1) << serve.Output() << serve.Errors();
   EXPECT_NE(serve.Errors().find("vlab: interrupted by SIGINT at t = "), std::string::npos) << serve.Errors();
   EXPECT_NE(serve.Output().find("pa10_serve: INTERRUPTED"), std::string::npos) << serve.Output();
   EXPECT_EQ(Entries(tmp.path()), (std::set<std::string>{"out", "serve.out", "serve.err"})) << "no staging folder";
