@@ -255,22 +255,36 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(j.transpose() * j);
     const Eigen::VectorXd lambda = eig.eigenvalues();
     const double floor = 1e-12 * std::max(lambda.maxCoeff(), 0.0);
-    Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(n, n);
+    Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(n, n);
     Eigen::VectorXd singular = Eigen::VectorXd::Zero(n);
     for (int k = 0; k < n; ++k) {
       const Eigen::VectorXd v = eig.eigenvectors().col(k);
       if (lambda[k] > floor) {
-        cov += v * v.transpose() / lambda[k];
+        bread += v * v.transpose() / lambda[k];
       } else {
         singular += v.cwiseAbs2();
       }
     }
-    cov *= variance;
+    // the noise of a window's start state runs through all its rows: its residuals are
+    // correlated, and J^T J scaled by the residual variance understates the spread. The
+    // cluster-robust ("sandwich") covariance takes each window as one independent sample:
+    // bread (sum_w J_w^T r_w r_w^T J_w) bread, times G / (G - 1) for G windows.
+    const Eigen::Map<const Eigen::VectorXd> rv(r.data(), count);
+    Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
+    const int windows = problem.window_count();
+    for (int w = 0; w < windows; ++w) {
+      const int offset = problem.window_offset(w), rows = problem.window_residuals(w);
+      const Eigen::VectorXd score = j.middleRows(offset, rows).transpose() * rv.segment(offset, rows);
+      meat += score * score.transpose();
+    }
+    const Eigen::MatrixXd cov_iid = variance * bread;
+    const Eigen::MatrixXd cov = bread * meat * bread * (windows > 1 ? windows / (windows - 1.0) : 1.0);
     for (int a = 0; a < n; ++a) {
       Estimate& e = result.estimates[set.index[a]];
       e.value = values[set.index[a]];
       const bool undetermined = singular[a] > 1e-6;
       e.sd = undetermined ? std::numeric_limits<double>::infinity() : std::sqrt(cov(a, a)) * set.scale[a];
+      e.sd_iid = undetermined ? std::numeric_limits<double>::infinity() : std::sqrt(cov_iid(a, a)) * set.scale[a];
       for (int b = 0; b < n; ++b) {
         const double c = undetermined || singular[b] > 1e-6 ? 0.0 : cov(a, b) / std::sqrt(cov(a, a) * cov(b, b));
         result.correlation(set.index[a], set.index[b]) = a == b ? 1.0 : c;

@@ -37,7 +37,8 @@ struct Estimate {
   std::string name;
   double nominal = 0;
   double value = 0;
-  double sd = 0;             ///< standard deviation (infinite when not determined)
+  double sd = 0;             ///< standard deviation, windows as independent samples (infinite: not determined)
+  double sd_iid = 0;         ///< the same from J^T J and the residual variance alone
   bool frozen = false;       ///< by the spec: not fitted
   bool excited = true;       ///< false: the data do not move it (kept at its nominal)
   bool identifiable = true;  ///< excited, sd small, no |correlation| above kCorrelated

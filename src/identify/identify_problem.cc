@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/QR>
+
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
 #include "lab/run/lab_runner.h"
@@ -18,6 +20,21 @@ std::string JoinNames(const std::vector<std::string>& names) {
   for (std::size_t i = 0; i < names.size() && i < 20; ++i) out += (i ? ", " : "") + names[i];
   if (names.size() > 20) out += ", ...";
   return out;
+}
+
+// row `row` of `m` smoothed: each column's quadratic least-squares fit over the rows within
+// `half` of it (fewer at a log's ends), evaluated at the row
+Eigen::VectorXd SmoothedRow(const Eigen::MatrixXd& m, int row, int half) {
+  const int lo = std::max(0, row - half), hi = std::min(static_cast<int>(m.rows()) - 1, row + half);
+  if (hi - lo < 3) return m.row(row).transpose();
+  Eigen::MatrixXd a(hi - lo + 1, 3);
+  for (int i = lo; i <= hi; ++i) {
+    const double x = i - row;
+    a.row(i - lo) << 1.0, x, x * x;
+  }
+  // the constant term of the fit is the value at the row
+  const Eigen::MatrixXd coefficients = a.colPivHouseholderQr().solve(m.middleRows(lo, hi - lo + 1));
+  return coefficients.row(0).transpose();
 }
 
 }  // namespace
@@ -37,6 +54,7 @@ std::unique_ptr<Problem> Problem::Create(const Spec& spec) {
   p->BindParameters();
   p->ReadLogs();
   p->CutWindows();
+  if (spec.skip_contacts) p->SkipContactWindows();
   return p;
 }
 
@@ -231,13 +249,41 @@ void Problem::CutWindows() {
     const int n = static_cast<int>(logs_[l].time.size());
     int first = 0;
     for (; first + rows < n; first += rows) {
-      windows_.push_back({static_cast<int>(l), first, rows, residual_count_});
+      Window w{static_cast<int>(l), first, rows, residual_count_, {}, {}};
+      w.q0 = SmoothedRow(logs_[l].q, first, spec_.start_smoothing);
+      w.qd0 = SmoothedRow(logs_[l].qd, first, spec_.start_smoothing);
+      windows_.push_back(w);
       residual_count_ += rows * columns;
     }
     rows_left_out_ += n - 1 - first;
   }
   if (windows_.empty()) {
     throw InputError(spec_.where_window + ": " + std::to_string(spec_.window_s) + " s is longer than every log");
+  }
+}
+
+void Problem::SkipContactWindows() {
+  std::vector<double> nominal;
+  for (const BoundParameter& p : parameters_) nominal.push_back(p.nominal);
+  Workspace ws = MakeWorkspace();
+  std::vector<Window> kept;
+  residual_count_ = 0;
+  for (int w = 0; w < window_count(); ++w) {
+    std::vector<double> r(window_residuals(w));
+    const bool ok = Rollout(w, nominal, ws, r.data(), nullptr);
+    if (!ok || ws.contacts > 0) {
+      ++windows_in_contact_;
+      continue;
+    }
+    kept.push_back(windows_[w]);
+    kept.back().offset = residual_count_;
+    residual_count_ += window_residuals(w);
+  }
+  windows_ = std::move(kept);
+  if (windows_.empty()) {
+    throw InputError(spec_.file +
+                     ": every window's replay with the nominal model makes contact (or diverges): "
+                     "nothing to fit (contacts: keep fits them anyway)");
   }
 }
 
@@ -282,8 +328,8 @@ void Problem::Apply(const std::vector<double>& values, Workspace& ws) const {
   ws.applied = values;
 }
 
-double Problem::TrueState(const Log& log, int row, int joint, bool velocity, const std::vector<double>& values) const {
-  double v = velocity ? log.qd(row, joint) : log.q(row, joint);
+double Problem::TrueState(double measured, int joint, bool velocity, const std::vector<double>& values) const {
+  double v = measured;
   for (const Column& c : columns_) {
     if (c.joint != joint || c.velocity != velocity) continue;
     if (c.bias >= 0) v -= values[c.bias];
@@ -301,14 +347,18 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
   mj_resetData(m, d);
   std::copy(qpos_init_.begin(), qpos_init_.end(), d->qpos);
   for (std::size_t j = 0; j < joints_.size(); ++j) {
-    d->qpos[joints_[j].qpos] = TrueState(log, win.first, static_cast<int>(j), false, values);
-    d->qvel[joints_[j].dof] = TrueState(log, win.first, static_cast<int>(j), true, values);
+    d->qpos[joints_[j].qpos] = TrueState(win.q0[j], static_cast<int>(j), false, values);
+    d->qvel[joints_[j].dof] = TrueState(win.qd0[j], static_cast<int>(j), true, values);
   }
+  ws.contacts = 0;
   const int columns = static_cast<int>(columns_.size());
   for (int k = 1; k <= win.rows; ++k) {
     const int row = win.first + k;
     for (std::size_t j = 0; j < joints_.size(); ++j) d->ctrl[joints_[j].actuator] = log.tau(row, static_cast<int>(j));
-    for (int s = 0; s < steps_per_row_; ++s) mj_step(m, d);
+    for (int s = 0; s < steps_per_row_; ++s) {
+      mj_step(m, d);
+      ws.contacts = std::max(ws.contacts, d->ncon);
+    }
     if (d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
         d->warning[mjWARN_BADQACC].number > 0) {
       return false;

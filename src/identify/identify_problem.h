@@ -43,6 +43,7 @@ struct Workspace {
   ModelPtr model;
   DataPtr data;
   std::vector<double> applied;  ///< the parameter values `model` holds now
+  int contacts = 0;             ///< the most contacts at any step of the last rollout
 };
 
 class Problem {
@@ -66,6 +67,8 @@ class Problem {
   int residual_count() const { return residual_count_; }
   /// Log rows no window covers (the tail shorter than a window), summed over the logs.
   int rows_left_out() const { return rows_left_out_; }
+  /// Windows left out because their nominal replay made contact (Spec::skip_contacts).
+  int windows_in_contact() const { return windows_in_contact_; }
 
   /// A workspace for Rollout: a copy of the model and data for it.
   Workspace MakeWorkspace() const;
@@ -104,6 +107,7 @@ class Problem {
   };
   struct Window {
     int log = 0, first = 0, rows = 0, offset = 0;
+    Eigen::VectorXd q0, qd0;  ///< the start state as measured (smoothed), per joint
   };
 
   Problem() = default;
@@ -112,8 +116,9 @@ class Problem {
   void BindParameters();
   void ReadLogs();
   void CutWindows();
-  // the recorded state of a joint at a row, sensor transforms undone
-  double TrueState(const Log& log, int row, int joint, bool velocity, const std::vector<double>& values) const;
+  void SkipContactWindows();
+  // a measured start state with the sensor transforms undone
+  double TrueState(double measured, int joint, bool velocity, const std::vector<double>& values) const;
 
   Spec spec_;
   ModelPtr model_;
@@ -129,6 +134,7 @@ class Problem {
   std::vector<Window> windows_;
   int residual_count_ = 0;
   int rows_left_out_ = 0;
+  int windows_in_contact_ = 0;
 };
 
 }  // namespace vlab::identify

@@ -163,6 +163,11 @@ Spec LoadSpec(const std::string& path) {
   }
   s.max_iterations = r.Integer("max_iterations", s.max_iterations);
   if (s.max_iterations < 1 || s.max_iterations > 1000) r.Fail("max_iterations", "must be from 1 to 1000");
+  s.start_smoothing = r.Integer("start_smoothing", s.start_smoothing);
+  if (s.start_smoothing < 0 || s.start_smoothing > 1000) r.Fail("start_smoothing", "must be from 0 to 1000 rows");
+  const std::string contacts = r.String("contacts", "skip");
+  if (contacts != "skip" && contacts != "keep") r.Fail("contacts", "must be 'skip' or 'keep', got '" + contacts + "'");
+  s.skip_contacts = contacts == "skip";
   const YAML::Node parameters = r.Sequence("parameters");
   for (std::size_t i = 0; i < parameters.size(); ++i) {
     const std::string item = "parameters[" + std::to_string(i) + "]";

@@ -55,6 +55,15 @@ struct Spec {
   std::string input = "torque";           ///< how the recorded inputs are replayed
   std::vector<ParameterSpec> parameters;  ///< at least one, names unique
   int max_iterations = 50;                ///< Ceres iterations, 1..1000
+  /// Rows on each side of a window's first row that its start state is smoothed over (a
+  /// quadratic least-squares fit of each q and qd, evaluated at the row; 0: the row as
+  /// recorded): the measurement noise of the start state, carried through the whole window,
+  /// is cut about 3.5-fold at 10 (docs/identify.md).
+  int start_smoothing = 10;
+  /// Windows whose replay with the nominal model makes contact are left out (`contacts:
+  /// skip`, the default: contact forces are no fitted parameter, and a contact's stiffness
+  /// turns noise in the start state into large residuals), or kept (`keep`).
+  bool skip_contacts = true;
   std::string where_window, where_input;
 };
 
