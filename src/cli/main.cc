@@ -55,6 +55,9 @@ int main(int argc, char** argv) {
                    "(devices.jr3.filter=2, controller.gains.position=15); VALUE is YAML, typed and checked "
                    "like the file; repeatable; recorded in summary.json")
       ->allow_extra_args(false);
+  run_cmd->add_option("--overrides", run.overrides_file,
+                      "FILE of KEY=VALUE lines, one --set each ('#' comments), applied before the --set options "
+                      "(vlab identify's overrides.txt)");
 
   vlab::cli::ServeArgs serve;
   CLI::App* serve_cmd =
@@ -127,7 +130,7 @@ int main(int argc, char** argv) {
       vlab::cli::AddCubesCommand(app),   vlab::cli::AddTaskCommand(app),   vlab::cli::AddCompareCommand(app),
       vlab::cli::AddGoldenCommand(app),  vlab::cli::AddSweepCommand(app),  vlab::cli::AddCollectCommand(app),
       vlab::cli::AddViewCommand(app),    vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app),
-      vlab::cli::AddConvertCommand(app), vlab::cli::AddRecordCommand(app)};
+      vlab::cli::AddConvertCommand(app), vlab::cli::AddRecordCommand(app), vlab::cli::AddIdentifyCommand(app)};
 
   try {
     app.parse(argc, argv);

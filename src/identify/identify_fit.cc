@@ -223,9 +223,11 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
     solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
     solver.linear_solver_type = ceres::DENSE_QR;
     solver.max_num_iterations = problem.spec().max_iterations;
-    solver.function_tolerance = 1e-10;
-    solver.parameter_tolerance = 1e-10;
-    solver.gradient_tolerance = 1e-12;
+    // Ceres's defaults: stop once an iteration changes the cost by less than 1e-6 of it (a
+    // change far below the noise), or the parameters by less than 1e-8 of their size
+    solver.function_tolerance = 1e-6;
+    solver.parameter_tolerance = 1e-8;
+    solver.gradient_tolerance = 1e-10;
     solver.num_threads = 1;  // one residual block: the rollouts are threaded in the pool
     solver.logging_type = ceres::SILENT;
     Progress progress(options);
