@@ -2,10 +2,10 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <mutex>
 
 #include <nlohmann/json.hpp>
 
@@ -24,6 +24,13 @@ std::string Num(double x) {
   char buffer[32];
   const auto result = std::to_chars(buffer, buffer + sizeof(buffer), x);
   return std::string(buffer, result.ptr);
+}
+
+// six significant digits, for the report's text
+std::string Short(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", x);
+  return buffer;
 }
 
 // a finite number, or null (an sd the data do not determine)
@@ -47,6 +54,7 @@ nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
   j["window_s"] = problem.spec().window_s;
   j["windows"] = fit.windows;
   j["rows_left_out"] = problem.rows_left_out();
+  j["windows_in_contact"] = problem.windows_in_contact();
   j["residuals"] = fit.residuals;
   j["cost_nominal"] = fit.cost_nominal;
   j["cost_fitted"] = fit.cost_fitted;
@@ -124,26 +132,27 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
   std::string md = "# Identification: " + problem.spec().file + "\n\n";
   md += "Scenario `" + problem.spec().scenario + "`, scene `" + problem.scene() + "`; " +
         std::to_string(problem.spec().logs.size()) + " log(s), " + std::to_string(fit.windows) + " windows of " +
-        Num(problem.spec().window_s) + " s, " + std::to_string(fit.residuals) + " residuals.\n\n";
-  md += "Cost (half the sum of squared weighted residuals): nominal " + Num(fit.cost_nominal) + ", fitted " +
-        Num(fit.cost_fitted) + "; residual sd " + Num(fit.residual_sd) +
+        Short(problem.spec().window_s) + " s (" + std::to_string(problem.windows_in_contact()) +
+        " more left out: their nominal replay made contact), " + std::to_string(fit.residuals) + " residuals.\n\n";
+  md += "Cost (half the sum of squared weighted residuals): nominal " + Short(fit.cost_nominal) + ", fitted " +
+        Short(fit.cost_fitted) + "; residual sd " + Short(fit.residual_sd) +
         " (weighted units; 1 when the weights are 1/σ of the noise). " + std::to_string(fit.iterations) +
         " iterations, " + std::to_string(fit.rollouts) + " window rollouts: " + fit.termination + "\n\n";
   md += "| parameter | target | nominal | fitted | sd | identifiable | note |\n|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
     const Estimate& e = fit.estimates[i];
     const BoundParameter& p = problem.parameters()[i];
-    md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element) + " | " + Num(e.nominal) + " | " +
-          Num(e.value) + " | " + (std::isfinite(e.sd) ? Num(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") +
+    md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element) + " | " + Short(e.nominal) + " | " +
+          Short(e.value) + " | " + (std::isfinite(e.sd) ? Short(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") +
           " | " + e.note + " |\n";
   }
-  md += "\nCorrelations above " + Num(kCorrelated) + " in magnitude flag parameters the data cannot tell apart:";
+  md += "\nCorrelations above " + Short(kCorrelated) + " in magnitude flag parameters the data cannot tell apart:";
   bool any = false;
   for (Eigen::Index a = 0; a < fit.correlation.rows(); ++a) {
     for (Eigen::Index b = a + 1; b < fit.correlation.cols(); ++b) {
       if (std::abs(fit.correlation(a, b)) > kCorrelated) {
         md += std::string(any ? "," : "") + " " + fit.estimates[a].name + "/" + fit.estimates[b].name + " " +
-              Num(fit.correlation(a, b));
+              Short(fit.correlation(a, b));
         any = true;
       }
     }
