@@ -100,6 +100,9 @@ bool Evaluate(RolloutPool& pool, const FreeSet& set, const double* u, double* re
   return true;
 }
 
+// the cost Ceres sees: one residual block over every window. Ceres asks for the residuals
+// and Jacobian at a point it has evaluated already (a candidate step's residuals, then its
+// Jacobian once accepted; the bounded line search): the last evaluation is kept and reused.
 class WindowsCost : public ceres::CostFunction {
  public:
   WindowsCost(RolloutPool& pool, const FreeSet& set, int residuals) : pool_(pool), set_(set) {
@@ -107,13 +110,30 @@ class WindowsCost : public ceres::CostFunction {
     mutable_parameter_block_sizes()->push_back(static_cast<int>(set.index.size()));
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    return identify::Evaluate(pool_, set_, parameters[0], residuals, jacobians ? jacobians[0] : nullptr,
-                              num_residuals());
+    const int n = static_cast<int>(set_.index.size());
+    const std::vector<double> u(parameters[0], parameters[0] + n);
+    double* jacobian = jacobians ? jacobians[0] : nullptr;
+    const bool have = u == last_u_ && (last_jacobian_.size() > 0 || !jacobian);
+    if (!have) {
+      last_u_.clear();
+      last_residuals_.resize(num_residuals());
+      last_jacobian_.resize(jacobian ? static_cast<std::size_t>(num_residuals()) * n : 0);
+      if (!identify::Evaluate(pool_, set_, u.data(), last_residuals_.data(), jacobian ? last_jacobian_.data() : nullptr,
+                              num_residuals())) {
+        return false;
+      }
+      last_u_ = u;
+    }
+    std::copy(last_residuals_.begin(), last_residuals_.end(), residuals);
+    if (jacobian) std::copy(last_jacobian_.begin(), last_jacobian_.end(), jacobian);
+    return true;
   }
 
  private:
   RolloutPool& pool_;
   const FreeSet& set_;
+  // the last point evaluated, its residuals and (when asked for) its Jacobian
+  mutable std::vector<double> last_u_, last_residuals_, last_jacobian_;
 };
 
 class Progress : public ceres::IterationCallback {
