@@ -100,40 +100,46 @@ bool Evaluate(RolloutPool& pool, const FreeSet& set, const double* u, double* re
   return true;
 }
 
-// the cost Ceres sees: one residual block over every window. Ceres asks for the residuals
-// and Jacobian at a point it has evaluated already (a candidate step's residuals, then its
-// Jacobian once accepted; the bounded line search): the last evaluation is kept and reused.
+// the last point evaluated, its residuals and (when asked for) its Jacobian: Ceres asks again
+// for a point it has evaluated (a candidate's residuals, then its Jacobian once accepted), and
+// the statistics want the Jacobian at the point Ceres ended on
+struct LastEvaluation {
+  std::vector<double> u, residuals, jacobian;  // jacobian empty: not computed there
+
+  bool Get(RolloutPool& pool, const FreeSet& set, const std::vector<double>& at, bool with_jacobian, int count) {
+    if (at == u && (!jacobian.empty() || !with_jacobian)) return true;
+    u.clear();
+    residuals.resize(count);
+    jacobian.assign(with_jacobian ? static_cast<std::size_t>(count) * at.size() : 0, 0.0);
+    if (!Evaluate(pool, set, at.data(), residuals.data(), with_jacobian ? jacobian.data() : nullptr, count)) {
+      return false;
+    }
+    u = at;
+    return true;
+  }
+};
+
+// the cost Ceres sees: one residual block over every window
 class WindowsCost : public ceres::CostFunction {
  public:
-  WindowsCost(RolloutPool& pool, const FreeSet& set, int residuals) : pool_(pool), set_(set) {
+  WindowsCost(RolloutPool& pool, const FreeSet& set, int residuals, LastEvaluation& last)
+      : pool_(pool), set_(set), last_(last) {
     set_num_residuals(residuals);
     mutable_parameter_block_sizes()->push_back(static_cast<int>(set.index.size()));
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const int n = static_cast<int>(set_.index.size());
-    const std::vector<double> u(parameters[0], parameters[0] + n);
+    const std::vector<double> u(parameters[0], parameters[0] + set_.index.size());
     double* jacobian = jacobians ? jacobians[0] : nullptr;
-    const bool have = u == last_u_ && (last_jacobian_.size() > 0 || !jacobian);
-    if (!have) {
-      last_u_.clear();
-      last_residuals_.resize(num_residuals());
-      last_jacobian_.resize(jacobian ? static_cast<std::size_t>(num_residuals()) * n : 0);
-      if (!identify::Evaluate(pool_, set_, u.data(), last_residuals_.data(), jacobian ? last_jacobian_.data() : nullptr,
-                              num_residuals())) {
-        return false;
-      }
-      last_u_ = u;
-    }
-    std::copy(last_residuals_.begin(), last_residuals_.end(), residuals);
-    if (jacobian) std::copy(last_jacobian_.begin(), last_jacobian_.end(), jacobian);
+    if (!last_.Get(pool_, set_, u, jacobian != nullptr, num_residuals())) return false;
+    std::copy(last_.residuals.begin(), last_.residuals.end(), residuals);
+    if (jacobian) std::copy(last_.jacobian.begin(), last_.jacobian.end(), jacobian);
     return true;
   }
 
  private:
   RolloutPool& pool_;
   const FreeSet& set_;
-  // the last point evaluated, its residuals and (when asked for) its Jacobian
-  mutable std::vector<double> last_u_, last_residuals_, last_jacobian_;
+  LastEvaluation& last_;
 };
 
 class Progress : public ceres::IterationCallback {
@@ -150,14 +156,13 @@ class Progress : public ceres::IterationCallback {
 
 // J (residuals x free) at u, row-major as Ceres writes it
 Eigen::MatrixXd JacobianAt(RolloutPool& pool, const FreeSet& set, const std::vector<double>& u, int count,
-                           std::vector<double>* residuals) {
-  const int n = static_cast<int>(u.size());
-  std::vector<double> j(static_cast<std::size_t>(count) * n);
-  residuals->resize(count);
-  if (!Evaluate(pool, set, u.data(), residuals->data(), j.data(), count)) {
+                           std::vector<double>* residuals, LastEvaluation& last) {
+  if (!last.Get(pool, set, u, true, count)) {
     throw std::runtime_error("identify: a rollout diverged while computing the Jacobian");
   }
-  return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(j.data(), count, n);
+  *residuals = last.residuals;
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      last.jacobian.data(), count, static_cast<Eigen::Index>(u.size()));
 }
 
 double HalfSquares(const std::vector<double>& r) {
@@ -173,6 +178,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   const std::vector<BoundParameter>& params = problem.parameters();
   const int count = problem.residual_count();
   RolloutPool pool(problem, options.threads);
+  LastEvaluation last;
   FitResult result;
   result.residuals = count;
   result.windows = problem.window_count();
@@ -199,7 +205,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   for (std::size_t i = 0; i < set.index.size(); ++i) u0.push_back(set.base[set.index[i]] / set.scale[i]);
   // parameters the data do not move at all are kept at their nominal values, not fitted to noise
   if (!u0.empty()) {
-    const Eigen::MatrixXd j0 = JacobianAt(pool, set, u0, count, &r_nominal);
+    const Eigen::MatrixXd j0 = JacobianAt(pool, set, u0, count, &r_nominal, last);
     const Eigen::VectorXd norms = j0.colwise().norm();
     const double largest = norms.maxCoeff();
     FreeSet excited = set;
@@ -221,6 +227,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
       excited.upper.push_back(set.upper[i]);
       u.push_back(u0[i]);
     }
+    if (excited.index.size() != set.index.size()) last = LastEvaluation();  // other columns
     set = excited;
     u0 = u;
   } else {
@@ -233,7 +240,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   const int n = static_cast<int>(u.size());
   if (n > 0) {
     ceres::Problem ceres_problem;
-    ceres_problem.AddResidualBlock(new WindowsCost(pool, set, count), nullptr, u.data());
+    ceres_problem.AddResidualBlock(new WindowsCost(pool, set, count, last), nullptr, u.data());
     for (int i = 0; i < n; ++i) {
       ceres_problem.SetParameterLowerBound(u.data(), i, set.lower[i]);
       ceres_problem.SetParameterUpperBound(u.data(), i, set.upper[i]);
@@ -268,7 +275,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   result.fitted_values = values;
   result.correlation = Eigen::MatrixXd::Zero(params.size(), params.size());
   if (n > 0) {
-    const Eigen::MatrixXd j = JacobianAt(pool, set, u, count, &r);
+    const Eigen::MatrixXd j = JacobianAt(pool, set, u, count, &r, last);
     result.cost_fitted = HalfSquares(r);
     const double dof = std::max(1, count - n);
     const double variance = 2 * result.cost_fitted / dof;

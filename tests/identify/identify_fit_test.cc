@@ -35,7 +35,8 @@ TEST(IdentifyFit, ReplayOfTheTrueModelReproducesTheLog) {
   TempDir tmp;
   const std::string log = RunLab(testing::kScene, tmp / "run", 3.0);
   WriteFile(tmp / "id.yaml", SpecText(testing::kScene, log, "  - {name: \"pa10.q*\"}\n",
-                                      "  - {name: m2, target: body pa10_link2 mass, lower: 1, upper: 20}\n"));
+                                      "  - {name: m2, target: body pa10_link2 mass, lower: 1, upper: 20}\n") +
+                                 "start_smoothing: 0\n");
   const std::unique_ptr<Problem> problem = Problem::Create(LoadSpec(tmp / "id.yaml"));
   ASSERT_EQ(problem->columns().size(), 14u);  // pa10.q.* and pa10.qd.*
   Workspace ws = problem->MakeWorkspace();
