@@ -268,10 +268,24 @@ void Problem::SkipContactWindows() {
   Workspace ws = MakeWorkspace();
   std::vector<Window> kept;
   residual_count_ = 0;
+  // a contact the recording went through shows in its recorded states, one the nominal model
+  // would make in its replay
+  auto recorded_contact = [&](const Window& win) {
+    mjData* d = ws.data.get();
+    for (int row = win.first; row <= win.first + win.rows; ++row) {
+      std::copy(qpos_init_.begin(), qpos_init_.end(), d->qpos);
+      for (std::size_t j = 0; j < joints_.size(); ++j) {
+        d->qpos[joints_[j].qpos] = logs_[win.log].q(row, static_cast<int>(j));
+      }
+      mj_fwdPosition(ws.model.get(), d);
+      if (d->ncon > 0) return true;
+    }
+    return false;
+  };
   for (int w = 0; w < window_count(); ++w) {
     std::vector<double> r(window_residuals(w));
     const bool ok = Rollout(w, nominal, ws, r.data(), nullptr);
-    if (!ok || ws.contacts > 0) {
+    if (!ok || ws.contacts > 0 || recorded_contact(windows_[w])) {
       ++windows_in_contact_;
       continue;
     }

@@ -60,9 +60,10 @@ struct Spec {
   /// recorded): the measurement noise of the start state, carried through the whole window,
   /// is cut about 3.5-fold at 10 (docs/identify.md).
   int start_smoothing = 10;
-  /// Windows whose replay with the nominal model makes contact are left out (`contacts:
-  /// skip`, the default: contact forces are no fitted parameter, and a contact's stiffness
-  /// turns noise in the start state into large residuals), or kept (`keep`).
+  /// Windows in contact are left out (`contacts: skip`, the default: contact forces are no
+  /// fitted parameter, and a contact's stiffness turns noise in the start state into large
+  /// residuals): a recorded state of the window in contact, or the nominal model's replay
+  /// making contact. `keep`: every window is fitted.
   bool skip_contacts = true;
   std::string where_window, where_input;
 };
