@@ -77,6 +77,12 @@ TEST(IdentifyCli, BadInputIsExitTwoNamingTheField) {
   EXPECT_NE(r.err.find("id.yaml:4: parameters[0].target: 'body pa10_link4 mas' is none of"), std::string::npos)
       << r.err;
   EXPECT_FALSE(std::filesystem::exists(tmp / "fit"));
+  // an overrides file's bad line, named by file and line
+  WriteFile(tmp / "overrides.txt", "# comment\n\nduration=0.1\nnokey\n");
+  const auto run = RunVlab("run scenes/pa10_joint_pd -q --overrides '" + (tmp / "overrides.txt") + "' --out '" +
+                           (tmp / "run") + "'");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("overrides.txt:4: --set 'nokey': expected KEY=VALUE"), std::string::npos) << run.err;
   const auto missing = RunVlab("identify '" + (tmp / "none.yaml") + "'");
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.err.find("none.yaml"), std::string::npos) << missing.err;

@@ -11,6 +11,7 @@
 #include "identify/identify_problem.h"
 #include "identify/identify_spec.h"
 #include "identify_test_plant.h"
+#include "scene/scene_csv.h"
 #include "test_util.h"
 
 namespace vlab::identify {
@@ -127,6 +128,43 @@ TEST(IdentifyFit, RecoversPlantedParameters) {
   EXPECT_FALSE(std::isfinite(base.sd));
   // the weights are 1/sigma: the fitted residuals are the noise, sd about 1
   EXPECT_NEAR(fit.residual_sd, 1.0, 0.1);
+}
+
+// A sensor's bias and gain: the log's S2 angle reads 2 mrad high, its E1 angle 2 % large;
+// both are recovered with a planted mass, and the start states are corrected by them.
+TEST(IdentifyFit, RecoversASensorsBiasAndGain) {
+  TempDir tmp;
+  WriteEditedScene(
+      testing::kScene, [](mjModel* m) { testing::ScaleMass(m, "pa10_link4", 0.93); }, tmp / "truth.xml");
+  AddNoise(RunLab(tmp / "truth.xml", tmp / "real", 4.0), tmp / "noisy.csv", ".q.", 1e-5, 13);
+  scene::CsvTable table = scene::ReadCsvTable(tmp / "noisy.csv");
+  const int s2 = table.Column("pa10.q.S2"), e1 = table.Column("pa10.q.E1");
+  std::string text;
+  for (std::size_t c = 0; c < table.columns.size(); ++c) text += (c ? "," : "") + table.columns[c];
+  text += "\n";
+  for (std::vector<double>& row : table.rows) {
+    row[s2] += 2e-3;
+    row[e1] *= 1.02;
+    for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + std::to_string(row[c]);
+    text += "\n";
+  }
+  WriteFile(tmp / "biased.csv", text);
+  WriteFile(tmp / "id.yaml", SpecText(testing::kScene, tmp / "biased.csv", "  - {name: pa10.q.*, weight: 1.0e5}\n",
+                                      "  - {name: m4, target: body pa10_link4 mass, lower: 1, upper: 8}\n"
+                                      "  - {name: bias, target: column pa10.q.S2 bias, lower: -0.01, upper: 0.01}\n"
+                                      "  - {name: gain, target: column pa10.q.E1 gain, lower: 0.9, upper: 1.1}\n"));
+  const std::unique_ptr<Problem> problem = Problem::Create(LoadSpec(tmp / "id.yaml"));
+  FitOptions options;
+  options.threads = 2;
+  const FitResult fit = Fit(*problem, options);
+  const double truth[] = {4.31 * 0.93, 2e-3, 1.02};
+  for (int i = 0; i < 3; ++i) {
+    const Estimate& e = fit.estimates[i];
+    std::printf("%-5s truth %.6g fitted %.6g sd %.3g %s\n", e.name.c_str(), truth[i], e.value, e.sd, e.note.c_str());
+    EXPECT_TRUE(e.identifiable) << e.name << ": " << e.note;
+    EXPECT_LT(std::abs(e.value - truth[i]), 0.02 * truth[i]) << e.name;
+    EXPECT_LT(std::abs(e.value - truth[i]), 3 * e.sd) << e.name;
+  }
 }
 
 // Every rollout is computed alone and summed in a fixed order: one thread and three give the
