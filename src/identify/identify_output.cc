@@ -36,7 +36,9 @@ std::string Short(double x) {
 // a finite number, or null (an sd the data do not determine)
 nlohmann::json JsonNumber(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
-bool IsModelParameter(TargetKind kind) { return kind != TargetKind::kColumnBias && kind != TargetKind::kColumnGain; }
+bool IsModelParameter(TargetKind kind) {
+  return kind != TargetKind::kColumnBias && kind != TargetKind::kColumnGain && kind != TargetKind::kColumnDelay;
+}
 
 void WriteText(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
@@ -195,6 +197,7 @@ void SetModelParameters(const Problem& problem, const std::vector<double>& value
         break;
       case TargetKind::kColumnBias:
       case TargetKind::kColumnGain:
+      case TargetKind::kColumnDelay:
         break;
     }
   }

@@ -22,19 +22,28 @@ std::string JoinNames(const std::vector<std::string>& names) {
   return out;
 }
 
-// row `row` of `m` smoothed: each column's quadratic least-squares fit over the rows within
-// `half` of it (fewer at a log's ends), evaluated at the row
-Eigen::VectorXd SmoothedRow(const Eigen::MatrixXd& m, int row, int half) {
-  const int lo = std::max(0, row - half), hi = std::min(static_cast<int>(m.rows()) - 1, row + half);
-  if (hi - lo < 3) return m.row(row).transpose();
+// each column of `m` about row `row` as a + b x + c x² (x in rows from it): a quadratic
+// least-squares fit over the rows within `half` of it (fewer at a log's ends); with half 0 the
+// row itself and the parabola through it and the next two rows
+Eigen::MatrixXd QuadraticAbout(const Eigen::MatrixXd& m, int row, int half) {
+  const int rows = static_cast<int>(m.rows());
+  Eigen::MatrixXd out(m.cols(), 3);
+  if (half == 0 || rows < 4) {
+    const int r1 = std::min(row + 1, rows - 1), r2 = std::min(row + 2, rows - 1);
+    for (Eigen::Index j = 0; j < m.cols(); ++j) {
+      const double y0 = m(row, j), y1 = m(r1, j), y2 = m(r2, j);
+      const bool three = r2 == row + 2;
+      out.row(j) << y0, three ? (-3 * y0 + 4 * y1 - y2) / 2 : y1 - y0, three ? (y0 - 2 * y1 + y2) / 2 : 0.0;
+    }
+    return out;
+  }
+  const int lo = std::max(0, row - half), hi = std::min(rows - 1, row + half);
   Eigen::MatrixXd a(hi - lo + 1, 3);
   for (int i = lo; i <= hi; ++i) {
     const double x = i - row;
     a.row(i - lo) << 1.0, x, x * x;
   }
-  // the constant term of the fit is the value at the row
-  const Eigen::MatrixXd coefficients = a.colPivHouseholderQr().solve(m.middleRows(lo, hi - lo + 1));
-  return coefficients.row(0).transpose();
+  return a.colPivHouseholderQr().solve(m.middleRows(lo, hi - lo + 1)).transpose();
 }
 
 }  // namespace
@@ -145,7 +154,8 @@ void Problem::BindParameters() {
         break;
       }
       case TargetKind::kColumnBias:
-      case TargetKind::kColumnGain: {
+      case TargetKind::kColumnGain:
+      case TargetKind::kColumnDelay: {
         std::vector<std::string> arm_columns;
         for (const Joint& j : joints_) {
           for (const char* quantity : {".q.", ".qd."}) arm_columns.push_back(j.device + quantity + j.name);
@@ -162,9 +172,11 @@ void Problem::BindParameters() {
           if (columns_[c].joint == joint && columns_[c].velocity == velocity) p.index = static_cast<int>(c);
         }
         if (p.index < 0) throw InputError(where + ": column '" + spec.element + "' is not among the fitted columns");
-        int& slot = spec.kind == TargetKind::kColumnBias ? columns_[p.index].bias : columns_[p.index].gain;
+        int& slot = spec.kind == TargetKind::kColumnBias   ? columns_[p.index].bias
+                    : spec.kind == TargetKind::kColumnGain ? columns_[p.index].gain
+                                                           : columns_[p.index].delay;
         slot = static_cast<int>(parameters_.size());
-        model_value = spec.kind == TargetKind::kColumnBias ? 0.0 : 1.0;
+        model_value = spec.kind == TargetKind::kColumnGain ? 1.0 : 0.0;
         break;
       }
     }
@@ -250,8 +262,8 @@ void Problem::CutWindows() {
     int first = 0;
     for (; first + rows < n; first += rows) {
       Window w{static_cast<int>(l), first, rows, residual_count_, {}, {}};
-      w.q0 = SmoothedRow(logs_[l].q, first, spec_.start_smoothing);
-      w.qd0 = SmoothedRow(logs_[l].qd, first, spec_.start_smoothing);
+      w.q0 = QuadraticAbout(logs_[l].q, first, spec_.start_smoothing);
+      w.qd0 = QuadraticAbout(logs_[l].qd, first, spec_.start_smoothing);
       windows_.push_back(w);
       residual_count_ += rows * columns;
     }
@@ -334,6 +346,7 @@ void Problem::Apply(const std::vector<double>& values, Workspace& ws) const {
         break;
       case TargetKind::kColumnBias:
       case TargetKind::kColumnGain:
+      case TargetKind::kColumnDelay:
         break;  // applied to the columns in Rollout
     }
   }
@@ -342,13 +355,19 @@ void Problem::Apply(const std::vector<double>& values, Workspace& ws) const {
   ws.applied = values;
 }
 
-double Problem::TrueState(double measured, int joint, bool velocity, const std::vector<double>& values) const {
-  double v = measured;
+double Problem::TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity,
+                          const std::vector<double>& values) const {
+  // a sensor delayed by d reads now what was true d ago: the true value now is the measured
+  // one d later, x = d / period rows ahead on the measured fit
+  double x = 0;
+  const Column* column = nullptr;
   for (const Column& c : columns_) {
-    if (c.joint != joint || c.velocity != velocity) continue;
-    if (c.bias >= 0) v -= values[c.bias];
-    if (c.gain >= 0) v /= values[c.gain];
+    if (c.joint == joint && c.velocity == velocity) column = &c;
   }
+  if (column && column->delay >= 0) x = values[column->delay] / (steps_per_row_ * model_->opt.timestep);
+  double v = fit(joint, 0) + fit(joint, 1) * x + fit(joint, 2) * x * x;
+  if (column && column->bias >= 0) v -= values[column->bias];
+  if (column && column->gain >= 0) v /= values[column->gain];
   return v;
 }
 
@@ -361,11 +380,28 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
   mj_resetData(m, d);
   std::copy(qpos_init_.begin(), qpos_init_.end(), d->qpos);
   for (std::size_t j = 0; j < joints_.size(); ++j) {
-    d->qpos[joints_[j].qpos] = TrueState(win.q0[j], static_cast<int>(j), false, values);
-    d->qvel[joints_[j].dof] = TrueState(win.qd0[j], static_cast<int>(j), true, values);
+    d->qpos[joints_[j].qpos] = TrueState(win.q0, static_cast<int>(j), false, values);
+    d->qvel[joints_[j].dof] = TrueState(win.qd0, static_cast<int>(j), true, values);
   }
   ws.contacts = 0;
   const int columns = static_cast<int>(columns_.size());
+  // the model's value and rate of each column at each row (row 0: the start), for the delays
+  ws.trace.assign(static_cast<std::size_t>(win.rows + 1) * columns * 2, 0.0);
+  auto record = [&](int k) {
+    for (int c = 0; c < columns; ++c) {
+      const Joint& joint = joints_[columns_[c].joint];
+      double* at = &ws.trace[(static_cast<std::size_t>(k) * columns + c) * 2];
+      at[0] = columns_[c].velocity ? d->qvel[joint.dof] : d->qpos[joint.qpos];
+      at[1] = columns_[c].velocity ? d->qacc[joint.dof] : d->qvel[joint.dof];
+    }
+  };
+  for (const Column& c : columns_) {
+    if (c.delay >= 0 && c.velocity) {
+      mj_forward(m, d);  // the start's accelerations, the rate of a delayed qd column
+      break;
+    }
+  }
+  record(0);
   for (int k = 1; k <= win.rows; ++k) {
     const int row = win.first + k;
     for (std::size_t j = 0; j < joints_.size(); ++j) d->ctrl[joints_[j].actuator] = log.tau(row, static_cast<int>(j));
@@ -377,10 +413,31 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
         d->warning[mjWARN_BADQACC].number > 0) {
       return false;
     }
+    record(k);
+  }
+  const double period = steps_per_row_ * m->opt.timestep;
+  for (int k = 1; k <= win.rows; ++k) {
+    const int row = win.first + k;
     for (int c = 0; c < columns; ++c) {
       const Column& col = columns_[c];
-      const Joint& joint = joints_[col.joint];
-      double y = col.velocity ? d->qvel[joint.dof] : d->qpos[joint.qpos];
+      auto at = [&](int i) { return &ws.trace[(static_cast<std::size_t>(i) * columns + c) * 2]; };
+      double y = at(k)[0];
+      if (col.delay >= 0) {
+        // the value x rows earlier: cubic Hermite between the rows around it (value and rate),
+        // smooth in the delay; before the window, along the start's rate
+        const double x = values[col.delay] / period;
+        const double s = k - x;
+        if (s <= 0) {
+          y = at(0)[0] + at(0)[1] * s * period;
+        } else {
+          const int i = std::min(static_cast<int>(std::floor(s)), win.rows - 1);
+          const double f = s - i, f2 = f * f, f3 = f2 * f;
+          const double* a = at(i);
+          const double* b = at(i + 1);
+          y = (2 * f3 - 3 * f2 + 1) * a[0] + (f3 - 2 * f2 + f) * period * a[1] + (-2 * f3 + 3 * f2) * b[0] +
+              (f3 - f2) * period * b[1];
+        }
+      }
       if (col.gain >= 0) y *= values[col.gain];
       if (col.bias >= 0) y += values[col.bias];
       const int i = (k - 1) * columns + c;

@@ -44,6 +44,7 @@ struct Workspace {
   DataPtr data;
   std::vector<double> applied;  ///< the parameter values `model` holds now
   int contacts = 0;             ///< the most contacts at any step of the last rollout
+  std::vector<double> trace;    ///< delayed columns: value and rate at each row of the window
 };
 
 class Problem {
@@ -76,7 +77,7 @@ class Problem {
   /// model's derived constants (mj_setConst); a no-op when it holds them already.
   void Apply(const std::vector<double>& values, Workspace& ws) const;
   /// Replays window w with `values`: residuals into r (window_residuals(w) of them) and,
-  /// unless null, the predicted column values (the sensor's bias and gain applied).
+  /// unless null, the predicted column values (the sensor's bias, gain and delay applied).
   /// False when the simulation diverged (MuJoCo's bad qpos/qvel/qacc).
   bool Rollout(int w, const std::vector<double>& values, Workspace& ws, double* r, double* predicted) const;
 
@@ -98,7 +99,7 @@ class Problem {
   struct Column {
     int joint = 0;
     bool velocity = false;
-    int bias = -1, gain = -1;  ///< parameters transforming it, -1: none
+    int bias = -1, gain = -1, delay = -1;  ///< parameters transforming it, -1: none
   };
   struct Log {
     std::vector<double> time;
@@ -107,7 +108,9 @@ class Problem {
   };
   struct Window {
     int log = 0, first = 0, rows = 0, offset = 0;
-    Eigen::VectorXd q0, qd0;  ///< the start state as measured (smoothed), per joint
+    /// the measured q and qd about the first row, per joint: a + b x + c x² at x rows after it
+    /// (smoothed), so that a delayed sensor's start value can be read ahead
+    Eigen::MatrixXd q0, qd0;  ///< joints x 3 (a, b, c)
   };
 
   Problem() = default;
@@ -117,8 +120,8 @@ class Problem {
   void ReadLogs();
   void CutWindows();
   void SkipContactWindows();
-  // a measured start state with the sensor transforms undone
-  double TrueState(double measured, int joint, bool velocity, const std::vector<double>& values) const;
+  // the true start state of a joint from the measured fit (a, b, c), the sensor transforms undone
+  double TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity, const std::vector<double>& values) const;
 
   Spec spec_;
   ModelPtr model_;

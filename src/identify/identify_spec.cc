@@ -31,6 +31,8 @@ bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element
     *kind = TargetKind::kColumnBias;
   } else if (what == "column" && attribute == "gain") {
     *kind = TargetKind::kColumnGain;
+  } else if (what == "column" && attribute == "delay") {
+    *kind = TargetKind::kColumnDelay;
   } else {
     return false;
   }
@@ -39,7 +41,7 @@ bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element
 
 constexpr char kTargets[] =
     "'body NAME mass', 'joint NAME damping', 'joint NAME armature', 'joint NAME frictionloss', "
-    "'column NAME bias' or 'column NAME gain'";
+    "'column NAME bias', 'column NAME gain' or 'column NAME delay'";
 
 ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, const std::string& path) {
   lab::MapReader r(file, node, path);
@@ -68,7 +70,7 @@ ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, con
   // a mass, damping, armature and friction loss are never negative; a gain is positive
   const bool positive = p.kind == TargetKind::kBodyMass || p.kind == TargetKind::kColumnGain;
   const bool non_negative = p.kind == TargetKind::kJointDamping || p.kind == TargetKind::kJointArmature ||
-                            p.kind == TargetKind::kJointFrictionLoss;
+                            p.kind == TargetKind::kJointFrictionLoss || p.kind == TargetKind::kColumnDelay;
   if (positive && !(p.lower > 0)) r.Fail("lower", "must be > 0 for " + TargetText(p.kind, p.element));
   if (non_negative && p.lower < 0) r.Fail("lower", "must be >= 0 for " + TargetText(p.kind, p.element));
   return p;
@@ -110,6 +112,8 @@ std::string TargetText(TargetKind kind, const std::string& element) {
       return "column " + element + " bias";
     case TargetKind::kColumnGain:
       return "column " + element + " gain";
+    case TargetKind::kColumnDelay:
+      return "column " + element + " delay";
   }
   return "";
 }

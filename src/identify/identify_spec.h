@@ -20,6 +20,7 @@ enum class TargetKind {
   kJointFrictionLoss,  ///< joint NAME frictionloss (N·m, N)
   kColumnBias,         ///< column NAME bias: the sensor reads true + bias (the column's unit)
   kColumnGain,         ///< column NAME gain: the sensor reads gain · true (1)
+  kColumnDelay,        ///< column NAME delay: the sensor reads the true value of this long ago (s)
 };
 
 /// "body NAME mass", ...: the words of a target, for messages and outputs.

@@ -1,4 +1,5 @@
 // vlab identify's fit: planted parameters recovered from logs the lab makes in-test.
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -130,9 +131,10 @@ TEST(IdentifyFit, RecoversPlantedParameters) {
   EXPECT_NEAR(fit.residual_sd, 1.0, 0.1);
 }
 
-// A sensor's bias and gain: the log's S2 angle reads 2 mrad high, its E1 angle 2 % large;
-// both are recovered with a planted mass, and the start states are corrected by them.
-TEST(IdentifyFit, RecoversASensorsBiasAndGain) {
+// A sensor's bias, gain and delay: the log's S2 angle reads 2 mrad high, its E1 angle 2 %
+// large, its S1 angle one period (2 ms) late; all are recovered with a planted mass, the
+// start states corrected by them.
+TEST(IdentifyFit, RecoversASensorsBiasGainAndDelay) {
   TempDir tmp;
   WriteEditedScene(
       testing::kScene, [](mjModel* m) { testing::ScaleMass(m, "pa10_link4", 0.93); }, tmp / "truth.xml");
@@ -142,23 +144,32 @@ TEST(IdentifyFit, RecoversASensorsBiasAndGain) {
   std::string text;
   for (std::size_t c = 0; c < table.columns.size(); ++c) text += (c ? "," : "") + table.columns[c];
   text += "\n";
+  const int s1 = table.Column("pa10.q.S1");
+  char buffer[32];
+  for (std::size_t r = table.rows.size(); r-- > 0;) {
+    // S1 read one period (2 ms) late; the first row as it is
+    if (r > 0) table.rows[r][s1] = table.rows[r - 1][s1];
+  }
   for (std::vector<double>& row : table.rows) {
     row[s2] += 2e-3;
     row[e1] *= 1.02;
-    for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + std::to_string(row[c]);
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      text += (c ? "," : "") + std::string(buffer, std::to_chars(buffer, buffer + sizeof buffer, row[c]).ptr);
+    }
     text += "\n";
   }
   WriteFile(tmp / "biased.csv", text);
   WriteFile(tmp / "id.yaml", SpecText(testing::kScene, tmp / "biased.csv", "  - {name: pa10.q.*, weight: 1.0e5}\n",
                                       "  - {name: m4, target: body pa10_link4 mass, lower: 1, upper: 8}\n"
                                       "  - {name: bias, target: column pa10.q.S2 bias, lower: -0.01, upper: 0.01}\n"
-                                      "  - {name: gain, target: column pa10.q.E1 gain, lower: 0.9, upper: 1.1}\n"));
+                                      "  - {name: gain, target: column pa10.q.E1 gain, lower: 0.9, upper: 1.1}\n"
+                                      "  - {name: delay, target: column pa10.q.S1 delay, lower: 0, upper: 0.01}\n"));
   const std::unique_ptr<Problem> problem = Problem::Create(LoadSpec(tmp / "id.yaml"));
   FitOptions options;
   options.threads = 2;
   const FitResult fit = Fit(*problem, options);
-  const double truth[] = {4.31 * 0.93, 2e-3, 1.02};
-  for (int i = 0; i < 3; ++i) {
+  const double truth[] = {4.31 * 0.93, 2e-3, 1.02, 0.002};
+  for (int i = 0; i < 4; ++i) {
     const Estimate& e = fit.estimates[i];
     std::printf("%-5s truth %.6g fitted %.6g sd %.3g %s\n", e.name.c_str(), truth[i], e.value, e.sd, e.note.c_str());
     EXPECT_TRUE(e.identifiable) << e.name << ": " << e.note;
