@@ -129,6 +129,31 @@ TEST(IdentifyFit, RecoversPlantedParameters) {
   EXPECT_FALSE(std::isfinite(base.sd));
   // the weights are 1/sigma: the fitted residuals are the noise, sd about 1
   EXPECT_NEAR(fit.residual_sd, 1.0, 0.1);
+
+  // held out: another path through other poses, run by the lab on the truth, the fitted and
+  // the nominal model; the fitted one's joints follow the truth's within the noise level
+  const std::unique_ptr<Problem> all = Problem::Create(LoadSpec(tmp / "id.yaml"));
+  WriteEditedScene(
+      tmp / "nominal.xml", [&](mjModel* m) { SetModelParameters(*all, fit.fitted_values, m); }, tmp / "fitted.xml");
+  const std::vector<std::string> path = {"controller.waypoints.0.q=[0.3, 0.5, -0.2, 1.2, 0.3, 1.4, 0.5]",
+                                         "controller.waypoints.1.q=[-0.3, 0.6, 0.4, 0.8, -0.5, 1.3, -0.6]"};
+  auto joints = [&](const std::string& scene, const std::string& name) {
+    return scene::ReadCsvTable(RunLab(scene, tmp / name, 10.0, path));
+  };
+  const scene::CsvTable truth = joints(tmp / "truth.xml", "h_truth"), fitted = joints(tmp / "fitted.xml", "h_fitted"),
+                        nominal = joints(tmp / "nominal.xml", "h_nominal");
+  double worst_fitted = 0, worst_nominal = 0;
+  for (const char* j : {"S1", "S2", "S3", "E1", "E2", "W1", "W2"}) {
+    const int c = truth.Column(std::string("pa10.q.") + j);
+    for (std::size_t r = 0; r < truth.rows.size(); ++r) {
+      worst_fitted = std::max(worst_fitted, std::abs(fitted.rows[r][c] - truth.rows[r][c]));
+      worst_nominal = std::max(worst_nominal, std::abs(nominal.rows[r][c] - truth.rows[r][c]));
+    }
+  }
+  std::printf("held out: largest joint difference to the truth: fitted %.3g rad, nominal %.3g rad\n", worst_fitted,
+              worst_nominal);
+  EXPECT_LT(worst_fitted, 2 * kSigma);
+  EXPECT_GT(worst_nominal, 10 * kSigma);
 }
 
 // A sensor's bias, gain and delay: the log's S2 angle reads 2 mrad high, its E1 angle 2 %

@@ -33,10 +33,13 @@ inline void ScaleMass(mjModel* m, const char* body, double factor) {
   for (int k = 0; k < 3; ++k) m->body_inertia[3 * b + k] *= factor;
 }
 
-/// Runs pa10_joint_pd (no checks, `duration` s) on `scene` into `out_dir`; its log.csv.
-inline std::string RunLab(const std::string& scene, const std::string& out_dir, double duration) {
-  lab::Scenario s =
-      lab::LoadScenario(kScenario, {"scene=" + scene, "checks=[]", "duration=" + std::to_string(duration)});
+/// Runs pa10_joint_pd (no checks, `duration` s, `sets` overrides after) on `scene` into
+/// `out_dir`; its log.csv.
+inline std::string RunLab(const std::string& scene, const std::string& out_dir, double duration,
+                          const std::vector<std::string>& sets = {}) {
+  std::vector<std::string> all = {"scene=" + scene, "checks=[]", "duration=" + std::to_string(duration)};
+  all.insert(all.end(), sets.begin(), sets.end());
+  lab::Scenario s = lab::LoadScenario(kScenario, all);
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(s);
   lab::RunOptions options;
   options.out_dir = out_dir;
