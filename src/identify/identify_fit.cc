@@ -191,6 +191,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
     e.nominal = e.value = params[i].nominal;
     e.frozen = params[i].spec.frozen;
     e.sd = e.frozen ? 0.0 : std::numeric_limits<double>::infinity();
+    e.sd_iid = e.sd;
     e.identifiable = !e.frozen;
     if (e.frozen) e.note = "frozen";
     result.estimates.push_back(e);

@@ -76,6 +76,7 @@ nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
                       {"nominal", e.nominal},
                       {"value", e.value},
                       {"sd", JsonNumber(e.sd)},
+                      {"sd_iid", JsonNumber(e.sd_iid)},
                       {"lower", p.spec.lower},
                       {"upper", p.spec.upper},
                       {"frozen", e.frozen},
