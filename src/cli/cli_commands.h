@@ -64,6 +64,7 @@ int BenchTask(const BenchArgs& args);      // cli_bench_task.cc
 int BenchSweep(const BenchArgs& args);     // cli_bench_sweep.cc
 int BenchView(const BenchArgs& args);      // cli_bench_view.cc
 int BenchLog(const BenchArgs& args);       // cli_bench_log.cc
+int BenchIdentify(const BenchArgs& args);  // cli_bench_identify.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.
