@@ -64,6 +64,15 @@ TEST(IdentifySpec, ReadsEveryKey) {
   EXPECT_TRUE(s.parameters[1].frozen);
 }
 
+// the shipped spec reads (its log is made by the command its comment gives)
+TEST(IdentifySpec, ShippedSpecReads) {
+  const identify::Spec s = LoadSpec(VLAB_SOURCE_DIR "/scenes/identify/pa10_joint_pd.yaml");
+  EXPECT_EQ(s.scenario, VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml");
+  ASSERT_EQ(s.logs.size(), 1u);
+  EXPECT_NE(s.logs[0].find("out/pa10_joint_pd"), std::string::npos);
+  EXPECT_EQ(s.parameters.size(), 8u);
+}
+
 TEST(IdentifySpec, RefusesBadEntriesNamingTheField) {
   struct Case {
     std::string from, to, message;
