@@ -22,6 +22,8 @@ VLAB_APT_PACKAGES+=(libzstd-dev)
 # PNG and JPEG through libpng and libjpeg (render/image_codec.*), not OpenCV's imgcodecs, whose
 # dependencies every program linking it loads at start-up
 VLAB_APT_PACKAGES+=(libpng-dev libjpeg62-turbo-dev)
+# vlab identify fits model parameters to logs by nonlinear least squares with Ceres (src/identify/)
+VLAB_APT_PACKAGES+=(libceres-dev)
 
 # for the tests only: Octave runs the MATLAB/Octave example (tests/serve/octave_client_test.sh)
 VLAB_TEST_APT_PACKAGES=(octave octave-instrument-control)

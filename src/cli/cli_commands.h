@@ -26,6 +26,7 @@ struct RunArgs {
   long long seed = -1;            ///< >= 0 overrides the scenario's seed
   int rt_priority = -1;           ///< >= 0 overrides the scenario's realtime.priority
   std::vector<std::string> sets;  ///< --set KEY=VALUE scenario overrides, in order
+  std::string overrides_file;     ///< --overrides FILE: KEY=VALUE lines applied before the --set ones
 };
 int RunCommand(const RunArgs& args);
 
@@ -63,6 +64,7 @@ int BenchTask(const BenchArgs& args);      // cli_bench_task.cc
 int BenchSweep(const BenchArgs& args);     // cli_bench_sweep.cc
 int BenchView(const BenchArgs& args);      // cli_bench_view.cc
 int BenchLog(const BenchArgs& args);       // cli_bench_log.cc
+int BenchIdentify(const BenchArgs& args);  // cli_bench_identify.cc
 
 /// A subcommand defined wholly in its own file: Add*Command adds it (name,
 /// help, options) to `app` and returns the function that runs it once parsed.
@@ -71,21 +73,22 @@ struct Subcommand {
   CLI::App* app = nullptr;
   std::function<int()> run;
 };
-Subcommand AddRenderCommand(CLI::App& app);   // cli_render.cc
-Subcommand AddCameraCommand(CLI::App& app);   // cli_camera.cc
-Subcommand AddVisionCommand(CLI::App& app);   // cli_vision.cc
-Subcommand AddCubesCommand(CLI::App& app);    // cli_cubes.cc
-Subcommand AddTaskCommand(CLI::App& app);     // cli_task.cc
-Subcommand AddCompareCommand(CLI::App& app);  // cli_compare.cc
-Subcommand AddGoldenCommand(CLI::App& app);   // cli_compare.cc
-Subcommand AddSweepCommand(CLI::App& app);    // cli_sweep.cc
-Subcommand AddCollectCommand(CLI::App& app);  // cli_collect.cc
-Subcommand AddViewCommand(CLI::App& app);     // cli_view.cc
-Subcommand AddExportCommand(CLI::App& app);   // cli_view.cc
-Subcommand AddFollowCommand(CLI::App& app);   // cli_follow.cc
-Subcommand AddConvertCommand(CLI::App& app);  // cli_convert.cc
-Subcommand AddRecordCommand(CLI::App& app);   // cli_record.cc
-Subcommand AddExciteCommand(CLI::App& app);   // cli_excite.cc
+Subcommand AddRenderCommand(CLI::App& app);    // cli_render.cc
+Subcommand AddCameraCommand(CLI::App& app);    // cli_camera.cc
+Subcommand AddVisionCommand(CLI::App& app);    // cli_vision.cc
+Subcommand AddCubesCommand(CLI::App& app);     // cli_cubes.cc
+Subcommand AddTaskCommand(CLI::App& app);      // cli_task.cc
+Subcommand AddCompareCommand(CLI::App& app);   // cli_compare.cc
+Subcommand AddGoldenCommand(CLI::App& app);    // cli_compare.cc
+Subcommand AddSweepCommand(CLI::App& app);     // cli_sweep.cc
+Subcommand AddCollectCommand(CLI::App& app);   // cli_collect.cc
+Subcommand AddViewCommand(CLI::App& app);      // cli_view.cc
+Subcommand AddExportCommand(CLI::App& app);    // cli_view.cc
+Subcommand AddFollowCommand(CLI::App& app);    // cli_follow.cc
+Subcommand AddConvertCommand(CLI::App& app);   // cli_convert.cc
+Subcommand AddRecordCommand(CLI::App& app);    // cli_record.cc
+Subcommand AddExciteCommand(CLI::App& app);    // cli_excite.cc
+Subcommand AddIdentifyCommand(CLI::App& app);  // cli_identify.cc
 
 /// Runs a sweep's runs here, `jobs` at a time, into out/ID, skipping complete runs
 /// (cli_sweep.cc); quiet: no lines printed. Returns 0 when every run passed.

@@ -12,6 +12,7 @@
 #include "core/core_errors.h"
 #include "lab/outputs/lab_log.h"
 #include "lab/run/lab_runner.h"
+#include "lab/scenario/lab_overrides.h"
 #include "lab/scenario/lab_scenario.h"
 
 namespace vlab::cli {
@@ -79,7 +80,10 @@ int RunCommand(const RunArgs& args) {
     // SIGINT, SIGTERM: the run stops at the next period and writes what ran (exit 1); installed
     // before loading, so that one during loading stops the run at t = 0 instead of being lost
     InstallStopSignals();
-    lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario), args.sets);
+    std::vector<std::string> sets;
+    if (!args.overrides_file.empty()) sets = lab::ReadOverridesFile(args.overrides_file);
+    sets.insert(sets.end(), args.sets.begin(), args.sets.end());
+    lab::Scenario scenario = lab::LoadScenario(lab::ResolveScenarioPath(args.scenario), sets);
     if (args.duration_s > 0) scenario.duration_s = args.duration_s;
     if (args.seed >= 0) scenario.seed = static_cast<std::uint64_t>(args.seed);
     std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);

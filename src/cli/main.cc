@@ -55,6 +55,9 @@ int main(int argc, char** argv) {
                    "(devices.jr3.filter=2, controller.gains.position=15); VALUE is YAML, typed and checked "
                    "like the file; repeatable; recorded in summary.json")
       ->allow_extra_args(false);
+  run_cmd->add_option("--overrides", run.overrides_file,
+                      "FILE of KEY=VALUE lines, one --set each ('#' comments), applied before the --set options "
+                      "(vlab identify's overrides.txt)");
 
   vlab::cli::ServeArgs serve;
   CLI::App* serve_cmd =
@@ -101,18 +104,20 @@ int main(int argc, char** argv) {
                    "| task (a task script vs the built-in task_space controller, period time) "
                    "| sweep (runs per minute of vlab sweep -j 2 vs -j 1) "
                    "| view (lab period with and without the scene stream + one viewer) "
-                   "| log (a run's wall time and log bytes per log format against CSV)")
+                   "| log (a run's wall time and log bytes per log format against CSV) "
+                   "| identify (vlab identify's fit of 20 PA10 parameters with 1 and 2 threads)")
       ->required()
-      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task", "sweep", "view", "log"}));
+      ->check(CLI::IsMember({"physics", "bridge", "render", "realtime", "task", "sweep", "view", "log", "identify"}));
   bench_cmd->add_option(
       "--scenario", bench.scenario,
       "Scenario to measure (default: scenes/pa10_reach for physics, scenes/pa10_serve for bridge "
       "and realtime, scenes/pa10_reach_task for task, scenes/pa10_view for view, scenes/pa10_reach for log); "
       "sweep: a sweep "
       "file (default scenes/sweeps/pa10_gains.yaml)");
-  bench_cmd->add_option("--duration", bench.duration_s,
-                        "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5); "
-                        "realtime: of each run (default 10); log: of each run (default 60)");
+  bench_cmd->add_option(
+      "--duration", bench.duration_s,
+      "Simulated seconds per measurement (> 0); bridge: of the lockstep run (default 5); "
+      "realtime: of each run (default 10); log: of each run (default 60); identify: of the fitted log (default 20)");
   bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
   bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant, 1 to 100 (best kept)");
   bench_cmd
@@ -127,7 +132,8 @@ int main(int argc, char** argv) {
       vlab::cli::AddCubesCommand(app),   vlab::cli::AddTaskCommand(app),   vlab::cli::AddCompareCommand(app),
       vlab::cli::AddGoldenCommand(app),  vlab::cli::AddSweepCommand(app),  vlab::cli::AddCollectCommand(app),
       vlab::cli::AddViewCommand(app),    vlab::cli::AddExportCommand(app), vlab::cli::AddFollowCommand(app),
-      vlab::cli::AddConvertCommand(app), vlab::cli::AddRecordCommand(app), vlab::cli::AddExciteCommand(app)};
+      vlab::cli::AddConvertCommand(app), vlab::cli::AddRecordCommand(app), vlab::cli::AddExciteCommand(app),
+      vlab::cli::AddIdentifyCommand(app)};
 
   try {
     app.parse(argc, argv);
@@ -185,6 +191,7 @@ int main(int argc, char** argv) {
     if (bench.what == "sweep") return vlab::cli::BenchSweep(bench);
     if (bench.what == "view") return vlab::cli::BenchView(bench);
     if (bench.what == "log") return vlab::cli::BenchLog(bench);
+    if (bench.what == "identify") return vlab::cli::BenchIdentify(bench);
     return vlab::cli::BenchCommand(bench);
   }
   for (const auto& sub : more) {

@@ -114,6 +114,28 @@ Override ParseOverride(const std::string& text) {
   return o;
 }
 
+std::vector<std::string> ReadOverridesFile(const std::string& path) {
+  const std::string text = ReadInputFile(path, "overrides file '" + path + "'", kMaxYamlBytes);
+  std::vector<std::string> lines;
+  std::size_t start = 0;
+  for (int number = 1; start < text.size(); ++number) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(start, end - start);
+    start = end + 1;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    try {
+      ParseOverride(line);
+    } catch (const InputError& e) {
+      throw InputError(path + ":" + std::to_string(number) + ": " + e.what());
+    }
+    lines.push_back(line);
+  }
+  return lines;
+}
+
 std::vector<std::string> ApplyOverrides(const std::string& file, YAML::Node root,
                                         const std::vector<Override>& overrides) {
   std::vector<std::string> paths;

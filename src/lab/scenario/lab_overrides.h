@@ -26,6 +26,12 @@ struct Override {
 /// there is no '=' or KEY is empty or has an empty segment ("a..b").
 Override ParseOverride(const std::string& text);
 
+/// Reads an overrides file (`vlab run --overrides FILE`, written by vlab identify): one
+/// KEY=VALUE a line, as --set takes it; blank lines and lines starting with '#' are skipped.
+/// Returns the lines in order. Throws InputError naming the file (and "FILE:LINE" for a
+/// line ParseOverride refuses).
+std::vector<std::string> ReadOverridesFile(const std::string& path);
+
 /// Applies `overrides` in order to the document `root` of scenario `file`.
 /// Returns, for each override, the key path the scenario parser uses in its
 /// messages ("devices[1].filter"). Throws InputError naming the --set when a

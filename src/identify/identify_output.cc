@@ -1,0 +1,244 @@
+#include "identify/identify_output.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "core/core_errors.h"
+#include "core/core_mujoco.h"
+#include "lab/outputs/lab_output.h"
+#include "lab/outputs/lab_plot.h"
+
+namespace vlab::identify {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Num(double x) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), x);
+  return std::string(buffer, result.ptr);
+}
+
+// six significant digits, for the report's text
+std::string Short(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", x);
+  return buffer;
+}
+
+// a finite number, or null (an sd the data do not determine)
+nlohmann::json JsonNumber(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+bool IsModelParameter(TargetKind kind) {
+  return kind != TargetKind::kColumnBias && kind != TargetKind::kColumnGain && kind != TargetKind::kColumnDelay;
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  if (!out.flush()) throw std::runtime_error("identify: cannot write '" + path + "'");
+}
+
+nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
+  nlohmann::json j;
+  j["spec"] = problem.spec().file;
+  j["scenario"] = problem.spec().scenario;
+  j["scene"] = problem.scene();
+  j["logs"] = problem.spec().logs;
+  j["columns"] = problem.columns();
+  j["window_s"] = problem.spec().window_s;
+  j["windows"] = fit.windows;
+  j["rows_left_out"] = problem.rows_left_out();
+  j["windows_in_contact"] = problem.windows_in_contact();
+  j["residuals"] = fit.residuals;
+  j["cost_nominal"] = fit.cost_nominal;
+  j["cost_fitted"] = fit.cost_fitted;
+  j["residual_sd"] = fit.residual_sd;
+  j["iterations"] = fit.iterations;
+  j["rollouts"] = fit.rollouts;
+  j["termination"] = fit.termination;
+  j["thresholds"] = {{"unexcited_column", kUnexcitedColumn}, {"poor_sd", kPoorSd}, {"correlated", kCorrelated}};
+  nlohmann::json params = nlohmann::json::array();
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
+    const Estimate& e = fit.estimates[i];
+    const BoundParameter& p = problem.parameters()[i];
+    names.push_back(e.name);
+    params.push_back({{"name", e.name},
+                      {"target", TargetText(p.spec.kind, p.spec.element)},
+                      {"nominal", e.nominal},
+                      {"value", e.value},
+                      {"sd", JsonNumber(e.sd)},
+                      {"sd_iid", JsonNumber(e.sd_iid)},
+                      {"lower", p.spec.lower},
+                      {"upper", p.spec.upper},
+                      {"frozen", e.frozen},
+                      {"excited", e.excited},
+                      {"identifiable", e.identifiable},
+                      {"note", e.note}});
+  }
+  j["parameters"] = params;
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index a = 0; a < fit.correlation.rows(); ++a) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index b = 0; b < fit.correlation.cols(); ++b) row.push_back(fit.correlation(a, b));
+    rows.push_back(row);
+  }
+  j["correlation"] = {{"names", names}, {"matrix", rows}};
+  return j;
+}
+
+// fit.csv: time, log, then per column measured, nominal, fitted and the two errors
+std::vector<std::string> WriteFitCsv(const Problem& problem, const FitResult& fit, int threads,
+                                     const std::string& path) {
+  std::vector<double> nominal, fitted;
+  if (!Predict(problem, fit.nominal_values, threads, &nominal) ||
+      !Predict(problem, fit.fitted_values, threads, &fitted)) {
+    throw std::runtime_error("identify: a rollout diverged while writing fit.csv");
+  }
+  const std::vector<std::string>& columns = problem.columns();
+  std::string text = "time,log";
+  std::vector<std::string> header;
+  for (const std::string& c : columns) {
+    for (const char* what : {"measured", "nominal", "fitted", "error_nominal", "error_fitted"}) {
+      text += "," + c + "." + what;
+    }
+  }
+  text += "\n";
+  const int n = static_cast<int>(columns.size());
+  for (int w = 0; w < problem.window_count(); ++w) {
+    const int rows = problem.window_residuals(w) / n;
+    for (int k = 1; k <= rows; ++k) {
+      const Problem::Sample s = problem.WindowRow(w, k);
+      text += Num(s.time_s) + "," + std::to_string(s.log);
+      for (int c = 0; c < n; ++c) {
+        const int i = problem.window_offset(w) + (k - 1) * n + c;
+        const double measured = problem.Measured(w, k, c);
+        text += "," + Num(measured) + "," + Num(nominal[i]) + "," + Num(fitted[i]) + "," + Num(nominal[i] - measured) +
+                "," + Num(fitted[i] - measured);
+      }
+      text += "\n";
+    }
+  }
+  WriteText(path, text);
+  return columns;
+}
+
+std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const std::vector<std::string>& plots) {
+  std::string md = "# Identification: " + problem.spec().file + "\n\n";
+  md += "Scenario `" + problem.spec().scenario + "`, scene `" + problem.scene() + "`; " +
+        std::to_string(problem.spec().logs.size()) + " log(s), " + std::to_string(fit.windows) + " windows of " +
+        Short(problem.spec().window_s) + " s (" + std::to_string(problem.windows_in_contact()) +
+        " more left out: their nominal replay made contact), " + std::to_string(fit.residuals) + " residuals.\n\n";
+  md += "Cost (half the sum of squared weighted residuals): nominal " + Short(fit.cost_nominal) + ", fitted " +
+        Short(fit.cost_fitted) + "; residual sd " + Short(fit.residual_sd) +
+        " (weighted units; 1 when the weights are 1/σ of the noise). " + std::to_string(fit.iterations) +
+        " iterations, " + std::to_string(fit.rollouts) + " window rollouts: " + fit.termination + "\n\n";
+  md += "| parameter | target | nominal | fitted | sd | identifiable | note |\n|---|---|---|---|---|---|---|\n";
+  for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
+    const Estimate& e = fit.estimates[i];
+    const BoundParameter& p = problem.parameters()[i];
+    md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element) + " | " + Short(e.nominal) + " | " +
+          Short(e.value) + " | " + (std::isfinite(e.sd) ? Short(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") +
+          " | " + e.note + " |\n";
+  }
+  md += "\nCorrelations above " + Short(kCorrelated) + " in magnitude flag parameters the data cannot tell apart:";
+  bool any = false;
+  for (Eigen::Index a = 0; a < fit.correlation.rows(); ++a) {
+    for (Eigen::Index b = a + 1; b < fit.correlation.cols(); ++b) {
+      if (std::abs(fit.correlation(a, b)) > kCorrelated) {
+        md += std::string(any ? "," : "") + " " + fit.estimates[a].name + "/" + fit.estimates[b].name + " " +
+              Short(fit.correlation(a, b));
+        any = true;
+      }
+    }
+  }
+  md += any ? ".\n" : " none.\n";
+  md += "\n## Fitted columns\n\nErrors of the nominal and the fitted model against the measured column (fit.csv):\n\n";
+  for (const std::string& plot : plots) md += "![" + plot + "](" + plot + ")\n";
+  return md;
+}
+
+}  // namespace
+
+void WriteEditedScene(const std::string& scene, const std::function<void(mjModel*)>& edit, const std::string& out) {
+  ModelPtr model = LoadModel(scene);
+  edit(model.get());
+  DataPtr data = MakeData(model.get());
+  mj_setConst(model.get(), data.get());
+  char error[1024] = "";
+  if (!mj_saveLastXML(out.c_str(), model.get(), error, sizeof(error))) {
+    throw InputError("scene '" + scene + "': cannot write it as '" + out + "': " + error);
+  }
+}
+
+void SetModelParameters(const Problem& problem, const std::vector<double>& values, mjModel* m) {
+  for (std::size_t i = 0; i < problem.parameters().size(); ++i) {
+    const BoundParameter& p = problem.parameters()[i];
+    switch (p.spec.kind) {
+      case TargetKind::kBodyMass:
+        m->body_mass[p.index] = values[i];
+        for (int k = 0; k < 3; ++k) m->body_inertia[3 * p.index + k] = p.inertia0[k] * values[i] / p.mass0;
+        break;
+      case TargetKind::kJointDamping:
+        m->dof_damping[p.index] = values[i];
+        break;
+      case TargetKind::kJointArmature:
+        m->dof_armature[p.index] = values[i];
+        break;
+      case TargetKind::kJointFrictionLoss:
+        m->dof_frictionloss[p.index] = values[i];
+        break;
+      case TargetKind::kColumnBias:
+      case TargetKind::kColumnGain:
+      case TargetKind::kColumnDelay:
+        break;
+    }
+  }
+}
+
+std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std::string& out_dir, int threads,
+                         std::string* note) {
+  std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
+  const std::string dir = out->staging_dir();
+  WriteText(out->File("estimates.json"), EstimatesJson(problem, fit).dump(2) + "\n");
+  WriteEditedScene(
+      problem.scene(), [&](mjModel* m) { SetModelParameters(problem, fit.fitted_values, m); }, out->File("model.xml"));
+  // --set lines: the patched scene (the absolute path of its final place); sensor transforms as comments
+  std::string overrides =
+      "# vlab identify " + problem.spec().file + ": the fitted model for vlab run --overrides FILE\n";
+  overrides += "scene=" + fs::absolute(fs::path(out->final_dir()) / "model.xml").lexically_normal().string() + "\n";
+  for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
+    const BoundParameter& p = problem.parameters()[i];
+    if (IsModelParameter(p.spec.kind)) continue;
+    overrides += "# " + TargetText(p.spec.kind, p.spec.element) + " = " + Num(fit.fitted_values[i]) +
+                 " (a sensor's, not the model's: correct the log with it)\n";
+  }
+  WriteText(out->File("overrides.txt"), overrides);
+  const std::vector<std::string> columns = WriteFitCsv(problem, fit, threads, out->File("fit.csv"));
+  std::vector<std::string> plots;
+  for (const std::string& c : columns) {
+    lab::PlotConfig plot;
+    plot.file = "fit_" + c + ".png";
+    plot.csv = "fit.csv";
+    plot.y = {c + ".error_nominal", c + ".error_fitted"};
+    plot.title = c + ": model minus measured, nominal and fitted";
+    plot.ylabel = c.find(".qd.") != std::string::npos ? "rad/s (m/s)" : "rad (m)";
+    plot.where = problem.spec().file;
+    lab::WritePlot(dir, plot);
+    plots.push_back(plot.file);
+  }
+  WriteText(out->File("report.md"), ReportMarkdown(problem, fit, plots));
+  const std::string where = out->Commit();
+  *note = out->note();
+  return where;
+}
+
+}  // namespace vlab::identify

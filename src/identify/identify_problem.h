@@ -1,0 +1,143 @@
+// An identification problem bound to its scenario's model and its logs: the parameters as
+// model fields, the recorded inputs and measurements, and the multiple-shooting windows,
+// each replayed by a rollout.
+//
+// A window is `rows` consecutive log rows after a first row. Its rollout starts from the
+// recorded state of the first row (every arm joint's q and qd; the rest of the scene in the
+// scenario's initial state), applies each later row's recorded joint torques over the
+// physics steps of that row's period (a torque command is held over its period: the arm
+// device's `NAME.tau.JOINT` of the row that ends it), and predicts the fitted q and qd
+// columns at each row. Residual = weight · (predicted − measured).
+//
+// Threads: a Problem is immutable once made; Rollout may run on many threads at once, each
+// with its own Workspace.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/core_mujoco.h"
+#include "identify/identify_spec.h"
+
+namespace vlab::lab {
+struct Scenario;
+}
+
+namespace vlab::identify {
+
+/// A parameter bound to the model or a log column.
+struct BoundParameter {
+  ParameterSpec spec;
+  int index = -1;                  ///< body id, dof address, or fitted column
+  double nominal = 0;              ///< the starting value (spec's, else the model's; bias 0, gain 1)
+  double scale = 1;                ///< the fit works on value / scale: |nominal|, or the larger |bound| when 0
+  double mass0 = 0;                ///< body mass: the model's mass ...
+  double inertia0[3] = {0, 0, 0};  ///< ... and principal inertia, scaled together
+};
+
+/// A rollout's own model and data (one per thread).
+struct Workspace {
+  ModelPtr model;
+  DataPtr data;
+  std::vector<double> applied;  ///< the parameter values `model` holds now
+  int contacts = 0;             ///< the most contacts at any step of the last rollout
+  std::vector<double> trace;    ///< delayed columns: value and rate at each row of the window
+};
+
+class Problem {
+ public:
+  /// Loads the scenario (with the spec's `set:` overrides) and its scene, reads the logs,
+  /// binds parameters and columns and cuts the windows. Throws InputError naming the spec
+  /// entry, log file or column at fault.
+  static std::unique_ptr<Problem> Create(const Spec& spec);
+
+  const Spec& spec() const { return spec_; }
+  const mjModel* model() const { return model_.get(); }
+  /// The scenario's MJCF file (resolved), after the spec's `set:` overrides.
+  const std::string& scene() const { return scene_; }
+  const std::vector<BoundParameter>& parameters() const { return parameters_; }
+  /// The fitted columns, in residual order within a row.
+  const std::vector<std::string>& columns() const { return column_names_; }
+  int window_count() const { return static_cast<int>(windows_.size()); }
+  /// Residuals of window w (rows · columns) and where they start in the whole vector.
+  int window_residuals(int w) const;
+  int window_offset(int w) const;
+  int residual_count() const { return residual_count_; }
+  /// Log rows no window covers (the tail shorter than a window), summed over the logs.
+  int rows_left_out() const { return rows_left_out_; }
+  /// Windows left out because their nominal replay made contact (Spec::skip_contacts).
+  int windows_in_contact() const { return windows_in_contact_; }
+
+  /// A workspace for Rollout: a copy of the model and data for it.
+  Workspace MakeWorkspace() const;
+  /// Sets `values` (one per parameter, in the spec's units) in ws.model and recomputes the
+  /// model's derived constants (mj_setConst); a no-op when it holds them already.
+  void Apply(const std::vector<double>& values, Workspace& ws) const;
+  /// Replays window w with `values`: residuals into r (window_residuals(w) of them) and,
+  /// unless null, the predicted column values (the sensor's bias, gain and delay applied).
+  /// False when the simulation diverged (MuJoCo's bad qpos/qvel/qacc).
+  bool Rollout(int w, const std::vector<double>& values, Workspace& ws, double* r, double* predicted) const;
+
+  /// Log file, time and measured value of each residual of window w, for plots.
+  struct Sample {
+    int log = 0;
+    double time_s = 0;
+  };
+  Sample WindowRow(int w, int k) const;
+  double Measured(int w, int k, int column) const;
+  double Weight(int column) const { return weights_[column]; }
+  const std::vector<std::string>& log_files() const { return spec_.logs; }
+
+ private:
+  struct Joint {
+    std::string device, name;
+    int qpos = -1, dof = -1, actuator = -1;
+  };
+  struct Column {
+    int joint = 0;
+    bool velocity = false;
+    int bias = -1, gain = -1, delay = -1;  ///< parameters transforming it, -1: none
+  };
+  struct Log {
+    std::vector<double> time;
+    Eigen::MatrixXd q, qd, tau;  ///< rows x joints
+    Eigen::MatrixXd measured;    ///< rows x fitted columns
+  };
+  struct Window {
+    int log = 0, first = 0, rows = 0, offset = 0;
+    /// the measured q and qd about the first row, per joint: a + b x + c x² at x rows after it
+    /// (smoothed), so that a delayed sensor's start value can be read ahead
+    Eigen::MatrixXd q0, qd0;  ///< joints x 3 (a, b, c)
+  };
+
+  Problem() = default;
+  void BindJoints(const lab::Scenario& scenario);
+  void BindColumns();
+  void BindParameters();
+  void ReadLogs();
+  void CutWindows();
+  void SkipContactWindows();
+  // the true start state of a joint from the measured fit (a, b, c), the sensor transforms undone
+  double TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity, const std::vector<double>& values) const;
+
+  Spec spec_;
+  ModelPtr model_;
+  std::string scene_;
+  std::vector<double> qpos_init_;  ///< the scenario's initial qpos
+  int steps_per_row_ = 1;
+  std::vector<Joint> joints_;
+  std::vector<Column> columns_;
+  std::vector<std::string> column_names_;
+  std::vector<double> weights_;
+  std::vector<BoundParameter> parameters_;
+  std::vector<Log> logs_;
+  std::vector<Window> windows_;
+  int residual_count_ = 0;
+  int rows_left_out_ = 0;
+  int windows_in_contact_ = 0;
+};
+
+}  // namespace vlab::identify

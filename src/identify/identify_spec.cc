@@ -1,0 +1,195 @@
+#include "identify/identify_spec.h"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "core/core_errors.h"
+#include "lab/scenario/lab_yaml.h"
+
+namespace vlab::identify {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// "body NAME mass" etc.: the kind and element of a target's words
+bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element) {
+  std::istringstream in(text);
+  std::string what, name, attribute, extra;
+  if (!(in >> what >> name >> attribute) || (in >> extra)) return false;
+  *element = name;
+  if (what == "body" && attribute == "mass") {
+    *kind = TargetKind::kBodyMass;
+  } else if (what == "joint" && attribute == "damping") {
+    *kind = TargetKind::kJointDamping;
+  } else if (what == "joint" && attribute == "armature") {
+    *kind = TargetKind::kJointArmature;
+  } else if (what == "joint" && attribute == "frictionloss") {
+    *kind = TargetKind::kJointFrictionLoss;
+  } else if (what == "column" && attribute == "bias") {
+    *kind = TargetKind::kColumnBias;
+  } else if (what == "column" && attribute == "gain") {
+    *kind = TargetKind::kColumnGain;
+  } else if (what == "column" && attribute == "delay") {
+    *kind = TargetKind::kColumnDelay;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+constexpr char kTargets[] =
+    "'body NAME mass', 'joint NAME damping', 'joint NAME armature', 'joint NAME frictionloss', "
+    "'column NAME bias', 'column NAME gain' or 'column NAME delay'";
+
+ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, const std::string& path) {
+  lab::MapReader r(file, node, path);
+  ParameterSpec p;
+  p.where = lab::YamlWhere(file, node) + ": " + path;
+  p.name = r.String("name");
+  if (p.name.empty()) r.Fail("name", "must not be empty");
+  const std::string target = r.String("target");
+  if (!ParseTarget(target, &p.kind, &p.element)) {
+    r.Fail("target", "'" + target + "' is none of " + kTargets);
+  }
+  p.has_nominal = r.Has("nominal");
+  if (p.has_nominal) p.nominal = r.Number("nominal");
+  p.lower = r.Number("lower");
+  p.upper = r.Number("upper");
+  p.frozen = r.Bool("frozen", false);
+  r.Finish();
+  for (const char* key : {"nominal", "lower", "upper"}) {
+    const double v = std::string(key) == "nominal" ? p.nominal : std::string(key) == "lower" ? p.lower : p.upper;
+    if (!std::isfinite(v)) r.Fail(key, "must be finite");
+  }
+  if (!(p.upper > p.lower)) r.Fail("upper", "must be greater than lower (" + std::to_string(p.lower) + ")");
+  if (p.has_nominal && (p.nominal < p.lower || p.nominal > p.upper)) {
+    r.Fail("nominal", "must lie within [lower, upper]");
+  }
+  // a mass, damping, armature and friction loss are never negative; a gain is positive
+  const bool positive = p.kind == TargetKind::kBodyMass || p.kind == TargetKind::kColumnGain;
+  const bool non_negative = p.kind == TargetKind::kJointDamping || p.kind == TargetKind::kJointArmature ||
+                            p.kind == TargetKind::kJointFrictionLoss || p.kind == TargetKind::kColumnDelay;
+  if (positive && !(p.lower > 0)) r.Fail("lower", "must be > 0 for " + TargetText(p.kind, p.element));
+  if (non_negative && p.lower < 0) r.Fail("lower", "must be >= 0 for " + TargetText(p.kind, p.element));
+  return p;
+}
+
+ColumnSpec ReadColumn(const std::string& file, const YAML::Node& node, const std::string& path) {
+  lab::MapReader r(file, node, path);
+  ColumnSpec c;
+  c.where = lab::YamlWhere(file, node) + ": " + path;
+  c.pattern = r.String("name");
+  if (c.pattern.empty()) r.Fail("name", "must not be empty");
+  c.weight = r.Number("weight", 1.0);
+  if (!(c.weight > 0) || !std::isfinite(c.weight)) r.Fail("weight", "must be a finite number > 0");
+  r.Finish();
+  return c;
+}
+
+// a log argument: a run folder (its log.csv) or a CSV file, relative to the spec's folder
+std::string ResolveLog(const fs::path& dir, const std::string& text) {
+  fs::path p = (dir / text).lexically_normal();
+  std::error_code ec;
+  if (fs::is_directory(p, ec)) p /= "log.csv";
+  return p.string();
+}
+
+}  // namespace
+
+std::string TargetText(TargetKind kind, const std::string& element) {
+  switch (kind) {
+    case TargetKind::kBodyMass:
+      return "body " + element + " mass";
+    case TargetKind::kJointDamping:
+      return "joint " + element + " damping";
+    case TargetKind::kJointArmature:
+      return "joint " + element + " armature";
+    case TargetKind::kJointFrictionLoss:
+      return "joint " + element + " frictionloss";
+    case TargetKind::kColumnBias:
+      return "column " + element + " bias";
+    case TargetKind::kColumnGain:
+      return "column " + element + " gain";
+    case TargetKind::kColumnDelay:
+      return "column " + element + " delay";
+  }
+  return "";
+}
+
+bool MatchColumn(const std::string& pattern, const std::string& name) {
+  // iterative wildcard match: '*' backtracks to the last star only
+  std::size_t p = 0, n = 0, star = std::string::npos, mark = 0;
+  while (n < name.size()) {
+    if (p < pattern.size() && pattern[p] == '*') {
+      star = p++;
+      mark = n;
+    } else if (p < pattern.size() && pattern[p] == name[n]) {
+      ++p;
+      ++n;
+    } else if (star != std::string::npos) {
+      p = star + 1;
+      n = ++mark;
+    } else {
+      return false;
+    }
+  }
+  while (p < pattern.size() && pattern[p] == '*') ++p;
+  return p == pattern.size();
+}
+
+Spec LoadSpec(const std::string& path) {
+  const YAML::Node root = lab::LoadYamlFile(path, "identification spec");
+  if (!root.IsMap()) throw InputError(path + ": an identification spec is a mapping (scenario:, logs:, ...)");
+  lab::MapReader r(path, root, "");
+  const fs::path dir = fs::path(path).parent_path();
+  Spec s;
+  s.file = path;
+  s.scenario = (dir / r.String("scenario")).lexically_normal().string();
+  s.sets = r.Strings("set", {});
+  for (const std::string& text : r.Strings("logs", {})) s.logs.push_back(ResolveLog(dir, text));
+  if (s.logs.empty()) r.Fail("logs", "name at least one log (a run folder or a log.csv)");
+  const YAML::Node columns = r.Sequence("columns");
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    s.columns.push_back(ReadColumn(path, columns[i], "columns[" + std::to_string(i) + "]"));
+  }
+  if (s.columns.empty()) r.Fail("columns", "name at least one log column ({name: pa10.q.*, weight: 1e4})");
+  s.where_window = lab::YamlWhere(path, r.Has("window") ? root["window"] : root) + ": window";
+  s.window_s = r.Number("window", s.window_s);
+  if (!(s.window_s > 0) || s.window_s > 1e3) r.Fail("window", "must be > 0 and at most 1000 s");
+  s.where_input = lab::YamlWhere(path, r.Has("input") ? root["input"] : root) + ": input";
+  s.input = r.String("input", s.input);
+  if (s.input != "torque") {
+    r.Fail("input", "'" + s.input +
+                        "' is not supported: 'torque' replays the recorded joint torques (recorded "
+                        "references through the servo are not replayed yet)");
+  }
+  s.max_iterations = r.Integer("max_iterations", s.max_iterations);
+  if (s.max_iterations < 1 || s.max_iterations > 1000) r.Fail("max_iterations", "must be from 1 to 1000");
+  s.start_smoothing = r.Integer("start_smoothing", s.start_smoothing);
+  if (s.start_smoothing < 0 || s.start_smoothing > 1000) r.Fail("start_smoothing", "must be from 0 to 1000 rows");
+  const std::string contacts = r.String("contacts", "skip");
+  if (contacts != "skip" && contacts != "keep") r.Fail("contacts", "must be 'skip' or 'keep', got '" + contacts + "'");
+  s.skip_contacts = contacts == "skip";
+  const YAML::Node parameters = r.Sequence("parameters");
+  for (std::size_t i = 0; i < parameters.size(); ++i) {
+    const std::string item = "parameters[" + std::to_string(i) + "]";
+    s.parameters.push_back(ReadParameter(path, parameters[i], item));
+    for (std::size_t j = 0; j < i; ++j) {
+      if (s.parameters[j].name == s.parameters[i].name) {
+        throw InputError(s.parameters[i].where + ".name: duplicate parameter name '" + s.parameters[i].name + "'");
+      }
+      if (s.parameters[j].kind == s.parameters[i].kind && s.parameters[j].element == s.parameters[i].element) {
+        throw InputError(s.parameters[i].where + ".target: '" +
+                         TargetText(s.parameters[i].kind, s.parameters[i].element) + "' is already parameter '" +
+                         s.parameters[j].name + "'");
+      }
+    }
+  }
+  if (s.parameters.empty()) r.Fail("parameters", "name at least one parameter to fit");
+  r.Finish();
+  return s;
+}
+
+}  // namespace vlab::identify

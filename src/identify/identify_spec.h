@@ -1,0 +1,78 @@
+// An identification spec (vlab identify SPEC.yaml): which model parameters to fit, to which
+// recorded logs, by which residual. docs/identify.md, "Identify", lists every key.
+//
+// The spec is read and checked on its own here (types, ranges, unknown keys); its names are
+// bound to the scenario's model and to the logs' columns later (identify_problem.h). Every
+// error is an InputError naming the file, line and key path ("id.yaml:12:
+// parameters[1].upper: must be greater than lower (2)").
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace vlab::identify {
+
+/// What a parameter changes.
+enum class TargetKind {
+  kBodyMass,           ///< body NAME mass: the body's mass, its inertia scaled with it (kg)
+  kJointDamping,       ///< joint NAME damping (N·m·s/rad, N·s/m)
+  kJointArmature,      ///< joint NAME armature (kg·m², kg)
+  kJointFrictionLoss,  ///< joint NAME frictionloss (N·m, N)
+  kColumnBias,         ///< column NAME bias: the sensor reads true + bias (the column's unit)
+  kColumnGain,         ///< column NAME gain: the sensor reads gain · true (1)
+  kColumnDelay,        ///< column NAME delay: the sensor reads the true value of this long ago (s)
+};
+
+/// "body NAME mass", ...: the words of a target, for messages and outputs.
+std::string TargetText(TargetKind kind, const std::string& element);
+
+/// One parameter of the fit.
+struct ParameterSpec {
+  std::string name;  ///< unique, as written
+  TargetKind kind = TargetKind::kBodyMass;
+  std::string element;  ///< body or joint name, or log column
+  bool has_nominal = false;
+  double nominal = 0;  ///< the starting value (default: the model's; bias 0, gain 1)
+  double lower = 0;    ///< bounds of the fitted value, lower < upper
+  double upper = 0;
+  bool frozen = false;  ///< kept at the nominal value
+  std::string where;    ///< "FILE:LINE: parameters[i]" for messages
+};
+
+/// Log columns in the residual: a name, or a pattern with '*' (any characters).
+struct ColumnSpec {
+  std::string pattern;
+  double weight = 1;  ///< residual = weight · (model − measured): 1/σ of the column's noise
+  std::string where;
+};
+
+struct Spec {
+  std::string file;                       ///< the spec as given
+  std::string scenario;                   ///< resolved relative to the spec file
+  std::vector<std::string> sets;          ///< `set:` KEY=VALUE overrides of the scenario
+  std::vector<std::string> logs;          ///< log.csv files (a run folder is its log.csv)
+  std::vector<ColumnSpec> columns;        ///< at least one
+  double window_s = 0.2;                  ///< multiple-shooting window, s
+  std::string input = "torque";           ///< how the recorded inputs are replayed
+  std::vector<ParameterSpec> parameters;  ///< at least one, names unique
+  int max_iterations = 50;                ///< Ceres iterations, 1..1000
+  /// Rows on each side of a window's first row that its start state is smoothed over (a
+  /// quadratic least-squares fit of each q and qd, evaluated at the row; 0: the row as
+  /// recorded): the measurement noise of the start state, carried through the whole window,
+  /// is cut about 3.5-fold at 10 (docs/identify.md).
+  int start_smoothing = 10;
+  /// Windows in contact are left out (`contacts: skip`, the default: contact forces are no
+  /// fitted parameter, and a contact's stiffness turns noise in the start state into large
+  /// residuals): a recorded state of the window in contact, or the nominal model's replay
+  /// making contact. `keep`: every window is fitted.
+  bool skip_contacts = true;
+  std::string where_window, where_input;
+};
+
+/// Reads and checks a spec file. Throws InputError naming the file, line and key.
+Spec LoadSpec(const std::string& path);
+
+/// True when `name` matches `pattern` ('*': any run of characters).
+bool MatchColumn(const std::string& pattern, const std::string& name);
+
+}  // namespace vlab::identify
