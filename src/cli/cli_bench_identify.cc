@@ -8,11 +8,9 @@
 // that both give the same estimates to the bit; the planted parameters' largest error.
 // Goal (issue 33): <= 300 s with 2 threads on 2 cores for a 20 s log.
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -23,11 +21,11 @@
 #include "core/core_realtime.h"
 #include "identify/identify_fit.h"
 #include "identify/identify_output.h"
+#include "identify/identify_plant.h"
 #include "identify/identify_problem.h"
 #include "identify/identify_spec.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
-#include "scene/scene_csv.h"
 
 namespace vlab::cli {
 
@@ -41,40 +39,13 @@ const char* const kJoints[] = {"S1", "S2", "S3", "E1", "E2", "W1", "W2"};
 
 // the planted arm: the changes named at the top of the file
 void Plant(mjModel* m) {
-  auto body = [m](const char* name, double factor) {
-    const int b = mj_name2id(m, mjOBJ_BODY, name);
-    m->body_mass[b] *= factor;
-    for (int k = 0; k < 3; ++k) m->body_inertia[3 * b + k] *= factor;
-  };
   auto dof = [m](const char* joint) { return m->jnt_dofadr[mj_name2id(m, mjOBJ_JOINT, joint)]; };
-  body("pa10_link3", 1.10);
-  body("pa10_link4", 0.93);
-  body("pa10_link6", 1.05);
+  identify::ScaleBodyMass(m, "pa10_link3", 1.10);
+  identify::ScaleBodyMass(m, "pa10_link4", 0.93);
+  identify::ScaleBodyMass(m, "pa10_link6", 1.05);
   m->dof_damping[dof("S2")] = 1.5;
   m->dof_frictionloss[dof("E1")] = 0.8;
   m->dof_armature[dof("S1")] *= 1.15;
-}
-
-// log.csv with seeded noise on every joint angle
-void AddNoise(const std::string& in, const std::string& out) {
-  const scene::CsvTable table = scene::ReadCsvTable(in);
-  std::mt19937_64 rng(1);
-  std::normal_distribution<double> noise(0.0, kNoise_rad);
-  std::string text;
-  for (std::size_t c = 0; c < table.columns.size(); ++c) text += (c ? "," : "") + table.columns[c];
-  text += "\n";
-  char buffer[32];
-  for (const std::vector<double>& row : table.rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) {
-      const double v = row[c] + (table.columns[c].find(".q.") != std::string::npos ? noise(rng) : 0.0);
-      text += (c ? "," : "") + std::string(buffer, std::to_chars(buffer, buffer + sizeof buffer, v).ptr);
-    }
-    text += "\n";
-  }
-  FILE* f = std::fopen(out.c_str(), "wb");
-  if (!f || std::fwrite(text.data(), 1, text.size(), f) != text.size() || std::fclose(f) != 0) {
-    throw std::runtime_error("cannot write " + out);
-  }
 }
 
 // the 20 parameters, bounds half and twice the nominal (dampings and friction losses 0 to 10)
@@ -126,7 +97,7 @@ int BenchIdentify(const BenchArgs& args) {
     lab::RunOptions run;
     run.out_dir = work + "/real";
     if (lab::Lab::Create(real)->Run(run).exit_code != 0) throw std::runtime_error("the planted arm's run failed");
-    AddNoise(work + "/real/log.csv", work + "/noisy.csv");
+    identify::WriteNoisyLog(work + "/real/log.csv", work + "/noisy.csv", ".q.", kNoise_rad, 1);
     FILE* f = std::fopen((work + "/id.yaml").c_str(), "wb");
     const std::string spec_text = SpecText(work + "/noisy.csv", duration_s);
     if (!f || std::fwrite(spec_text.data(), 1, spec_text.size(), f) != spec_text.size() || std::fclose(f) != 0) {

@@ -23,8 +23,8 @@ using vlab::testing::WriteFile;
 TEST(IdentifyCli, WritesEstimatesAPatchedSceneAndOverridesThatRunIt) {
   TempDir tmp;
   WriteEditedScene(
-      testing::kScene, [](mjModel* m) { testing::ScaleMass(m, "pa10_link4", 0.93); }, tmp / "truth.xml");
-  testing::AddNoise(testing::RunLab(tmp / "truth.xml", tmp / "real", 3.0), tmp / "noisy.csv", ".q.", 1e-5, 5);
+      testing::kScene, [](mjModel* m) { ScaleBodyMass(m, "pa10_link4", 0.93); }, tmp / "truth.xml");
+  WriteNoisyLog(testing::RunLab(tmp / "truth.xml", tmp / "real", 3.0), tmp / "noisy.csv", ".q.", 1e-5, 5);
   WriteFile(tmp / "id.yaml", "scenario: " + testing::kScenario + "\nset: [\"checks=[]\"]\nlogs: [noisy.csv]\n" +
                                  "columns: [{name: pa10.q.*, weight: 1.0e5}]\nparameters:\n"
                                  "  - {name: m4, target: body pa10_link4 mass, lower: 1, upper: 8}\n"

@@ -18,7 +18,6 @@
 namespace vlab::identify {
 namespace {
 
-using testing::AddNoise;
 using testing::RunLab;
 using vlab::testing::TempDir;
 using vlab::testing::WriteFile;
@@ -78,8 +77,8 @@ void EditNominal(mjModel* m) {
 
 void EditTruth(mjModel* m) {
   EditNominal(m);
-  testing::ScaleMass(m, "pa10_link3", 1.10);
-  testing::ScaleMass(m, "pa10_link4", 0.93);
+  ScaleBodyMass(m, "pa10_link3", 1.10);
+  ScaleBodyMass(m, "pa10_link4", 0.93);
   m->dof_damping[testing::Dof(m, "S2")] *= 1.5;
   m->dof_armature[testing::Dof(m, "S1")] *= 1.15;
   m->dof_frictionloss[testing::Dof(m, "E1")] *= 1.2;
@@ -95,7 +94,7 @@ TEST(IdentifyFit, RecoversPlantedParameters) {
   WriteEditedScene(testing::kScene, EditTruth, tmp / "truth.xml");
   const std::string clean = RunLab(tmp / "truth.xml", tmp / "real", 10.0);
   constexpr double kSigma = 1e-5;  // rad, about the PA10's encoder count (7.67e-6 rad)
-  AddNoise(clean, tmp / "noisy.csv", ".q.", kSigma, 7);
+  WriteNoisyLog(clean, tmp / "noisy.csv", ".q.", kSigma, 7);
   std::string params;
   for (const Planted& p : kPlanted) {
     params += std::string("  - {name: ") + p.name + ", target: " + p.target + ", lower: " + std::to_string(p.lower) +
@@ -162,8 +161,8 @@ TEST(IdentifyFit, RecoversPlantedParameters) {
 TEST(IdentifyFit, RecoversASensorsBiasGainAndDelay) {
   TempDir tmp;
   WriteEditedScene(
-      testing::kScene, [](mjModel* m) { testing::ScaleMass(m, "pa10_link4", 0.93); }, tmp / "truth.xml");
-  AddNoise(RunLab(tmp / "truth.xml", tmp / "real", 4.0), tmp / "noisy.csv", ".q.", 1e-5, 13);
+      testing::kScene, [](mjModel* m) { ScaleBodyMass(m, "pa10_link4", 0.93); }, tmp / "truth.xml");
+  WriteNoisyLog(RunLab(tmp / "truth.xml", tmp / "real", 4.0), tmp / "noisy.csv", ".q.", 1e-5, 13);
   scene::CsvTable table = scene::ReadCsvTable(tmp / "noisy.csv");
   const int s2 = table.Column("pa10.q.S2"), e1 = table.Column("pa10.q.E1");
   std::string text;
@@ -208,7 +207,7 @@ TEST(IdentifyFit, RecoversASensorsBiasGainAndDelay) {
 TEST(IdentifyFit, SameResultForAnyThreadCount) {
   TempDir tmp;
   WriteEditedScene(testing::kScene, EditTruth, tmp / "truth.xml");
-  AddNoise(RunLab(tmp / "truth.xml", tmp / "real", 3.0), tmp / "noisy.csv", ".q.", 1e-5, 11);
+  WriteNoisyLog(RunLab(tmp / "truth.xml", tmp / "real", 3.0), tmp / "noisy.csv", ".q.", 1e-5, 11);
   WriteFile(tmp / "id.yaml", SpecText(testing::kScene, tmp / "noisy.csv", "  - {name: pa10.q.*, weight: 1.0e5}\n",
                                       "  - {name: m4, target: body pa10_link4 mass, lower: 1, upper: 8}\n"
                                       "  - {name: a_s1, target: joint S1 armature, lower: 0, upper: 5}\n"));
