@@ -3,7 +3,8 @@
 // loss 0.8 N m, S1 armature +15 %) runs scenes/pa10_joint_pd for --duration s (default 20)
 // in this process; seeded Gaussian noise of 1e-5 rad goes on its joint angles; then 20
 // parameters (the 7 link masses, the 7 armatures, 4 dampings, 2 friction losses) are fitted
-// from the nominal scene with 1 and with 2 rollout threads, --repeat times each. Printed per
+// from the nominal scene with 1 and with 2 rollout threads (at most --iterations each, default
+// the spec's 50), --repeat times each. Printed per
 // thread count: the median wall time, iterations, rollouts per second and the speed-up;
 // that both give the same estimates to the bit; the planted parameters' largest error.
 // Goal (issue 33): <= 300 s with 2 threads on 2 cores for a 20 s log.
@@ -18,6 +19,7 @@
 
 #include "cli/cli_commands.h"
 #include "core/core_clock.h"
+#include "core/core_errors.h"
 #include "core/core_realtime.h"
 #include "identify/identify_fit.h"
 #include "identify/identify_output.h"
@@ -49,12 +51,14 @@ void Plant(mjModel* m) {
 }
 
 // the 20 parameters, bounds half and twice the nominal (dampings and friction losses 0 to 10)
-std::string SpecText(const std::string& log, double duration_s) {
+std::string SpecText(const std::string& log, double duration_s, int iterations) {
   const double mass[] = {9.78, 8.41, 3.52, 4.31, 3.45, 1.46, 0.24};
   const double armature[] = {0.75, 0.75, 0.2125, 0.2125, 0.00575, 0.00575, 0.00575};
   std::string s = "scenario: " + fs::absolute(kScenario).string() +
                   "\nset: [\"checks=[]\", \"duration=" + std::to_string(duration_s) + "\"]\nlogs: [" + log +
-                  "]\ncolumns: [{name: pa10.q.*, weight: 1.0e5}]\nparameters:\n";
+                  "]\ncolumns: [{name: pa10.q.*, weight: 1.0e5}]\n" +
+                  (iterations > 0 ? "max_iterations: " + std::to_string(iterations) + "\n" : std::string()) +
+                  "parameters:\n";
   for (int i = 0; i < 7; ++i) {
     s += "  - {name: m" + std::to_string(i + 1) + ", target: body pa10_link" + std::to_string(i + 1) +
          " mass, lower: " + std::to_string(mass[i] / 2) + ", upper: " + std::to_string(mass[i] * 2) + "}\n";
@@ -78,6 +82,9 @@ std::string SpecText(const std::string& log, double duration_s) {
 int BenchIdentify(const BenchArgs& args) {
   return WithErrorReport([&args] {
     const double duration_s = args.duration_s > 0 ? args.duration_s : 20.0;
+    if (args.iterations < 0 || args.iterations > 1000) {
+      throw InputError("--iterations " + std::to_string(args.iterations) + ": must be from 1 to 1000");
+    }
     const std::vector<int> cpus = ThreadCpus();
     std::printf("CPUs: %zu allowed (%s); %ld online\n", cpus.size(), CpuListText(cpus).c_str(),
                 ::sysconf(_SC_NPROCESSORS_ONLN));
@@ -99,7 +106,7 @@ int BenchIdentify(const BenchArgs& args) {
     if (lab::Lab::Create(real)->Run(run).exit_code != 0) throw std::runtime_error("the planted arm's run failed");
     identify::WriteNoisyLog(work + "/real/log.csv", work + "/noisy.csv", ".q.", kNoise_rad, 1);
     FILE* f = std::fopen((work + "/id.yaml").c_str(), "wb");
-    const std::string spec_text = SpecText(work + "/noisy.csv", duration_s);
+    const std::string spec_text = SpecText(work + "/noisy.csv", duration_s, args.iterations);
     if (!f || std::fwrite(spec_text.data(), 1, spec_text.size(), f) != spec_text.size() || std::fclose(f) != 0) {
       throw std::runtime_error("cannot write the spec");
     }

@@ -52,6 +52,7 @@ struct BenchArgs {
   double duration_s = 0;          ///< simulated seconds per measurement (0: scenario's)
   int repeat = 3;                 ///< measurements per variant; the best is reported
   double realtime_s = 30;         ///< bridge: length of the realtime run, s
+  int iterations = 0;             ///< identify: the fit's most Ceres iterations (0: the spec's default)
   std::vector<std::string> sets;  ///< physics: --set KEY=VALUE scenario overrides, in order
 };
 int BenchCommand(const BenchArgs& args);

@@ -120,6 +120,9 @@ int main(int argc, char** argv) {
       "realtime: of each run (default 10); log: of each run (default 60); identify: of the fitted log (default 20)");
   bench_cmd->add_option("--realtime", bench.realtime_s, "bridge: seconds of the 1 kHz realtime run (default 30)");
   bench_cmd->add_option("--repeat", bench.repeat, "Measurements per variant, 1 to 100 (best kept)");
+  bench_cmd->add_option("--iterations", bench.iterations,
+                        "identify: the fit's most iterations, 1 to 1000 (0 or absent: the spec's default, 50; "
+                        "fewer for a short run whose estimates do not matter)");
   bench_cmd
       ->add_option("--set", bench.sets,
                    "physics: KEY=VALUE, a scenario override as vlab run's (devices.pa10.servo.feedforward=model); "

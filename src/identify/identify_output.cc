@@ -211,17 +211,20 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
   WriteText(out->File("estimates.json"), EstimatesJson(problem, fit).dump(2) + "\n");
   WriteEditedScene(
       problem.scene(), [&](mjModel* m) { SetModelParameters(problem, fit.fitted_values, m); }, out->File("model.xml"));
-  // --set lines: the patched scene (the absolute path of its final place); sensor transforms as comments
-  std::string overrides =
-      "# vlab identify " + problem.spec().file + ": the fitted model for vlab run --overrides FILE\n";
-  overrides += "scene=" + fs::absolute(fs::path(out->final_dir()) / "model.xml").lexically_normal().string() + "\n";
-  for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
-    const BoundParameter& p = problem.parameters()[i];
-    if (IsModelParameter(p.spec.kind)) continue;
-    overrides += "# " + TargetText(p.spec.kind, p.spec.element) + " = " + Num(fit.fitted_values[i]) +
-                 " (a sensor's, not the model's: correct the log with it)\n";
-  }
-  WriteText(out->File("overrides.txt"), overrides);
+  // --set lines: the patched scene (the absolute path of the folder's place); sensor transforms
+  // as comments
+  auto overrides = [&](const std::string& folder) {
+    std::string text = "# vlab identify " + problem.spec().file + ": the fitted model for vlab run --overrides FILE\n";
+    text += "scene=" + fs::absolute(fs::path(folder) / "model.xml").lexically_normal().string() + "\n";
+    for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
+      const BoundParameter& p = problem.parameters()[i];
+      if (IsModelParameter(p.spec.kind)) continue;
+      text += "# " + TargetText(p.spec.kind, p.spec.element) + " = " + Num(fit.fitted_values[i]) +
+              " (a sensor's, not the model's: correct the log with it)\n";
+    }
+    return text;
+  };
+  WriteText(out->File("overrides.txt"), overrides(out->final_dir()));
   const std::vector<std::string> columns = WriteFitCsv(problem, fit, threads, out->File("fit.csv"));
   std::vector<std::string> plots;
   for (const std::string& c : columns) {
@@ -238,6 +241,14 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
   WriteText(out->File("report.md"), ReportMarkdown(problem, fit, plots));
   const std::string where = out->Commit();
   *note = out->note();
+  if (fs::path(where).lexically_normal() != fs::path(out->final_dir()).lexically_normal()) {
+    // the folder went elsewhere (DIR.2: another run's folder took DIR meanwhile): overrides.txt
+    // names the model.xml beside it, written whole under a temporary name, then renamed over
+    // the first version
+    const std::string file = (fs::path(where) / "overrides.txt").string();
+    WriteText(file + ".tmp", overrides(where));
+    fs::rename(file + ".tmp", file);
+  }
   return where;
 }
 
