@@ -20,6 +20,7 @@
 #include "cli/cli_commands.h"
 #include "core/core_clock.h"
 #include "core/core_errors.h"
+#include "core/core_output_file.h"
 #include "core/core_realtime.h"
 #include "identify/identify_fit.h"
 #include "identify/identify_output.h"
@@ -105,11 +106,7 @@ int BenchIdentify(const BenchArgs& args) {
     run.out_dir = work + "/real";
     if (lab::Lab::Create(real)->Run(run).exit_code != 0) throw std::runtime_error("the planted arm's run failed");
     identify::WriteNoisyLog(work + "/real/log.csv", work + "/noisy.csv", ".q.", kNoise_rad, 1);
-    FILE* f = std::fopen((work + "/id.yaml").c_str(), "wb");
-    const std::string spec_text = SpecText(work + "/noisy.csv", duration_s, args.iterations);
-    if (!f || std::fwrite(spec_text.data(), 1, spec_text.size(), f) != spec_text.size() || std::fclose(f) != 0) {
-      throw std::runtime_error("cannot write the spec");
-    }
+    WriteOutputFile(work + "/id.yaml", SpecText(work + "/noisy.csv", duration_s, args.iterations));
     const std::unique_ptr<identify::Problem> problem = identify::Problem::Create(identify::LoadSpec(work + "/id.yaml"));
     std::printf("PA10, %zu parameters, %.3g s log: %d windows (%d left out for contact), %d residuals, %d rounds\n",
                 problem->parameters().size(), duration_s, problem->window_count(), problem->windows_in_contact(),

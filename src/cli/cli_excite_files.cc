@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_excite.h"
+#include "core/core_output_file.h"
 
 namespace vlab::cli::excite {
 
@@ -185,21 +185,15 @@ nlohmann::ordered_json Record(const ExciteArgs& a, const lab::Scenario& s, const
   return j;
 }
 
-void WriteFile(const std::string& path, const std::string& text) {
-  std::ofstream file(path);
-  file << text;
-  if (!file.flush()) throw std::runtime_error(path + ": write failed");
-}
-
 }  // namespace
 
 void WriteOutputs(const ExciteArgs& a, const lab::Scenario& s, const lab::DeviceConfig& arm, const std::string& tip,
                   const std::string& base, const control::DynamicsRegressor& r, const control::JointLimits& limits,
                   const control::ExcitationConfig& c, const control::ExcitationResult& res, lab::OutputDir& out) {
-  WriteFile(out.File("excite.lua"), Script(a, arm.name, res.trajectory, c.control_period_s, res.cond_final));
+  WriteOutputFile(out.File("excite.lua"), Script(a, arm.name, res.trajectory, c.control_period_s, res.cond_final));
   const double duration = a.cycles * a.period_s + 1.0;  // the stream, and a second at rest
-  WriteFile(out.File("excite.yaml"), ScenarioYaml(a, s, arm, tip, base, r, limits, out.final_dir(), duration));
-  WriteFile(out.File("excite.json"), Record(a, s, arm.name, r, limits, c, res).dump(2) + "\n");
+  WriteOutputFile(out.File("excite.yaml"), ScenarioYaml(a, s, arm, tip, base, r, limits, out.final_dir(), duration));
+  WriteOutputFile(out.File("excite.json"), Record(a, s, arm.name, r, limits, c, res).dump(2) + "\n");
 }
 
 }  // namespace vlab::cli::excite

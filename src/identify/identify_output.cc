@@ -4,13 +4,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include <nlohmann/json.hpp>
 
 #include "core/core_errors.h"
 #include "core/core_mujoco.h"
+#include "core/core_output_file.h"
 #include "lab/outputs/lab_output.h"
 #include "lab/outputs/lab_plot.h"
 
@@ -38,12 +38,6 @@ nlohmann::json JsonNumber(double x) { return std::isfinite(x) ? nlohmann::json(x
 
 bool IsModelParameter(TargetKind kind) {
   return kind != TargetKind::kColumnBias && kind != TargetKind::kColumnGain && kind != TargetKind::kColumnDelay;
-}
-
-void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  if (!out.flush()) throw std::runtime_error("identify: cannot write '" + path + "'");
 }
 
 nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
@@ -127,7 +121,7 @@ std::vector<std::string> WriteFitCsv(const Problem& problem, const FitResult& fi
       text += "\n";
     }
   }
-  WriteText(path, text);
+  WriteOutputFile(path, text);
   return columns;
 }
 
@@ -208,7 +202,7 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
                          std::string* note) {
   std::unique_ptr<lab::OutputDir> out = lab::OutputDir::Create(out_dir);
   const std::string dir = out->staging_dir();
-  WriteText(out->File("estimates.json"), EstimatesJson(problem, fit).dump(2) + "\n");
+  WriteOutputFile(out->File("estimates.json"), EstimatesJson(problem, fit).dump(2) + "\n");
   WriteEditedScene(
       problem.scene(), [&](mjModel* m) { SetModelParameters(problem, fit.fitted_values, m); }, out->File("model.xml"));
   // --set lines: the patched scene (the absolute path of the folder's place); sensor transforms
@@ -224,7 +218,7 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
     }
     return text;
   };
-  WriteText(out->File("overrides.txt"), overrides(out->final_dir()));
+  WriteOutputFile(out->File("overrides.txt"), overrides(out->final_dir()));
   const std::vector<std::string> columns = WriteFitCsv(problem, fit, threads, out->File("fit.csv"));
   std::vector<std::string> plots;
   for (const std::string& c : columns) {
@@ -238,7 +232,7 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
     lab::WritePlot(dir, plot);
     plots.push_back(plot.file);
   }
-  WriteText(out->File("report.md"), ReportMarkdown(problem, fit, plots));
+  WriteOutputFile(out->File("report.md"), ReportMarkdown(problem, fit, plots));
   const std::string where = out->Commit();
   *note = out->note();
   if (fs::path(where).lexically_normal() != fs::path(out->final_dir()).lexically_normal()) {
@@ -246,7 +240,7 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
     // names the model.xml beside it, written whole under a temporary name, then renamed over
     // the first version
     const std::string file = (fs::path(where) / "overrides.txt").string();
-    WriteText(file + ".tmp", overrides(where));
+    WriteOutputFile(file + ".tmp", overrides(where));
     fs::rename(file + ".tmp", file);
   }
   return where;

@@ -1,11 +1,11 @@
 #include "identify/identify_plant.h"
 
 #include <charconv>
-#include <cstdio>
 #include <random>
 #include <vector>
 
 #include "core/core_errors.h"
+#include "core/core_output_file.h"
 #include "scene/scene_csv.h"
 
 namespace vlab::identify {
@@ -34,10 +34,7 @@ void WriteNoisyLog(const std::string& in, const std::string& out, const std::str
     }
     text += "\n";
   }
-  std::FILE* f = std::fopen(out.c_str(), "wb");
-  const bool written = f && std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  if (f && std::fclose(f) != 0) throw InputError("cannot write '" + out + "'");
-  if (!written) throw InputError("cannot write '" + out + "'");
+  WriteOutputFile(out, text);
 }
 
 }  // namespace vlab::identify

@@ -17,7 +17,7 @@ void ScaleBodyMass(mjModel* m, const std::string& body, double factor);
 /// Copies the CSV log `in` to `out` with seeded Gaussian noise of standard deviation `sigma`
 /// added to every column whose name contains `columns` (e.g. ".q." for the joint angles); the
 /// values written in the shortest form that reads back to the same double. Throws InputError
-/// naming a file that cannot be read or written.
+/// naming a file that cannot be read, std::runtime_error one that cannot be written.
 void WriteNoisyLog(const std::string& in, const std::string& out, const std::string& columns, double sigma,
                    unsigned seed);
 
