@@ -464,18 +464,7 @@ int MoveJ(lua_State* L) {
   if (HasOption(L, 2, "ref"))
     ScriptError(L, "movej: option ref is for a target frame: joint angles (deg) have no frame");
   const int n = r.model->dof();
-  if (static_cast<int>(lua_rawlen(L, 1)) != n) {
-    ScriptError(L, "movej: expected %d joint angles (deg), got %d", n, static_cast<int>(lua_rawlen(L, 1)));
-  }
-  Eigen::VectorXd q(n);
-  for (int i = 0; i < n; ++i) {
-    lua_rawgeti(L, 1, i + 1);
-    if (!lua_isnumber(L, -1)) ScriptError(L, "movej: joint %d must be a number (deg)", i + 1);
-    const double deg = lua_tonumber(L, -1);
-    if (!std::isfinite(deg)) ScriptError(L, "movej: joint %d is %g, not a finite angle (deg)", i + 1, deg);
-    q[i] = deg * kDeg;
-    lua_pop(L, 1);
-  }
+  const Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(JointAngles(L, 1, n, "movej"), n);
   PlanOrFail(L, r, "movej", [&] { return r.planner->Joint(r.q_ref, q, limits, t); });
   ResolveTriggers(L, r, 2, "movej");
   return 1;

@@ -81,6 +81,22 @@ void CheckOptions(lua_State* L, int options, const char* what, const char* const
   }
 }
 
+const double* JointAngles(lua_State* L, int index, int n, const char* what) {
+  if (static_cast<int>(lua_rawlen(L, index)) != n) {
+    ScriptError(L, "%s: expected %d joint angles (deg), got %d", what, n, static_cast<int>(lua_rawlen(L, index)));
+  }
+  auto* q = static_cast<double*>(lua_newuserdatauv(L, sizeof(double) * n, 0));
+  for (int i = 0; i < n; ++i) {
+    lua_rawgeti(L, index, i + 1);
+    if (!lua_isnumber(L, -1)) ScriptError(L, "%s: joint %d must be a number (deg)", what, i + 1);
+    const double deg = lua_tonumber(L, -1);
+    if (!std::isfinite(deg)) ScriptError(L, "%s: joint %d is %g, not a finite angle (deg)", what, i + 1, deg);
+    q[i] = deg * kDeg;
+    lua_pop(L, 1);
+  }
+  return q;
+}
+
 // whether the options table has `key`
 bool HasOption(lua_State* L, int options, const char* key) {
   if (lua_isnoneornil(L, options)) return false;

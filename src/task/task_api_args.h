@@ -39,6 +39,12 @@ bool HasOption(lua_State* L, int options, const char* key);
 /// is finite.
 void CheckFinite(lua_State* L, const Frame& f, const char* what, const char* which);
 
+/// The table of joint angles at `index` (deg, `n` of them, each a finite number) in radians,
+/// in memory Lua owns (a userdata pushed on the stack: nothing to free when a later check
+/// raises its error). An error naming `what` for a count other than `n`, a value that is not a
+/// number or not finite. The caller has checked that the value is a table.
+const double* JointAngles(lua_State* L, int index, int n, const char* what);
+
 /// The registry key of the program's user frames (frame_def): a table, name -> frame.
 inline constexpr const char* kFramesKey = "vlab.frames";
 

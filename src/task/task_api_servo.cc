@@ -62,19 +62,7 @@ int ServoJ(lua_State* L) {
   if (!lua_istable(L, 1)) ScriptError(L, "servoj: expected a table of joint angles (deg), got %s", luaL_typename(L, 1));
   if (!lua_isnone(L, 2)) ScriptError(L, "servoj: takes one argument, the joint angles (deg)");
   const int n = r.model->dof();
-  if (static_cast<int>(lua_rawlen(L, 1)) != n) {
-    ScriptError(L, "servoj: expected %d joint angles (deg), got %d", n, static_cast<int>(lua_rawlen(L, 1)));
-  }
-  // the reference, in memory Lua owns (a script error below unwinds by longjmp)
-  auto* q = static_cast<double*>(lua_newuserdatauv(L, sizeof(double) * n, 0));
-  for (int i = 0; i < n; ++i) {
-    lua_rawgeti(L, 1, i + 1);
-    if (!lua_isnumber(L, -1)) ScriptError(L, "servoj: joint %d must be a number (deg)", i + 1);
-    const double deg = lua_tonumber(L, -1);
-    if (!std::isfinite(deg)) ScriptError(L, "servoj: joint %d is %g, not a finite angle (deg)", i + 1, deg);
-    q[i] = deg * kDeg;
-    lua_pop(L, 1);
-  }
+  const double* q = JointAngles(L, 1, n, "servoj");
   char why[400] = "";
   Refusal(r, q, ProgramOf(L)->period_s, why, sizeof why);
   if (why[0]) ScriptError(L, "servoj: %s", why);
