@@ -258,6 +258,22 @@ std::vector<Case> Cases() {
       sweep("@D/sweep_non_utf8.yaml", {"@D/sweep_non_utf8.yaml:4:48: byte 0xA0 is not UTF-8"}),
       sweep("@T/fifo.yaml", {"'@T/fifo.yaml': a FIFO"}),
       sweep("/dev/zero", {"'/dev/zero': a character device"}),
+      // identification specs and overrides files (vlab identify, vlab run --overrides)
+      Case{"identify @T/fifo.yaml",
+           {"identify", "@T/fifo.yaml", "--out", "@O/fit"},
+           {"identification spec '@T/fifo.yaml': a FIFO (named pipe), not a regular file"}},
+      Case{"identify /dev/zero",
+           {"identify", "/dev/zero", "--out", "@O/fit"},
+           {"identification spec '/dev/zero': a character device"}},
+      Case{"identify alias bomb",
+           {"identify", "@D/alias_bomb.yaml", "--out", "@O/fit"},
+           {"@D/alias_bomb.yaml:", "expands to more than 100000 nodes"}},
+      Case{"--overrides @T/fifo.yaml",
+           {"run", "scenes/pa10_reach", "-q", out, "--overrides", "@T/fifo.yaml"},
+           {"overrides file '@T/fifo.yaml': a FIFO (named pipe), not a regular file"}},
+      Case{"--overrides /dev/zero",
+           {"run", "scenes/pa10_reach", "-q", out, "--overrides", "/dev/zero"},
+           {"overrides file '/dev/zero': a character device"}},
   };
 }
 
