@@ -156,6 +156,7 @@ DeviceEndpoint::Received DeviceEndpoint::Handle(const unsigned char* data, std::
   const double last_seq = from_owner ? last_seq_ : -1;
   if (header_.seq < last_seq || header_.seq < newest_seq_ - kSeqWindow) {
     ++counters_.stale;
+    if (header_.seq >= last_seq) ++counters_.stale_window;  // not a late copy: a reply fallen behind
     return Received::kOther;
   }
   if (header_.seq == last_seq) {

@@ -95,6 +95,8 @@ struct EndpointCounters {
   long refused_not_subscribed = 0;  ///< commands from a source that is no subscriber
   long stale = 0;                   ///< seq lower than the last accepted, or older than the window (ignored);
                                     ///< payloads: seq not above the owner's last accepted one (refused, answered)
+  long stale_window = 0;            ///< of stale: commands older than the window (a controller more than
+                                    ///< kSeqWindow periods behind, e.g. catching up after a free run)
   long duplicate = 0;               ///< seq equal to the last accepted (ignored)
   long future = 0;                  ///< seq of a state not published yet (ignored)
   long watchdog_holds = 0;          ///< times the watchdog put the arm on hold

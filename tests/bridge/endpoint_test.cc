@@ -44,6 +44,7 @@ TEST_F(EndpointTest, BaseCommandsAreCheckedAndTaken) {
   EXPECT_EQ(n.refused_limits, 1);
   EXPECT_EQ(n.refused_not_owner, 1);
   EXPECT_EQ(n.stale, 1);
+  EXPECT_EQ(n.stale_window, 0);                   // a late copy, not a reply fallen out of the window
   EXPECT_TRUE(e.status_bits() & kStatusRefused);  // the owner's last command was refused
   EXPECT_FALSE(e.TakeCommand(&taken));            // refusals leave nothing to take
 
@@ -270,6 +271,7 @@ TEST_F(EndpointTest, ACommandMustAnswerAPublishedStateWithinTheWindow) {
   EXPECT_EQ(e.counters().future, 3);
   EXPECT_FALSE(Send(e, *client_, base, 200 - kSeqWindow - 1, {0, 0, 0, 0}, 0));  // older than the window
   EXPECT_EQ(e.counters().stale, 1);
+  EXPECT_EQ(e.counters().stale_window, 1);
   EXPECT_TRUE(Send(e, *client_, base, 200 - kSeqWindow, {0, 0, 0, 0}, 0));  // the oldest it takes
   EXPECT_TRUE(Send(e, *client_, base, 200, {0, 0, 0, 0}, 0));
   EXPECT_FALSE(Send(e, *client_, base, 200, {0, 0, 0, 0}, 0));

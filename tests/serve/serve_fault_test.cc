@@ -5,6 +5,7 @@
 // counters and in the status bits of the states.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -39,20 +40,28 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
   ArmStateMsg s;
   bool saw_refused = false, saw_watchdog = false, watchdog_cleared = false, second_saw_not_owner = false;
   bool restarted_accepted = false;
+  long resumed = -1;  // the period from which the controller owns the arm again after its silence
+  long restart = -1;  // the period at which the controller died and restarted
   std::vector<unsigned char> p;
   for (long k = 0; k < 500; ++k) {
     Peer& reader = restarted ? *restarted : *peer;
+    // where the lab ran on without waiting (nobody owned the arm: after the silence, after the
+    // restart) the controller answers the newest state, as a real one does; elsewhere the lab
+    // waits for each command and one state at a time arrives
+    const bool catch_up = restarted || (k >= 70 && resumed < 0);
     // (a new subscriber first gets the latest state again: skip what it has seen)
     do {
-      ASSERT_TRUE(reader.ReadArm(&h, &s)) << "no state " << k;
+      ASSERT_TRUE(catch_up ? reader.ReadNewestArm(&h, &s) : reader.ReadArm(&h, &s)) << "no state " << k;
     } while (restarted && h.seq < k);
-    // the restarted controller joins a lab that ran on while nobody owned the arm
-    if (restarted && h.seq > k) k = static_cast<long>(h.seq);
+    if (catch_up && h.seq > k) k = static_cast<long>(h.seq);
     ASSERT_EQ(h.seq, k) << "states arrive in order, one per period";
     if (k == 31) saw_refused = Has(s.status, bridge::kStatusRefused);
     if (k >= 64 && k <= 70) saw_watchdog = saw_watchdog || Has(s.status, bridge::kStatusWatchdog);
-    if (k >= 80 && k < 200 && saw_watchdog && !Has(s.status, bridge::kStatusWatchdog)) watchdog_cleared = true;
-    if (restarted && k > 215) restarted_accepted = restarted_accepted || s.qd[0] > 0.05;
+    if (k > 70 && resumed < 0 && saw_watchdog && !Has(s.status, bridge::kStatusWatchdog)) {
+      watchdog_cleared = true;  // the command after the silence was accepted: the hold ended
+      resumed = k;
+    }
+    if (restarted && k > restart + 15) restarted_accepted = restarted_accepted || s.qd[0] > 0.05;
 
     if (k == 20) {  // malformed datagrams, then out-of-limit commands, then the valid one
       bridge::EncodeArmCommand(k, 0, {2, v}, &p);
@@ -87,14 +96,15 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
       // silence: three lockstep timeouts, the silent owner is released, the
       // watchdog holds the arm, and the lab runs on without waiting until a
       // controller owns the arm again
-    } else if (k >= 100 && k < 110) {
+    } else if (resumed >= 0 && k >= resumed + 20 && k < resumed + 30) {
       peer->Command(k, 2, v);
       second.Command(k, 2, {-0.1, 0, 0, 0, 0, 0, 0});  // not the owner: refused
       ArmStateMsg s2;
       Header h2;
       if (second.ReadArm(&h2, &s2, 1))
         second_saw_not_owner = second_saw_not_owner || Has(s2.status, bridge::kStatusNotOwner);
-    } else if (k == 200) {
+    } else if (!restarted && resumed >= 0 && k >= std::max(200L, resumed + 50)) {
+      restart = k;
       peer.reset();                                  // the controller dies...
       restarted = std::make_unique<Peer>(arm_port);  // ...and a new one starts
       restarted->Describe(bridge::DeviceKind::kArm);
@@ -121,7 +131,12 @@ TEST(ServeFaultTest, LabSurvivesEveryFaultAndCountsIt) {
   EXPECT_EQ(arm.at("refused_malformed").get<long>(), 5);
   EXPECT_EQ(arm.at("refused_limits").get<long>(), 4);
   EXPECT_EQ(arm.at("duplicate").get<long>(), 1);
-  EXPECT_EQ(arm.at("stale").get<long>(), 1);
+  // the reordered command at k = 50 is the one late copy. While nobody owns the arm (after the
+  // silence, after the restart) the lab runs on without waiting, and on a busy machine it can run
+  // more than the window past the state a command answers: that command is stale too, counted
+  // apart (stale_window), and how many there are depends on the load
+  const long stale = arm.at("stale").get<long>(), stale_window = arm.at("stale_window").get<long>();
+  EXPECT_EQ(stale - stale_window, 1) << stale << " stale, " << stale_window << " of them older than the window";
   EXPECT_GE(arm.at("refused_not_owner").get<long>(), 10);
   EXPECT_GE(arm.at("watchdog_holds").get<long>(), 1);
   // at least 1 (refused command at k = 30) + 3 (silence, then released) + 3 (the dead

@@ -112,6 +112,18 @@ class Peer {
       if (bridge::ParseArmState(*h, payload, 7, m) == bridge::DecodeError::kNone) return true;
     }
   }
+  /// Next arm state, then every state already queued behind it: the newest one (what a
+  /// controller answers after a pause, while the lab ran on without waiting for it).
+  bool ReadNewestArm(bridge::Header* h, bridge::ArmStateMsg* m) {
+    if (!ReadArm(h, m)) return false;
+    bridge::Header next;
+    bridge::ArmStateMsg state;
+    while (ReadArm(&next, &state, 0)) {
+      *h = next;
+      *m = state;
+    }
+    return true;
+  }
   void Command(double seq, int mode, const std::vector<double>& value) {
     std::vector<unsigned char> p;
     bridge::EncodeArmCommand(seq, 0, {mode, value}, &p);

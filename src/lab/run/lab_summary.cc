@@ -120,6 +120,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
                       {"refused_not_owner", c.refused_not_owner},
                       {"refused_not_subscribed", c.refused_not_subscribed},
                       {"stale", c.stale},
+                      {"stale_window", c.stale_window},
                       {"duplicate", c.duplicate},
                       {"future", c.future},
                       {"watchdog_holds", c.watchdog_holds},
