@@ -124,8 +124,10 @@ class Problem {
     Eigen::MatrixXd q, qd, tau;  ///< rows x joints
     Eigen::MatrixXd measured;    ///< rows x fitted columns
     /// input: reference: the command in force over the period ending at each row: its mode
-    /// (bridge::ArmMode, rows x arms) and value (rows x joints)
-    Eigen::MatrixXd mode, command;
+    /// (bridge::ArmMode, rows x arms) and value (rows x joints); the servo's position reference
+    /// at each row (rows x joints: hold and position, the logged value; velocity, integrated
+    /// from the last one; NaN after torque mode, where the reference follows the joint)
+    Eigen::MatrixXd mode, command, reference;
   };
   struct Window {
     int log = 0, first = 0, rows = 0, offset = 0;

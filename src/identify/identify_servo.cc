@@ -7,7 +7,9 @@
 // reach it through the model (the world's bias forces and joint inertia) and Tune (the gain
 // parameters); the gains are made by the arm's Start at the scenario's initial pose, as the
 // lab makes them.
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/core_errors.h"
 #include "identify/identify_problem.h"
@@ -53,6 +55,35 @@ void Problem::ReadCommands(const scene::CsvTable& table, const std::string& file
       }
     }
   }
+  // the servo's position reference at each row. Hold and position modes log it; velocity mode
+  // integrates it from the reference it took over, step by step as the servo does (the
+  // following-error window aside); torque mode makes it follow the joint (NaN: unknown). Before
+  // the first row the arm held its start: the first row's measured position stands for it.
+  const int time = table.Column("time");
+  const double timestep = model_->opt.timestep;
+  const int steps =
+      rows > 1 && time >= 0
+          ? std::max(1, static_cast<int>(std::lround((table.rows[1][time] - table.rows[0][time]) / timestep)))
+          : 1;
+  log->reference.resize(rows, static_cast<int>(joints_.size()));
+  for (std::size_t a = 0; a < arms_.size(); ++a) {
+    const Arm& arm = arms_[a];
+    for (int j = 0; j < arm.joints; ++j) {
+      const int c = arm.first + j;
+      const int q = table.Column(joints_[c].device + ".q." + joints_[c].name);
+      for (int r = 0; r < rows; ++r) {
+        const auto m = static_cast<bridge::ArmMode>(static_cast<int>(log->mode(r, static_cast<int>(a))));
+        double ref = std::numeric_limits<double>::quiet_NaN();
+        if (m == bridge::ArmMode::kHold || m == bridge::ArmMode::kPosition) {
+          ref = log->command(r, c);
+        } else if (m == bridge::ArmMode::kVelocity) {
+          ref = r > 0 ? log->reference(r - 1, c) : q >= 0 ? table.rows[0][q] : ref;
+          for (int s = 0; s < steps; ++s) ref += log->command(r, c) * timestep;
+        }
+        log->reference(r, c) = ref;
+      }
+    }
+  }
 }
 
 void Problem::TuneServos(const std::vector<double>& values, Workspace& ws) const {
@@ -80,13 +111,12 @@ void Problem::StartServos(const Window& win, Workspace& ws) const {
   const int row = win.first;
   for (std::size_t a = 0; a < arms_.size(); ++a) {
     const Arm& arm = arms_[a];
-    const auto mode = static_cast<bridge::ArmMode>(static_cast<int>(log.mode(row, static_cast<int>(a))));
     Eigen::VectorXd q_ref(arm.joints);
     for (int j = 0; j < arm.joints; ++j) {
-      // hold: the logged value is the position held; velocity and torque: the reference is not
-      // logged, the start's position stands for it
-      const bool logged = mode == bridge::ArmMode::kHold || mode == bridge::ArmMode::kPosition;
-      q_ref[j] = logged ? log.command(row, arm.first + j) : d->qpos[joints_[arm.first + j].qpos];
+      // the reference at the row (ReadCommands); where it is unknown (torque mode, or velocity
+      // mode after it), the start's position
+      const double ref = log.reference(row, arm.first + j);
+      q_ref[j] = std::isfinite(ref) ? ref : d->qpos[joints_[arm.first + j].qpos];
     }
     ws.arms[a]->Resume(*d, q_ref);
     // the row's command in force: its mode, and the position the next one's rate counts from

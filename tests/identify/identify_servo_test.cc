@@ -130,6 +130,47 @@ TEST(IdentifyServo, ReferenceReplayReproducesTheLog) {
   }
 }
 
+// Velocity commands (scenes/pa10_reach: the task-space controller, holding still 0.5 s, then
+// along its path): the servo's reference is integrated from the log's first row as the servo
+// integrates it, so every window starts with the reference the lab's servo had.
+TEST(IdentifyServo, ReplaysVelocityCommands) {
+  TempDir tmp;
+  const std::string scenario = VLAB_SOURCE_DIR "/scenes/pa10_reach.yaml";
+  RunScenario(scenario, tmp / "run", {"checks=[]", "duration=2", "devices.pa10.log_command=true"});
+  const scene::CsvTable table = scene::ReadCsvTable(tmp / "run/log.csv");
+  const int mode = table.Column("pa10.cmd_mode");
+  ASSERT_GE(mode, 0);
+  int velocity_rows = 0, first_velocity = -1;
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    velocity_rows += table.rows[r][mode] == 2.0;
+    if (first_velocity < 0 && table.rows[r][mode] == 2.0) first_velocity = static_cast<int>(r);
+  }
+  EXPECT_EQ(first_velocity, 1);  // row 0: the start, holding
+  EXPECT_EQ(velocity_rows, static_cast<int>(table.rows.size()) - 1);
+  WriteFile(tmp / "id.yaml", "scenario: " + scenario +
+                                 "\nset: [\"checks=[]\"]\nlogs: [run]\ninput: reference\nstart_smoothing: 0\n"
+                                 "columns:\n  - {name: pa10.q.*}\n  - {name: pa10.qd.*}\n  - {name: pa10.tau.*}\n"
+                                 "parameters:\n  - {name: bw, target: servo pa10 bandwidth, lower: 1, upper: 50}\n");
+  const std::unique_ptr<Problem> problem = Problem::Create(LoadSpec(tmp / "id.yaml"));
+  Workspace ws = problem->MakeWorkspace();
+  double worst[3] = {0, 0, 0};  // q, qd, tau
+  for (int w = 0; w < problem->window_count(); ++w) {
+    std::vector<double> r(problem->window_residuals(w));
+    ASSERT_TRUE(problem->Rollout(w, {10.0}, ws, r.data(), nullptr));
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const int c = static_cast<int>(i % 21);
+      double& slot = worst[c < 7 ? 0 : c < 14 ? 1 : 2];
+      slot = std::max(slot, std::abs(r[i]));
+    }
+  }
+  std::printf("velocity commands, true parameters, %d windows: largest error q %.3g rad, qd %.3g rad/s, tau %.3g N m\n",
+              problem->window_count(), worst[0], worst[1], worst[2]);
+  EXPECT_EQ(problem->window_count(), 10);
+  EXPECT_LT(worst[0], 1e-12);
+  EXPECT_LT(worst[1], 1e-10);
+  EXPECT_LT(worst[2], 1e-9);
+}
+
 // The planted "real" servo: gains for bandwidth 12 Hz (nominal 10) and damping ratio 0.8
 // (nominal 1.0), and S2's joint damping 4.5 N m s/rad (nominal 3).
 const double kTruth[] = {12.0, 0.8, 4.5};
