@@ -64,8 +64,8 @@ Subcommand AddIdentifyCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "identify",
       "Fit model parameters (body masses with their inertia, joint damping, armature and friction loss, a q or qd "
-      "column's bias, gain and delay) to recorded logs: the recorded joint torques replayed over short windows from "
-      "the "
+      "column's bias, gain and delay, an arm's servo bandwidth and damping ratio) to recorded logs: the recorded "
+      "joint torques, or the arms' recorded commands through their servos, replayed over short windows from the "
       "recorded state (multiple shooting), box-constrained nonlinear least squares (Ceres). Prints each estimate "
       "with its standard deviation and whether the data can tell it; writes estimates.json, overrides.txt (for vlab "
       "run --overrides), model.xml (the scene patched), fit.csv, plots and report.md (docs/identify.md). Exit: 0 "

@@ -40,6 +40,10 @@ bool IsModelParameter(TargetKind kind) {
   return kind != TargetKind::kColumnBias && kind != TargetKind::kColumnGain && kind != TargetKind::kColumnDelay;
 }
 
+bool IsServoParameter(TargetKind kind) {
+  return kind == TargetKind::kServoBandwidth || kind == TargetKind::kServoDampingRatio;
+}
+
 nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
   nlohmann::json j;
   j["spec"] = problem.spec().file;
@@ -193,6 +197,8 @@ void SetModelParameters(const Problem& problem, const std::vector<double>& value
       case TargetKind::kColumnBias:
       case TargetKind::kColumnGain:
       case TargetKind::kColumnDelay:
+      case TargetKind::kServoBandwidth:  // the scenario's, not the scene's: an override line
+      case TargetKind::kServoDampingRatio:
         break;
     }
   }
@@ -205,13 +211,19 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
   WriteOutputFile(out->File("estimates.json"), EstimatesJson(problem, fit).dump(2) + "\n");
   WriteEditedScene(
       problem.scene(), [&](mjModel* m) { SetModelParameters(problem, fit.fitted_values, m); }, out->File("model.xml"));
-  // --set lines: the patched scene (the absolute path of the folder's place); sensor transforms
-  // as comments
+  // --set lines: the patched scene (the absolute path of the folder's place) and the arms' servo
+  // keys; sensor transforms as comments
   auto overrides = [&](const std::string& folder) {
     std::string text = "# vlab identify " + problem.spec().file + ": the fitted model for vlab run --overrides FILE\n";
     text += "scene=" + fs::absolute(fs::path(folder) / "model.xml").lexically_normal().string() + "\n";
     for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
       const BoundParameter& p = problem.parameters()[i];
+      if (IsServoParameter(p.spec.kind)) {
+        text += "devices." + p.spec.element + ".servo." +
+                (p.spec.kind == TargetKind::kServoBandwidth ? "bandwidth_hz" : "damping_ratio") + "=" +
+                Num(fit.fitted_values[i]) + "\n";
+        continue;
+      }
       if (IsModelParameter(p.spec.kind)) continue;
       text += "# " + TargetText(p.spec.kind, p.spec.element) + " = " + Num(fit.fitted_values[i]) +
               " (a sensor's, not the model's: correct the log with it)\n";
@@ -227,7 +239,9 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
     plot.csv = "fit.csv";
     plot.y = {c + ".error_nominal", c + ".error_fitted"};
     plot.title = c + ": model minus measured, nominal and fitted";
-    plot.ylabel = c.find(".qd.") != std::string::npos ? "rad/s (m/s)" : "rad (m)";
+    plot.ylabel = c.find(".qd.") != std::string::npos    ? "rad/s (m/s)"
+                  : c.find(".tau.") != std::string::npos ? "N m (N)"
+                                                         : "rad (m)";
     plot.where = problem.spec().file;
     lab::WritePlot(dir, plot);
     plots.push_back(plot.file);

@@ -51,7 +51,9 @@ Eigen::MatrixXd QuadraticAbout(const Eigen::MatrixXd& m, int row, int half) {
 std::unique_ptr<Problem> Problem::Create(const Spec& spec) {
   std::unique_ptr<Problem> p(new Problem());
   p->spec_ = spec;
+  p->reference_ = spec.input == "reference";
   const lab::Scenario scenario = lab::LoadScenario(spec.scenario, spec.sets);
+  p->seed_ = scenario.seed;
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(scenario);
   p->scene_ = scenario.scene;
   p->model_.reset(mj_copyModel(nullptr, lab->model()));
@@ -72,6 +74,7 @@ void Problem::BindJoints(const lab::Scenario& scenario) {
   for (const lab::DeviceConfig& device : scenario.devices) {
     if (device.kind != bridge::DeviceKind::kArm) continue;
     const lab::ArmParams& arm = device.ParamsAs<lab::ArmParams>();
+    arms_.push_back({device, static_cast<int>(joints_.size()), static_cast<int>(arm.joints.size()), -1, -1});
     for (std::size_t i = 0; i < arm.joints.size(); ++i) {
       Joint j;
       j.device = device.name;
@@ -94,11 +97,18 @@ void Problem::BindJoints(const lab::Scenario& scenario) {
 }
 
 void Problem::BindColumns() {
-  // the columns a rollout predicts: every arm joint's q and qd
+  // the columns a rollout predicts: every arm joint's q and qd, and with input: reference the
+  // torque its servo applies
   std::vector<std::string> predictable;
-  for (const Joint& j : joints_) {
-    predictable.push_back(j.device + ".q." + j.name);
-    predictable.push_back(j.device + ".qd." + j.name);
+  std::vector<Column> kinds;
+  for (std::size_t j = 0; j < joints_.size(); ++j) {
+    predictable.push_back(joints_[j].device + ".q." + joints_[j].name);
+    kinds.push_back({static_cast<int>(j), false, -1, -1, -1, false});
+    predictable.push_back(joints_[j].device + ".qd." + joints_[j].name);
+    kinds.push_back({static_cast<int>(j), true, -1, -1, -1, false});
+    if (!reference_) continue;
+    predictable.push_back(joints_[j].device + ".tau." + joints_[j].name);
+    kinds.push_back({static_cast<int>(j), false, -1, -1, -1, true});
   }
   for (const ColumnSpec& c : spec_.columns) {
     bool any = false;
@@ -111,7 +121,7 @@ void Problem::BindColumns() {
       }
       column_names_.push_back(predictable[i]);
       weights_.push_back(c.weight);
-      columns_.push_back({static_cast<int>(i / 2), i % 2 == 1, -1, -1});
+      columns_.push_back(kinds[i]);
     }
     if (!any) {
       throw InputError(c.where + ".name: '" + c.pattern +
@@ -169,7 +179,9 @@ void Problem::BindParameters() {
         const bool velocity = (it - arm_columns.begin()) % 2 == 1;
         p.index = -1;
         for (std::size_t c = 0; c < columns_.size(); ++c) {
-          if (columns_[c].joint == joint && columns_[c].velocity == velocity) p.index = static_cast<int>(c);
+          if (columns_[c].joint == joint && columns_[c].velocity == velocity && !columns_[c].torque) {
+            p.index = static_cast<int>(c);
+          }
         }
         if (p.index < 0) throw InputError(where + ": column '" + spec.element + "' is not among the fitted columns");
         int& slot = spec.kind == TargetKind::kColumnBias   ? columns_[p.index].bias
@@ -177,6 +189,24 @@ void Problem::BindParameters() {
                                                            : columns_[p.index].delay;
         slot = static_cast<int>(parameters_.size());
         model_value = spec.kind == TargetKind::kColumnGain ? 1.0 : 0.0;
+        break;
+      }
+      case TargetKind::kServoBandwidth:
+      case TargetKind::kServoDampingRatio: {
+        // (LoadSpec refused a servo target without input: reference)
+        std::vector<std::string> names;
+        for (const Arm& arm : arms_) names.push_back(arm.config.name);
+        const auto it = std::find(names.begin(), names.end(), spec.element);
+        if (it == names.end()) {
+          throw InputError(where + ": no arm device '" + spec.element +
+                           "' in the scenario (its arms: " + JoinNames(names) + ")");
+        }
+        Arm& arm = arms_[it - names.begin()];
+        const lab::ServoConfig& servo = arm.config.ParamsAs<lab::ArmParams>().servo;
+        p.index = static_cast<int>(it - names.begin());
+        const bool bandwidth = spec.kind == TargetKind::kServoBandwidth;
+        (bandwidth ? arm.bandwidth : arm.damping) = static_cast<int>(parameters_.size());
+        model_value = bandwidth ? servo.bandwidth_hz : servo.damping_ratio;
         break;
       }
     }
@@ -217,6 +247,7 @@ void Problem::ReadLogs() {
       tau[j] = column(joints_[j].device + ".tau." + joints_[j].name);
     }
     for (std::size_t c = 0; c < columns_.size(); ++c) fitted[c] = column(column_names_[c]);
+    if (reference_) ReadCommands(table, file, &log);
     for (int r = 0; r < rows; ++r) {
       const std::vector<double>& row = table.rows[r];
       log.time.push_back(row[time]);
@@ -320,6 +351,14 @@ Workspace Problem::MakeWorkspace() const {
   Workspace ws;
   ws.model.reset(mj_copyModel(nullptr, model_.get()));
   ws.data = MakeData(ws.model.get());
+  if (!reference_) return ws;
+  // the arm devices' own servos on this model: commands come a log period apart
+  const lab::DeviceContext context{ws.model.get(), steps_per_row_ * model_->opt.timestep, seed_, scene_};
+  for (const Arm& arm : arms_) {
+    lab::DeviceConfig config = arm.config;
+    if (spec_.servo_sensing_exact) config.EditParams<lab::ArmParams>().sensing = {};  // (a copy: on write)
+    ws.arms.push_back(lab::SimArm::Create(context, config));
+  }
   return ws;
 }
 
@@ -348,10 +387,15 @@ void Problem::Apply(const std::vector<double>& values, Workspace& ws) const {
       case TargetKind::kColumnGain:
       case TargetKind::kColumnDelay:
         break;  // applied to the columns in Rollout
+      case TargetKind::kServoBandwidth:
+      case TargetKind::kServoDampingRatio:
+        break;  // the servos' (TuneServos)
     }
   }
   // subtree masses and the constraint solver's inverse weights follow the masses and armature
   mj_setConst(m, ws.data.get());
+  // the servo gains follow the joints' inertia at the initial pose, and the gain parameters
+  if (reference_) TuneServos(values, ws);
   ws.applied = values;
 }
 
@@ -362,7 +406,7 @@ double Problem::TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity,
   double x = 0;
   const Column* column = nullptr;
   for (const Column& c : columns_) {
-    if (c.joint == joint && c.velocity == velocity) column = &c;
+    if (c.joint == joint && c.velocity == velocity && !c.torque) column = &c;
   }
   if (column && column->delay >= 0) x = values[column->delay] / (steps_per_row_ * model_->opt.timestep);
   double v = fit(joint, 0) + fit(joint, 1) * x + fit(joint, 2) * x * x;
@@ -383,6 +427,7 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
     d->qpos[joints_[j].qpos] = TrueState(win.q0, static_cast<int>(j), false, values);
     d->qvel[joints_[j].dof] = TrueState(win.qd0, static_cast<int>(j), true, values);
   }
+  if (reference_) StartServos(win, ws);
   ws.contacts = 0;
   const int columns = static_cast<int>(columns_.size());
   // the model's value and rate of each column at each row (row 0: the start), for the delays
@@ -391,6 +436,11 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
     for (int c = 0; c < columns; ++c) {
       const Joint& joint = joints_[columns_[c].joint];
       double* at = &ws.trace[(static_cast<std::size_t>(k) * columns + c) * 2];
+      if (columns_[c].torque) {  // what the servo applied over the last step (no delay: no rate)
+        at[0] = d->ctrl[joint.actuator];
+        at[1] = 0;
+        continue;
+      }
       at[0] = columns_[c].velocity ? d->qvel[joint.dof] : d->qpos[joint.qpos];
       at[1] = columns_[c].velocity ? d->qacc[joint.dof] : d->qvel[joint.dof];
     }
@@ -404,10 +454,19 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
   record(0);
   for (int k = 1; k <= win.rows; ++k) {
     const int row = win.first + k;
-    for (std::size_t j = 0; j < joints_.size(); ++j) d->ctrl[joints_[j].actuator] = log.tau(row, static_cast<int>(j));
-    for (int s = 0; s < steps_per_row_; ++s) {
-      mj_step(m, d);
-      ws.contacts = std::max(ws.contacts, d->ncon);
+    if (reference_) {
+      // the row's commands, taken at the start of its period; the servos act at every step
+      CommandServos(log, row, ws);
+      for (int s = 0; s < steps_per_row_; ++s) {
+        StepWithServos(ws);
+        ws.contacts = std::max(ws.contacts, d->ncon);
+      }
+    } else {
+      for (std::size_t j = 0; j < joints_.size(); ++j) d->ctrl[joints_[j].actuator] = log.tau(row, static_cast<int>(j));
+      for (int s = 0; s < steps_per_row_; ++s) {
+        mj_step(m, d);
+        ws.contacts = std::max(ws.contacts, d->ncon);
+      }
     }
     if (d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
         d->warning[mjWARN_BADQACC].number > 0) {

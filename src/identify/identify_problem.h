@@ -4,10 +4,14 @@
 //
 // A window is `rows` consecutive log rows after a first row. Its rollout starts from the
 // recorded state of the first row (every arm joint's q and qd; the rest of the scene in the
-// scenario's initial state), applies each later row's recorded joint torques over the
-// physics steps of that row's period (a torque command is held over its period: the arm
-// device's `NAME.tau.JOINT` of the row that ends it), and predicts the fitted q and qd
-// columns at each row. Residual = weight · (predicted − measured).
+// scenario's initial state), applies each later row's recorded inputs over the physics steps
+// of that row's period, and predicts the fitted columns at each row. The inputs (spec
+// `input`): `torque`, the recorded joint torques (a torque command is held over its period:
+// the arm device's `NAME.tau.JOINT` of the row that ends it); `reference`, the arms' recorded
+// commands (`NAME.cmd_mode`, `NAME.cmd.JOINT`) taken by each arm device's own servo
+// (lab::SimArm, one per arm and workspace, bound to the workspace's model), which then acts
+// at every physics step as in the lab (identify_servo.cc). Residual = weight · (predicted −
+// measured).
 //
 // Threads: a Problem is immutable once made; Rollout may run on many threads at once, each
 // with its own Workspace.
@@ -21,9 +25,13 @@
 
 #include "core/core_mujoco.h"
 #include "identify/identify_spec.h"
+#include "lab/devices/device_arm.h"
 
 namespace vlab::lab {
 struct Scenario;
+}
+namespace vlab::scene {
+struct CsvTable;
 }
 
 namespace vlab::identify {
@@ -45,6 +53,9 @@ struct Workspace {
   std::vector<double> applied;  ///< the parameter values `model` holds now
   int contacts = 0;             ///< the most contacts at any step of the last rollout
   std::vector<double> trace;    ///< delayed columns: value and rate at each row of the window
+  /// input: reference: each arm device's servo, bound to `model` (its gains made for `applied`)
+  std::vector<std::unique_ptr<lab::SimArm>> arms;
+  bridge::ArmCommand command;  ///< scratch: a recorded command
 };
 
 class Problem {
@@ -100,11 +111,23 @@ class Problem {
     int joint = 0;
     bool velocity = false;
     int bias = -1, gain = -1, delay = -1;  ///< parameters transforming it, -1: none
+    bool torque = false;                   ///< the joint's applied torque (input: reference)
+  };
+  /// An arm device: its config (a SimArm per workspace is made from it) and its joints.
+  struct Arm {
+    lab::DeviceConfig config;
+    int first = 0, joints = 0;         ///< its joints in joints_
+    int bandwidth = -1, damping = -1;  ///< servo gain parameters, -1: the config's
   };
   struct Log {
     std::vector<double> time;
     Eigen::MatrixXd q, qd, tau;  ///< rows x joints
     Eigen::MatrixXd measured;    ///< rows x fitted columns
+    /// input: reference: the command in force over the period ending at each row: its mode
+    /// (bridge::ArmMode, rows x arms) and value (rows x joints); the servo's position reference
+    /// at each row (rows x joints: hold and position, the logged value; velocity, integrated
+    /// from the last one; NaN after torque mode, where the reference follows the joint)
+    Eigen::MatrixXd mode, command, reference;
   };
   struct Window {
     int log = 0, first = 0, rows = 0, offset = 0;
@@ -122,13 +145,24 @@ class Problem {
   void SkipContactWindows();
   // the true start state of a joint from the measured fit (a, b, c), the sensor transforms undone
   double TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity, const std::vector<double>& values) const;
+  // input: reference (identify_servo.cc): the recorded commands of a log; the servos' gains for
+  // `values` (at the scenario's initial state, as the arm's Start makes them); a window's
+  // servo state from its first row; a row's commands taken; one physics step with the servos
+  void ReadCommands(const scene::CsvTable& table, const std::string& file, Log* log) const;
+  void TuneServos(const std::vector<double>& values, Workspace& ws) const;
+  void StartServos(const Window& win, Workspace& ws) const;
+  void CommandServos(const Log& log, int row, Workspace& ws, int only = -1) const;
+  void StepWithServos(Workspace& ws) const;
 
   Spec spec_;
   ModelPtr model_;
   std::string scene_;
   std::vector<double> qpos_init_;  ///< the scenario's initial qpos
   int steps_per_row_ = 1;
+  bool reference_ = false;  ///< input: reference
+  std::uint64_t seed_ = 1;  ///< the scenario's (the arm devices' contexts)
   std::vector<Joint> joints_;
+  std::vector<Arm> arms_;
   std::vector<Column> columns_;
   std::vector<std::string> column_names_;
   std::vector<double> weights_;

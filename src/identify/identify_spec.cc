@@ -33,6 +33,10 @@ bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element
     *kind = TargetKind::kColumnGain;
   } else if (what == "column" && attribute == "delay") {
     *kind = TargetKind::kColumnDelay;
+  } else if (what == "servo" && attribute == "bandwidth") {
+    *kind = TargetKind::kServoBandwidth;
+  } else if (what == "servo" && attribute == "damping_ratio") {
+    *kind = TargetKind::kServoDampingRatio;
   } else {
     return false;
   }
@@ -41,7 +45,8 @@ bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element
 
 constexpr char kTargets[] =
     "'body NAME mass', 'joint NAME damping', 'joint NAME armature', 'joint NAME frictionloss', "
-    "'column NAME bias', 'column NAME gain' or 'column NAME delay'";
+    "'column NAME bias', 'column NAME gain', 'column NAME delay', 'servo DEVICE bandwidth' or "
+    "'servo DEVICE damping_ratio'";
 
 ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, const std::string& path) {
   lab::MapReader r(file, node, path);
@@ -68,7 +73,8 @@ ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, con
     r.Fail("nominal", "must lie within [lower, upper]");
   }
   // a mass, damping, armature and friction loss are never negative; a gain is positive
-  const bool positive = p.kind == TargetKind::kBodyMass || p.kind == TargetKind::kColumnGain;
+  const bool positive = p.kind == TargetKind::kBodyMass || p.kind == TargetKind::kColumnGain ||
+                        p.kind == TargetKind::kServoBandwidth || p.kind == TargetKind::kServoDampingRatio;
   const bool non_negative = p.kind == TargetKind::kJointDamping || p.kind == TargetKind::kJointArmature ||
                             p.kind == TargetKind::kJointFrictionLoss || p.kind == TargetKind::kColumnDelay;
   if (positive && !(p.lower > 0)) r.Fail("lower", "must be > 0 for " + TargetText(p.kind, p.element));
@@ -114,6 +120,10 @@ std::string TargetText(TargetKind kind, const std::string& element) {
       return "column " + element + " gain";
     case TargetKind::kColumnDelay:
       return "column " + element + " delay";
+    case TargetKind::kServoBandwidth:
+      return "servo " + element + " bandwidth";
+    case TargetKind::kServoDampingRatio:
+      return "servo " + element + " damping_ratio";
   }
   return "";
 }
@@ -160,11 +170,18 @@ Spec LoadSpec(const std::string& path) {
   if (!(s.window_s > 0) || s.window_s > 1e3) r.Fail("window", "must be > 0 and at most 1000 s");
   s.where_input = lab::YamlWhere(path, r.Has("input") ? root["input"] : root) + ": input";
   s.input = r.String("input", s.input);
-  if (s.input != "torque") {
-    r.Fail("input", "'" + s.input +
-                        "' is not supported: 'torque' replays the recorded joint torques (recorded "
-                        "references through the servo are not replayed yet)");
+  if (s.input != "torque" && s.input != "reference") {
+    r.Fail("input",
+           "must be 'torque' (the recorded joint torques) or 'reference' (the recorded commands "
+           "through the arm's servo), got '" +
+               s.input + "'");
   }
+  const std::string sensing = r.String("servo_sensing", "scenario");
+  if (sensing != "scenario" && sensing != "exact") {
+    r.Fail("servo_sensing", "must be 'scenario' or 'exact', got '" + sensing + "'");
+  }
+  if (sensing == "exact" && s.input != "reference") r.Fail("servo_sensing", "needs input: reference");
+  s.servo_sensing_exact = sensing == "exact";
   s.max_iterations = r.Integer("max_iterations", s.max_iterations);
   if (s.max_iterations < 1 || s.max_iterations > 1000) r.Fail("max_iterations", "must be from 1 to 1000");
   s.start_smoothing = r.Integer("start_smoothing", s.start_smoothing);
@@ -188,6 +205,13 @@ Spec LoadSpec(const std::string& path) {
     }
   }
   if (s.parameters.empty()) r.Fail("parameters", "name at least one parameter to fit");
+  for (const ParameterSpec& p : s.parameters) {
+    const bool servo = p.kind == TargetKind::kServoBandwidth || p.kind == TargetKind::kServoDampingRatio;
+    if (servo && s.input != "reference") {
+      throw InputError(p.where + ".target: '" + TargetText(p.kind, p.element) +
+                       "' needs input: reference (the torque replay does not run the servo)");
+    }
+  }
   r.Finish();
   return s;
 }

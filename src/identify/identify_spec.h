@@ -21,6 +21,8 @@ enum class TargetKind {
   kColumnBias,         ///< column NAME bias: the sensor reads true + bias (the column's unit)
   kColumnGain,         ///< column NAME gain: the sensor reads gain · true (1)
   kColumnDelay,        ///< column NAME delay: the sensor reads the true value of this long ago (s)
+  kServoBandwidth,     ///< servo DEVICE bandwidth: the arm's servo.bandwidth_hz (Hz)
+  kServoDampingRatio,  ///< servo DEVICE damping_ratio: the arm's servo.damping_ratio (1)
 };
 
 /// "body NAME mass", ...: the words of a target, for messages and outputs.
@@ -30,7 +32,7 @@ std::string TargetText(TargetKind kind, const std::string& element);
 struct ParameterSpec {
   std::string name;  ///< unique, as written
   TargetKind kind = TargetKind::kBodyMass;
-  std::string element;  ///< body or joint name, or log column
+  std::string element;  ///< body or joint name, log column, or arm device
   bool has_nominal = false;
   double nominal = 0;  ///< the starting value (default: the model's; bias 0, gain 1)
   double lower = 0;    ///< bounds of the fitted value, lower < upper
@@ -47,13 +49,21 @@ struct ColumnSpec {
 };
 
 struct Spec {
-  std::string file;                       ///< the spec as given
-  std::string scenario;                   ///< resolved relative to the spec file
-  std::vector<std::string> sets;          ///< `set:` KEY=VALUE overrides of the scenario
-  std::vector<std::string> logs;          ///< log.csv files (a run folder is its log.csv)
-  std::vector<ColumnSpec> columns;        ///< at least one
-  double window_s = 0.2;                  ///< multiple-shooting window, s
-  std::string input = "torque";           ///< how the recorded inputs are replayed
+  std::string file;                 ///< the spec as given
+  std::string scenario;             ///< resolved relative to the spec file
+  std::vector<std::string> sets;    ///< `set:` KEY=VALUE overrides of the scenario
+  std::vector<std::string> logs;    ///< log.csv files (a run folder is its log.csv)
+  std::vector<ColumnSpec> columns;  ///< at least one
+  double window_s = 0.2;            ///< multiple-shooting window, s
+  /// How the recorded inputs are replayed: "torque" (each joint's recorded torque) or
+  /// "reference" (the arms' recorded commands through their servos).
+  std::string input = "torque";
+  /// input: reference with arms that sense their joints through encoders (the arm key
+  /// `sensing`): false, the replayed servo reads the counts as the lab's does (the log to the
+  /// bit, but the rollout is then a step function of the parameters); true (`servo_sensing:
+  /// exact`), it reads the exact joint state, smooth in the parameters, the counts' rounding
+  /// left as noise.
+  bool servo_sensing_exact = false;
   std::vector<ParameterSpec> parameters;  ///< at least one, names unique
   int max_iterations = 50;                ///< Ceres iterations, 1..1000
   /// Rows on each side of a window's first row that its start state is smoothed over (a

@@ -1,5 +1,6 @@
 // vlab identify's spec: read and checked, every error naming the file, the entry and the
 // field; names bound to the scenario's model and the log's columns with the same care.
+#include <charconv>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "identify/identify_problem.h"
 #include "identify/identify_spec.h"
 #include "identify_test_plant.h"
+#include "scene/scene_csv.h"
 #include "test_util.h"
 
 namespace vlab::identify {
@@ -80,7 +82,15 @@ TEST(IdentifySpec, RefusesBadEntriesNamingTheField) {
   const std::vector<Case> cases = {
       {"window: 0.2", "windw: 0.2", ":3: windw: unknown key"},
       {"window: 0.2", "window: -1", ":3: window: must be > 0"},
-      {"input: torque", "input: reference", ":4: input: 'reference' is not supported"},
+      {"input: torque", "input: servo", ":4: input: must be 'torque' (the recorded joint torques) or 'reference'"},
+      {"body pa10_link2 mass", "servo pa10 bandwidth",
+       ":8: parameters[0].target: 'servo pa10 bandwidth' needs input: reference"},
+      {"body pa10_link2 mass, lower: 4", "servo pa10 damping_ratio, lower: 0",
+       ":8: parameters[0].lower: must be > 0 for servo pa10 damping_ratio"},
+      {"body pa10_link2 mass", "servo pa10 gains", ":8: parameters[0].target: 'servo pa10 gains' is none of"},
+      {"input: torque", "input: torque\nservo_sensing: exact", ":5: servo_sensing: needs input: reference"},
+      {"input: torque", "input: reference\nservo_sensing: counts",
+       ":5: servo_sensing: must be 'scenario' or 'exact', got 'counts'"},
       {"logs: [run]", "logs: []", "logs: name at least one log"},
       {"weight: 1.0e5", "weight: -1", ":6: columns[0].weight: must be a finite number > 0"},
       {"body pa10_link2 mass", "body pa10_link2 volume",
@@ -141,6 +151,52 @@ TEST(IdentifySpec, RefusesNamesTheModelOrLogLacks) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("short.csv': no column 'pa10.qd.S1'"), std::string::npos) << e.what();
   }
+}
+
+// input: reference binds the arms' recorded commands and the servo targets' devices: a log
+// without the command columns, a servo target naming no arm device, a mode that is none
+TEST(IdentifySpec, RefusesWhatTheReferenceReplayLacks) {
+  TempDir tmp;
+  testing::RunLab(testing::kScene, tmp / "run", 0.2);  // no command columns
+  auto edit = [](std::string text, const std::string& from, const std::string& to) {
+    return text.replace(text.find(from), from.size(), to);
+  };
+  auto refused = [&](const std::string& text, const std::string& message) {
+    WriteFile(tmp / "id.yaml", text);
+    try {
+      Problem::Create(LoadSpec(tmp / "id.yaml"));
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  const std::string reference = Spec("input: torque", "input: reference");
+  refused(reference, "log '" + tmp / "run/log.csv" + "': no column 'pa10.cmd_mode'");
+  // a servo target naming a device that is no arm
+  refused(edit(reference, "body pa10_link2 mass", "servo jr3 bandwidth"),
+          ":8: parameters[0].target: no arm device 'jr3' in the scenario (its arms: pa10)");
+  // a command mode that is none of the four, named by its row and column
+  testing::RunLab(testing::kScene, tmp / "cmd", 0.2, {"devices.pa10.log_command=true"});
+  scene::CsvTable table = scene::ReadCsvTable(tmp / "cmd/log.csv");
+  const int mode = table.Column("pa10.cmd_mode");
+  ASSERT_GE(mode, 0);
+  table.rows[3][mode] = 7;
+  std::string csv;
+  for (std::size_t c = 0; c < table.columns.size(); ++c) csv += (c ? "," : "") + table.columns[c];
+  csv += "\n";
+  char buffer[32];
+  for (const std::vector<double>& row : table.rows) {
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      csv += (c ? "," : "") + std::string(buffer, std::to_chars(buffer, buffer + sizeof buffer, row[c]).ptr);
+    }
+    csv += "\n";
+  }
+  WriteFile(tmp / "bad_mode.csv", csv);
+  refused(edit(reference, "logs: [run]", "logs: [bad_mode.csv]"),
+          "log '" + tmp / "bad_mode.csv" + "': row 5: column 'pa10.cmd_mode' is 7, not a command mode");
+  // the torque replay predicts no torque column
+  refused(edit(Spec(), "name: pa10.q.*", "name: pa10.tau.*"),
+          "'pa10.tau.*' names none of the columns the replay predicts");
 }
 
 }  // namespace

@@ -214,6 +214,53 @@ TEST_F(ArmDeviceTest, GainsFollowBandwidthRule) {
   }
 }
 
+// log_command: the command in force as NAME.cmd_mode and NAME.cmd.JOINT after the arm's other
+// columns; hold logs the position held, a refused command leaves the one before
+TEST_F(ArmDeviceTest, LogsTheCommandInForce) {
+  const std::vector<std::string> plain = arm_->Columns();
+  EXPECT_EQ(plain.size(), 22u);  // without the key: q, qd, tau, limit_violation only
+  DeviceConfig config = ArmConfig();
+  config.EditParams<ArmParams>().log_command = true;
+  arm_ = SimArm::Create({model_, kPeriod, 1, "pa10.xml"}, config);
+  mj_resetData(m(), d());
+  arm_->SetInitialState(*d());
+  mj_forward(m(), d());
+  arm_->Start(*d());
+  const std::vector<std::string> columns = arm_->Columns();
+  ASSERT_EQ(static_cast<int>(columns.size()), arm_->ColumnCount());
+  ASSERT_EQ(columns.size(), 30u);
+  EXPECT_EQ(columns[22], "pa10.cmd_mode");
+  EXPECT_EQ(columns[23], "pa10.cmd.S1");
+  EXPECT_EQ(columns[29], "pa10.cmd.W2");
+  std::vector<double> row(columns.size());
+  auto logged = [&](double mode, const std::vector<double>& value, const char* what) {
+    arm_->Row(*d(), row.data());
+    EXPECT_EQ(row[22], mode) << what;
+    for (int i = 0; i < 7; ++i) EXPECT_EQ(row[23 + i], value[i]) << what << " " << kJoints[i];
+  };
+  logged(0, kReady, "holding the start");
+  std::vector<double> target = kReady;
+  target[0] += 0.05;
+  ASSERT_TRUE(arm_->Command(Cmd(ArmMode::kPosition, target)));
+  Run(0.01);
+  logged(1, target, "position");
+  std::vector<double> beyond = target;
+  beyond[1] = 2.0;  // beyond S2's range: refused
+  EXPECT_FALSE(arm_->Command(Cmd(ArmMode::kPosition, beyond)));
+  logged(1, target, "after a refused position");
+  ASSERT_TRUE(arm_->Command(Cmd(ArmMode::kHold, {})));
+  Run(0.01);
+  logged(0, target, "hold after a position");
+  const std::vector<double> rate = {0.1, 0, 0, 0, -0.2, 0, 0};
+  ASSERT_TRUE(arm_->Command(Cmd(ArmMode::kVelocity, rate)));
+  Run(0.01);
+  logged(2, rate, "velocity");
+  const std::vector<double> tau = {1.0, -2.0, 0.5, 0, 0, 0, 0.25};
+  ASSERT_TRUE(arm_->Command(Cmd(ArmMode::kTorque, tau)));
+  Run(0.002);
+  logged(3, tau, "torque");
+}
+
 // ---- binding errors --------------------------------------------------------
 
 std::string CreateError(const mjModel* m, const DeviceConfig& c) {

@@ -96,6 +96,7 @@ std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r) {
   }
   ReadCommandInput(r, &arm->input);
   arm->log_following_error = r.Bool("log_following_error", arm->log_following_error);
+  arm->log_command = r.Bool("log_command", arm->log_command);
   arm->servo.bandwidth_hz = servo.Number("bandwidth_hz", arm->servo.bandwidth_hz);
   arm->servo.damping_ratio = servo.Number("damping_ratio", arm->servo.damping_ratio);
   if (!(arm->servo.bandwidth_hz > 0)) servo.Fail("bandwidth_hz", "must be > 0 Hz");
@@ -212,6 +213,7 @@ std::unique_ptr<SimArm> SimArm::Create(const DeviceContext& context, const Devic
   arm->watchdog_periods_ = p.input.watchdog_periods;
   arm->owner_timeout_s_ = p.input.owner_timeout_s;
   arm->log_following_error_ = p.log_following_error;
+  arm->log_command_ = p.log_command;
   arm->bandwidth_hz_ = p.servo.bandwidth_hz;
   arm->damping_ratio_ = p.servo.damping_ratio;
   arm->value_ = Eigen::VectorXd::Zero(n);
@@ -261,6 +263,22 @@ void SimArm::Start(mjData& d) {
 }
 
 void SimArm::Reset(const mjData& d) { Sample(d, d.time, &state_); }
+
+void SimArm::Resume(const mjData& d, const Eigen::VectorXd& q_ref) {
+  if (sensing_.enabled()) {
+    // the encoders last read the joints a physics step ago: their counts there, so that the
+    // next step's difference velocity is the one over that step
+    Gather(d);
+    const double dt = model_->opt.timestep;
+    const Eigen::VectorXd q_before = q_true_ - qd_true_ * dt;
+    sensing_.Sense(q_before.data(), qd_true_.data(), 0.0);
+  }
+  q_ref_ = q_ref;
+  qd_ref_.setZero();
+  mode_ = bridge::ArmMode::kHold;
+  have_position_command_ = false;
+  last_refused_ = false;
+}
 
 void SimArm::Sample(const mjData& d, double t) { Sample(d, t, &state_); }
 
@@ -375,6 +393,10 @@ std::vector<std::string> SimArm::Columns() const {
   }
   columns.push_back(name() + ".limit_violation");
   if (log_following_error_) columns.push_back(name() + ".following_error");
+  if (log_command_) {
+    columns.push_back(name() + ".cmd_mode");
+    for (const auto& joint : joint_names_) columns.push_back(name() + ".cmd." + joint);
+  }
   return columns;
 }
 
@@ -392,12 +414,22 @@ void SimArm::Row(const mjData& d, double* out) const {
     violation = std::max({violation, lower_[i] - q, q - upper_[i]});
   }
   out[3 * n] = violation;
-  if (!log_following_error_) return;
-  double following = 0.0;  // (torque mode: q_ref follows q, one step behind; sensed q when sensing)
-  for (int i = 0; i < n; ++i) {
-    following = std::max(following, std::abs(q_ref_[i] - (sensing_.enabled() ? out[i] : d.qpos[qpos_adr_[i]])));
+  int next = 3 * n + 1;
+  if (log_following_error_) {
+    double following = 0.0;  // (torque mode: q_ref follows q, one step behind; sensed q when sensing)
+    for (int i = 0; i < n; ++i) {
+      following = std::max(following, std::abs(q_ref_[i] - (sensing_.enabled() ? out[i] : d.qpos[qpos_adr_[i]])));
+    }
+    out[next++] = following;
   }
-  out[3 * n + 1] = following;
+  if (!log_command_) return;
+  // the command in force: its mode and value (hold: the position the servo holds)
+  out[next++] = static_cast<double>(static_cast<int>(mode_));
+  const Eigen::VectorXd& value = mode_ == bridge::ArmMode::kHold       ? q_ref_
+                                 : mode_ == bridge::ArmMode::kPosition ? last_position_command_
+                                 : mode_ == bridge::ArmMode::kVelocity ? qd_ref_
+                                                                       : value_;
+  for (int i = 0; i < n; ++i) out[next + i] = value[i];
 }
 
 void SimArm::Gather(const mjData& d) const {

@@ -90,10 +90,13 @@ struct ArmParams : DeviceParams {
   SensingConfig sensing;  ///< encoder resolution and velocity source (empty: exact)
   CommandInputConfig input;
   bool log_following_error = false;  ///< log NAME.following_error: max |q_ref - q| of the servo, rad
+  /// log the command in force each period: NAME.cmd_mode (the bridge's ArmMode number) and
+  /// NAME.cmd.JOINT (its value: position rad, velocity rad/s, torque N m; hold: the position held)
+  bool log_command = false;
 };
 
 /// Reads an arm entry's keys (joints, actuators, initial, initial_jitter, max_velocity, servo,
-/// payload, sensing, watchdog_periods, owner_timeout, log_following_error). Throws
+/// payload, sensing, watchdog_periods, owner_timeout, log_following_error, log_command). Throws
 /// InputError naming the file, line and key.
 std::shared_ptr<const DeviceParams> ReadArmParams(MapReader& r);
 /// Makes a SimArm.
@@ -144,6 +147,19 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   long refused_commands() const { return refused_; }
   const Eigen::VectorXd& kp() const { return kp_; }
   const Eigen::VectorXd& kd() const { return kd_; }
+  double bandwidth_hz() const { return bandwidth_hz_; }
+  double damping_ratio() const { return damping_ratio_; }
+  /// Sets the servo's bandwidth (Hz, > 0) and damping ratio (> 0); the gains follow from them
+  /// at the next Start, as from the config's.
+  void Tune(double bandwidth_hz, double damping_ratio) {
+    bandwidth_hz_ = bandwidth_hz;
+    damping_ratio_ = damping_ratio;
+  }
+  /// Takes up the servo at `d`'s state as the end of a control period left it (a replay that
+  /// starts mid-run; gains as the last Start made them): holding `q_ref` with no rate, no
+  /// position command before, and the encoders' last reading (sensing) that of the physics
+  /// step before, the joints at q - qd dt. Commands then follow as in a run.
+  void Resume(const mjData& d, const Eigen::VectorXd& q_ref);
 
   // Device; CommandInput (a typed command: TakeCommand); StepHooks (the servo)
   void SetInitialState(mjData& d) const override;
@@ -152,10 +168,13 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   void Actuate(mjData& d, double dt) override;
   void Sample(const mjData& d, double t) override;
   /// Log columns: NAME.q.JOINT, NAME.qd.JOINT (sensed), NAME.tau.JOINT,
-  /// NAME.limit_violation (of the true q), and NAME.following_error (largest
-  /// |q_ref - q| of the servo, sensed q, rad) when configured.
+  /// NAME.limit_violation (of the true q), NAME.following_error (largest
+  /// |q_ref - q| of the servo, sensed q, rad) when configured, and the command in
+  /// force (log_command): NAME.cmd_mode and NAME.cmd.JOINT.
   std::vector<std::string> Columns() const override;
-  int ColumnCount() const override { return 3 * dof() + 1 + (log_following_error_ ? 1 : 0); }
+  int ColumnCount() const override {
+    return 3 * dof() + 1 + (log_following_error_ ? 1 : 0) + (log_command_ ? 1 + dof() : 0);
+  }
   void Row(const mjData& d, double* out) const override;
   int log_rank() const override { return 0; }
   void EncodeState(double seq, double t, std::uint32_t endpoint_bits, std::vector<double>* scratch,
@@ -193,6 +212,7 @@ class SimArm final : public Device, public CommandInput, public StepHooks {
   double owner_timeout_s_ = 1.0;
   bool has_initial_ = false;
   bool log_following_error_ = false;
+  bool log_command_ = false;
   double bandwidth_hz_ = 10.0, damping_ratio_ = 1.0;
   Eigen::VectorXd kp_, kd_;
   ServoConfig::Feedforward feedforward_kind_ = ServoConfig::Feedforward::kWorld;
