@@ -43,7 +43,9 @@ std::string Spec(const std::string& from = "", const std::string& to = "") {
 
 TEST(IdentifySpec, ReadsEveryKey) {
   TempDir tmp;
-  WriteFile(tmp / "id.yaml", Spec("window: 0.2", "window: 0.5\nstart_smoothing: 4\ncontacts: keep\nmax_iterations: 7"));
+  WriteFile(tmp / "id.yaml", Spec("window: 0.2",
+                                  "window: 0.5\nstart_smoothing: 4\ncontacts: keep\nmax_iterations: 7\n"
+                                  "first_estimate: nominal"));
   const identify::Spec s = LoadSpec(tmp / "id.yaml");
   EXPECT_EQ(s.scenario, testing::kScenario);
   ASSERT_EQ(s.logs.size(), 1u);
@@ -52,6 +54,9 @@ TEST(IdentifySpec, ReadsEveryKey) {
   EXPECT_EQ(s.start_smoothing, 4);
   EXPECT_FALSE(s.skip_contacts);
   EXPECT_EQ(s.max_iterations, 7);
+  EXPECT_EQ(s.first_estimate, FirstEstimate::kNominal);
+  WriteFile(tmp / "default.yaml", Spec());
+  EXPECT_EQ(LoadSpec(tmp / "default.yaml").first_estimate, FirstEstimate::kLinear);  // the default
   ASSERT_EQ(s.columns.size(), 1u);
   EXPECT_EQ(s.columns[0].weight, 1e5);
   ASSERT_EQ(s.parameters.size(), 2u);
@@ -80,6 +85,7 @@ TEST(IdentifySpec, RefusesBadEntriesNamingTheField) {
   const std::vector<Case> cases = {
       {"window: 0.2", "windw: 0.2", ":3: windw: unknown key"},
       {"window: 0.2", "window: -1", ":3: window: must be > 0"},
+      {"window: 0.2", "first_estimate: linear_regression", ":3: first_estimate: must be 'linear' or 'nominal'"},
       {"input: torque", "input: reference", ":4: input: 'reference' is not supported"},
       {"logs: [run]", "logs: []", "logs: name at least one log"},
       {"weight: 1.0e5", "weight: -1", ":6: columns[0].weight: must be a finite number > 0"},
