@@ -60,14 +60,20 @@ double TorquePerControl(const mjModel* m, int a) {
   return m->actuator_gear[6 * a] * m->actuator_gainprm[mjNGAIN * a];
 }
 
-// Savitzky-Golay quadratic over x = -H..H read at x = -1/2: the weights of the value and of
-// the slope (per row)
-void SavitzkyGolay(int half, Eigen::VectorXd* value, Eigen::VectorXd* slope) {
-  Eigen::MatrixXd a(2 * half + 1, 3);
-  for (int i = -half; i <= half; ++i) a.row(i + half) << 1.0, i, static_cast<double>(i) * i;
-  const Eigen::MatrixXd p = a.colPivHouseholderQr().solve(Eigen::MatrixXd::Identity(a.rows(), a.rows()));  // 3 x rows
-  *value = (p.row(0) - 0.5 * p.row(1) + 0.25 * p.row(2)).transpose();
-  *slope = (p.row(1) - p.row(2)).transpose();
+// Savitzky-Golay polynomial of `degree` over rows i = -H..H: the weights (per row) of its value
+// at x, or of its slope at x (per row)
+Eigen::VectorXd SavitzkyGolay(int half, int degree, double x, bool slope) {
+  Eigen::MatrixXd a(2 * half + 1, degree + 1);
+  for (int i = -half; i <= half; ++i) {
+    for (int k = 0; k <= degree; ++k) a(i + half, k) = std::pow(static_cast<double>(i), k);
+  }
+  // (degree + 1) x rows: the least-squares coefficients of the rows' values
+  const Eigen::MatrixXd p = a.colPivHouseholderQr().solve(Eigen::MatrixXd::Identity(a.rows(), a.rows()));
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(a.rows());
+  for (int k = slope ? 1 : 0; k <= degree; ++k) {
+    w += (slope ? k * std::pow(x, k - 1) : std::pow(x, k)) * p.row(k).transpose();
+  }
+  return w;
 }
 
 // the columns of `a` (scaled) that QR with column pivoting finds independent, in column order
@@ -166,10 +172,19 @@ LinearEstimate EstimateLinear(const Problem& problem, const LinearOptions& optio
     for (int j = 0; j < n; ++j) friction[j] = friction[j] || joints[j].dof == params[p].index;
   }
 
-  const int half = std::max(2, options.half_window);
-  Eigen::VectorXd w_value, w_slope;
-  SavitzkyGolay(half, &w_value, &w_slope);
+  const int degree = std::max(2, options.degree);
+  const int half = std::max(degree + 1, options.half_window);
+  // where in the period that ends at a row (x rows from it) the model's forces act: the period's
+  // mean acceleration is the slope at its middle, x = -1/2; MuJoCo's Euler steps (semi-implicit)
+  // take the forces at the state at the start of each of the period's n steps (mean x = -1/2 -
+  // 1/(2n)) and the damping, implicit, at each step's end (-1/2 + 1/(2n)); RK4 about the middle
   const double period = problem.row_period();
+  const int steps = std::max(1, static_cast<int>(std::lround(period / model->opt.timestep)));
+  const bool euler = model->opt.integrator == mjINT_EULER;
+  const double x_state = euler ? -0.5 - 0.5 / steps : -0.5, x_damping = euler ? -0.5 + 0.5 / steps : -0.5;
+  const Eigen::VectorXd w_state = SavitzkyGolay(half, degree, x_state, false),
+                        w_damping = SavitzkyGolay(half, degree, x_damping, false),
+                        w_slope = SavitzkyGolay(half, degree, -0.5, true);
   const int cols = static_cast<int>(estimated.size());
   std::vector<double> rows_a, rows_b;  // row-major A (torque rows x cols) and b
   std::vector<int> row_joint;
@@ -200,11 +215,16 @@ LinearEstimate EstimateLinear(const Problem& problem, const LinearOptions& optio
         Eigen::VectorXd qs(m), qds(m), qdds(m);
         for (int i = 0; i < m; ++i) {
           const int j = c.joints[i];
-          qs[i] = q.col(j).segment(r - half, 2 * half + 1).dot(w_value);
-          qds[i] = qd.col(j).segment(r - half, 2 * half + 1).dot(w_value);
+          qs[i] = q.col(j).segment(r - half, 2 * half + 1).dot(w_state);
+          qds[i] = qd.col(j).segment(r - half, 2 * half + 1).dot(w_state);
           qdds[i] = qd.col(j).segment(r - half, 2 * half + 1).dot(w_slope) / period;
         }
         c.regressor->Compute(qs, qds, qdds, &y);
+        // the damping column (Y's qd after the links' columns) at the damping's own time
+        for (int i = 0; i < m; ++i) {
+          y(i, control::DynamicsRegressor::kLinkParameters * m + i) =
+              qd.col(c.joints[i]).segment(r - half, 2 * half + 1).dot(w_damping);
+        }
         const Eigen::VectorXd known = y * c.pi0;
         const Eigen::MatrixXd a = y * c.dpi;
         for (int i = 0; i < m; ++i) {

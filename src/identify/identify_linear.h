@@ -6,12 +6,13 @@
 // (identify_fit.h) starts from there. docs/identify.md, "How it works".
 //
 // Per log row r (the rows within `half_window` of a log's end left out): each joint's q and
-// qd are fitted by a quadratic over rows r - H .. r + H (Savitzky-Golay) and read at
-// r - 1/2, the middle of the period over which the row's torque was applied (a torque is
-// held over the period that ends at its row), where also qdd is the fitted qd's slope. The
-// rows of the arm joints are stacked: tau - Y·pi(nominal) = sum_p Y·dpi/dtheta_p ·
-// (theta_p - nominal_p), solved by weighted least squares (each joint's rows weighted by 1 /
-// the rms of its residual after an unweighted pass).
+// qd are fitted by a cubic over rows r - H .. r + H (Savitzky-Golay); qdd is the fitted qd's
+// slope in the middle of the period that ends at the row (the row's torque acted over it),
+// q and qd are read where the simulator evaluated its forces in that period (MuJoCo's Euler:
+// at the start of each step, the damping at each step's end). The rows of the arm joints are
+// stacked: tau - Y·pi(nominal) = sum_p Y·dpi/dtheta_p · (theta_p - nominal_p), solved by
+// weighted least squares (each joint's rows weighted by 1 / the rms of its residual after an
+// unweighted pass).
 //
 // Left out: a sample whose recorded state is in contact; a joint's row whose torque is at
 // its motor's limit (clipped); a joint's row slower than `min_speed` when the joint has
@@ -35,7 +36,8 @@ namespace vlab::identify {
 bool LinearKind(TargetKind kind);
 
 struct LinearOptions {
-  int half_window = 20;          ///< rows on each side of the Savitzky-Golay quadratic, >= 2
+  int half_window = 40;          ///< rows on each side of the Savitzky-Golay polynomial, > degree
+  int degree = 3;                ///< of the Savitzky-Golay polynomial, >= 2
   double min_speed = 0.05;       ///< rad/s (m/s): slower rows of a joint with friction loss left out
   double rank_tolerance = 1e-8;  ///< pivots below this fraction of the largest: undetermined
 };
