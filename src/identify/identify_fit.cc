@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -165,6 +166,13 @@ Eigen::MatrixXd JacobianAt(RolloutPool& pool, const FreeSet& set, const std::vec
       last.jacobian.data(), count, static_cast<Eigen::Index>(u.size()));
 }
 
+// six significant digits, for the progress line
+std::string Short(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", x);
+  return buffer;
+}
+
 double HalfSquares(const std::vector<double>& r) {
   double s = 0;
   for (double x : r) s += x * x;
@@ -275,11 +283,11 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
       for (LinearStatus s : l.status) covered += s != LinearStatus::kNotCovered;
       line += " (" + std::to_string(l.rank) + " of " + std::to_string(covered) + " parameters estimated from " +
               std::to_string(l.torque_rows) + " joint torques of " + std::to_string(l.samples) +
-              " log rows); cost at nominal " + std::to_string(result.cost_nominal) + ", at the start " +
-              std::to_string(result.cost_start);
+              " log rows); cost at nominal " + Short(result.cost_nominal) + ", at the start " +
+              Short(result.cost_start);
     } else {
       line += result.first_estimate_note.empty() ? "" : " (" + result.first_estimate_note + ")";
-      line += "; cost " + std::to_string(result.cost_start);
+      line += "; cost " + Short(result.cost_start);
     }
     options.message(line);
   }
