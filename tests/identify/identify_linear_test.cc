@@ -1,5 +1,6 @@
 // vlab identify's linear first estimate: planted masses, damping and armature recovered from
 // the logs' torques alone (inverse-dynamics regression), and the fit started from it.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -156,6 +157,38 @@ TEST_F(IdentifyLinear, LeavesWhatTheTorquesCannotTellAtNominal) {
   EXPECT_EQ(e.status[d_s3], LinearStatus::kNotCovered);
   EXPECT_EQ(e.values[d_s3], 0.0);
   EXPECT_EQ(e.rank, static_cast<int>(kPlanted.size()) + 1);
+}
+
+// A joint torque at its motor's limit may be the clipped command rather than what acted: its
+// equations are left out (here the nominal model's W1 limited to the median of the log's
+// |tau|), and the estimate stays within the noise-free bounds.
+TEST_F(IdentifyLinear, LeavesClippedTorquesOut) {
+  const int w1 = 5;
+  std::vector<double> magnitudes;
+  {
+    const Eigen::MatrixXd& tau = Make(clean_)->log_tau(0);
+    for (Eigen::Index r = 0; r < tau.rows(); ++r) magnitudes.push_back(std::abs(tau(r, w1)));
+  }
+  std::nth_element(magnitudes.begin(), magnitudes.begin() + magnitudes.size() / 2, magnitudes.end());
+  const double limit = magnitudes[magnitudes.size() / 2];
+  WriteEditedScene(
+      *tmp_ / "nominal.xml",
+      [limit](mjModel* m) {
+        const int a = mj_name2id(m, mjOBJ_ACTUATOR, "W1");
+        m->actuator_ctrlrange[2 * a] = m->actuator_forcerange[2 * a] = -limit;
+        m->actuator_ctrlrange[2 * a + 1] = m->actuator_forcerange[2 * a + 1] = limit;
+      },
+      *tmp_ / "limited.xml");
+  WriteFile(*tmp_ / "id.yaml", SpecText(*tmp_ / "limited.xml", clean_));
+  const std::unique_ptr<Problem> problem = Problem::Create(LoadSpec(*tmp_ / "id.yaml"));
+  const LinearEstimate e = EstimateLinear(*problem);
+  std::printf("W1 limited to %.4g N m: %d equations left out as clipped\n", limit, e.left_out_clipped);
+  // about half of W1's rows (MJCF's 6 digits may round the limit either way)
+  EXPECT_GT(e.left_out_clipped, e.samples / 3);
+  EXPECT_LT(e.left_out_clipped, 2 * e.samples / 3);
+  const std::vector<double> errors = RelativeErrors(*problem, e);
+  const double bound[] = {5e-4, 5e-4, 5e-4, 1e-4, 3e-3, 2e-4};
+  for (std::size_t i = 0; i < errors.size(); ++i) EXPECT_LT(errors[i], bound[i]) << kPlanted[i].name;
 }
 
 // The fit from the linear estimate converges to the fit from the nominal values (masses
