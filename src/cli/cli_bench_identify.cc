@@ -3,8 +3,8 @@
 // loss 0.8 N m, S1 armature +15 %) runs scenes/pa10_joint_pd for --duration s (default 20)
 // in this process; seeded Gaussian noise of 1e-5 rad goes on its joint angles; then 20
 // parameters (the 7 link masses, the 7 armatures, 4 dampings, 2 friction losses) are fitted
-// from the nominal scene with 1 and with 2 rollout threads (at most --iterations each, default
-// the spec's 50), --repeat times each. Printed per
+// from the nominal scene (the fit starting from the linear first estimate) with 1 and with 2
+// rollout threads (at most --iterations each, default the spec's 50), --repeat times each. Printed per
 // thread count: the median wall time, iterations, rollouts per second and the speed-up;
 // that both give the same estimates to the bit; the planted parameters' largest error.
 // Goal (issue 33): <= 300 s with 2 threads on 2 cores for a 20 s log.

@@ -36,16 +36,20 @@ int Identify(const IdentifyArgs& a) {
     std::fprintf(stderr, "identify: %d windows (%d left out for contact), %d residuals, %zu parameters, %d threads\n",
                  problem->window_count(), problem->windows_in_contact(), problem->residual_count(),
                  problem->parameters().size(), options.threads);
+    options.message = [](const std::string& line) { std::fprintf(stderr, "identify: %s\n", line.c_str()); };
     options.progress = [](int iteration, double cost) {
       std::fprintf(stderr, "identify: iteration %d cost %.6g\n", iteration, cost);
     };
   }
   const identify::FitResult fit = identify::Fit(*problem, options);
   for (const identify::Estimate& e : fit.estimates) {
-    std::printf("%-16s nominal %-12.6g fitted %-12.6g sd %-10s %s%s%s\n", e.name.c_str(), e.nominal, e.value,
+    std::printf("%-16s nominal %-12.6g start %-12.6g fitted %-12.6g sd %-10s %s%s%s\n", e.name.c_str(), e.nominal,
+                fit.start_values[static_cast<std::size_t>(&e - fit.estimates.data())], e.value,
                 std::isfinite(e.sd) ? std::to_string(e.sd).c_str() : "-",
                 e.identifiable ? "identifiable" : "NOT identifiable", e.note.empty() ? "" : ": ", e.note.c_str());
   }
+  std::printf("first estimate %s%s%s\n", fit.first_estimate.c_str(), fit.first_estimate_note.empty() ? "" : ": ",
+              fit.first_estimate_note.c_str());
   std::printf("cost %.6g -> %.6g, residual sd %.4g, %d iterations, %d rollouts, %.1f s: %s\n", fit.cost_nominal,
               fit.cost_fitted, fit.residual_sd, fit.iterations, fit.rollouts, fit.wall_s, fit.termination.c_str());
   const std::string out_dir =
@@ -66,7 +70,9 @@ Subcommand AddIdentifyCommand(CLI::App& app) {
       "Fit model parameters (body masses with their inertia, joint damping, armature and friction loss, a q or qd "
       "column's bias, gain and delay, an arm's servo bandwidth and damping ratio) to recorded logs: the recorded "
       "joint torques, or the arms' recorded commands through their servos, replayed over short windows from the "
-      "recorded state (multiple shooting), box-constrained nonlinear least squares (Ceres). Prints each estimate "
+      "recorded state (multiple shooting), box-constrained nonlinear least squares (Ceres) from a linear "
+      "inverse-dynamics estimate of the masses, damping, armature and friction loss where it applies. Prints each "
+      "estimate "
       "with its standard deviation and whether the data can tell it; writes estimates.json, overrides.txt (for vlab "
       "run --overrides), model.xml (the scene patched), fit.csv, plots and report.md (docs/identify.md). Exit: 0 "
       "fitted; 1 a rollout diverged or a write failed; 2 bad input");

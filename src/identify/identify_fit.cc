@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -165,6 +166,13 @@ Eigen::MatrixXd JacobianAt(RolloutPool& pool, const FreeSet& set, const std::vec
       last.jacobian.data(), count, static_cast<Eigen::Index>(u.size()));
 }
 
+// six significant digits, for the progress line
+std::string Short(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", x);
+  return buffer;
+}
+
 double HalfSquares(const std::vector<double>& r) {
   double s = 0;
   for (double x : r) s += x * x;
@@ -185,6 +193,17 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   FreeSet set;
   for (const BoundParameter& p : params) set.base.push_back(p.nominal);
   result.nominal_values = set.base;
+  // the start: the linear estimate where it applies (identify_linear.h), else the nominal values
+  result.first_estimate = "nominal";
+  if (options.first_estimate.value_or(problem.spec().first_estimate) == FirstEstimate::kLinear) {
+    result.linear = EstimateLinear(problem);
+    if (result.linear.applies) {
+      set.base = result.linear.values;
+      result.first_estimate = "linear";
+    } else {
+      result.first_estimate_note = "the linear estimate does not apply: " + result.linear.why;
+    }
+  }
   for (std::size_t i = 0; i < params.size(); ++i) {
     Estimate e;
     e.name = params[i].spec.name;
@@ -201,12 +220,21 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
     set.lower.push_back(params[i].spec.lower / params[i].scale);
     set.upper.push_back(params[i].spec.upper / params[i].scale);
   }
-  std::vector<double> r_nominal;
+  std::vector<double> r_start;
+  if (result.first_estimate == "linear") {
+    // a start whose replay diverges (an estimate far off on poor data) falls back to nominal
+    std::vector<std::vector<double>> out;
+    if (!pool.Run({set.base}, &out)) {
+      set.base = result.nominal_values;
+      result.first_estimate = "nominal";
+      result.first_estimate_note = "a rollout from the linear estimate diverged";
+    }
+  }
   std::vector<double> u0;
   for (std::size_t i = 0; i < set.index.size(); ++i) u0.push_back(set.base[set.index[i]] / set.scale[i]);
   // parameters the data do not move at all are kept at their nominal values, not fitted to noise
   if (!u0.empty()) {
-    const Eigen::MatrixXd j0 = JacobianAt(pool, set, u0, count, &r_nominal, last);
+    const Eigen::MatrixXd j0 = JacobianAt(pool, set, u0, count, &r_start, last);
     const Eigen::VectorXd norms = j0.colwise().norm();
     const double largest = norms.maxCoeff();
     FreeSet excited = set;
@@ -220,6 +248,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
       if (!(norms[static_cast<Eigen::Index>(i)] > kUnexcitedColumn * largest)) {
         e.excited = e.identifiable = false;
         e.note = "not excited: the data do not depend on it (kept at its nominal value)";
+        excited.base[set.index[i]] = params[set.index[i]].nominal;
         continue;
       }
       excited.index.push_back(set.index[i]);
@@ -228,15 +257,40 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
       excited.upper.push_back(set.upper[i]);
       u.push_back(u0[i]);
     }
-    if (excited.index.size() != set.index.size()) last = LastEvaluation();  // other columns
+    if (excited.index.size() != set.index.size() || excited.base != set.base) last = LastEvaluation();
     set = excited;
     u0 = u;
   } else {
     std::vector<std::vector<double>> out;
     if (!pool.Run({set.base}, &out)) throw std::runtime_error("identify: the nominal model's rollout diverged");
-    r_nominal = out[0];
+    r_start = out[0];
   }
-  result.cost_nominal = HalfSquares(r_nominal);
+  result.start_values = set.base;
+  result.cost_start = HalfSquares(r_start);
+  result.cost_nominal = result.cost_start;
+  if (result.start_values != result.nominal_values) {
+    std::vector<std::vector<double>> out;
+    if (!pool.Run({result.nominal_values}, &out)) {
+      throw std::runtime_error("identify: the nominal model's rollout diverged");
+    }
+    result.cost_nominal = HalfSquares(out[0]);
+  }
+  if (options.message) {
+    const LinearEstimate& l = result.linear;
+    std::string line = "first estimate: " + result.first_estimate;
+    if (result.first_estimate == "linear") {
+      int covered = 0;
+      for (LinearStatus s : l.status) covered += s != LinearStatus::kNotCovered;
+      line += " (" + std::to_string(l.rank) + " of " + std::to_string(covered) + " parameters estimated from " +
+              std::to_string(l.torque_rows) + " joint torques of " + std::to_string(l.samples) +
+              " log rows); cost at nominal " + Short(result.cost_nominal) + ", at the start " +
+              Short(result.cost_start);
+    } else {
+      line += result.first_estimate_note.empty() ? "" : " (" + result.first_estimate_note + ")";
+      line += "; cost " + Short(result.cost_start);
+    }
+    options.message(line);
+  }
   std::vector<double> u = u0;
   const int n = static_cast<int>(u.size());
   if (n > 0) {

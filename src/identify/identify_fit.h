@@ -8,11 +8,13 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "identify/identify_linear.h"
 #include "identify/identify_problem.h"
 
 namespace vlab::identify {
@@ -28,8 +30,12 @@ inline constexpr double kCorrelated = 0.99;
 
 struct FitOptions {
   int threads = 1;  ///< rollout threads (>= 1)
+  /// Where the fit starts; unset: the spec's `first_estimate`.
+  std::optional<FirstEstimate> first_estimate;
   /// Called after each Ceres iteration: iteration, cost (half the sum of squares).
   std::function<void(int iteration, double cost)> progress;
+  /// Called once before the iterations with a line on the start (which first estimate, its cost).
+  std::function<void(const std::string& line)> message;
 };
 
 /// One parameter's result.
@@ -49,6 +55,10 @@ struct FitResult {
   std::vector<Estimate> estimates;  ///< in the spec's order
   Eigen::MatrixXd correlation;      ///< over all parameters (0 rows/columns for those not fitted)
   double cost_nominal = 0;          ///< half the sum of squared residuals at the nominal values
+  double cost_start = 0;            ///< the same where the fit started
+  std::string first_estimate;       ///< where it started: "linear" or "nominal"
+  std::string first_estimate_note;  ///< why "nominal" when the spec asked for "linear" ("" otherwise)
+  LinearEstimate linear;            ///< the linear estimate (applies false: not made, or why not)
   double cost_fitted = 0;
   double residual_sd = 0;  ///< sqrt(sum r^2 / (residuals - fitted parameters)), weighted units
   int residuals = 0;
@@ -57,11 +67,12 @@ struct FitResult {
   int rollouts = 0;         ///< window rollouts simulated in all
   std::string termination;  ///< Ceres's message
   double wall_s = 0;
-  std::vector<double> nominal_values, fitted_values;  ///< all parameters
+  std::vector<double> nominal_values, start_values, fitted_values;  ///< all parameters
 };
 
-/// Fits the problem's free parameters from their nominal values. Throws std::runtime_error
-/// when the nominal model's rollouts diverge.
+/// Fits the problem's free parameters from the first estimate (the linear estimate where it
+/// applies and is asked for, else the nominal values). Throws std::runtime_error when the
+/// starting model's rollouts diverge.
 FitResult Fit(const Problem& problem, const FitOptions& options);
 
 /// The predicted columns of every window at `values` (residual order), for plots; false

@@ -44,6 +44,12 @@ bool IsServoParameter(TargetKind kind) {
   return kind == TargetKind::kServoBandwidth || kind == TargetKind::kServoDampingRatio;
 }
 
+// a parameter's linear estimate (clamped within its bounds), null where it made none
+nlohmann::json LinearValue(const FitResult& fit, std::size_t i) {
+  const bool made = fit.linear.applies && fit.linear.status[i] == LinearStatus::kEstimated;
+  return made ? nlohmann::json(fit.linear.values[i]) : nlohmann::json(nullptr);
+}
+
 nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
   nlohmann::json j;
   j["spec"] = problem.spec().file;
@@ -57,6 +63,18 @@ nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
   j["windows_in_contact"] = problem.windows_in_contact();
   j["residuals"] = fit.residuals;
   j["cost_nominal"] = fit.cost_nominal;
+  j["first_estimate"] = fit.first_estimate;
+  if (!fit.first_estimate_note.empty()) j["first_estimate_note"] = fit.first_estimate_note;
+  j["cost_start"] = fit.cost_start;
+  if (fit.linear.applies) {
+    j["linear"] = {{"samples", fit.linear.samples},
+                   {"torque_rows", fit.linear.torque_rows},
+                   {"left_out_contact", fit.linear.left_out_contact},
+                   {"left_out_clipped", fit.linear.left_out_clipped},
+                   {"left_out_slow", fit.linear.left_out_slow},
+                   {"rank", fit.linear.rank},
+                   {"residual_rms", fit.linear.residual_rms}};
+  }
   j["cost_fitted"] = fit.cost_fitted;
   j["residual_sd"] = fit.residual_sd;
   j["iterations"] = fit.iterations;
@@ -72,6 +90,7 @@ nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
     params.push_back({{"name", e.name},
                       {"target", TargetText(p.spec.kind, p.spec.element)},
                       {"nominal", e.nominal},
+                      {"linear", LinearValue(fit, i)},
                       {"value", e.value},
                       {"sd", JsonNumber(e.sd)},
                       {"sd_iid", JsonNumber(e.sd_iid)},
@@ -139,13 +158,27 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
         Short(fit.cost_fitted) + "; residual sd " + Short(fit.residual_sd) +
         " (weighted units; 1 when the weights are 1/σ of the noise). " + std::to_string(fit.iterations) +
         " iterations, " + std::to_string(fit.rollouts) + " window rollouts: " + fit.termination + "\n\n";
-  md += "| parameter | target | nominal | fitted | sd | identifiable | note |\n|---|---|---|---|---|---|---|\n";
+  md += "The fit started from the " + fit.first_estimate + " values" +
+        (fit.first_estimate_note.empty() ? "" : " (" + fit.first_estimate_note + ")") + ", cost " +
+        Short(fit.cost_start) + ".";
+  if (fit.linear.applies) {
+    md += " The linear estimate (inverse-dynamics regression of the logged joint torques): " +
+          std::to_string(fit.linear.rank) + " parameters from " + std::to_string(fit.linear.torque_rows) +
+          " joint torques of " + std::to_string(fit.linear.samples) + " log rows; left out " +
+          std::to_string(fit.linear.left_out_contact) + " rows near contact, " +
+          std::to_string(fit.linear.left_out_clipped) + " clipped and " + std::to_string(fit.linear.left_out_slow) +
+          " slow joint torques (friction). A parameter it does not estimate (\"—\") started at its nominal value.";
+  }
+  md +=
+      "\n\n| parameter | target | nominal | linear | fitted | sd | identifiable | note |\n"
+      "|---|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
     const Estimate& e = fit.estimates[i];
     const BoundParameter& p = problem.parameters()[i];
+    const nlohmann::json linear = LinearValue(fit, i);
     md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element) + " | " + Short(e.nominal) + " | " +
-          Short(e.value) + " | " + (std::isfinite(e.sd) ? Short(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") +
-          " | " + e.note + " |\n";
+          (linear.is_null() ? "—" : Short(linear.get<double>())) + " | " + Short(e.value) + " | " +
+          (std::isfinite(e.sd) ? Short(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") + " | " + e.note + " |\n";
   }
   md += "\nCorrelations above " + Short(kCorrelated) + " in magnitude flag parameters the data cannot tell apart:";
   bool any = false;

@@ -102,11 +102,23 @@ class Problem {
   double Weight(int column) const { return weights_[column]; }
   const std::vector<std::string>& log_files() const { return spec_.logs; }
 
- private:
+  /// An arm joint the logs record: its device, MJCF name and addresses in the model.
   struct Joint {
     std::string device, name;
     int qpos = -1, dof = -1, actuator = -1;
   };
+  /// Read-only views for the linear first estimate (identify_linear.h): the arm joints in
+  /// the logs' order, each log's q, qd and tau (rows x joints, as recorded), the logs' row
+  /// period (s) and the scenario's initial qpos (the joints outside the arms).
+  const std::vector<Joint>& joints() const { return joints_; }
+  int log_count() const { return static_cast<int>(logs_.size()); }
+  const Eigen::MatrixXd& log_q(int log) const { return logs_[log].q; }
+  const Eigen::MatrixXd& log_qd(int log) const { return logs_[log].qd; }
+  const Eigen::MatrixXd& log_tau(int log) const { return logs_[log].tau; }
+  double row_period() const { return steps_per_row_ * model_->opt.timestep; }
+  const std::vector<double>& initial_qpos() const { return qpos_init_; }
+
+ private:
   struct Column {
     int joint = 0;
     bool velocity = false;

@@ -189,6 +189,11 @@ Spec LoadSpec(const std::string& path) {
   const std::string contacts = r.String("contacts", "skip");
   if (contacts != "skip" && contacts != "keep") r.Fail("contacts", "must be 'skip' or 'keep', got '" + contacts + "'");
   s.skip_contacts = contacts == "skip";
+  const std::string first = r.String("first_estimate", "linear");
+  if (first != "linear" && first != "nominal") {
+    r.Fail("first_estimate", "must be 'linear' or 'nominal', got '" + first + "'");
+  }
+  s.first_estimate = first == "linear" ? FirstEstimate::kLinear : FirstEstimate::kNominal;
   const YAML::Node parameters = r.Sequence("parameters");
   for (std::size_t i = 0; i < parameters.size(); ++i) {
     const std::string item = "parameters[" + std::to_string(i) + "]";

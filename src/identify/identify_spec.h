@@ -48,6 +48,12 @@ struct ColumnSpec {
   std::string where;
 };
 
+/// Where the fit starts (`first_estimate:`).
+enum class FirstEstimate {
+  kLinear,   ///< the linear inverse-dynamics estimate (identify_linear.h) where it applies, else nominal
+  kNominal,  ///< the parameters' nominal values
+};
+
 struct Spec {
   std::string file;                 ///< the spec as given
   std::string scenario;             ///< resolved relative to the spec file
@@ -76,6 +82,7 @@ struct Spec {
   /// residuals): a recorded state of the window in contact, or the nominal model's replay
   /// making contact. `keep`: every window is fitted.
   bool skip_contacts = true;
+  FirstEstimate first_estimate = FirstEstimate::kLinear;
   std::string where_window, where_input;
 };
 

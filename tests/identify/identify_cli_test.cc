@@ -40,6 +40,12 @@ TEST(IdentifyCli, WritesEstimatesAPatchedSceneAndOverridesThatRunIt) {
   EXPECT_EQ(m4["target"], "body pa10_link4 mass");
   EXPECT_NEAR(m4["value"].get<double>(), truth, 0.002 * truth);
   EXPECT_TRUE(m4["identifiable"].get<bool>());
+  // the fit started from the linear estimate, which found link 4's mass (not the base's: no
+  // joint moves it, its torque column is zero)
+  EXPECT_EQ(j["first_estimate"], "linear");
+  EXPECT_NEAR(m4["linear"].get<double>(), truth, 0.01 * truth);
+  EXPECT_TRUE(j["parameters"][1]["linear"].is_null());
+  EXPECT_NE(r.out.find("first estimate linear"), std::string::npos) << r.out;
   EXPECT_TRUE(j["parameters"][1]["sd"].is_null());
   EXPECT_FALSE(j["parameters"][1]["excited"].get<bool>());
   EXPECT_EQ(j["correlation"]["names"].size(), 2u);

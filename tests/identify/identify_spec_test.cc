@@ -45,7 +45,9 @@ std::string Spec(const std::string& from = "", const std::string& to = "") {
 
 TEST(IdentifySpec, ReadsEveryKey) {
   TempDir tmp;
-  WriteFile(tmp / "id.yaml", Spec("window: 0.2", "window: 0.5\nstart_smoothing: 4\ncontacts: keep\nmax_iterations: 7"));
+  WriteFile(tmp / "id.yaml", Spec("window: 0.2",
+                                  "window: 0.5\nstart_smoothing: 4\ncontacts: keep\nmax_iterations: 7\n"
+                                  "first_estimate: nominal"));
   const identify::Spec s = LoadSpec(tmp / "id.yaml");
   EXPECT_EQ(s.scenario, testing::kScenario);
   ASSERT_EQ(s.logs.size(), 1u);
@@ -54,6 +56,9 @@ TEST(IdentifySpec, ReadsEveryKey) {
   EXPECT_EQ(s.start_smoothing, 4);
   EXPECT_FALSE(s.skip_contacts);
   EXPECT_EQ(s.max_iterations, 7);
+  EXPECT_EQ(s.first_estimate, FirstEstimate::kNominal);
+  WriteFile(tmp / "default.yaml", Spec());
+  EXPECT_EQ(LoadSpec(tmp / "default.yaml").first_estimate, FirstEstimate::kLinear);  // the default
   ASSERT_EQ(s.columns.size(), 1u);
   EXPECT_EQ(s.columns[0].weight, 1e5);
   ASSERT_EQ(s.parameters.size(), 2u);
@@ -91,6 +96,7 @@ TEST(IdentifySpec, RefusesBadEntriesNamingTheField) {
       {"input: torque", "input: torque\nservo_sensing: exact", ":5: servo_sensing: needs input: reference"},
       {"input: torque", "input: reference\nservo_sensing: counts",
        ":5: servo_sensing: must be 'scenario' or 'exact', got 'counts'"},
+      {"window: 0.2", "first_estimate: linear_regression", ":3: first_estimate: must be 'linear' or 'nominal'"},
       {"logs: [run]", "logs: []", "logs: name at least one log"},
       {"weight: 1.0e5", "weight: -1", ":6: columns[0].weight: must be a finite number > 0"},
       {"body pa10_link2 mass", "body pa10_link2 volume",
