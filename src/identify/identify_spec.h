@@ -15,15 +15,22 @@ namespace vlab::identify {
 /// What a parameter changes.
 enum class TargetKind {
   kBodyMass,           ///< body NAME mass: the body's mass, its inertia scaled with it (kg)
+  kBodyCom,            ///< body NAME com_x|com_y|com_z: its centre of mass, body frame (m)
   kJointDamping,       ///< joint NAME damping (N·m·s/rad, N·s/m)
   kJointArmature,      ///< joint NAME armature (kg·m², kg)
   kJointFrictionLoss,  ///< joint NAME frictionloss (N·m, N)
   kColumnBias,         ///< column NAME bias: the sensor reads true + bias (the column's unit)
   kColumnGain,         ///< column NAME gain: the sensor reads gain · true (1)
   kColumnDelay,        ///< column NAME delay: the sensor reads the true value of this long ago (s)
+  kPayloadMass,        ///< payload BODY mass: a point mass rigidly added to BODY (kg)
+  kPayloadCom,         ///< payload BODY com_x|com_y|com_z: where it is, BODY's frame (m)
 };
 
-/// "body NAME mass", ...: the words of a target, for messages and outputs.
+/// "body NAME mass", ...: the words of a target, for messages and outputs (`axis`: 0, 1, 2
+/// for com_x, com_y, com_z).
+std::string TargetText(TargetKind kind, const std::string& element, int axis);
+
+/// The same for targets without an axis.
 std::string TargetText(TargetKind kind, const std::string& element);
 
 /// One parameter of the fit.
@@ -31,6 +38,7 @@ struct ParameterSpec {
   std::string name;  ///< unique, as written
   TargetKind kind = TargetKind::kBodyMass;
   std::string element;  ///< body or joint name, or log column
+  int axis = 0;         ///< com_x, com_y, com_z: 0, 1, 2
   bool has_nominal = false;
   double nominal = 0;  ///< the starting value (default: the model's; bias 0, gain 1)
   double lower = 0;    ///< bounds of the fitted value, lower < upper
@@ -66,7 +74,12 @@ struct Spec {
   /// residuals): a recorded state of the window in contact, or the nominal model's replay
   /// making contact. `keep`: every window is fitted.
   bool skip_contacts = true;
-  std::string where_window, where_input;
+  /// A wrench column's rows within this long of a window's start are left out of the residual:
+  /// the replay's JR3 filter starts settled on the model's load there, not in the state the
+  /// load's history left it in. Negative (the default): the selected filter's settling time
+  /// (its step response within 1e-3 of the step from then on).
+  double wrench_settle_s = -1;
+  std::string where_window, where_input, where_wrench_settle;
 };
 
 /// Reads and checks a spec file. Throws InputError naming the file, line and key.
