@@ -332,7 +332,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   if (n > 0) {
     const Eigen::MatrixXd j = JacobianAt(pool, set, u, count, &r, last);
     result.cost_fitted = HalfSquares(r);
-    const double dof = std::max(1, count - n);
+    const double dof = std::max(1, count - problem.residuals_left_out() - n);
     const double variance = 2 * result.cost_fitted / dof;
     result.residual_sd = std::sqrt(variance);
     // pseudo-inverse of J^T J: directions the data do not tell get an infinite variance

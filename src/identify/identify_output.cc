@@ -61,6 +61,8 @@ nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
   j["windows"] = fit.windows;
   j["rows_left_out"] = problem.rows_left_out();
   j["windows_in_contact"] = problem.windows_in_contact();
+  j["wrench_settle_rows"] = problem.wrench_settle_rows();
+  j["residuals_left_out"] = problem.residuals_left_out();
   j["residuals"] = fit.residuals;
   j["cost_nominal"] = fit.cost_nominal;
   j["first_estimate"] = fit.first_estimate;
@@ -88,7 +90,7 @@ nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
     const BoundParameter& p = problem.parameters()[i];
     names.push_back(e.name);
     params.push_back({{"name", e.name},
-                      {"target", TargetText(p.spec.kind, p.spec.element)},
+                      {"target", TargetText(p.spec.kind, p.spec.element, p.spec.axis)},
                       {"nominal", e.nominal},
                       {"linear", LinearValue(fit, i)},
                       {"value", e.value},
@@ -153,7 +155,12 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
   md += "Scenario `" + problem.spec().scenario + "`, scene `" + problem.scene() + "`; " +
         std::to_string(problem.spec().logs.size()) + " log(s), " + std::to_string(fit.windows) + " windows of " +
         Short(problem.spec().window_s) + " s (" + std::to_string(problem.windows_in_contact()) +
-        " more left out: their nominal replay made contact), " + std::to_string(fit.residuals) + " residuals.\n\n";
+        " more left out: their nominal replay made contact), " + std::to_string(fit.residuals) + " residuals" +
+        (problem.residuals_left_out() > 0
+             ? " (" + std::to_string(problem.residuals_left_out()) + " of them held at 0: a wrench column's first " +
+                   std::to_string(problem.wrench_settle_rows()) + " rows of each window, its filter settling)"
+             : std::string()) +
+        ".\n\n";
   md += "Cost (half the sum of squared weighted residuals): nominal " + Short(fit.cost_nominal) + ", fitted " +
         Short(fit.cost_fitted) + "; residual sd " + Short(fit.residual_sd) +
         " (weighted units; 1 when the weights are 1/σ of the noise). " + std::to_string(fit.iterations) +
@@ -176,8 +183,8 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
     const Estimate& e = fit.estimates[i];
     const BoundParameter& p = problem.parameters()[i];
     const nlohmann::json linear = LinearValue(fit, i);
-    md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element) + " | " + Short(e.nominal) + " | " +
-          (linear.is_null() ? "—" : Short(linear.get<double>())) + " | " + Short(e.value) + " | " +
+    md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element, p.spec.axis) + " | " + Short(e.nominal) +
+          " | " + (linear.is_null() ? "—" : Short(linear.get<double>())) + " | " + Short(e.value) + " | " +
           (std::isfinite(e.sd) ? Short(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") + " | " + e.note + " |\n";
   }
   md += "\nCorrelations above " + Short(kCorrelated) + " in magnitude flag parameters the data cannot tell apart:";
@@ -197,6 +204,28 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
   return md;
 }
 
+// the payload as the arm's scenario declares it: in the frame of the body of the nearest joint
+// above its body (the flange frame, when that joint is the arm's last), through the fixed
+// bodies between; "" when a body between them has a joint of its own (none: no joint above)
+std::string PayloadAtJoint(const mjModel* m, int body, double mass, const double com[3]) {
+  int frame = body;
+  while (frame > 0 && m->body_jntnum[frame] == 0) frame = m->body_parentid[frame];
+  if (frame <= 0) return "";
+  DataPtr d = MakeData(m);
+  mj_kinematics(m, d.get());
+  // com in the world, then in the frame body's axes about its origin
+  double world[3], rel[3], local[3];
+  mju_rotVecMat(world, com, d->xmat + 9 * body);
+  mju_addTo3(world, d->xpos + 3 * body);
+  mju_sub3(rel, world, d->xpos + 3 * frame);
+  mju_rotVecMatT(local, rel, d->xmat + 9 * frame);
+  const char* joint = mj_id2name(m, mjOBJ_JOINT, m->body_jntadr[frame]);
+  const char* name = mj_id2name(m, mjOBJ_BODY, frame);
+  return "#   declared to the arm whose last joint is " + std::string(joint ? joint : "?") +
+         " (the flange frame, body " + (name ? name : "?") + "), its scenario's payload: {mass: " + Num(mass) +
+         ", com: [" + Num(local[0]) + ", " + Num(local[1]) + ", " + Num(local[2]) + "]}\n";
+}
+
 }  // namespace
 
 void WriteEditedScene(const std::string& scene, const std::function<void(mjModel*)>& edit, const std::string& out) {
@@ -211,30 +240,7 @@ void WriteEditedScene(const std::string& scene, const std::function<void(mjModel
 }
 
 void SetModelParameters(const Problem& problem, const std::vector<double>& values, mjModel* m) {
-  for (std::size_t i = 0; i < problem.parameters().size(); ++i) {
-    const BoundParameter& p = problem.parameters()[i];
-    switch (p.spec.kind) {
-      case TargetKind::kBodyMass:
-        m->body_mass[p.index] = values[i];
-        for (int k = 0; k < 3; ++k) m->body_inertia[3 * p.index + k] = p.inertia0[k] * values[i] / p.mass0;
-        break;
-      case TargetKind::kJointDamping:
-        m->dof_damping[p.index] = values[i];
-        break;
-      case TargetKind::kJointArmature:
-        m->dof_armature[p.index] = values[i];
-        break;
-      case TargetKind::kJointFrictionLoss:
-        m->dof_frictionloss[p.index] = values[i];
-        break;
-      case TargetKind::kColumnBias:
-      case TargetKind::kColumnGain:
-      case TargetKind::kColumnDelay:
-      case TargetKind::kServoBandwidth:  // the scenario's, not the scene's: an override line
-      case TargetKind::kServoDampingRatio:
-        break;
-    }
-  }
+  problem.SetModel(values, m);
 }
 
 std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std::string& out_dir, int threads,
@@ -258,8 +264,23 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
         continue;
       }
       if (IsModelParameter(p.spec.kind)) continue;
-      text += "# " + TargetText(p.spec.kind, p.spec.element) + " = " + Num(fit.fitted_values[i]) +
+      text += "# " + TargetText(p.spec.kind, p.spec.element, p.spec.axis) + " = " + Num(fit.fitted_values[i]) +
               " (a sensor's, not the model's: correct the log with it)\n";
+    }
+    // a payload is in model.xml as part of its body; the arm's scenario declares it apart
+    for (std::size_t i = 0; i < fit.estimates.size(); ++i) {
+      const BoundParameter& p = problem.parameters()[i];
+      if (p.spec.kind != TargetKind::kPayloadMass) continue;
+      double com[3] = {0, 0, 0};
+      for (std::size_t k = 0; k < fit.estimates.size(); ++k) {
+        const BoundParameter& q = problem.parameters()[k];
+        if (q.spec.kind == TargetKind::kPayloadCom && q.spec.element == p.spec.element)
+          com[q.spec.axis] = fit.fitted_values[k];
+      }
+      text += "# payload on body " + p.spec.element + " (in model.xml, part of that body): a point mass of " +
+              Num(fit.fitted_values[i]) + " kg at [" + Num(com[0]) + ", " + Num(com[1]) + ", " + Num(com[2]) +
+              "] m in " + p.spec.element + "'s frame\n";
+      text += PayloadAtJoint(problem.model(), p.index, fit.fitted_values[i], com);
     }
     return text;
   };
@@ -273,8 +294,9 @@ std::string WriteOutputs(const Problem& problem, const FitResult& fit, const std
     plot.y = {c + ".error_nominal", c + ".error_fitted"};
     plot.title = c + ": model minus measured, nominal and fitted";
     plot.ylabel = c.find(".qd.") != std::string::npos    ? "rad/s (m/s)"
+                  : c.find(".q.") != std::string::npos   ? "rad (m)"
                   : c.find(".tau.") != std::string::npos ? "N m (N)"
-                                                         : "rad (m)";
+                                                         : "N, N·m";
     plot.where = problem.spec().file;
     lab::WritePlot(dir, plot);
     plots.push_back(plot.file);

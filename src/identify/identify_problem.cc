@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/QR>
 
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
+#include "lab/devices/device_wrench.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
 #include "scene/scene_csv.h"
@@ -46,7 +49,53 @@ Eigen::MatrixXd QuadraticAbout(const Eigen::MatrixXd& m, int row, int half) {
   return a.colPivHouseholderQr().solve(m.middleRows(lo, hi - lo + 1)).transpose();
 }
 
+// the time after which the selected filter's response to a unit step stays within 1e-3 of
+// it, the filter fed every `dt` as the lab feeds it; in rows of `period`
+int SettleRows(const sensors::WrenchSensorModel& model, double dt, double period) {
+  sensors::WrenchSensorState state;
+  sensors::Reset(model, state, sensors::Wrench::Zero());
+  const sensors::Wrench step = 0.5 * model.full_scale();  // within the ADC's range
+  double last = 0;
+  const int steps = static_cast<int>(std::ceil(20.0 / dt));  // 20 s: 60 time constants of filter 6
+  for (int i = 1; i <= steps; ++i) {
+    sensors::WrenchReading flags;
+    sensors::Advance(model, state, step, dt, &flags);
+    const sensors::Wrench y = sensors::ReadSelected(model, state);
+    if ((y.cwiseQuotient(step).array() - 1.0).abs().maxCoeff() > 1e-3) last = i * dt;
+  }
+  return static_cast<int>(std::ceil(last / period - 1e-9));
+}
+
 }  // namespace
+
+void AddPointMass(double payload_mass, const double payload_com[3], double* mass, double ipos[3], double inertia[3],
+                  double iquat[4]) {
+  if (payload_mass == 0) return;
+  const double m1 = *mass, total = m1 + payload_mass;
+  const Eigen::Map<const Eigen::Vector3d> c2(payload_com);
+  const Eigen::Vector3d c1(ipos[0], ipos[1], ipos[2]);
+  const Eigen::Vector3d c = (m1 * c1 + payload_mass * c2) / total;
+  const Eigen::Matrix3d r = Eigen::Quaterniond(iquat[0], iquat[1], iquat[2], iquat[3]).normalized().toRotationMatrix();
+  // both inertias about the combined centre of mass, in the body's frame (parallel axes)
+  auto shift = [](double m, const Eigen::Vector3d& d) {
+    return Eigen::Matrix3d(m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose()));
+  };
+  const Eigen::Matrix3d sum = r * Eigen::Vector3d(inertia[0], inertia[1], inertia[2]).asDiagonal() * r.transpose() +
+                              shift(m1, c1 - c) + shift(payload_mass, c2 - c);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(sum);
+  Eigen::Matrix3d axes = eig.eigenvectors();
+  if (axes.determinant() < 0) axes.col(0) = -axes.col(0);  // a rotation, not a reflection
+  const Eigen::Quaterniond q(axes);
+  *mass = total;
+  for (int k = 0; k < 3; ++k) {
+    ipos[k] = c[k];
+    inertia[k] = std::max(0.0, eig.eigenvalues()[k]);
+  }
+  iquat[0] = q.w();
+  iquat[1] = q.x();
+  iquat[2] = q.y();
+  iquat[3] = q.z();
+}
 
 std::unique_ptr<Problem> Problem::Create(const Spec& spec) {
   std::unique_ptr<Problem> p(new Problem());
@@ -61,6 +110,7 @@ std::unique_ptr<Problem> Problem::Create(const Spec& spec) {
   lab->InitialState(data.get());
   p->qpos_init_.assign(data->qpos, data->qpos + p->model_->nq);
   p->BindJoints(scenario);
+  p->BindWrenches(scenario);
   p->BindColumns();
   p->BindParameters();
   p->ReadLogs();
@@ -96,19 +146,59 @@ void Problem::BindJoints(const lab::Scenario& scenario) {
   }
 }
 
+void Problem::BindWrenches(const lab::Scenario& scenario) {
+  const mjModel* m = model_.get();
+  for (const lab::DeviceConfig& device : scenario.devices) {
+    if (device.kind != bridge::DeviceKind::kWrench) continue;
+    const lab::WrenchParams& params = device.ParamsAs<lab::WrenchParams>();
+    WrenchSensor w;
+    w.device = device.name;
+    const int force = mj_name2id(m, mjOBJ_SENSOR, params.force_sensor.c_str());
+    const int torque = mj_name2id(m, mjOBJ_SENSOR, params.torque_sensor.c_str());
+    // the lab has bound these names already: a miss is a bug, not bad input
+    if (force < 0 || torque < 0) throw std::logic_error("wrench '" + device.name + "': sensor not in the model");
+    w.force_adr = m->sensor_adr[force];
+    w.torque_adr = m->sensor_adr[torque];
+    // the device's own JR3 model, what it adds to the reading taken out: the bias is a
+    // parameter of the fit, the noise and rounding are the measurement's
+    sensors::WrenchSensorConfig config = lab::WrenchSensorConfigOf(params, 1);
+    config.enable_noise = config.enable_bias = config.enable_quantization = false;
+    w.model = sensors::WrenchSensorModel::Create(config);
+    wrenches_.push_back(std::move(w));
+  }
+}
+
 void Problem::BindColumns() {
   // the columns a rollout predicts: every arm joint's q and qd, and with input: reference the
-  // torque its servo applies
+  // torque its servo applies; every wrench device's axes
   std::vector<std::string> predictable;
   std::vector<Column> kinds;
+  auto joint_column = [](int joint, bool velocity, bool torque) {
+    Column c;
+    c.joint = joint;
+    c.velocity = velocity;
+    c.torque = torque;
+    return c;
+  };
   for (std::size_t j = 0; j < joints_.size(); ++j) {
     predictable.push_back(joints_[j].device + ".q." + joints_[j].name);
-    kinds.push_back({static_cast<int>(j), false, -1, -1, -1, false});
+    kinds.push_back(joint_column(static_cast<int>(j), false, false));
     predictable.push_back(joints_[j].device + ".qd." + joints_[j].name);
-    kinds.push_back({static_cast<int>(j), true, -1, -1, -1, false});
+    kinds.push_back(joint_column(static_cast<int>(j), true, false));
     if (!reference_) continue;
     predictable.push_back(joints_[j].device + ".tau." + joints_[j].name);
-    kinds.push_back({static_cast<int>(j), false, -1, -1, -1, true});
+    kinds.push_back(joint_column(static_cast<int>(j), false, true));
+  }
+  for (std::size_t w = 0; w < wrenches_.size(); ++w) {
+    int axis = 0;
+    for (const char* name : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"}) {
+      predictable.push_back(wrenches_[w].device + "." + name);
+      Column c;
+      c.joint = -1;
+      c.wrench = static_cast<int>(w);
+      c.axis = axis++;
+      kinds.push_back(c);
+    }
   }
   for (const ColumnSpec& c : spec_.columns) {
     bool any = false;
@@ -122,6 +212,7 @@ void Problem::BindColumns() {
       column_names_.push_back(predictable[i]);
       weights_.push_back(c.weight);
       columns_.push_back(kinds[i]);
+      if (kinds[i].wrench >= 0) ++wrench_columns_;
     }
     if (!any) {
       throw InputError(c.where + ".name: '" + c.pattern +
@@ -138,15 +229,49 @@ void Problem::BindParameters() {
     const std::string where = spec.where + ".target";
     double model_value = 0;
     switch (spec.kind) {
-      case TargetKind::kBodyMass: {
+      case TargetKind::kBodyMass:
+      case TargetKind::kBodyCom:
+      case TargetKind::kPayloadMass:
+      case TargetKind::kPayloadCom: {
         p.index = mj_name2id(m, mjOBJ_BODY, spec.element.c_str());
         if (p.index <= 0)
           throw InputError(where + ": no body '" + spec.element + "' in the scene (the world's is not one)");
         p.mass0 = m->body_mass[p.index];
-        if (!(p.mass0 > 0))
+        if (spec.kind == TargetKind::kBodyMass && !(p.mass0 > 0))
           throw InputError(where + ": body '" + spec.element + "' has no mass to scale its inertia with");
         for (int i = 0; i < 3; ++i) p.inertia0[i] = m->body_inertia[3 * p.index + i];
-        model_value = p.mass0;
+        auto edit = std::find_if(bodies_.begin(), bodies_.end(), [&](const BodyEdit& e) { return e.body == p.index; });
+        if (edit == bodies_.end()) {
+          BodyEdit e;
+          e.body = p.index;
+          e.mass0 = p.mass0;
+          for (int i = 0; i < 3; ++i) {
+            e.ipos0[i] = m->body_ipos[3 * p.index + i];
+            e.inertia0[i] = p.inertia0[i];
+          }
+          for (int i = 0; i < 4; ++i) e.iquat0[i] = m->body_iquat[4 * p.index + i];
+          bodies_.push_back(e);
+          edit = bodies_.end() - 1;
+        }
+        const int self = static_cast<int>(parameters_.size());
+        switch (spec.kind) {
+          case TargetKind::kBodyMass:
+            edit->mass = self;
+            model_value = p.mass0;
+            break;
+          case TargetKind::kBodyCom:
+            edit->com[spec.axis] = self;
+            model_value = edit->ipos0[spec.axis];
+            break;
+          case TargetKind::kPayloadMass:
+            edit->payload_mass = self;
+            model_value = 0;  // the model has none
+            break;
+          default:
+            edit->payload_com[spec.axis] = self;
+            model_value = 0;
+            break;
+        }
         break;
       }
       case TargetKind::kJointDamping:
@@ -166,24 +291,27 @@ void Problem::BindParameters() {
       case TargetKind::kColumnBias:
       case TargetKind::kColumnGain:
       case TargetKind::kColumnDelay: {
-        std::vector<std::string> arm_columns;
+        std::vector<std::string> known;
         for (const Joint& j : joints_) {
-          for (const char* quantity : {".q.", ".qd."}) arm_columns.push_back(j.device + quantity + j.name);
+          for (const char* quantity : {".q.", ".qd."}) known.push_back(j.device + quantity + j.name);
         }
-        const auto it = std::find(arm_columns.begin(), arm_columns.end(), spec.element);
-        if (it == arm_columns.end()) {
-          throw InputError(where + ": '" + spec.element + "' is not an arm's q or qd column (" +
-                           JoinNames(arm_columns) + ")");
+        for (const WrenchSensor& w : wrenches_) {
+          for (const char* axis : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"}) known.push_back(w.device + "." + axis);
         }
-        const int joint = static_cast<int>((it - arm_columns.begin()) / 2);
-        const bool velocity = (it - arm_columns.begin()) % 2 == 1;
-        p.index = -1;
-        for (std::size_t c = 0; c < columns_.size(); ++c) {
-          if (columns_[c].joint == joint && columns_[c].velocity == velocity && !columns_[c].torque) {
-            p.index = static_cast<int>(c);
-          }
+        if (std::find(known.begin(), known.end(), spec.element) == known.end()) {
+          throw InputError(where + ": '" + spec.element +
+                           "' is not a column the replay predicts (an arm's q or qd, a wrench device's axis: " +
+                           JoinNames(known) + ")");
         }
-        if (p.index < 0) throw InputError(where + ": column '" + spec.element + "' is not among the fitted columns");
+        const auto it = std::find(column_names_.begin(), column_names_.end(), spec.element);
+        if (it == column_names_.end()) {
+          throw InputError(where + ": column '" + spec.element + "' is not among the fitted columns");
+        }
+        p.index = static_cast<int>(it - column_names_.begin());
+        if (spec.kind == TargetKind::kColumnDelay && columns_[p.index].wrench >= 0) {
+          throw InputError(where + ": a delay is for an arm's q or qd column, not the wrench column '" + spec.element +
+                           "' (its filter's lag is in the model already)");
+        }
         int& slot = spec.kind == TargetKind::kColumnBias   ? columns_[p.index].bias
                     : spec.kind == TargetKind::kColumnGain ? columns_[p.index].gain
                                                            : columns_[p.index].delay;
@@ -213,7 +341,8 @@ void Problem::BindParameters() {
     p.nominal = spec.has_nominal ? spec.nominal : model_value;
     if (p.nominal < spec.lower || p.nominal > spec.upper) {
       throw InputError(spec.where + ": the model's value " + std::to_string(model_value) + " of '" +
-                       TargetText(spec.kind, spec.element) + "' lies outside [lower, upper]: give a nominal");
+                       TargetText(spec.kind, spec.element, spec.axis) +
+                       "' lies outside [lower, upper]: give a nominal");
     }
     p.scale = std::abs(p.nominal) > 0 ? std::abs(p.nominal) : std::max(std::abs(spec.lower), std::abs(spec.upper));
     parameters_.push_back(p);
@@ -286,6 +415,21 @@ void Problem::CutWindows() {
   if (rows < 1) {
     throw InputError(spec_.where_window + ": " + std::to_string(spec_.window_s) + " s is shorter than a log period (" +
                      std::to_string(period) + " s)");
+  }
+  if (wrench_columns_ > 0) {
+    const double settle = spec_.wrench_settle_s;
+    if (settle >= 0) {
+      wrench_settle_rows_ = static_cast<int>(std::ceil(settle / period - 1e-9));
+    } else {
+      for (const WrenchSensor& w : wrenches_) {
+        wrench_settle_rows_ = std::max(wrench_settle_rows_, SettleRows(*w.model, model_->opt.timestep, period));
+      }
+    }
+    if (wrench_settle_rows_ >= rows) {
+      throw InputError(spec_.where_window + ": windows of " + std::to_string(rows) + " rows leave no wrench row: " +
+                       std::to_string(wrench_settle_rows_) + " rows (" + std::to_string(wrench_settle_rows_ * period) +
+                       " s) at each window's start are its filter's settling (wrench_settle); make the windows longer");
+    }
   }
   const int columns = static_cast<int>(columns_.size());
   for (std::size_t l = 0; l < logs_.size(); ++l) {
@@ -365,15 +509,50 @@ Workspace Problem::MakeWorkspace() const {
 void Problem::Apply(const std::vector<double>& values, Workspace& ws) const {
   if (ws.applied == values) return;
   mjModel* m = ws.model.get();
+  SetModel(values, m);
+  // subtree masses and the constraint solver's inverse weights follow the masses and armature
+  mj_setConst(m, ws.data.get());
+  // the servo gains follow the joints' inertia at the initial pose, and the gain parameters
+  if (reference_) TuneServos(values, ws);
+  ws.applied = values;
+}
+
+void Problem::SetModel(const std::vector<double>& values, mjModel* m) const {
+  for (const BodyEdit& e : bodies_) {
+    // the body's own: a mass scales the inertia with it (the density changes; the centre of
+    // mass stays), a moved centre of mass keeps the inertia about it
+    double mass = e.mass0, ipos[3], inertia[3], iquat[4];
+    for (int k = 0; k < 3; ++k) {
+      ipos[k] = e.com[k] >= 0 ? values[e.com[k]] : e.ipos0[k];
+      inertia[k] = e.inertia0[k];
+    }
+    for (int k = 0; k < 4; ++k) iquat[k] = e.iquat0[k];
+    if (e.mass >= 0 && values[e.mass] != e.mass0) {  // (the model's mass: its inertia to the bit)
+      mass = values[e.mass];
+      for (int k = 0; k < 3; ++k) inertia[k] = e.inertia0[k] * mass / e.mass0;
+    }
+    if (e.payload_mass >= 0) {
+      const double at[3] = {e.payload_com[0] >= 0 ? values[e.payload_com[0]] : 0.0,
+                            e.payload_com[1] >= 0 ? values[e.payload_com[1]] : 0.0,
+                            e.payload_com[2] >= 0 ? values[e.payload_com[2]] : 0.0};
+      AddPointMass(values[e.payload_mass], at, &mass, ipos, inertia, iquat);
+    }
+    m->body_mass[e.body] = mass;
+    for (int k = 0; k < 3; ++k) {
+      m->body_ipos[3 * e.body + k] = ipos[k];
+      m->body_inertia[3 * e.body + k] = inertia[k];
+    }
+    for (int k = 0; k < 4; ++k) m->body_iquat[4 * e.body + k] = iquat[k];
+  }
   for (std::size_t i = 0; i < parameters_.size(); ++i) {
     const BoundParameter& p = parameters_[i];
     const double v = values[i];
     switch (p.spec.kind) {
       case TargetKind::kBodyMass:
-        // the centre of mass stays, the inertia scales with the mass: the body's density changes
-        m->body_mass[p.index] = v;
-        for (int k = 0; k < 3; ++k) m->body_inertia[3 * p.index + k] = p.inertia0[k] * v / p.mass0;
-        break;
+      case TargetKind::kBodyCom:
+      case TargetKind::kPayloadMass:
+      case TargetKind::kPayloadCom:
+        break;  // above, body by body
       case TargetKind::kJointDamping:
         m->dof_damping[p.index] = v;
         break;
@@ -392,11 +571,6 @@ void Problem::Apply(const std::vector<double>& values, Workspace& ws) const {
         break;  // the servos' (TuneServos)
     }
   }
-  // subtree masses and the constraint solver's inverse weights follow the masses and armature
-  mj_setConst(m, ws.data.get());
-  // the servo gains follow the joints' inertia at the initial pose, and the gain parameters
-  if (reference_) TuneServos(values, ws);
-  ws.applied = values;
 }
 
 double Problem::TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity,
@@ -430,12 +604,35 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
   if (reference_) StartServos(win, ws);
   ws.contacts = 0;
   const int columns = static_cast<int>(columns_.size());
+  // the JR3 filters settled on the model's load at the start (the first period's torques
+  // applied: the load includes the tool's acceleration)
+  const bool wrench = wrench_columns_ > 0;  // nothing else reads the sensors
+  if (wrench) {
+    for (std::size_t j = 0; j < joints_.size(); ++j)
+      d->ctrl[joints_[j].actuator] = log.tau(win.first + 1, static_cast<int>(j));
+    mj_forward(m, d);
+    ws.wrench.resize(wrenches_.size());
+    for (std::size_t i = 0; i < wrenches_.size(); ++i) {
+      const WrenchSensor& w = wrenches_[i];
+      sensors::Reset(*w.model, ws.wrench[i],
+                     sensors::LoadFromMujocoSensor(d->sensordata + w.force_adr, d->sensordata + w.torque_adr));
+      // the slower stages update every 4^(k-1) samples counted from the sensor's start: the
+      // lab's JR3 starts at time 0, so the row's time gives the phase of that decimation
+      ws.wrench[i].sample_count =
+          static_cast<std::uint64_t>(std::max(0.0, std::round(log.time[win.first] * w.model->sample_rate_hz())));
+    }
+  }
   // the model's value and rate of each column at each row (row 0: the start), for the delays
   ws.trace.assign(static_cast<std::size_t>(win.rows + 1) * columns * 2, 0.0);
   auto record = [&](int k) {
     for (int c = 0; c < columns; ++c) {
-      const Joint& joint = joints_[columns_[c].joint];
       double* at = &ws.trace[(static_cast<std::size_t>(k) * columns + c) * 2];
+      if (columns_[c].wrench >= 0) {
+        const int w = columns_[c].wrench;
+        at[0] = sensors::ReadSelected(*wrenches_[w].model, ws.wrench[w])[columns_[c].axis];
+        continue;  // its rate: no delay on a wrench column
+      }
+      const Joint& joint = joints_[columns_[c].joint];
       if (columns_[c].torque) {  // what the servo applied over the last step (no delay: no rate)
         at[0] = d->ctrl[joint.actuator];
         at[1] = 0;
@@ -457,15 +654,23 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
     if (reference_) {
       // the row's commands, taken at the start of its period; the servos act at every step
       CommandServos(log, row, ws);
-      for (int s = 0; s < steps_per_row_; ++s) {
-        StepWithServos(ws);
-        ws.contacts = std::max(ws.contacts, d->ncon);
-      }
     } else {
       for (std::size_t j = 0; j < joints_.size(); ++j) d->ctrl[joints_[j].actuator] = log.tau(row, static_cast<int>(j));
-      for (int s = 0; s < steps_per_row_; ++s) {
+    }
+    for (int s = 0; s < steps_per_row_; ++s) {
+      if (reference_) {
+        StepWithServos(ws);
+      } else {
         mj_step(m, d);
-        ws.contacts = std::max(ws.contacts, d->ncon);
+      }
+      ws.contacts = std::max(ws.contacts, d->ncon);
+      // the load held over the step just taken (computed at its start), as the device feeds it
+      for (std::size_t i = 0; wrench && i < wrenches_.size(); ++i) {
+        const WrenchSensor& w = wrenches_[i];
+        sensors::WrenchReading flags;
+        sensors::Advance(*w.model, ws.wrench[i],
+                         sensors::LoadFromMujocoSensor(d->sensordata + w.force_adr, d->sensordata + w.torque_adr),
+                         m->opt.timestep, &flags);
       }
     }
     if (d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
@@ -501,7 +706,9 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
       if (col.bias >= 0) y += values[col.bias];
       const int i = (k - 1) * columns + c;
       if (predicted) predicted[i] = y;
-      r[i] = weights_[c] * (y - log.measured(row, c));
+      // a wrench column's first rows: the filter's state there is not known (CutWindows)
+      const bool settling = col.wrench >= 0 && k <= wrench_settle_rows_;
+      r[i] = settling ? 0.0 : weights_[c] * (y - log.measured(row, c));
     }
   }
   return true;

@@ -10,8 +10,12 @@
 // the arm device's `NAME.tau.JOINT` of the row that ends it); `reference`, the arms' recorded
 // commands (`NAME.cmd_mode`, `NAME.cmd.JOINT`) taken by each arm device's own servo
 // (lab::SimArm, one per arm and workspace, bound to the workspace's model), which then acts
-// at every physics step as in the lab (identify_servo.cc). Residual = weight · (predicted −
-// measured).
+// at every physics step as in the lab (identify_servo.cc). The predicted columns: the arms'
+// q and qd (and their torques under `reference`), and a wrench device's columns: the model's
+// force/torque sensors fed, after every physics step, to the same JR3 model the device runs
+// (its filter at its internal rate; no noise, bias or rounding), its filter settled on the
+// model's load at the window's start and its first rows (the filter's settling time) left out
+// of the residual. Residual = weight · (predicted − measured).
 //
 // Threads: a Problem is immutable once made; Rollout may run on many threads at once, each
 // with its own Workspace.
@@ -26,6 +30,7 @@
 #include "core/core_mujoco.h"
 #include "identify/identify_spec.h"
 #include "lab/devices/device_arm.h"
+#include "sensors/sensor_wrench.h"
 
 namespace vlab::lab {
 struct Scenario;
@@ -46,13 +51,39 @@ struct BoundParameter {
   double inertia0[3] = {0, 0, 0};  ///< ... and principal inertia, scaled together
 };
 
+/// A body whose inertial the parameters change: its own mass and centre of mass, and a
+/// payload (a point mass rigidly attached) combined with it.
+struct BodyEdit {
+  int body = -1;
+  int mass = -1;                      ///< parameter index of `body NAME mass`, -1: none
+  int com[3] = {-1, -1, -1};          ///< of `body NAME com_x|y|z`
+  int payload_mass = -1;              ///< of `payload NAME mass`
+  int payload_com[3] = {-1, -1, -1};  ///< of `payload NAME com_x|y|z` (none: 0)
+  double mass0 = 0, ipos0[3] = {0, 0, 0}, inertia0[3] = {0, 0, 0}, iquat0[4] = {1, 0, 0, 0};  ///< the model's
+};
+
+/// Combines a body's inertial (mass, centre of mass `ipos`, principal inertia about it along
+/// the axes `iquat`, MuJoCo's body_* fields) with a point mass `payload_mass` at `payload_com`
+/// (the body's frame): the mass sum, the combined centre of mass, both inertias moved to it
+/// (parallel axes) and re-diagonalised. A payload mass of 0 leaves the fields as they are.
+void AddPointMass(double payload_mass, const double payload_com[3], double* mass, double ipos[3], double inertia[3],
+                  double iquat[4]);
+
+/// A wrench device's sensors and JR3 model (its own, without noise, bias and rounding).
+struct WrenchSensor {
+  std::string device;
+  int force_adr = -1, torque_adr = -1;  ///< sensordata addresses
+  std::shared_ptr<const sensors::WrenchSensorModel> model;
+};
+
 /// A rollout's own model and data (one per thread).
 struct Workspace {
   ModelPtr model;
   DataPtr data;
-  std::vector<double> applied;  ///< the parameter values `model` holds now
-  int contacts = 0;             ///< the most contacts at any step of the last rollout
-  std::vector<double> trace;    ///< delayed columns: value and rate at each row of the window
+  std::vector<double> applied;                     ///< the parameter values `model` holds now
+  int contacts = 0;                                ///< the most contacts at any step of the last rollout
+  std::vector<double> trace;                       ///< delayed columns: value and rate at each row of the window
+  std::vector<sensors::WrenchSensorState> wrench;  ///< one per wrench device
   /// input: reference: each arm device's servo, bound to `model` (its gains made for `applied`)
   std::vector<std::unique_ptr<lab::SimArm>> arms;
   bridge::ArmCommand command;  ///< scratch: a recorded command
@@ -81,12 +112,20 @@ class Problem {
   int rows_left_out() const { return rows_left_out_; }
   /// Windows left out because their nominal replay made contact (Spec::skip_contacts).
   int windows_in_contact() const { return windows_in_contact_; }
+  /// Residuals held at 0: a wrench column's rows within its filter's settling time of a
+  /// window's start (their filter state is not known), summed over the windows.
+  int residuals_left_out() const { return wrench_settle_rows_ * wrench_columns_ * window_count(); }
+  /// Rows at a window's start whose wrench residuals are left out (Spec::wrench_settle_s).
+  int wrench_settle_rows() const { return wrench_settle_rows_; }
 
   /// A workspace for Rollout: a copy of the model and data for it.
   Workspace MakeWorkspace() const;
   /// Sets `values` (one per parameter, in the spec's units) in ws.model and recomputes the
   /// model's derived constants (mj_setConst); a no-op when it holds them already.
   void Apply(const std::vector<double>& values, Workspace& ws) const;
+  /// Sets the model fields of `values` in `m` (a model of the same scene): Apply without the
+  /// derived constants, for writing the fitted scene.
+  void SetModel(const std::vector<double>& values, mjModel* m) const;
   /// Replays window w with `values`: residuals into r (window_residuals(w) of them) and,
   /// unless null, the predicted column values (the sensor's bias, gain and delay applied).
   /// False when the simulation diverged (MuJoCo's bad qpos/qvel/qacc).
@@ -120,8 +159,9 @@ class Problem {
 
  private:
   struct Column {
-    int joint = 0;
+    int joint = 0;  ///< -1: a wrench device's column
     bool velocity = false;
+    int wrench = -1, axis = 0;             ///< wrench device (wrenches_) and axis (Fx .. Mz)
     int bias = -1, gain = -1, delay = -1;  ///< parameters transforming it, -1: none
     bool torque = false;                   ///< the joint's applied torque (input: reference)
   };
@@ -150,6 +190,7 @@ class Problem {
 
   Problem() = default;
   void BindJoints(const lab::Scenario& scenario);
+  void BindWrenches(const lab::Scenario& scenario);
   void BindColumns();
   void BindParameters();
   void ReadLogs();
@@ -175,6 +216,10 @@ class Problem {
   std::uint64_t seed_ = 1;  ///< the scenario's (the arm devices' contexts)
   std::vector<Joint> joints_;
   std::vector<Arm> arms_;
+  std::vector<WrenchSensor> wrenches_;
+  std::vector<BodyEdit> bodies_;
+  int wrench_columns_ = 0;      ///< fitted columns of wrench devices
+  int wrench_settle_rows_ = 0;  ///< their rows left out at a window's start
   std::vector<Column> columns_;
   std::vector<std::string> column_names_;
   std::vector<double> weights_;

@@ -14,13 +14,22 @@ namespace fs = std::filesystem;
 namespace {
 
 // "body NAME mass" etc.: the kind and element of a target's words
-bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element) {
+bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element, int* axis) {
   std::istringstream in(text);
   std::string what, name, attribute, extra;
   if (!(in >> what >> name >> attribute) || (in >> extra)) return false;
   *element = name;
+  *axis = 0;
+  const bool com = attribute == "com_x" || attribute == "com_y" || attribute == "com_z";
+  if (com) *axis = attribute[4] - 'x';
   if (what == "body" && attribute == "mass") {
     *kind = TargetKind::kBodyMass;
+  } else if (what == "body" && com) {
+    *kind = TargetKind::kBodyCom;
+  } else if (what == "payload" && attribute == "mass") {
+    *kind = TargetKind::kPayloadMass;
+  } else if (what == "payload" && com) {
+    *kind = TargetKind::kPayloadCom;
   } else if (what == "joint" && attribute == "damping") {
     *kind = TargetKind::kJointDamping;
   } else if (what == "joint" && attribute == "armature") {
@@ -44,7 +53,8 @@ bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element
 }
 
 constexpr char kTargets[] =
-    "'body NAME mass', 'joint NAME damping', 'joint NAME armature', 'joint NAME frictionloss', "
+    "'body NAME mass', 'body NAME com_x|com_y|com_z', 'payload BODY mass', 'payload BODY com_x|com_y|com_z', "
+    "'joint NAME damping', 'joint NAME armature', 'joint NAME frictionloss', "
     "'column NAME bias', 'column NAME gain', 'column NAME delay', 'servo DEVICE bandwidth' or "
     "'servo DEVICE damping_ratio'";
 
@@ -55,7 +65,7 @@ ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, con
   p.name = r.String("name");
   if (p.name.empty()) r.Fail("name", "must not be empty");
   const std::string target = r.String("target");
-  if (!ParseTarget(target, &p.kind, &p.element)) {
+  if (!ParseTarget(target, &p.kind, &p.element, &p.axis)) {
     r.Fail("target", "'" + target + "' is none of " + kTargets);
   }
   p.has_nominal = r.Has("nominal");
@@ -76,9 +86,10 @@ ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, con
   const bool positive = p.kind == TargetKind::kBodyMass || p.kind == TargetKind::kColumnGain ||
                         p.kind == TargetKind::kServoBandwidth || p.kind == TargetKind::kServoDampingRatio;
   const bool non_negative = p.kind == TargetKind::kJointDamping || p.kind == TargetKind::kJointArmature ||
-                            p.kind == TargetKind::kJointFrictionLoss || p.kind == TargetKind::kColumnDelay;
-  if (positive && !(p.lower > 0)) r.Fail("lower", "must be > 0 for " + TargetText(p.kind, p.element));
-  if (non_negative && p.lower < 0) r.Fail("lower", "must be >= 0 for " + TargetText(p.kind, p.element));
+                            p.kind == TargetKind::kJointFrictionLoss || p.kind == TargetKind::kColumnDelay ||
+                            p.kind == TargetKind::kPayloadMass;
+  if (positive && !(p.lower > 0)) r.Fail("lower", "must be > 0 for " + TargetText(p.kind, p.element, p.axis));
+  if (non_negative && p.lower < 0) r.Fail("lower", "must be >= 0 for " + TargetText(p.kind, p.element, p.axis));
   return p;
 }
 
@@ -104,10 +115,19 @@ std::string ResolveLog(const fs::path& dir, const std::string& text) {
 
 }  // namespace
 
-std::string TargetText(TargetKind kind, const std::string& element) {
+std::string TargetText(TargetKind kind, const std::string& element) { return TargetText(kind, element, 0); }
+
+std::string TargetText(TargetKind kind, const std::string& element, int axis) {
+  const std::string com = std::string(" com_") + static_cast<char>('x' + axis);
   switch (kind) {
     case TargetKind::kBodyMass:
       return "body " + element + " mass";
+    case TargetKind::kBodyCom:
+      return "body " + element + com;
+    case TargetKind::kPayloadMass:
+      return "payload " + element + " mass";
+    case TargetKind::kPayloadCom:
+      return "payload " + element + com;
     case TargetKind::kJointDamping:
       return "joint " + element + " damping";
     case TargetKind::kJointArmature:
@@ -186,6 +206,12 @@ Spec LoadSpec(const std::string& path) {
   if (s.max_iterations < 1 || s.max_iterations > 1000) r.Fail("max_iterations", "must be from 1 to 1000");
   s.start_smoothing = r.Integer("start_smoothing", s.start_smoothing);
   if (s.start_smoothing < 0 || s.start_smoothing > 1000) r.Fail("start_smoothing", "must be from 0 to 1000 rows");
+  s.where_wrench_settle =
+      lab::YamlWhere(path, r.Has("wrench_settle") ? root["wrench_settle"] : root) + ": wrench_settle";
+  if (r.Has("wrench_settle")) {
+    s.wrench_settle_s = r.Number("wrench_settle");
+    if (!(s.wrench_settle_s >= 0) || s.wrench_settle_s > 1e3) r.Fail("wrench_settle", "must be from 0 to 1000 s");
+  }
   const std::string contacts = r.String("contacts", "skip");
   if (contacts != "skip" && contacts != "keep") r.Fail("contacts", "must be 'skip' or 'keep', got '" + contacts + "'");
   s.skip_contacts = contacts == "skip";
@@ -202,10 +228,11 @@ Spec LoadSpec(const std::string& path) {
       if (s.parameters[j].name == s.parameters[i].name) {
         throw InputError(s.parameters[i].where + ".name: duplicate parameter name '" + s.parameters[i].name + "'");
       }
-      if (s.parameters[j].kind == s.parameters[i].kind && s.parameters[j].element == s.parameters[i].element) {
+      if (s.parameters[j].kind == s.parameters[i].kind && s.parameters[j].element == s.parameters[i].element &&
+          s.parameters[j].axis == s.parameters[i].axis) {
         throw InputError(s.parameters[i].where + ".target: '" +
-                         TargetText(s.parameters[i].kind, s.parameters[i].element) + "' is already parameter '" +
-                         s.parameters[j].name + "'");
+                         TargetText(s.parameters[i].kind, s.parameters[i].element, s.parameters[i].axis) +
+                         "' is already parameter '" + s.parameters[j].name + "'");
       }
     }
   }
@@ -215,6 +242,17 @@ Spec LoadSpec(const std::string& path) {
     if (servo && s.input != "reference") {
       throw InputError(p.where + ".target: '" + TargetText(p.kind, p.element) +
                        "' needs input: reference (the torque replay does not run the servo)");
+    }
+  }
+  // a payload's centre of mass is nothing without its mass
+  for (const ParameterSpec& p : s.parameters) {
+    if (p.kind != TargetKind::kPayloadCom) continue;
+    bool mass = false;
+    for (const ParameterSpec& q : s.parameters)
+      mass = mass || (q.kind == TargetKind::kPayloadMass && q.element == p.element);
+    if (!mass) {
+      throw InputError(p.where + ".target: '" + TargetText(p.kind, p.element, p.axis) + "' needs a 'payload " +
+                       p.element + " mass' parameter (frozen, if the mass is known)");
     }
   }
   r.Finish();

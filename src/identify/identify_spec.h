@@ -15,6 +15,7 @@ namespace vlab::identify {
 /// What a parameter changes.
 enum class TargetKind {
   kBodyMass,           ///< body NAME mass: the body's mass, its inertia scaled with it (kg)
+  kBodyCom,            ///< body NAME com_x|com_y|com_z: its centre of mass, body frame (m)
   kJointDamping,       ///< joint NAME damping (N·m·s/rad, N·s/m)
   kJointArmature,      ///< joint NAME armature (kg·m², kg)
   kJointFrictionLoss,  ///< joint NAME frictionloss (N·m, N)
@@ -23,9 +24,15 @@ enum class TargetKind {
   kColumnDelay,        ///< column NAME delay: the sensor reads the true value of this long ago (s)
   kServoBandwidth,     ///< servo DEVICE bandwidth: the arm's servo.bandwidth_hz (Hz)
   kServoDampingRatio,  ///< servo DEVICE damping_ratio: the arm's servo.damping_ratio (1)
+  kPayloadMass,        ///< payload BODY mass: a point mass rigidly added to BODY (kg)
+  kPayloadCom,         ///< payload BODY com_x|com_y|com_z: where it is, BODY's frame (m)
 };
 
-/// "body NAME mass", ...: the words of a target, for messages and outputs.
+/// "body NAME mass", ...: the words of a target, for messages and outputs (`axis`: 0, 1, 2
+/// for com_x, com_y, com_z).
+std::string TargetText(TargetKind kind, const std::string& element, int axis);
+
+/// The same for targets without an axis.
 std::string TargetText(TargetKind kind, const std::string& element);
 
 /// One parameter of the fit.
@@ -33,6 +40,7 @@ struct ParameterSpec {
   std::string name;  ///< unique, as written
   TargetKind kind = TargetKind::kBodyMass;
   std::string element;  ///< body or joint name, log column, or arm device
+  int axis = 0;         ///< com_x, com_y, com_z: 0, 1, 2
   bool has_nominal = false;
   double nominal = 0;  ///< the starting value (default: the model's; bias 0, gain 1)
   double lower = 0;    ///< bounds of the fitted value, lower < upper
@@ -83,7 +91,12 @@ struct Spec {
   /// making contact. `keep`: every window is fitted.
   bool skip_contacts = true;
   FirstEstimate first_estimate = FirstEstimate::kLinear;
-  std::string where_window, where_input;
+  /// A wrench column's rows within this long of a window's start are left out of the residual:
+  /// the replay's JR3 filter starts settled on the model's load there, not in the state the
+  /// load's history left it in. Negative (the default): the selected filter's settling time
+  /// (its step response within 1e-3 of the step from then on).
+  double wrench_settle_s = -1;
+  std::string where_window, where_input, where_wrench_settle;
 };
 
 /// Reads and checks a spec file. Throws InputError naming the file, line and key.

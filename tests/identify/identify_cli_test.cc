@@ -8,6 +8,7 @@
 
 #include "core/core_mujoco.h"
 #include "identify/identify_output.h"
+#include "identify/identify_problem.h"
 #include "identify_test_plant.h"
 #include "test_util.h"
 
@@ -72,6 +73,50 @@ TEST(IdentifyCli, WritesEstimatesAPatchedSceneAndOverridesThatRunIt) {
     EXPECT_TRUE(std::filesystem::exists(tmp / ("fit/" + std::string(file)))) << file;
   }
   EXPECT_NE(ReadFile(tmp / "fit/report.md").find("| m4 | body pa10_link4 mass |"), std::string::npos);
+}
+
+// a payload on the tool fitted with the JR3's columns: model.xml holds it in the tool's body,
+// overrides.txt says what it is and how the arm's scenario declares it
+TEST(IdentifyCli, WritesAPayloadAndTheJr3Columns) {
+  TempDir tmp;
+  const double own[3] = {0, 0, 0.05};
+  WriteEditedScene(
+      testing::kScene,
+      [&](mjModel* m) {
+        const int b = testing::Body(m, "tool_body");
+        AddPointMass(0.3, own, &m->body_mass[b], m->body_ipos + 3 * b, m->body_inertia + 3 * b, m->body_iquat + 4 * b);
+      },
+      tmp / "truth.xml");
+  testing::RunLab(tmp / "truth.xml", tmp / "real", 2.0, {"devices.jr3.filter=3", "devices.jr3.noise=false"});
+  WriteFile(tmp / "id.yaml", "scenario: " + testing::kScenario +
+                                 "\nset: [\"checks=[]\", \"devices.jr3.filter=3\"]\nlogs: [real]\n" +
+                                 "columns: [{name: pa10.q.*, weight: 1.0e5}, {name: jr3.F*, weight: 50}]\n"
+                                 "parameters:\n"
+                                 "  - {name: pm, target: payload tool_body mass, nominal: 0.1, lower: 0, upper: 2}\n"
+                                 "  - {name: pz, target: payload tool_body com_z, lower: -0.2, upper: 0.2}\n"
+                                 "  - {name: bz, target: column jr3.Fz bias, lower: -1, upper: 1}\n");
+  const auto r = RunVlab("identify '" + (tmp / "id.yaml") + "' --out '" + (tmp / "fit") + "' --threads 2 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(tmp / "fit/estimates.json"));
+  EXPECT_EQ(j["parameters"][0]["target"], "payload tool_body mass");
+  EXPECT_EQ(j["parameters"][1]["target"], "payload tool_body com_z");
+  const double pm = j["parameters"][0]["value"].get<double>(), pz = j["parameters"][1]["value"].get<double>();
+  EXPECT_NEAR(pm, 0.3, 0.003);
+  EXPECT_NEAR(pz, 0.05, 0.001);
+  EXPECT_GT(j["wrench_settle_rows"].get<int>(), 0);
+  const ModelPtr fitted = LoadModel(tmp / "fit/model.xml");
+  const ModelPtr nominal = LoadModel(testing::kScene);
+  const int b = testing::Body(fitted.get(), "tool_body");
+  EXPECT_NEAR(fitted->body_mass[b], nominal->body_mass[b] + pm, 1e-5);
+  const std::string overrides = ReadFile(tmp / "fit/overrides.txt");
+  EXPECT_NE(overrides.find("# payload on body tool_body"), std::string::npos) << overrides;
+  // the flange frame (pa10_link7, W2's body) is 25 mm above tool_body's, axes alike
+  EXPECT_NE(overrides.find("W2 (the flange frame, body pa10_link7), its scenario's payload: {mass: "),
+            std::string::npos)
+      << overrides;
+  const std::string csv = ReadFile(tmp / "fit/fit.csv");
+  EXPECT_NE(csv.find("jr3.Fz.measured"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(tmp / "fit/fit_jr3.Fz.png"));
 }
 
 TEST(IdentifyCli, BadInputIsExitTwoNamingTheField) {

@@ -1,12 +1,15 @@
 // vlab identify's spec: read and checked, every error naming the file, the entry and the
 // field; names bound to the scenario's model and the log's columns with the same care.
 #include <charconv>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "core/core_errors.h"
+#include "core/core_mujoco.h"
+#include "identify/identify_output.h"
 #include "identify/identify_problem.h"
 #include "identify/identify_spec.h"
 #include "identify_test_plant.h"
@@ -47,7 +50,7 @@ TEST(IdentifySpec, ReadsEveryKey) {
   TempDir tmp;
   WriteFile(tmp / "id.yaml", Spec("window: 0.2",
                                   "window: 0.5\nstart_smoothing: 4\ncontacts: keep\nmax_iterations: 7\n"
-                                  "first_estimate: nominal"));
+                                  "first_estimate: nominal\nwrench_settle: 0.05"));
   const identify::Spec s = LoadSpec(tmp / "id.yaml");
   EXPECT_EQ(s.scenario, testing::kScenario);
   ASSERT_EQ(s.logs.size(), 1u);
@@ -59,6 +62,7 @@ TEST(IdentifySpec, ReadsEveryKey) {
   EXPECT_EQ(s.first_estimate, FirstEstimate::kNominal);
   WriteFile(tmp / "default.yaml", Spec());
   EXPECT_EQ(LoadSpec(tmp / "default.yaml").first_estimate, FirstEstimate::kLinear);  // the default
+  EXPECT_EQ(s.wrench_settle_s, 0.05);
   ASSERT_EQ(s.columns.size(), 1u);
   EXPECT_EQ(s.columns[0].weight, 1e5);
   ASSERT_EQ(s.parameters.size(), 2u);
@@ -69,6 +73,22 @@ TEST(IdentifySpec, ReadsEveryKey) {
   EXPECT_TRUE(s.parameters[1].has_nominal);
   EXPECT_EQ(s.parameters[1].nominal, 1.0);
   EXPECT_TRUE(s.parameters[1].frozen);
+  EXPECT_LT(LoadSpec(tmp / "id.yaml").wrench_settle_s, 1.0);
+  // the centre-of-mass and payload targets
+  WriteFile(tmp / "id.yaml", Spec("target: joint S1 damping, nominal: 1, lower: 0, upper: 5, frozen: true",
+                                  "target: payload tool_body mass, lower: 0, upper: 2}\n"
+                                  "  - {name: c, target: payload tool_body com_z, lower: -1, upper: 1}\n"
+                                  "  - {name: d, target: body pa10_link3 com_y, lower: -1, upper: 1"));
+  const identify::Spec t = LoadSpec(tmp / "id.yaml");
+  ASSERT_EQ(t.parameters.size(), 4u);
+  EXPECT_EQ(t.parameters[1].kind, TargetKind::kPayloadMass);
+  EXPECT_EQ(t.parameters[2].kind, TargetKind::kPayloadCom);
+  EXPECT_EQ(t.parameters[2].axis, 2);
+  EXPECT_EQ(t.parameters[3].kind, TargetKind::kBodyCom);
+  EXPECT_EQ(t.parameters[3].element, "pa10_link3");
+  EXPECT_EQ(t.parameters[3].axis, 1);
+  EXPECT_EQ(TargetText(t.parameters[3].kind, t.parameters[3].element, t.parameters[3].axis), "body pa10_link3 com_y");
+  EXPECT_LT(t.wrench_settle_s, 0.0);  // the filter's own
 }
 
 // the shipped spec reads (its log is made by the command its comment gives)
@@ -109,6 +129,12 @@ TEST(IdentifySpec, RefusesBadEntriesNamingTheField) {
       {"body pa10_link2 mass", "joint S1 damping",
        ":9: parameters[1].target: 'joint S1 damping' is already parameter 'a'"},
       {"name: a, target", "nme: a, target", ":8: parameters[0].name: missing"},
+      {"body pa10_link2 mass", "body pa10_link2 com_w", ":8: parameters[0].target: 'body pa10_link2 com_w' is none of"},
+      {"joint S1 damping", "payload pa10_link2 com_x",
+       ":9: parameters[1].target: 'payload pa10_link2 com_x' needs a 'payload pa10_link2 mass' parameter"},
+      {"body pa10_link2 mass, lower: 4", "payload pa10_link2 mass, lower: -1",
+       ":8: parameters[0].lower: must be >= 0 for payload pa10_link2 mass"},
+      {"window: 0.2", "window: 0.2\nwrench_settle: -1", ":4: wrench_settle: must be from 0 to 1000 s"},
   };
   TempDir tmp;
   for (const Case& c : cases) {
@@ -133,10 +159,19 @@ TEST(IdentifySpec, RefusesNamesTheModelOrLogLacks) {
   const std::vector<Case> cases = {
       {"body pa10_link2 mass", "body nobody mass", ":8: parameters[0].target: no body 'nobody' in the scene"},
       {"joint S1 damping", "joint S9 damping", ":9: parameters[1].target: no joint 'S9' in the scene"},
-      {"joint S1 damping", "column jr3.Fx bias", ":9: parameters[1].target: 'jr3.Fx' is not an arm's q or qd column"},
+      {"joint S1 damping", "column jr3.Fx bias", ":9: parameters[1].target: column 'jr3.Fx' is not among the fitted"},
+      {"joint S1 damping", "column pa10.tau.S1 bias",
+       ":9: parameters[1].target: 'pa10.tau.S1' is not a column the replay predicts (an arm's q or qd, a wrench "
+       "device's axis: pa10.q.S1,"},
+      {"body pa10_link2 mass", "body nobody com_x", ":8: parameters[0].target: no body 'nobody' in the scene"},
+      {"body pa10_link2 mass, lower: 4", "payload world mass, lower: 0",
+       ":8: parameters[0].target: no body 'world' in the scene (the world's is not one)"},
+      {"name: pa10.q.*, weight: 1.0e5}", "name: jr3.*}",
+       ":3: window: windows of 100 rows leave no wrench row: 112 rows"},
       {"joint S1 damping", "column pa10.qd.S1 bias",
        ":9: parameters[1].target: column 'pa10.qd.S1' is not among the fitted columns"},
-      {"name: pa10.q.*", "name: jr3.F*", ":6: columns[0].name: 'jr3.F*' names none of the columns the replay predicts"},
+      {"name: pa10.q.*", "name: jr3.sat*",
+       ":6: columns[0].name: 'jr3.sat*' names none of the columns the replay predicts"},
       {"window: 0.2", "window: 0.9", "window: 0.9"},  // longer than the 0.5 s log
   };
   for (const Case& c : cases) {
@@ -145,8 +180,21 @@ TEST(IdentifySpec, RefusesNamesTheModelOrLogLacks) {
       Problem::Create(LoadSpec(tmp / "id.yaml"));
       ADD_FAILURE() << "accepted: " << c.to;
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << c.to << ": " << e.what();
     }
+  }
+  // a delay on a wrench column: its filter's lag is the model's
+  std::string text = Spec("name: pa10.q.*, weight: 1.0e5}", "name: pa10.q.*, weight: 1.0e5}\n  - {name: jr3.F*}");
+  text.replace(text.find("joint S1 damping"), 16, "column jr3.Fy delay");
+  WriteFile(tmp / "id.yaml", text);
+  try {
+    Problem::Create(LoadSpec(tmp / "id.yaml"));
+    ADD_FAILURE() << "accepted a delay on a wrench column";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  ":10: parameters[1].target: a delay is for an arm's q or qd column, not the wrench column 'jr3.Fy'"),
+              std::string::npos)
+        << e.what();
   }
   // a log without the torques the replay needs
   vlab::testing::WriteFile(tmp / "short.csv", "time,pa10.q.S1\n0,0\n0.002,0\n");
@@ -203,6 +251,92 @@ TEST(IdentifySpec, RefusesWhatTheReferenceReplayLacks) {
   // the torque replay predicts no torque column
   refused(edit(Spec(), "name: pa10.q.*", "name: pa10.tau.*"),
           "'pa10.tau.*' names none of the columns the replay predicts");
+}
+
+// A payload: a point mass combined with its body's inertial exactly (the mass sum, the combined
+// centre of mass, the inertia about the body's origin the sum of the two), and nothing changed
+// at all by a payload of mass 0.
+TEST(IdentifyModel, PayloadCombinesWithItsBodyExactly) {
+  double mass = 2.0, ipos[3] = {0.1, 0.0, 0.05}, inertia[3] = {0.01, 0.02, 0.03};
+  const Eigen::Quaterniond q0 = Eigen::Quaterniond(0.9, 0.1, -0.3, 0.2).normalized();
+  double iquat[4] = {q0.w(), q0.x(), q0.y(), q0.z()};
+  const double m2 = 0.5, c2[3] = {-0.05, 0.1, 0.2};
+  // second moment about the body's origin, body frame: R I R^T + m (|c|^2 E - c c^T)
+  auto about_origin = [](double m, const double c[3], const double d[3], const double q[4]) {
+    const Eigen::Matrix3d r = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
+    const Eigen::Vector3d v(c[0], c[1], c[2]);
+    return Eigen::Matrix3d(r * Eigen::Vector3d(d[0], d[1], d[2]).asDiagonal() * r.transpose() +
+                           m * (v.squaredNorm() * Eigen::Matrix3d::Identity() - v * v.transpose()));
+  };
+  const double zero[3] = {0, 0, 0};
+  const Eigen::Matrix3d expected = about_origin(mass, ipos, inertia, iquat) + about_origin(m2, c2, zero, iquat);
+  const double c_expected[3] = {(2.0 * 0.1 + 0.5 * -0.05) / 2.5, (0.5 * 0.1) / 2.5, (2.0 * 0.05 + 0.5 * 0.2) / 2.5};
+  AddPointMass(m2, c2, &mass, ipos, inertia, iquat);
+  EXPECT_EQ(mass, 2.5);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(ipos[k], c_expected[k], 1e-15);
+  EXPECT_NEAR(Eigen::Vector4d(iquat[0], iquat[1], iquat[2], iquat[3]).norm(), 1.0, 1e-14);
+  EXPECT_TRUE(inertia[0] > 0 && inertia[0] <= inertia[1] && inertia[1] <= inertia[2]);
+  EXPECT_LT((about_origin(mass, ipos, inertia, iquat) - expected).cwiseAbs().maxCoeff(), 1e-14);
+  // the triangle inequality of a physical body holds
+  EXPECT_LE(inertia[2], inertia[0] + inertia[1]);
+  // mass 0: nothing moves, to the bit
+  double mass0 = mass, ipos0[3], inertia0[3], iquat0[4];
+  std::copy(ipos, ipos + 3, ipos0);
+  std::copy(inertia, inertia + 3, inertia0);
+  std::copy(iquat, iquat + 4, iquat0);
+  AddPointMass(0.0, c2, &mass, ipos, inertia, iquat);
+  EXPECT_EQ(std::memcmp(&mass, &mass0, sizeof mass), 0);
+  EXPECT_EQ(std::memcmp(ipos, ipos0, sizeof ipos), 0);
+  EXPECT_EQ(std::memcmp(inertia, inertia0, sizeof inertia), 0);
+  EXPECT_EQ(std::memcmp(iquat, iquat0, sizeof iquat), 0);
+}
+
+// Bound to the scene: a payload of mass 0 and the body's own centre of mass leave the model as
+// it is to the bit; a payload and a moved centre of mass change exactly that body.
+TEST(IdentifyModel, PayloadAndCentreOfMassTargetsSetTheModel) {
+  TempDir tmp;
+  testing::RunLab(testing::kScene, tmp / "run", 0.3);
+  WriteFile(tmp / "id.yaml", Spec("target: joint S1 damping, nominal: 1, lower: 0, upper: 5, frozen: true",
+                                  "target: payload tool_body mass, lower: 0, upper: 2}\n"
+                                  "  - {name: c, target: payload tool_body com_z, lower: -1, upper: 1}\n"
+                                  "  - {name: d, target: body tool_body com_x, lower: -1, upper: 1"));
+  const std::unique_ptr<Problem> problem = Problem::Create(LoadSpec(tmp / "id.yaml"));
+  const mjModel* m = problem->model();
+  const int tool = testing::Body(m, "tool_body");
+  std::vector<double> values;
+  for (const BoundParameter& p : problem->parameters()) values.push_back(p.nominal);
+  EXPECT_EQ(values[1], 0.0);  // the payload's mass: none in the model
+  ModelPtr copy(mj_copyModel(nullptr, m));
+  problem->SetModel(values, copy.get());
+  auto same = [&](const double* a, const double* b, int n) { return std::memcmp(a, b, n * sizeof(double)) == 0; };
+  EXPECT_TRUE(same(copy->body_mass, m->body_mass, m->nbody));
+  EXPECT_TRUE(same(copy->body_ipos, m->body_ipos, 3 * m->nbody));
+  EXPECT_TRUE(same(copy->body_inertia, m->body_inertia, 3 * m->nbody));
+  EXPECT_TRUE(same(copy->body_iquat, m->body_iquat, 4 * m->nbody));
+  // 0.2 kg at z 0.1 m, the tool's own centre of mass moved 10 mm in x
+  values[1] = 0.2;
+  values[2] = 0.1;
+  values[3] = 0.01;
+  problem->SetModel(values, copy.get());
+  const double own = m->body_mass[tool], z0 = m->body_ipos[3 * tool + 2];
+  EXPECT_DOUBLE_EQ(copy->body_mass[tool], own + 0.2);
+  EXPECT_NEAR(copy->body_ipos[3 * tool + 0], own * 0.01 / (own + 0.2), 1e-15);
+  EXPECT_NEAR(copy->body_ipos[3 * tool + 2], (own * z0 + 0.2 * 0.1) / (own + 0.2), 1e-15);
+  for (int b = 0; b < m->nbody; ++b) {
+    if (b != tool) {
+      EXPECT_EQ(copy->body_mass[b], m->body_mass[b]);
+    }
+  }
+  // model.xml carries the changed body (mj_saveLastXML: 6 significant digits)
+  WriteEditedScene(
+      problem->scene(), [&](mjModel* edit) { SetModelParameters(*problem, values, edit); }, tmp / "model.xml");
+  const ModelPtr written = LoadModel(tmp / "model.xml");
+  EXPECT_NEAR(written->body_mass[tool], copy->body_mass[tool], 1e-6 * copy->body_mass[tool]);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(written->body_ipos[3 * tool + k], copy->body_ipos[3 * tool + k], 1e-6);
+    EXPECT_NEAR(written->body_inertia[3 * tool + k], copy->body_inertia[3 * tool + k],
+                1e-5 * copy->body_inertia[3 * tool + 2]);
+  }
 }
 
 }  // namespace

@@ -37,16 +37,8 @@ class SimWrench final : public Device, public StepHooks {
     force_adr_ = m->sensor_adr[force];
     torque_adr_ = m->sensor_adr[torque];
 
-    sensors::WrenchSensorConfig sc;
-    sc.model = p.model;
-    if (!p.full_scale.empty()) sc.full_scale = Eigen::Map<const sensors::Wrench>(p.full_scale.data());
-    sc.filter = p.filter;
-    sc.enable_noise = p.noise;
-    sc.enable_bias = p.bias;
-    sc.enable_quantization = p.quantization;
-    sc.seed = context.seed;
     try {
-      sensor_ = sensors::WrenchSensorModel::Create(sc);
+      sensor_ = sensors::WrenchSensorModel::Create(WrenchSensorConfigOf(p, context.seed));
     } catch (const std::invalid_argument& e) {
       throw InputError(who() + ": " + e.what());
     }
@@ -118,6 +110,18 @@ class SimWrench final : public Device, public StepHooks {
 };
 
 }  // namespace
+
+sensors::WrenchSensorConfig WrenchSensorConfigOf(const WrenchParams& p, std::uint64_t seed) {
+  sensors::WrenchSensorConfig sc;
+  sc.model = p.model;
+  if (!p.full_scale.empty()) sc.full_scale = Eigen::Map<const sensors::Wrench>(p.full_scale.data());
+  sc.filter = p.filter;
+  sc.enable_noise = p.noise;
+  sc.enable_bias = p.bias;
+  sc.enable_quantization = p.quantization;
+  sc.seed = seed;
+  return sc;
+}
 
 std::shared_ptr<const DeviceParams> ReadWrenchParams(MapReader& r) {
   auto w = std::make_shared<WrenchParams>();

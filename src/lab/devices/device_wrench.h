@@ -11,6 +11,7 @@
 // Noise and bias are seeded per device from the scenario seed.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,6 +34,10 @@ struct WrenchParams : DeviceParams {
   bool bias = true;
   bool quantization = true;
 };
+
+/// The JR3 model configuration the device runs for `params`, seeded with `seed`. Throws
+/// nothing; WrenchSensorModel::Create checks it.
+sensors::WrenchSensorConfig WrenchSensorConfigOf(const WrenchParams& params, std::uint64_t seed);
 
 /// Reads a wrench entry's keys (site, force_sensor, torque_sensor, model,
 /// full_scale, filter, noise, bias, quantization).
