@@ -166,13 +166,6 @@ Eigen::MatrixXd JacobianAt(RolloutPool& pool, const FreeSet& set, const std::vec
       last.jacobian.data(), count, static_cast<Eigen::Index>(u.size()));
 }
 
-// six significant digits, for the progress line
-std::string Short(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", x);
-  return buffer;
-}
-
 double HalfSquares(const std::vector<double>& r) {
   double s = 0;
   for (double x : r) s += x * x;
@@ -180,6 +173,12 @@ double HalfSquares(const std::vector<double>& r) {
 }
 
 }  // namespace
+
+std::string SixDigits(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", x);
+  return buffer;
+}
 
 FitResult Fit(const Problem& problem, const FitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -283,11 +282,11 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
       for (LinearStatus s : l.status) covered += s != LinearStatus::kNotCovered;
       line += " (" + std::to_string(l.rank) + " of " + std::to_string(covered) + " parameters estimated from " +
               std::to_string(l.torque_rows) + " joint torques of " + std::to_string(l.samples) +
-              " log rows); cost at nominal " + Short(result.cost_nominal) + ", at the start " +
-              Short(result.cost_start);
+              " log rows); cost at nominal " + SixDigits(result.cost_nominal) + ", at the start " +
+              SixDigits(result.cost_start);
     } else {
       line += result.first_estimate_note.empty() ? "" : " (" + result.first_estimate_note + ")";
-      line += "; cost " + Short(result.cost_start);
+      line += "; cost " + SixDigits(result.cost_start);
     }
     options.message(line);
   }

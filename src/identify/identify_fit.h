@@ -75,6 +75,9 @@ struct FitResult {
 /// starting model's rollouts diverge.
 FitResult Fit(const Problem& problem, const FitOptions& options);
 
+/// x with six significant digits (%.6g), for the progress line and the report.
+std::string SixDigits(double x);
+
 /// The predicted columns of every window at `values` (residual order), for plots; false
 /// when a rollout diverged.
 bool Predict(const Problem& problem, const std::vector<double>& values, int threads, std::vector<double>* predicted);

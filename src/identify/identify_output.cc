@@ -26,13 +26,6 @@ std::string Num(double x) {
   return std::string(buffer, result.ptr);
 }
 
-// six significant digits, for the report's text
-std::string Short(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", x);
-  return buffer;
-}
-
 // a finite number, or null (an sd the data do not determine)
 nlohmann::json JsonNumber(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
@@ -154,20 +147,20 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
   std::string md = "# Identification: " + problem.spec().file + "\n\n";
   md += "Scenario `" + problem.spec().scenario + "`, scene `" + problem.scene() + "`; " +
         std::to_string(problem.spec().logs.size()) + " log(s), " + std::to_string(fit.windows) + " windows of " +
-        Short(problem.spec().window_s) + " s (" + std::to_string(problem.windows_in_contact()) +
+        SixDigits(problem.spec().window_s) + " s (" + std::to_string(problem.windows_in_contact()) +
         " more left out: their nominal replay made contact), " + std::to_string(fit.residuals) + " residuals" +
         (problem.residuals_left_out() > 0
              ? " (" + std::to_string(problem.residuals_left_out()) + " of them held at 0: a wrench column's first " +
                    std::to_string(problem.wrench_settle_rows()) + " rows of each window, its filter settling)"
              : std::string()) +
         ".\n\n";
-  md += "Cost (half the sum of squared weighted residuals): nominal " + Short(fit.cost_nominal) + ", fitted " +
-        Short(fit.cost_fitted) + "; residual sd " + Short(fit.residual_sd) +
+  md += "Cost (half the sum of squared weighted residuals): nominal " + SixDigits(fit.cost_nominal) + ", fitted " +
+        SixDigits(fit.cost_fitted) + "; residual sd " + SixDigits(fit.residual_sd) +
         " (weighted units; 1 when the weights are 1/σ of the noise). " + std::to_string(fit.iterations) +
         " iterations, " + std::to_string(fit.rollouts) + " window rollouts: " + fit.termination + "\n\n";
   md += "The fit started from the " + fit.first_estimate + " values" +
         (fit.first_estimate_note.empty() ? "" : " (" + fit.first_estimate_note + ")") + ", cost " +
-        Short(fit.cost_start) + ".";
+        SixDigits(fit.cost_start) + ".";
   if (fit.linear.applies) {
     md += " The linear estimate (inverse-dynamics regression of the logged joint torques): " +
           std::to_string(fit.linear.rank) + " parameters from " + std::to_string(fit.linear.torque_rows) +
@@ -183,17 +176,18 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
     const Estimate& e = fit.estimates[i];
     const BoundParameter& p = problem.parameters()[i];
     const nlohmann::json linear = LinearValue(fit, i);
-    md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element, p.spec.axis) + " | " + Short(e.nominal) +
-          " | " + (linear.is_null() ? "—" : Short(linear.get<double>())) + " | " + Short(e.value) + " | " +
-          (std::isfinite(e.sd) ? Short(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") + " | " + e.note + " |\n";
+    md += "| " + e.name + " | " + TargetText(p.spec.kind, p.spec.element, p.spec.axis) + " | " + SixDigits(e.nominal) +
+          " | " + (linear.is_null() ? "—" : SixDigits(linear.get<double>())) + " | " + SixDigits(e.value) + " | " +
+          (std::isfinite(e.sd) ? SixDigits(e.sd) : "—") + " | " + (e.identifiable ? "yes" : "no") + " | " + e.note +
+          " |\n";
   }
-  md += "\nCorrelations above " + Short(kCorrelated) + " in magnitude flag parameters the data cannot tell apart:";
+  md += "\nCorrelations above " + SixDigits(kCorrelated) + " in magnitude flag parameters the data cannot tell apart:";
   bool any = false;
   for (Eigen::Index a = 0; a < fit.correlation.rows(); ++a) {
     for (Eigen::Index b = a + 1; b < fit.correlation.cols(); ++b) {
       if (std::abs(fit.correlation(a, b)) > kCorrelated) {
         md += std::string(any ? "," : "") + " " + fit.estimates[a].name + "/" + fit.estimates[b].name + " " +
-              Short(fit.correlation(a, b));
+              SixDigits(fit.correlation(a, b));
         any = true;
       }
     }

@@ -12,7 +12,7 @@
 #include "identify_test_plant.h"
 #include "test_util.h"
 
-namespace vlab::identify {
+namespace vlab::identify::cli_test {
 namespace {
 
 using vlab::testing::ReadFile;
@@ -140,4 +140,4 @@ TEST(IdentifyCli, BadInputIsExitTwoNamingTheField) {
 }
 
 }  // namespace
-}  // namespace vlab::identify
+}  // namespace vlab::identify::cli_test

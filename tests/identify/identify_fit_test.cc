@@ -16,7 +16,7 @@
 #include "sensors/sensor_wrench.h"
 #include "test_util.h"
 
-namespace vlab::identify {
+namespace vlab::identify::fit_test {
 namespace {
 
 using testing::RunLab;
@@ -444,4 +444,4 @@ TEST(IdentifyFit, SameResultForAnyThreadCount) {
 }
 
 }  // namespace
-}  // namespace vlab::identify
+}  // namespace vlab::identify::fit_test

@@ -15,7 +15,7 @@
 #include "identify_test_plant.h"
 #include "test_util.h"
 
-namespace vlab::identify {
+namespace vlab::identify::linear_test {
 namespace {
 
 using testing::RunLab;
@@ -222,4 +222,4 @@ TEST_F(IdentifyLinear, FitFromItReachesTheSameOptimumSooner) {
 }
 
 }  // namespace
-}  // namespace vlab::identify
+}  // namespace vlab::identify::linear_test

@@ -16,7 +16,7 @@
 #include "scene/scene_csv.h"
 #include "test_util.h"
 
-namespace vlab::identify {
+namespace vlab::identify::spec_test {
 namespace {
 
 using vlab::testing::TempDir;
@@ -340,4 +340,4 @@ TEST(IdentifyModel, PayloadAndCentreOfMassTargetsSetTheModel) {
 }
 
 }  // namespace
-}  // namespace vlab::identify
+}  // namespace vlab::identify::spec_test

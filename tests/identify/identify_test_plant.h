@@ -23,19 +23,25 @@ inline const std::string kScenario = VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml
 inline int Dof(const mjModel* m, const char* joint) { return m->jnt_dofadr[mj_name2id(m, mjOBJ_JOINT, joint)]; }
 inline int Body(const mjModel* m, const char* body) { return mj_name2id(m, mjOBJ_BODY, body); }
 
-/// Runs pa10_joint_pd (no checks, `duration` s, `sets` overrides after) on `scene` into
-/// `out_dir`; its log.csv.
-inline std::string RunLab(const std::string& scene, const std::string& out_dir, double duration,
-                          const std::vector<std::string>& sets = {}) {
-  std::vector<std::string> all = {"scene=" + scene, "checks=[]", "duration=" + std::to_string(duration)};
-  all.insert(all.end(), sets.begin(), sets.end());
-  lab::Scenario s = lab::LoadScenario(kScenario, all);
+/// Runs the scenario `file` with the overrides `sets` into `out_dir`; its log.csv.
+inline std::string RunScenario(const std::string& file, const std::string& out_dir,
+                               const std::vector<std::string>& sets) {
+  const lab::Scenario s = lab::LoadScenario(file, sets);
   std::unique_ptr<lab::Lab> lab = lab::Lab::Create(s);
   lab::RunOptions options;
   options.out_dir = out_dir;
   const lab::RunResult result = lab->Run(options);
   EXPECT_EQ(result.exit_code, 0) << result.failure;
   return out_dir + "/log.csv";
+}
+
+/// Runs pa10_joint_pd (no checks, `duration` s, `sets` overrides after) on `scene` into
+/// `out_dir`; its log.csv.
+inline std::string RunLab(const std::string& scene, const std::string& out_dir, double duration,
+                          const std::vector<std::string>& sets = {}) {
+  std::vector<std::string> all = {"scene=" + scene, "checks=[]", "duration=" + std::to_string(duration)};
+  all.insert(all.end(), sets.begin(), sets.end());
+  return RunScenario(kScenario, out_dir, all);
 }
 
 }  // namespace vlab::identify::testing
