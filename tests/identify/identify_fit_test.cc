@@ -124,13 +124,8 @@ const std::vector<Planted> kPlanted = {
     {"f_e1", "joint E1 frictionloss", 1.0, 1.0 * 1.2, 0, 10},
 };
 
-void EditNominal(mjModel* m) {
-  m->dof_damping[testing::Dof(m, "S2")] = 3.0;
-  m->dof_frictionloss[testing::Dof(m, "E1")] = 1.0;
-}
-
 void EditTruth(mjModel* m) {
-  EditNominal(m);
+  testing::EditNominal(m);
   ScaleBodyMass(m, "pa10_link3", 1.10);
   ScaleBodyMass(m, "pa10_link4", 0.93);
   m->dof_damping[testing::Dof(m, "S2")] *= 1.5;
@@ -144,7 +139,7 @@ void EditTruth(mjModel* m) {
 // reported as not excited and left at its nominal value.
 TEST(IdentifyFit, RecoversPlantedParameters) {
   TempDir tmp;
-  WriteEditedScene(testing::kScene, EditNominal, tmp / "nominal.xml");
+  WriteEditedScene(testing::kScene, testing::EditNominal, tmp / "nominal.xml");
   WriteEditedScene(testing::kScene, EditTruth, tmp / "truth.xml");
   const std::string clean = RunLab(tmp / "truth.xml", tmp / "real", 10.0);
   constexpr double kSigma = 1e-5;  // rad, about the PA10's encoder count (7.67e-6 rad)
@@ -271,7 +266,7 @@ struct Truth {
 TEST(IdentifyFit, RecoversThePlantedArmPayloadAndJr3) {
   TempDir tmp;
   constexpr double kPayloadMass = 0.5, kPayloadCom[3] = {0.02, -0.01, 0.08};  // kg; m in tool_body's frame
-  WriteEditedScene(testing::kScene, EditNominal, tmp / "nominal.xml");
+  WriteEditedScene(testing::kScene, testing::EditNominal, tmp / "nominal.xml");
   WriteEditedScene(
       testing::kScene,
       [&](mjModel* m) {

@@ -38,13 +38,8 @@ const std::vector<Planted> kPlanted = {
     {"f_e1", "joint E1 frictionloss", 1.0, 1.0 * 1.2, 0, 10},
 };
 
-void EditNominal(mjModel* m) {
-  m->dof_damping[testing::Dof(m, "S2")] = 3.0;
-  m->dof_frictionloss[testing::Dof(m, "E1")] = 1.0;
-}
-
 void EditTruth(mjModel* m) {
-  EditNominal(m);
+  testing::EditNominal(m);
   ScaleBodyMass(m, "pa10_link3", 1.30);
   ScaleBodyMass(m, "pa10_link4", 0.70);
   ScaleBodyMass(m, "pa10_link6", 1.30);
@@ -85,7 +80,7 @@ class IdentifyLinear : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     tmp_ = new TempDir();
-    WriteEditedScene(testing::kScene, EditNominal, *tmp_ / "nominal.xml");
+    WriteEditedScene(testing::kScene, testing::EditNominal, *tmp_ / "nominal.xml");
     WriteEditedScene(testing::kScene, EditTruth, *tmp_ / "truth.xml");
     clean_ = RunLab(*tmp_ / "truth.xml", *tmp_ / "real", 10.0);
   }

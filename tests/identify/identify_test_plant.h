@@ -23,6 +23,14 @@ inline const std::string kScenario = VLAB_SOURCE_DIR "/scenes/pa10_joint_pd.yaml
 inline int Dof(const mjModel* m, const char* joint) { return m->jnt_dofadr[mj_name2id(m, mjOBJ_JOINT, joint)]; }
 inline int Body(const mjModel* m, const char* body) { return mj_name2id(m, mjOBJ_BODY, body); }
 
+/// The nominal PA10 of the identification tests: the shipped scene with S2's damping 3 N·m·s/rad
+/// and E1's friction loss 1 N·m (the data sheet leaves both at 0), so that a planted change of
+/// either is a change of a value the model has.
+inline void EditNominal(mjModel* m) {
+  m->dof_damping[Dof(m, "S2")] = 3.0;
+  m->dof_frictionloss[Dof(m, "E1")] = 1.0;
+}
+
 /// Runs the scenario `file` with the overrides `sets` into `out_dir`; its log.csv.
 inline std::string RunScenario(const std::string& file, const std::string& out_dir,
                                const std::vector<std::string>& sets) {
