@@ -67,13 +67,14 @@ Subcommand AddIdentifyCommand(CLI::App& app) {
   auto args = std::make_shared<IdentifyArgs>();
   CLI::App* cmd = app.add_subcommand(
       "identify",
-      "Fit model parameters (body masses with their inertia, joint damping, armature and friction loss, a q or qd "
-      "column's bias, gain and delay, an arm's servo bandwidth and damping ratio) to recorded logs: the recorded "
-      "joint torques, or the arms' recorded commands through their servos, replayed over short windows from the "
-      "recorded state (multiple shooting), box-constrained nonlinear least squares (Ceres) from a linear "
-      "inverse-dynamics estimate of the masses, damping, armature and friction loss where it applies. Prints each "
-      "estimate "
-      "with its standard deviation and whether the data can tell it; writes estimates.json, overrides.txt (for vlab "
+      "Fit model parameters (body masses with their inertia, centres of mass, a payload's mass and centre of mass, "
+      "joint damping, armature and friction loss, a column's bias and gain, a q or qd column's delay, an arm's "
+      "servo bandwidth and damping ratio) to recorded logs (the arms' q, qd and tau, a wrench device's filtered "
+      "wrench): the recorded joint torques, or the arms' recorded commands through their servos, replayed over "
+      "short windows from the recorded state (multiple shooting), box-constrained nonlinear least squares (Ceres) "
+      "from a linear inverse-dynamics estimate of the masses, damping, armature and friction loss where it "
+      "applies. Prints each estimate with its standard deviation and whether the data can tell it; writes "
+      "estimates.json, overrides.txt (for vlab "
       "run --overrides), model.xml (the scene patched), fit.csv, plots and report.md (docs/identify.md). Exit: 0 "
       "fitted; 1 a rollout diverged or a write failed; 2 bad input");
   cmd->add_option("SPEC", args->spec, "Identification spec (YAML: scenario, logs, columns, parameters)")->required();
