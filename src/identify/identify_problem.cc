@@ -191,7 +191,7 @@ void Problem::BindColumns() {
   }
   for (std::size_t w = 0; w < wrenches_.size(); ++w) {
     int axis = 0;
-    for (const char* name : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"}) {
+    for (const char* name : lab::kWrenchAxes) {
       predictable.push_back(wrenches_[w].device + "." + name);
       Column c;
       c.joint = -1;
@@ -296,7 +296,7 @@ void Problem::BindParameters() {
           for (const char* quantity : {".q.", ".qd."}) known.push_back(j.device + quantity + j.name);
         }
         for (const WrenchSensor& w : wrenches_) {
-          for (const char* axis : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"}) known.push_back(w.device + "." + axis);
+          for (const char* axis : lab::kWrenchAxes) known.push_back(w.device + "." + axis);
         }
         if (std::find(known.begin(), known.end(), spec.element) == known.end()) {
           throw InputError(where + ": '" + spec.element +
@@ -376,7 +376,6 @@ void Problem::ReadLogs() {
       tau[j] = column(joints_[j].device + ".tau." + joints_[j].name);
     }
     for (std::size_t c = 0; c < columns_.size(); ++c) fitted[c] = column(column_names_[c]);
-    if (reference_) ReadCommands(table, file, &log);
     for (int r = 0; r < rows; ++r) {
       const std::vector<double>& row = table.rows[r];
       log.time.push_back(row[time]);
@@ -405,6 +404,7 @@ void Problem::ReadLogs() {
       throw InputError("log '" + file + "': a period of " + std::to_string(period) + " s, unlike the first log's");
     }
     steps_per_row_ = static_cast<int>(steps);
+    if (reference_) ReadCommands(table, file, steps_per_row_, &log);
     logs_.push_back(std::move(log));
   }
 }

@@ -201,7 +201,8 @@ class Problem {
   // input: reference (identify_servo.cc): the recorded commands of a log; the servos' gains for
   // `values` (at the scenario's initial state, as the arm's Start makes them); a window's
   // servo state from its first row; a row's commands taken; one physics step with the servos
-  void ReadCommands(const scene::CsvTable& table, const std::string& file, Log* log) const;
+  // `steps`: physics steps a row (the log's period, checked); `log` holds its q already
+  void ReadCommands(const scene::CsvTable& table, const std::string& file, int steps, Log* log) const;
   void TuneServos(const std::vector<double>& values, Workspace& ws) const;
   void StartServos(const Window& win, Workspace& ws) const;
   void CommandServos(const Log& log, int row, Workspace& ws, int only = -1) const;

@@ -18,7 +18,7 @@
 
 namespace vlab::identify {
 
-void Problem::ReadCommands(const scene::CsvTable& table, const std::string& file, Log* log) const {
+void Problem::ReadCommands(const scene::CsvTable& table, const std::string& file, int steps, Log* log) const {
   const int rows = static_cast<int>(table.rows.size());
   log->mode.resize(rows, static_cast<int>(arms_.size()));
   log->command.resize(rows, static_cast<int>(joints_.size()));
@@ -59,25 +59,19 @@ void Problem::ReadCommands(const scene::CsvTable& table, const std::string& file
   // integrates it from the reference it took over, step by step as the servo does (the
   // following-error window aside); torque mode makes it follow the joint (NaN: unknown). Before
   // the first row the arm held its start: the first row's measured position stands for it.
-  const int time = table.Column("time");
   const double timestep = model_->opt.timestep;
-  const int steps =
-      rows > 1 && time >= 0
-          ? std::max(1, static_cast<int>(std::lround((table.rows[1][time] - table.rows[0][time]) / timestep)))
-          : 1;
   log->reference.resize(rows, static_cast<int>(joints_.size()));
   for (std::size_t a = 0; a < arms_.size(); ++a) {
     const Arm& arm = arms_[a];
     for (int j = 0; j < arm.joints; ++j) {
       const int c = arm.first + j;
-      const int q = table.Column(joints_[c].device + ".q." + joints_[c].name);
       for (int r = 0; r < rows; ++r) {
         const auto m = static_cast<bridge::ArmMode>(static_cast<int>(log->mode(r, static_cast<int>(a))));
         double ref = std::numeric_limits<double>::quiet_NaN();
         if (m == bridge::ArmMode::kHold || m == bridge::ArmMode::kPosition) {
           ref = log->command(r, c);
         } else if (m == bridge::ArmMode::kVelocity) {
-          ref = r > 0 ? log->reference(r - 1, c) : q >= 0 ? table.rows[0][q] : ref;
+          ref = r > 0 ? log->reference(r - 1, c) : log->q(0, c);
           for (int s = 0; s < steps; ++s) ref += log->command(r, c) * timestep;
         }
         log->reference(r, c) = ref;
