@@ -66,7 +66,7 @@ class SimWrench final : public Device, public StepHooks {
 
   std::vector<std::string> Columns() const override {
     std::vector<std::string> columns;
-    for (const char* axis : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"}) columns.push_back(name() + "." + axis);
+    for (const char* axis : kWrenchAxes) columns.push_back(name() + "." + axis);
     columns.push_back(name() + ".saturated");
     return columns;
   }

@@ -23,6 +23,9 @@
 
 namespace vlab::lab {
 
+/// The wrench axes, in the order of the device's log columns (NAME.Fx ... NAME.Mz) and state.
+inline constexpr const char* kWrenchAxes[6] = {"Fx", "Fy", "Fz", "Mx", "My", "Mz"};
+
 struct WrenchParams : DeviceParams {
   std::string site;           ///< sensor site (documentation; frames come from the sensors)
   std::string force_sensor;   ///< MJCF force sensor at the site
