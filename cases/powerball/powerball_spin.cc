@@ -3,7 +3,8 @@
 // the devices only through the vlab client library; the same binary in every stage.
 //
 //   powerball_spin --arm ADDR --jr3 ADDR --counter ADDR [--target-rpm RPM] [--alpha-max DEG]
-//                  [--delta DEG] [--wrist-speed RAD_S] [--stop-at S] [--log FILE] [--timeout S] [--quiet]
+//                  [--delta DEG] [--wrist-speed RAD_S] [--start-at S] [--stop-at S] [--log FILE]
+//                  [--timeout S] [--quiet]
 //
 // Devices: --arm, the PA10 (arm; its states pace the loop, one velocity command per state);
 // --jr3, the wrench device at the ball's mount (filter 1 or 2: filter 4's 7.8 Hz cut-off
@@ -40,11 +41,16 @@
 //    stays under --wrist-speed), times a speed regulator (1 at and below target - kRegulatorBand
 //    rpm, 0 at the target) so the rotor holds near the target instead of running away (the
 //    law blows up in finite time), ramped in over the first kRamp_s and rate-limited
-//    (kAlphaRate) so the tips are never slammed. With --stop-at S the drive stops at S s after
-//    the first state, as a user who stops turning the wrist: the cone closes at the same rate
-//    and the wrist holds its start pose; the rotor then coasts on its losses.
+//    (kAlphaRate) so the tips are never slammed. With --start-at S the wrist is held still for
+//    S s after the first state (the rotor coasts) and the ramp begins then. With --stop-at S
+//    the drive stops at S s after the first state, as a user who stops turning the wrist: the
+//    cone closes at the same rate, back onto the start pose, and the wrist is held still; the
+//    rotor then coasts on its losses (a spin-down to identify them from: docs/identify.md).
 // 5. Command: joint velocities, the cone's rate plus kPull times the position error (the
-//    others held at the start pose), clipped to kMaxJointSpeed, changing by at most
+//    others held at the start pose); held still (not driving, the cone closed), 0, so that the
+//    servo's reference stays put and the wrist gives to the rotor's couple on its own (a pull
+//    would answer that wobble, and drive or brake the rotor with it). Clipped to
+//    kMaxJointSpeed, changing by at most
 //    kMaxVelocityStep from one command to the next.
 // Logs FILE (CSV): time, counter rpm, nu_ff, alpha commanded and measured (deg, from W1 and
 // W2), phi_hat, psi, |M| (N m).
@@ -110,6 +116,7 @@ constexpr double kMaxVelocityStep = 0.5;
 struct Options {
   Address arm, jr3, counter;
   double target_rpm = 12000, alpha_max_deg = 10, delta_deg = 0, wrist_speed = 4.0, timeout_s = 2.0;
+  double start_at_s = 0.0;  // s: the drive starts then
   double stop_at_s = -1.0;  // s: the drive stops then; < 0: never
   std::string log;
   bool quiet = false;
@@ -139,6 +146,8 @@ bool ParseOptions(int argc, char** argv, Options* o) {
       o->delta_deg = std::atof(v.c_str());
     else if (arg == "--wrist-speed")
       o->wrist_speed = std::atof(v.c_str());
+    else if (arg == "--start-at")
+      ok = (o->start_at_s = std::atof(v.c_str())) >= 0.0;
     else if (arg == "--stop-at")
       ok = (o->stop_at_s = std::atof(v.c_str())) >= 0.0;
     else if (arg == "--log")
@@ -237,8 +246,8 @@ int Run(const Options& o) {
     const double rpm = std::abs(c.values[kCounterRpm]);
     const double cap = std::min(alpha_max, o.wrist_speed / std::max(std::abs(nu_ff), 1e-3));
     const double regulate = std::clamp((o.target_rpm - rpm) / kRegulatorBand, 0.0, 1.0);
-    const bool driving = o.stop_at_s < 0.0 || t < o.stop_at_s;
-    const double wanted = driving ? cap * regulate * std::min(1.0, t / kRamp_s) : 0.0;
+    const bool driving = t >= o.start_at_s && (o.stop_at_s < 0.0 || t < o.stop_at_s);
+    const double wanted = driving ? cap * regulate * std::min(1.0, (t - o.start_at_s) / kRamp_s) : 0.0;
     alpha += std::clamp(wanted - alpha, -kAlphaRate * dt, kAlphaRate * dt);
     // 5. velocity command: the cone's rate plus a slow pull (kPull) onto the cone and, for
     // the other joints, onto the start pose. A velocity command survives a late or missed
@@ -253,11 +262,16 @@ int Run(const Options& o) {
     // the cone's joint accelerations, analytic (psi turning at nu_ff): -nu^2 theta
     accel[0] = -nu_ff * nu_ff * theta[0];
     accel[1] = -nu_ff * nu_ff * theta[1];
+    // not driving and the cone closed: the wrist held still, its servo's reference frozen (a
+    // velocity of 0), so that the rotor coasts on its losses alone; a pull onto the pose would
+    // answer the wrist's wobble under the rotor's couple and drive or brake the rotor with it
+    const bool holding = !driving && alpha == 0.0;
     for (int i = 0; i < 7; ++i) {
       double target = q0(i), rate = 0.0;
       if (i == kW1) target += theta[0], rate = theta_rate[0];
       if (i == kW2) target += theta[1], rate = theta_rate[1];
-      const double wanted_v = std::clamp(rate + kPull * (target - a.q(i)), -kMaxJointSpeed, kMaxJointSpeed);
+      const double wanted_v =
+          holding ? 0.0 : std::clamp(rate + kPull * (target - a.q(i)), -kMaxJointSpeed, kMaxJointSpeed);
       v_cmd(i) += std::clamp(wanted_v - v_cmd(i), -kMaxVelocityStep, kMaxVelocityStep);
     }
     arm.Write(vlab::bridge::ArmMode::kVelocity, v_cmd, a.seq);
@@ -294,8 +308,8 @@ int main(int argc, char** argv) {
   if (!ParseOptions(argc, argv, &options)) {
     std::fprintf(stderr,
                  "usage: %s --arm HOST:PORT --jr3 HOST:PORT --counter HOST:PORT [--target-rpm RPM]\n"
-                 "       [--alpha-max DEG (<= 15)] [--delta DEG] [--wrist-speed RAD_S] [--stop-at S] [--log FILE]\n"
-                 "       [--timeout S] [--quiet]\n",
+                 "       [--alpha-max DEG (<= 15)] [--delta DEG] [--wrist-speed RAD_S] [--start-at S] [--stop-at S]\n"
+                 "       [--log FILE] [--timeout S] [--quiet]\n",
                  argv[0]);
     return 2;
   }

@@ -2,6 +2,7 @@
 # Stage 1 with the drive stopped at 20 s (powerball_spin --stop-at 20): the rotor coasts on its
 # losses (mjcf/powerball/README.md, "Losses"), so the hold check must fail, and only checks of
 # the rotor's speed may: the arm stays inside its limits and the tips still roll.
+cmake_policy(SET CMP0057 NEW)  # if(IN_LIST)
 file(REMOVE_RECURSE ${OUT})
 set(command "[\"{bin}/cases/powerball/powerball_spin\", \"--arm\", \"{pa10}\", \"--jr3\", \"{jr3}\", \"--counter\", \"{pb}\",\
  \"--target-rpm\", \"12000\", \"--stop-at\", \"20\", \"--quiet\"]")
@@ -23,6 +24,13 @@ foreach(i RANGE ${last})
     message(STATUS "failed as it should: ${name} = ${value}")
   endif()
 endforeach()
-if(NOT failed STREQUAL "counter_holds_speed")
-  message(FATAL_ERROR "with the drive stopped at 20 s the failed checks are '${failed}', not counter_holds_speed alone")
+# the hold check fails; any other that fails is one of the rotor's speed (the arm's limits and the
+# tips' rolling hold while it coasts)
+if(NOT "counter_holds_speed" IN_LIST failed)
+  message(FATAL_ERROR "with the drive stopped at 20 s counter_holds_speed passed (failed: '${failed}')")
 endif()
+foreach(name ${failed})
+  if(NOT name MATCHES "^(counter_holds_speed|counter_above_10000_rpm|spin_above_10000_rpm)$")
+    message(FATAL_ERROR "with the drive stopped at 20 s a check other than the rotor's speed failed: ${name}")
+  endif()
+endforeach()
