@@ -43,9 +43,10 @@ int Identify(const IdentifyArgs& a) {
   }
   const identify::FitResult fit = identify::Fit(*problem, options);
   for (const identify::Estimate& e : fit.estimates) {
+    char sd[32] = "-";
+    if (std::isfinite(e.sd)) std::snprintf(sd, sizeof sd, "%.3g", e.sd);
     std::printf("%-16s nominal %-12.6g start %-12.6g fitted %-12.6g sd %-10s %s%s%s\n", e.name.c_str(), e.nominal,
-                fit.start_values[static_cast<std::size_t>(&e - fit.estimates.data())], e.value,
-                std::isfinite(e.sd) ? std::to_string(e.sd).c_str() : "-",
+                fit.start_values[static_cast<std::size_t>(&e - fit.estimates.data())], e.value, sd,
                 e.identifiable ? "identifiable" : "NOT identifiable", e.note.empty() ? "" : ": ", e.note.c_str());
   }
   std::printf("first estimate %s%s%s\n", fit.first_estimate.c_str(), fit.first_estimate_note.empty() ? "" : ": ",
@@ -67,13 +68,15 @@ Subcommand AddIdentifyCommand(CLI::App& app) {
   auto args = std::make_shared<IdentifyArgs>();
   CLI::App* cmd = app.add_subcommand(
       "identify",
-      "Fit model parameters (body masses with their inertia, centres of mass, a payload's mass and centre of mass, "
-      "joint damping, armature and friction loss, a column's bias and gain, a q or qd column's delay, an arm's "
-      "servo bandwidth and damping ratio) to recorded logs (the arms' q, qd and tau, a wrench device's filtered "
-      "wrench): the recorded joint torques, or the arms' recorded commands through their servos, replayed over "
-      "short windows from the recorded state (multiple shooting), box-constrained nonlinear least squares (Ceres) "
-      "from a linear inverse-dynamics estimate of the masses, damping, armature and friction loss where it "
-      "applies. Prints each estimate with its standard deviation and whether the data can tell it; writes "
+      "Fit model parameters (body masses with their inertia, centres of mass, principal inertias, a payload's mass "
+      "and centre of mass, joint damping, armature and friction loss, a column's bias and gain, a q or qd column's "
+      "delay, an arm's servo bandwidth and damping ratio) to recorded logs (the arms' q, qd and tau, a wrench "
+      "device's filtered wrench, a counter's speed, norms of them): the recorded joint torques, or the arms' "
+      "recorded commands through their servos, replayed over short windows from the recorded state (multiple "
+      "shooting; a spinning body the log does not hold started from a counter's speed), box-constrained nonlinear "
+      "least squares (Ceres) from a linear inverse-dynamics estimate of the masses, damping, armature and friction "
+      "loss where it applies. Prints each estimate with its standard deviation and whether the data can tell it; "
+      "writes "
       "estimates.json, overrides.txt (for vlab "
       "run --overrides), model.xml (the scene patched), fit.csv, plots and report.md (docs/identify.md). Exit: 0 "
       "fitted; 1 a rollout diverged or a write failed; 2 bad input");

@@ -63,6 +63,7 @@ struct FreeSet {
   std::vector<int> index;    // into the problem's parameters
   std::vector<double> base;  // every parameter's value; the free ones are overwritten
   std::vector<double> lower, upper, scale;
+  double jacobian_step = 1e-4;  // the central differences' step, in units of the scaled parameters
 
   std::vector<double> Values(const double* u) const {
     std::vector<double> v = base;
@@ -80,7 +81,7 @@ bool Evaluate(RolloutPool& pool, const FreeSet& set, const double* u, double* re
   if (jacobian) {
     std::vector<double> x(u, u + n);
     for (int i = 0; i < n; ++i) {
-      const double h = 1e-4 * std::max(1.0, std::abs(u[i]));
+      const double h = set.jacobian_step * std::max(1.0, std::abs(u[i]));
       const double hi = std::min(set.upper[i], u[i] + h), lo = std::max(set.lower[i], u[i] - h);
       step[i] = hi - lo;
       x[i] = hi;
@@ -190,6 +191,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   result.residuals = count;
   result.windows = problem.window_count();
   FreeSet set;
+  set.jacobian_step = problem.spec().jacobian_step;
   for (const BoundParameter& p : params) set.base.push_back(p.nominal);
   result.nominal_values = set.base;
   // the start: the linear estimate where it applies (identify_linear.h), else the nominal values
@@ -331,7 +333,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   if (n > 0) {
     const Eigen::MatrixXd j = JacobianAt(pool, set, u, count, &r, last);
     result.cost_fitted = HalfSquares(r);
-    const double dof = std::max(1, count - problem.residuals_left_out() - n);
+    const double dof = std::max(1, count - problem.residuals_left_out() - problem.window_nuisances() - n);
     const double variance = 2 * result.cost_fitted / dof;
     result.residual_sd = std::sqrt(variance);
     // pseudo-inverse of J^T J: directions the data do not tell get an infinite variance

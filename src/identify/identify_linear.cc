@@ -23,7 +23,8 @@ bool LinearKind(TargetKind kind) {
     case TargetKind::kColumnBias:
     case TargetKind::kColumnGain:
     case TargetKind::kColumnDelay:
-    case TargetKind::kBodyCom:  // m·c is linear in it, the inertia about the joint quadratic
+    case TargetKind::kBodyCom:      // m·c is linear in it, the inertia about the joint quadratic
+    case TargetKind::kBodyInertia:  // linear, but about axes the regression does not carry
     case TargetKind::kPayloadCom:
     case TargetKind::kServoBandwidth:  // the servo's gains shape the torques, they are no term of them
     case TargetKind::kServoDampingRatio:

@@ -56,6 +56,7 @@ nlohmann::json EstimatesJson(const Problem& problem, const FitResult& fit) {
   j["windows_in_contact"] = problem.windows_in_contact();
   j["wrench_settle_rows"] = problem.wrench_settle_rows();
   j["residuals_left_out"] = problem.residuals_left_out();
+  j["window_nuisances"] = problem.window_nuisances();
   j["residuals"] = fit.residuals;
   j["cost_nominal"] = fit.cost_nominal;
   j["first_estimate"] = fit.first_estimate;
@@ -151,7 +152,9 @@ std::string ReportMarkdown(const Problem& problem, const FitResult& fit, const s
         " more left out: their nominal replay made contact), " + std::to_string(fit.residuals) + " residuals" +
         (problem.residuals_left_out() > 0
              ? " (" + std::to_string(problem.residuals_left_out()) + " of them held at 0: a wrench column's first " +
-                   std::to_string(problem.wrench_settle_rows()) + " rows of each window, its filter settling)"
+                   std::to_string(problem.wrench_settle_rows()) +
+                   " rows of each window, its filter settling; a counter's rows before the first gate the window "
+                   "saw whole; rows outside a column's spans)"
              : std::string()) +
         ".\n\n";
   md += "Cost (half the sum of squared weighted residuals): nominal " + SixDigits(fit.cost_nominal) + ", fitted " +

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -9,6 +10,7 @@
 
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
+#include "lab/devices/device_counter.h"
 #include "lab/devices/device_wrench.h"
 #include "lab/run/lab_runner.h"
 #include "lab/scenario/lab_scenario.h"
@@ -66,7 +68,28 @@ int SettleRows(const sensors::WrenchSensorModel& model, double dt, double period
   return static_cast<int>(std::ceil(last / period - 1e-9));
 }
 
+constexpr double kRpmPerRadPerSecond = 60.0 / (2.0 * M_PI);
+constexpr double kSameTime_s = 1e-9;  // two times this close are one (the counter device's)
+// start_speed: the counter's readings within this many gates of a window's start are fitted
+constexpr double kStartSpeedGates = 10;
+
 }  // namespace
+
+bool Problem::Column::settles() const {
+  if (wrench >= 0) return true;
+  for (const Column& p : parts) {
+    if (p.wrench >= 0) return true;
+  }
+  return false;
+}
+
+bool Problem::Column::Counts(double time_s) const {
+  if (spans.empty()) return true;
+  for (const auto& [from, to] : spans) {
+    if (time_s >= from - kSameTime_s && time_s <= to + kSameTime_s) return true;
+  }
+  return false;
+}
 
 void AddPointMass(double payload_mass, const double payload_com[3], double* mass, double ipos[3], double inertia[3],
                   double iquat[4]) {
@@ -109,13 +132,20 @@ std::unique_ptr<Problem> Problem::Create(const Spec& spec) {
   DataPtr data = MakeData(p->model_.get());
   lab->InitialState(data.get());
   p->qpos_init_.assign(data->qpos, data->qpos + p->model_->nq);
+  p->qvel_init_.assign(data->qvel, data->qvel + p->model_->nv);
   p->BindJoints(scenario);
   p->BindWrenches(scenario);
+  p->BindCounters(scenario);
   p->BindColumns();
   p->BindParameters();
+  p->CheckInertias();
+  p->arm_dof_.assign(p->model_->nv, false);
+  for (const Joint& j : p->joints_) p->arm_dof_[j.dof] = true;
+  p->run_in_steps_ = static_cast<int>(std::lround(spec.run_in_s / p->model_->opt.timestep));
   p->ReadLogs();
   p->CutWindows();
   if (spec.skip_contacts) p->SkipContactWindows();
+  if (p->start_counter_ >= 0) p->StartSpeedGains();
   return p;
 }
 
@@ -168,6 +198,36 @@ void Problem::BindWrenches(const lab::Scenario& scenario) {
   }
 }
 
+void Problem::BindCounters(const lab::Scenario& scenario) {
+  const mjModel* m = model_.get();
+  const double period = scenario.control_period_s;
+  for (const lab::DeviceConfig& device : scenario.devices) {
+    if (device.kind != bridge::DeviceKind::kCounter) continue;
+    const lab::CounterParams& params = device.ParamsAs<lab::CounterParams>();
+    const int id = mj_name2id(m, mjOBJ_JOINT, params.joint.c_str());
+    // the lab has bound this name already: a miss is a bug, not bad input
+    if (id < 0) throw std::logic_error("counter '" + device.name + "': joint not in the model");
+    counters_.push_back(
+        {device.name, m->jnt_qposadr[id], m->jnt_dofadr[id], params.rate_hz > 0 ? 1.0 / params.rate_hz : period});
+  }
+  if (spec_.start_speed.empty()) return;
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < counters_.size(); ++i) {
+    names.push_back(counters_[i].device + ".rpm");
+    if (names.back() == spec_.start_speed) start_counter_ = static_cast<int>(i);
+  }
+  if (start_counter_ < 0) {
+    throw InputError(spec_.where_start_speed + ": '" + spec_.start_speed +
+                     "' is no counter device's speed column (the scenario's: " +
+                     (names.empty() ? std::string("none") : JoinNames(names)) + ")");
+  }
+  start_speed0_ = qvel_init_[counters_[start_counter_].dof] * kRpmPerRadPerSecond;
+  if (!(std::abs(start_speed0_) > 1e-9)) {
+    throw InputError(spec_.where_start_speed + ": the counter's joint is at rest in the scenario's initial state: " +
+                     "there is no motion to scale (give the scenario a keyframe in which it turns)");
+  }
+}
+
 void Problem::BindColumns() {
   // the columns a rollout predicts: every arm joint's q and qd, and with input: reference the
   // torque its servo applies; every wrench device's axes
@@ -200,7 +260,43 @@ void Problem::BindColumns() {
       kinds.push_back(c);
     }
   }
+  for (std::size_t i = 0; i < counters_.size(); ++i) {
+    predictable.push_back(counters_[i].device + ".rpm");
+    Column c;
+    c.joint = -1;
+    c.counter = static_cast<int>(i);
+    kinds.push_back(c);
+  }
   for (const ColumnSpec& c : spec_.columns) {
+    if (!c.norm.empty()) {
+      // a derived column: its parts are columns the replay predicts, named in full
+      Column derived;
+      derived.joint = -1;
+      derived.rate = c.rate;
+      derived.part = part_count_;
+      for (const std::string& name : c.norm) {
+        const auto it = std::find(predictable.begin(), predictable.end(), name);
+        if (it == predictable.end() || kinds[it - predictable.begin()].counter >= 0) {
+          throw InputError(c.where + ".norm: '" + name +
+                           "' is none of the columns a norm can take (an arm's q, qd or torque, a wrench "
+                           "device's axis): " +
+                           JoinNames(predictable));
+        }
+        derived.parts.push_back(kinds[it - predictable.begin()]);
+        derived.part_names.push_back(name);
+      }
+      part_count_ += static_cast<int>(derived.parts.size());
+      if (std::find(column_names_.begin(), column_names_.end(), c.pattern) != column_names_.end() ||
+          std::find(predictable.begin(), predictable.end(), c.pattern) != predictable.end()) {
+        throw InputError(c.where + ".name: '" + c.pattern + "' is taken: name the derived column apart");
+      }
+      column_names_.push_back(c.pattern);
+      weights_.push_back(c.weight);
+      derived.spans = c.spans;
+      if (derived.settles()) ++wrench_columns_;
+      columns_.push_back(std::move(derived));
+      continue;
+    }
     bool any = false;
     for (std::size_t i = 0; i < predictable.size(); ++i) {
       if (!MatchColumn(c.pattern, predictable[i])) continue;
@@ -212,6 +308,7 @@ void Problem::BindColumns() {
       column_names_.push_back(predictable[i]);
       weights_.push_back(c.weight);
       columns_.push_back(kinds[i]);
+      columns_.back().spans = c.spans;
       if (kinds[i].wrench >= 0) ++wrench_columns_;
     }
     if (!any) {
@@ -231,6 +328,7 @@ void Problem::BindParameters() {
     switch (spec.kind) {
       case TargetKind::kBodyMass:
       case TargetKind::kBodyCom:
+      case TargetKind::kBodyInertia:
       case TargetKind::kPayloadMass:
       case TargetKind::kPayloadCom: {
         p.index = mj_name2id(m, mjOBJ_BODY, spec.element.c_str());
@@ -262,6 +360,10 @@ void Problem::BindParameters() {
           case TargetKind::kBodyCom:
             edit->com[spec.axis] = self;
             model_value = edit->ipos0[spec.axis];
+            break;
+          case TargetKind::kBodyInertia:
+            edit->inertia[spec.axis] = self;
+            model_value = edit->inertia0[spec.axis];
             break;
           case TargetKind::kPayloadMass:
             edit->payload_mass = self;
@@ -349,6 +451,36 @@ void Problem::BindParameters() {
   }
 }
 
+void Problem::CheckInertias() const {
+  // a body's principal moments obey the triangle inequality (I_a + I_b >= I_c) at every value
+  // the bounds allow, and a mass (which scales them) is fitted, or they are, not both
+  for (const BodyEdit& e : bodies_) {
+    int any = -1;
+    for (int k = 0; k < 3; ++k) any = e.inertia[k] >= 0 ? e.inertia[k] : any;
+    if (any < 0) continue;
+    const ParameterSpec& spec = parameters_[any].spec;
+    if (e.mass >= 0) {
+      throw InputError(spec.where + ".target: body '" + spec.element +
+                       "' has a mass parameter too, which scales its inertia: fit the one or the other");
+    }
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = e.inertia[k] >= 0 ? parameters_[e.inertia[k]].spec.lower : e.inertia0[k];
+      hi[k] = e.inertia[k] >= 0 ? parameters_[e.inertia[k]].spec.upper : e.inertia0[k];
+    }
+    for (int c = 0; c < 3; ++c) {
+      const int a = (c + 1) % 3, b = (c + 2) % 3;
+      if (lo[a] + lo[b] < hi[c] * (1 - 1e-12)) {
+        throw InputError(
+            spec.where + ": the bounds let body '" + spec.element + "''s principal moments break I_" +
+            std::string(1, static_cast<char>('x' + a)) + " + I_" + std::string(1, static_cast<char>('x' + b)) +
+            " >= I_" + std::string(1, static_cast<char>('x' + c)) + " (" + std::to_string(lo[a]) + " + " +
+            std::to_string(lo[b]) + " < " + std::to_string(hi[c]) + " kg m^2), which no body has: narrow them");
+      }
+    }
+  }
+}
+
 void Problem::ReadLogs() {
   const double timestep = model_->opt.timestep;
   for (const std::string& file : spec_.logs) {
@@ -375,7 +507,14 @@ void Problem::ReadLogs() {
       qd[j] = column(joints_[j].device + ".qd." + joints_[j].name);
       tau[j] = column(joints_[j].device + ".tau." + joints_[j].name);
     }
-    for (std::size_t c = 0; c < columns_.size(); ++c) fitted[c] = column(column_names_[c]);
+    // a derived column's parts, read into `parts` and combined once the period is known
+    std::vector<int> part_column;
+    for (std::size_t c = 0; c < columns_.size(); ++c) {
+      fitted[c] = columns_[c].parts.empty() ? column(column_names_[c]) : -1;
+      for (const std::string& name : columns_[c].part_names) part_column.push_back(column(name));
+    }
+    Eigen::MatrixXd parts(rows, part_column.size());
+    const int start_speed = spec_.start_speed.empty() ? -1 : column(spec_.start_speed);
     for (int r = 0; r < rows; ++r) {
       const std::vector<double>& row = table.rows[r];
       log.time.push_back(row[time]);
@@ -384,7 +523,11 @@ void Problem::ReadLogs() {
         log.qd(r, j) = row[qd[j]];
         log.tau(r, j) = row[tau[j]];
       }
-      for (std::size_t c = 0; c < columns_.size(); ++c) log.measured(r, static_cast<int>(c)) = row[fitted[c]];
+      for (std::size_t c = 0; c < columns_.size(); ++c) {
+        if (fitted[c] >= 0) log.measured(r, static_cast<int>(c)) = row[fitted[c]];
+      }
+      for (std::size_t i = 0; i < part_column.size(); ++i) parts(r, static_cast<Eigen::Index>(i)) = row[part_column[i]];
+      if (start_speed >= 0) log.start_speed.push_back(row[start_speed]);
     }
     if (rows < 2) throw InputError("log '" + file + "': fewer than two rows");
     // rows one period apart, a whole number of physics steps
@@ -404,9 +547,79 @@ void Problem::ReadLogs() {
       throw InputError("log '" + file + "': a period of " + std::to_string(period) + " s, unlike the first log's");
     }
     steps_per_row_ = static_cast<int>(steps);
+    for (std::size_t c = 0; c < columns_.size(); ++c) {
+      const Column& col = columns_[c];
+      if (col.parts.empty()) continue;
+      const int n_parts = static_cast<int>(col.parts.size());
+      for (int r = 0; r < rows; ++r) {
+        auto value = [&](int row) { return parts.row(row).segment(col.part, n_parts); };
+        // (row 0 has no rate: no window's row is row 0)
+        log.measured(r, static_cast<int>(c)) = !col.rate ? value(r).norm()
+                                               : r == 0  ? 0.0
+                                                         : (value(r) - value(r - 1)).norm() / period;
+      }
+    }
+    ReadCounterGates(&log);
     if (reference_) ReadCommands(table, file, steps_per_row_, &log);
     logs_.push_back(std::move(log));
   }
+}
+
+void Problem::ReadCounterGates(Log* log) const {
+  // the device's schedule: started at time 0, a reading at the first row at or after each
+  // whole gate, over the gate since the last one
+  const int rows = static_cast<int>(log->time.size());
+  for (const CounterSensor& c : counters_) {
+    std::vector<int> reading(rows, -1), gate(rows, -1);
+    int last = -1, from = -1;
+    double next = c.gate_s;
+    for (int r = 0; r < rows; ++r) {
+      const double t = log->time[r];
+      if (r > 0 && t + kSameTime_s >= next) {
+        from = last < 0 ? (log->time[0] <= kSameTime_s ? 0 : -1) : last;
+        last = r;
+        next += c.gate_s;
+        if (next < t + kSameTime_s) next = t + c.gate_s;
+      }
+      reading[r] = last;
+      gate[r] = last < 0 ? -1 : from;
+    }
+    log->reading.push_back(std::move(reading));
+    log->gate.push_back(std::move(gate));
+  }
+}
+
+double Problem::StartSpeed(const Log& log, int row, double from, double to) const {
+  // the counter's readings whose gates lie within [from, to], each its mean speed at the
+  // middle of its gate, nearest the row: a quadratic in time through them, at the row's time
+  const std::vector<int>& reading = log.reading[start_counter_];
+  const std::vector<int>& gate = log.gate[start_counter_];
+  const double t0 = log.time[row];
+  const double gate_s = counters_[start_counter_].gate_s;
+  const double reach = kStartSpeedGates * gate_s + kSameTime_s;
+  std::vector<double> t, v;
+  for (std::size_t r = 1; r < reading.size(); ++r) {
+    if (reading[r] != static_cast<int>(r) || gate[r] < 0) continue;  // no new reading here
+    const double start = log.time[gate[r]], end = log.time[r];
+    if (start < from - kSameTime_s || end > to + kSameTime_s) continue;
+    const double mid = 0.5 * (start + end);
+    if (std::abs(mid - t0) > reach) continue;
+    t.push_back(mid - t0);
+    v.push_back(log.start_speed[r]);
+  }
+  if (t.size() < 3) {
+    throw InputError(spec_.where_start_speed + ": the window at " + std::to_string(t0) + " s of a log has " +
+                     std::to_string(t.size()) + " reading(s) of '" + spec_.start_speed + "' within its span and " +
+                     std::to_string(reach) +
+                     " s of its start, fewer than the 3 a start speed is fitted from (start_smoothing, spans)");
+  }
+  Eigen::MatrixXd a(t.size(), 3);
+  Eigen::VectorXd b(t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    a.row(static_cast<Eigen::Index>(i)) << 1.0, t[i], t[i] * t[i];
+    b[static_cast<Eigen::Index>(i)] = v[i];
+  }
+  return a.colPivHouseholderQr().solve(b)[0];
 }
 
 void Problem::CutWindows() {
@@ -433,20 +646,50 @@ void Problem::CutWindows() {
   }
   const int columns = static_cast<int>(columns_.size());
   for (std::size_t l = 0; l < logs_.size(); ++l) {
-    const int n = static_cast<int>(logs_[l].time.size());
-    int first = 0;
-    for (; first + rows < n; first += rows) {
-      Window w{static_cast<int>(l), first, rows, residual_count_, {}, {}};
-      w.q0 = QuadraticAbout(logs_[l].q, first, spec_.start_smoothing);
-      w.qd0 = QuadraticAbout(logs_[l].qd, first, spec_.start_smoothing);
-      windows_.push_back(w);
-      residual_count_ += rows * columns;
+    const Log& log = logs_[l];
+    const int n = static_cast<int>(log.time.size());
+    std::vector<std::pair<double, double>> spans = spec_.spans;
+    if (spans.empty()) spans.emplace_back(log.time.front(), log.time.back());
+    for (const auto& [from, to] : spans) {
+      // the span's rows: from its first row at or after `from` to its last at or before `to`
+      int first = 0, end = n - 1;
+      while (first < n && log.time[first] < from - kSameTime_s) ++first;
+      while (end >= 0 && log.time[end] > to + kSameTime_s) --end;
+      if (end <= first) continue;
+      const int span_first = first;
+      for (; first + rows <= end; first += rows) {
+        Window w;
+        w.log = static_cast<int>(l);
+        w.first = first;
+        w.rows = rows;
+        w.offset = residual_count_;
+        w.q0 = QuadraticAbout(log.q, first, spec_.start_smoothing);
+        w.qd0 = QuadraticAbout(log.qd, first, spec_.start_smoothing);
+        if (start_counter_ >= 0)
+          w.speed_ratio = StartSpeed(log, first, log.time[span_first], log.time[end]) / start_speed0_;
+        for (const Column& c : columns_) {
+          for (int k = 1; k <= rows; ++k) {
+            const bool settling = c.settles() && k <= wrench_settle_rows_;
+            const bool unseen = c.counter >= 0 && log.gate[c.counter][first + k] < first;
+            w.left_out += settling || unseen || !c.Counts(log.time[first + k]);
+          }
+        }
+        windows_.push_back(w);
+        residual_count_ += rows * columns;
+      }
+      rows_left_out_ += end - first;
     }
-    rows_left_out_ += n - 1 - first;
   }
   if (windows_.empty()) {
-    throw InputError(spec_.where_window + ": " + std::to_string(spec_.window_s) + " s is longer than every log");
+    throw InputError(spec_.where_window + ": " + std::to_string(spec_.window_s) + " s is longer than every log" +
+                     (spec_.spans.empty() ? "" : "'s spans"));
   }
+}
+
+int Problem::residuals_left_out() const {
+  int n = 0;
+  for (const Window& w : windows_) n += w.left_out;
+  return n;
 }
 
 void Problem::SkipContactWindows() {
@@ -524,7 +767,7 @@ void Problem::SetModel(const std::vector<double>& values, mjModel* m) const {
     double mass = e.mass0, ipos[3], inertia[3], iquat[4];
     for (int k = 0; k < 3; ++k) {
       ipos[k] = e.com[k] >= 0 ? values[e.com[k]] : e.ipos0[k];
-      inertia[k] = e.inertia0[k];
+      inertia[k] = e.inertia[k] >= 0 ? values[e.inertia[k]] : e.inertia0[k];
     }
     for (int k = 0; k < 4; ++k) iquat[k] = e.iquat0[k];
     if (e.mass >= 0 && values[e.mass] != e.mass0) {  // (the model's mass: its inertia to the bit)
@@ -550,6 +793,7 @@ void Problem::SetModel(const std::vector<double>& values, mjModel* m) const {
     switch (p.spec.kind) {
       case TargetKind::kBodyMass:
       case TargetKind::kBodyCom:
+      case TargetKind::kBodyInertia:
       case TargetKind::kPayloadMass:
       case TargetKind::kPayloadCom:
         break;  // above, body by body
@@ -590,6 +834,58 @@ double Problem::TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity,
 }
 
 bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, double* r, double* predicted) const {
+  if (!Replay(w, values, windows_[w].speed_ratio, ws, r, predicted)) return false;
+  const Window& win = windows_[w];
+  if (win.speed_gain.empty()) return true;
+  // the window's start speed profiled out: its residuals at the start speed that fits them
+  // best, to first order along the gain (the start speed's error, the counter's rounding and
+  // the rotor's ripple about the readings' trend, is no parameter the rest should absorb)
+  const Eigen::Map<const Eigen::VectorXd> g(win.speed_gain.data(), static_cast<Eigen::Index>(win.speed_gain.size()));
+  Eigen::Map<Eigen::VectorXd> res(r, g.size());
+  const double delta = -g.dot(res) / g.squaredNorm();
+  res += delta * g;
+  if (predicted) {
+    const int columns = static_cast<int>(columns_.size());
+    for (Eigen::Index i = 0; i < g.size(); ++i) {
+      if (g[i] != 0) predicted[i] += delta * g[i] / weights_[i % columns];
+    }
+  }
+  return true;
+}
+
+void Problem::StartSpeedGains() {
+  // each window's residuals per rpm of start speed, at the nominal values: the difference of
+  // two replays 1e-3 of the start speed apart
+  std::vector<double> nominal;
+  for (const BoundParameter& p : parameters_) nominal.push_back(p.nominal);
+  Workspace ws = MakeWorkspace();
+  constexpr double kRelative = 1e-3;
+  for (int w = 0; w < window_count(); ++w) {
+    Window& win = windows_[w];
+    std::vector<double> lo(window_residuals(w)), hi(window_residuals(w));
+    const double step = win.speed_ratio * kRelative;
+    if (!Replay(w, nominal, win.speed_ratio - step, ws, lo.data(), nullptr) ||
+        !Replay(w, nominal, win.speed_ratio + step, ws, hi.data(), nullptr)) {
+      throw InputError(spec_.file + ": the window at " + std::to_string(logs_[win.log].time[win.first]) +
+                       " s of log '" + spec_.logs[win.log] + "' diverges in its nominal replay");
+    }
+    win.speed_gain.resize(lo.size());
+    for (std::size_t i = 0; i < lo.size(); ++i) win.speed_gain[i] = (hi[i] - lo[i]) / (2 * step * start_speed0_);
+    if (!(Eigen::Map<const Eigen::VectorXd>(win.speed_gain.data(), static_cast<Eigen::Index>(lo.size())).squaredNorm() >
+          0)) {
+      win.speed_gain.clear();  // no residual depends on it (all held at 0)
+    }
+  }
+}
+
+int Problem::window_nuisances() const {
+  int n = 0;
+  for (const Window& w : windows_) n += !w.speed_gain.empty();
+  return n;
+}
+
+bool Problem::Replay(int w, const std::vector<double>& values, double speed_ratio, Workspace& ws, double* r,
+                     double* predicted) const {
   Apply(values, ws);
   const Window& win = windows_[w];
   const Log& log = logs_[win.log];
@@ -597,6 +893,11 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
   mjData* d = ws.data.get();
   mj_resetData(m, d);
   std::copy(qpos_init_.begin(), qpos_init_.end(), d->qpos);
+  if (start_counter_ >= 0) {
+    // the rest of the scene in its initial motion, at the window's speed (the arms' joints are
+    // set next)
+    for (int i = 0; i < m->nv; ++i) d->qvel[i] = qvel_init_[i] * speed_ratio;
+  }
   for (std::size_t j = 0; j < joints_.size(); ++j) {
     d->qpos[joints_[j].qpos] = TrueState(win.q0, static_cast<int>(j), false, values);
     d->qvel[joints_[j].dof] = TrueState(win.qd0, static_cast<int>(j), true, values);
@@ -618,28 +919,65 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
                      sensors::LoadFromMujocoSensor(d->sensordata + w.force_adr, d->sensordata + w.torque_adr));
       // the slower stages update every 4^(k-1) samples counted from the sensor's start: the
       // lab's JR3 starts at time 0, so the row's time gives the phase of that decimation
-      ws.wrench[i].sample_count =
-          static_cast<std::uint64_t>(std::max(0.0, std::round(log.time[win.first] * w.model->sample_rate_hz())));
+      ws.wrench[i].sample_count = static_cast<std::uint64_t>(std::max(
+          0.0, std::round((log.time[win.first] - run_in_steps_ * m->opt.timestep) * w.model->sample_rate_hz())));
     }
   }
-  // the model's value and rate of each column at each row (row 0: the start), for the delays
+  // one physics step with the inputs set, the JR3 fed the load held over it (computed at its
+  // start), as the device feeds it
+  auto step = [&]() {
+    if (reference_) {
+      StepWithServos(ws);
+    } else {
+      mj_step(m, d);
+    }
+    ws.contacts = std::max(ws.contacts, d->ncon);
+    for (std::size_t i = 0; wrench && i < wrenches_.size(); ++i) {
+      const WrenchSensor& w = wrenches_[i];
+      sensors::WrenchReading flags;
+      sensors::Advance(*w.model, ws.wrench[i],
+                       sensors::LoadFromMujocoSensor(d->sensordata + w.force_adr, d->sensordata + w.torque_adr),
+                       m->opt.timestep, &flags);
+    }
+  };
+  auto diverged = [&]() {
+    return d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
+           d->warning[mjWARN_BADQACC].number > 0;
+  };
+  if (run_in_steps_ > 0) {
+    // spec run_in: the scene runs in from the start state, the first row's inputs held (the
+    // servos hold the command in force), so that what the log does not hold (a rotor's phase
+    // and the wrist's sway under its couple) settles on the model's own dynamics; then the rest
+    // of the scene's motion is scaled back to the window's start speed, and the window begins
+    if (!reference_) {
+      for (std::size_t j = 0; j < joints_.size(); ++j)
+        d->ctrl[joints_[j].actuator] = log.tau(win.first + 1, static_cast<int>(j));
+    }
+    for (int s = 0; s < run_in_steps_; ++s) step();
+    if (diverged()) return false;
+    const double now = d->qvel[counters_[start_counter_].dof];
+    const double ratio = qvel_init_[counters_[start_counter_].dof] * speed_ratio / now;
+    if (!std::isfinite(ratio)) return false;
+    for (int i = 0; i < m->nv; ++i) {
+      if (!arm_dof_[i]) d->qvel[i] *= ratio;
+    }
+  }
+  // the model's value and rate of each column at each row (row 0: the start), for the delays;
+  // a counter's joint angle; a derived column's parts
   ws.trace.assign(static_cast<std::size_t>(win.rows + 1) * columns * 2, 0.0);
+  ws.parts.assign(static_cast<std::size_t>(win.rows + 1) * part_count_, 0.0);
   auto record = [&](int k) {
     for (int c = 0; c < columns; ++c) {
+      const Column& col = columns_[c];
       double* at = &ws.trace[(static_cast<std::size_t>(k) * columns + c) * 2];
-      if (columns_[c].wrench >= 0) {
-        const int w = columns_[c].wrench;
-        at[0] = sensors::ReadSelected(*wrenches_[w].model, ws.wrench[w])[columns_[c].axis];
-        continue;  // its rate: no delay on a wrench column
+      for (std::size_t i = 0; i < col.parts.size(); ++i) {
+        ws.parts[static_cast<std::size_t>(k) * part_count_ + col.part + i] = ColumnValue(col.parts[i], ws);
       }
-      const Joint& joint = joints_[columns_[c].joint];
-      if (columns_[c].torque) {  // what the servo applied over the last step (no delay: no rate)
-        at[0] = d->ctrl[joint.actuator];
-        at[1] = 0;
-        continue;
-      }
-      at[0] = columns_[c].velocity ? d->qvel[joint.dof] : d->qpos[joint.qpos];
-      at[1] = columns_[c].velocity ? d->qacc[joint.dof] : d->qvel[joint.dof];
+      if (!col.parts.empty()) continue;
+      at[0] = ColumnValue(col, ws);
+      // its rate, for a delay (only an arm's q or qd column has one)
+      if (col.joint >= 0 && !col.torque)
+        at[1] = col.velocity ? d->qacc[joints_[col.joint].dof] : d->qvel[joints_[col.joint].dof];
     }
   };
   for (const Column& c : columns_) {
@@ -657,26 +995,8 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
     } else {
       for (std::size_t j = 0; j < joints_.size(); ++j) d->ctrl[joints_[j].actuator] = log.tau(row, static_cast<int>(j));
     }
-    for (int s = 0; s < steps_per_row_; ++s) {
-      if (reference_) {
-        StepWithServos(ws);
-      } else {
-        mj_step(m, d);
-      }
-      ws.contacts = std::max(ws.contacts, d->ncon);
-      // the load held over the step just taken (computed at its start), as the device feeds it
-      for (std::size_t i = 0; wrench && i < wrenches_.size(); ++i) {
-        const WrenchSensor& w = wrenches_[i];
-        sensors::WrenchReading flags;
-        sensors::Advance(*w.model, ws.wrench[i],
-                         sensors::LoadFromMujocoSensor(d->sensordata + w.force_adr, d->sensordata + w.torque_adr),
-                         m->opt.timestep, &flags);
-      }
-    }
-    if (d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
-        d->warning[mjWARN_BADQACC].number > 0) {
-      return false;
-    }
+    for (int s = 0; s < steps_per_row_; ++s) step();
+    if (diverged()) return false;
     record(k);
   }
   const double period = steps_per_row_ * m->opt.timestep;
@@ -686,6 +1006,24 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
       const Column& col = columns_[c];
       auto at = [&](int i) { return &ws.trace[(static_cast<std::size_t>(i) * columns + c) * 2]; };
       double y = at(k)[0];
+      bool known = !(col.settles() && k <= wrench_settle_rows_);  // (a wrench's filter state: CutWindows)
+      if (col.counter >= 0) {
+        // the device's reading in force at the row: the turns over its gate, if the window saw
+        // the gate begin
+        const int reading = log.reading[col.counter][row] - win.first;
+        const int gate = log.gate[col.counter][row] - win.first;
+        known = gate >= 0;
+        y = known ? (at(reading)[0] - at(gate)[0]) / (log.time[win.first + reading] - log.time[win.first + gate]) *
+                        kRpmPerRadPerSecond
+                  : std::numeric_limits<double>::quiet_NaN();  // (fit.csv: none)
+      } else if (!col.parts.empty()) {
+        const int n_parts = static_cast<int>(col.parts.size());
+        const Eigen::Map<const Eigen::VectorXd> now(&ws.parts[static_cast<std::size_t>(k) * part_count_ + col.part],
+                                                    n_parts);
+        const Eigen::Map<const Eigen::VectorXd> before(
+            &ws.parts[static_cast<std::size_t>(k - 1) * part_count_ + col.part], n_parts);
+        y = col.rate ? (now - before).norm() / period : now.norm();
+      }
       if (col.delay >= 0) {
         // the value x rows earlier: cubic Hermite between the rows around it (value and rate),
         // smooth in the delay; before the window, along the start's rate
@@ -706,12 +1044,19 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
       if (col.bias >= 0) y += values[col.bias];
       const int i = (k - 1) * columns + c;
       if (predicted) predicted[i] = y;
-      // a wrench column's first rows: the filter's state there is not known (CutWindows)
-      const bool settling = col.wrench >= 0 && k <= wrench_settle_rows_;
-      r[i] = settling ? 0.0 : weights_[c] * (y - log.measured(row, c));
+      r[i] = known && col.Counts(log.time[row]) ? weights_[c] * (y - log.measured(row, c)) : 0.0;
     }
   }
   return true;
+}
+
+double Problem::ColumnValue(const Column& c, const Workspace& ws) const {
+  const mjData* d = ws.data.get();
+  if (c.wrench >= 0) return sensors::ReadSelected(*wrenches_[c.wrench].model, ws.wrench[c.wrench])[c.axis];
+  if (c.counter >= 0) return d->qpos[counters_[c.counter].qpos];
+  const Joint& joint = joints_[c.joint];
+  if (c.torque) return d->ctrl[joint.actuator];  // what the servo applied over the last step
+  return c.velocity ? d->qvel[joint.dof] : d->qpos[joint.qpos];
 }
 
 Problem::Sample Problem::WindowRow(int w, int k) const {

@@ -15,7 +15,16 @@
 // force/torque sensors fed, after every physics step, to the same JR3 model the device runs
 // (its filter at its internal rate; no noise, bias or rounding), its filter settled on the
 // model's load at the window's start and its first rows (the filter's settling time) left out
-// of the residual. Residual = weight · (predicted − measured).
+// of the residual; a counter device's speed (`NAME.rpm`): the turns of its joint over each
+// gate, as the device counts them (its gates from time 0; no rounding), left out until the
+// first gate that starts within the window has ended; a derived column (spec `norm:`): the
+// norm of other predicted columns, or of their rates. Residual = weight · (predicted −
+// measured).
+//
+// The scene's joints outside the arms start in the scenario's initial state: at rest, or with
+// the spec's `start_speed`, at its velocities scaled by a counter's speed at the window's start
+// (the counter's readings about it, fitted by a quadratic in time). Windows lie within the
+// spec's `spans`.
 //
 // Threads: a Problem is immutable once made; Rollout may run on many threads at once, each
 // with its own Workspace.
@@ -57,6 +66,7 @@ struct BodyEdit {
   int body = -1;
   int mass = -1;                      ///< parameter index of `body NAME mass`, -1: none
   int com[3] = {-1, -1, -1};          ///< of `body NAME com_x|y|z`
+  int inertia[3] = {-1, -1, -1};      ///< of `body NAME inertia_x|y|z`
   int payload_mass = -1;              ///< of `payload NAME mass`
   int payload_com[3] = {-1, -1, -1};  ///< of `payload NAME com_x|y|z` (none: 0)
   double mass0 = 0, ipos0[3] = {0, 0, 0}, inertia0[3] = {0, 0, 0}, iquat0[4] = {1, 0, 0, 0};  ///< the model's
@@ -76,6 +86,13 @@ struct WrenchSensor {
   std::shared_ptr<const sensors::WrenchSensorModel> model;
 };
 
+/// A counter device: the joint whose turns it counts over each gate.
+struct CounterSensor {
+  std::string device;
+  int qpos = -1, dof = -1;
+  double gate_s = 0;
+};
+
 /// A rollout's own model and data (one per thread).
 struct Workspace {
   ModelPtr model;
@@ -83,6 +100,7 @@ struct Workspace {
   std::vector<double> applied;                     ///< the parameter values `model` holds now
   int contacts = 0;                                ///< the most contacts at any step of the last rollout
   std::vector<double> trace;                       ///< delayed columns: value and rate at each row of the window
+  std::vector<double> parts;                       ///< derived columns: their parts' values at each row
   std::vector<sensors::WrenchSensorState> wrench;  ///< one per wrench device
   /// input: reference: each arm device's servo, bound to `model` (its gains made for `applied`)
   std::vector<std::unique_ptr<lab::SimArm>> arms;
@@ -112,9 +130,13 @@ class Problem {
   int rows_left_out() const { return rows_left_out_; }
   /// Windows left out because their nominal replay made contact (Spec::skip_contacts).
   int windows_in_contact() const { return windows_in_contact_; }
-  /// Residuals held at 0: a wrench column's rows within its filter's settling time of a
-  /// window's start (their filter state is not known), summed over the windows.
-  int residuals_left_out() const { return wrench_settle_rows_ * wrench_columns_ * window_count(); }
+  /// Residuals held at 0, summed over the windows: a wrench column's rows within its filter's
+  /// settling time of a window's start (their filter state is not known), a counter's rows
+  /// before its first reading whose gate lies within the window.
+  int residuals_left_out() const;
+  /// Window states profiled out of the residuals, one degree of freedom each: with the spec's
+  /// start_speed, each window's start speed.
+  int window_nuisances() const;
   /// Rows at a window's start whose wrench residuals are left out (Spec::wrench_settle_s).
   int wrench_settle_rows() const { return wrench_settle_rows_; }
 
@@ -127,7 +149,8 @@ class Problem {
   /// derived constants, for writing the fitted scene.
   void SetModel(const std::vector<double>& values, mjModel* m) const;
   /// Replays window w with `values`: residuals into r (window_residuals(w) of them) and,
-  /// unless null, the predicted column values (the sensor's bias, gain and delay applied).
+  /// unless null, the predicted column values (the sensor's bias, gain and delay applied; NaN where the
+  /// model has none: a counter's rows before the first gate the window saw whole).
   /// False when the simulation diverged (MuJoCo's bad qpos/qvel/qacc).
   bool Rollout(int w, const std::vector<double>& values, Workspace& ws, double* r, double* predicted) const;
 
@@ -159,11 +182,21 @@ class Problem {
 
  private:
   struct Column {
-    int joint = 0;  ///< -1: a wrench device's column
+    int joint = 0;  ///< -1: a wrench device's, a counter's or a derived column
     bool velocity = false;
     int wrench = -1, axis = 0;             ///< wrench device (wrenches_) and axis (Fx .. Mz)
+    int counter = -1;                      ///< counter device (counters_): its speed, rpm
     int bias = -1, gain = -1, delay = -1;  ///< parameters transforming it, -1: none
     bool torque = false;                   ///< the joint's applied torque (input: reference)
+    /// a derived column: the norm of these (plain columns), or with `rate` of their rates;
+    /// their values at each row are in Workspace::parts from `part` on
+    std::vector<Column> parts;
+    std::vector<std::string> part_names;
+    bool rate = false;
+    int part = 0;
+    std::vector<std::pair<double, double>> spans;  ///< rows in the residual (none: all)
+    bool Counts(double time_s) const;              ///< a row at this time is in the residual
+    bool settles() const;                          ///< a wrench column, or one derived from one
   };
   /// An arm device: its config (a SimArm per workspace is made from it) and its joints.
   struct Arm {
@@ -180,21 +213,40 @@ class Problem {
     /// at each row (rows x joints: hold and position, the logged value; velocity, integrated
     /// from the last one; NaN after torque mode, where the reference follows the joint)
     Eigen::MatrixXd mode, command, reference;
+    /// each counter's readings: at each row, the row of the reading in force and the row its
+    /// gate began (-1: the device's start, before its first reading)
+    std::vector<std::vector<int>> reading, gate;
+    std::vector<double> start_speed;  ///< spec start_speed: the counter's speed column
   };
   struct Window {
     int log = 0, first = 0, rows = 0, offset = 0;
     /// the measured q and qd about the first row, per joint: a + b x + c x² at x rows after it
     /// (smoothed), so that a delayed sensor's start value can be read ahead
     Eigen::MatrixXd q0, qd0;  ///< joints x 3 (a, b, c)
+    double speed_ratio = 0;   ///< spec start_speed: the counter's speed at the start over its initial speed
+    /// spec start_speed: each residual's change per rpm of start speed (at the nominal values),
+    /// along which the start speed is profiled out of the window's residuals (Rollout)
+    std::vector<double> speed_gain;
+    int left_out = 0;  ///< residuals held at 0
   };
 
   Problem() = default;
   void BindJoints(const lab::Scenario& scenario);
   void BindWrenches(const lab::Scenario& scenario);
+  void BindCounters(const lab::Scenario& scenario);
+  void CheckInertias() const;
   void BindColumns();
   void BindParameters();
   void ReadLogs();
   void CutWindows();
+  void StartSpeedGains();
+  // Rollout's replay, from the start speed `speed_ratio` (spec start_speed), nothing profiled
+  bool Replay(int w, const std::vector<double>& values, double speed_ratio, Workspace& ws, double* r,
+              double* predicted) const;
+  void ReadCounterGates(Log* log) const;
+  double StartSpeed(const Log& log, int row, double from, double to) const;
+  // a plain column's value now: a joint's or servo's, a wrench device's axis, a counter's angle
+  double ColumnValue(const Column& c, const Workspace& ws) const;
   void SkipContactWindows();
   // the true start state of a joint from the measured fit (a, b, c), the sensor transforms undone
   double TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity, const std::vector<double>& values) const;
@@ -212,14 +264,21 @@ class Problem {
   ModelPtr model_;
   std::string scene_;
   std::vector<double> qpos_init_;  ///< the scenario's initial qpos
+  std::vector<double> qvel_init_;  ///< and qvel
   int steps_per_row_ = 1;
   bool reference_ = false;  ///< input: reference
   std::uint64_t seed_ = 1;  ///< the scenario's (the arm devices' contexts)
   std::vector<Joint> joints_;
   std::vector<Arm> arms_;
   std::vector<WrenchSensor> wrenches_;
+  std::vector<CounterSensor> counters_;
+  int start_counter_ = -1;     ///< spec start_speed: its counter (counters_)
+  double start_speed0_ = 0;    ///< its joint's speed in the initial state, rpm
+  int part_count_ = 0;         ///< derived columns' parts, in all
+  std::vector<bool> arm_dof_;  ///< per dof: an arm joint's
+  int run_in_steps_ = 0;       ///< spec run_in, in physics steps
   std::vector<BodyEdit> bodies_;
-  int wrench_columns_ = 0;      ///< fitted columns of wrench devices
+  int wrench_columns_ = 0;      ///< fitted columns of wrench devices (or derived from them)
   int wrench_settle_rows_ = 0;  ///< their rows left out at a window's start
   std::vector<Column> columns_;
   std::vector<std::string> column_names_;

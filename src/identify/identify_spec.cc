@@ -22,10 +22,14 @@ bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element
   *axis = 0;
   const bool com = attribute == "com_x" || attribute == "com_y" || attribute == "com_z";
   if (com) *axis = attribute[4] - 'x';
+  const bool inertia = attribute == "inertia_x" || attribute == "inertia_y" || attribute == "inertia_z";
+  if (inertia) *axis = attribute[8] - 'x';
   if (what == "body" && attribute == "mass") {
     *kind = TargetKind::kBodyMass;
   } else if (what == "body" && com) {
     *kind = TargetKind::kBodyCom;
+  } else if (what == "body" && inertia) {
+    *kind = TargetKind::kBodyInertia;
   } else if (what == "payload" && attribute == "mass") {
     *kind = TargetKind::kPayloadMass;
   } else if (what == "payload" && com) {
@@ -53,7 +57,8 @@ bool ParseTarget(const std::string& text, TargetKind* kind, std::string* element
 }
 
 constexpr char kTargets[] =
-    "'body NAME mass', 'body NAME com_x|com_y|com_z', 'payload BODY mass', 'payload BODY com_x|com_y|com_z', "
+    "'body NAME mass', 'body NAME com_x|com_y|com_z', 'body NAME inertia_x|inertia_y|inertia_z', "
+    "'payload BODY mass', 'payload BODY com_x|com_y|com_z', "
     "'joint NAME damping', 'joint NAME armature', 'joint NAME frictionloss', "
     "'column NAME bias', 'column NAME gain', 'column NAME delay', 'servo DEVICE bandwidth' or "
     "'servo DEVICE damping_ratio'";
@@ -82,15 +87,39 @@ ParameterSpec ReadParameter(const std::string& file, const YAML::Node& node, con
   if (p.has_nominal && (p.nominal < p.lower || p.nominal > p.upper)) {
     r.Fail("nominal", "must lie within [lower, upper]");
   }
-  // a mass, damping, armature and friction loss are never negative; a gain is positive
-  const bool positive = p.kind == TargetKind::kBodyMass || p.kind == TargetKind::kColumnGain ||
-                        p.kind == TargetKind::kServoBandwidth || p.kind == TargetKind::kServoDampingRatio;
+  // a mass, damping, armature and friction loss are never negative; a gain, a mass and a
+  // principal inertia are positive
+  const bool positive = p.kind == TargetKind::kBodyMass || p.kind == TargetKind::kBodyInertia ||
+                        p.kind == TargetKind::kColumnGain || p.kind == TargetKind::kServoBandwidth ||
+                        p.kind == TargetKind::kServoDampingRatio;
   const bool non_negative = p.kind == TargetKind::kJointDamping || p.kind == TargetKind::kJointArmature ||
                             p.kind == TargetKind::kJointFrictionLoss || p.kind == TargetKind::kColumnDelay ||
                             p.kind == TargetKind::kPayloadMass;
   if (positive && !(p.lower > 0)) r.Fail("lower", "must be > 0 for " + TargetText(p.kind, p.element, p.axis));
   if (non_negative && p.lower < 0) r.Fail("lower", "must be >= 0 for " + TargetText(p.kind, p.element, p.axis));
   return p;
+}
+
+// `spans: [[from, to], ...]` (s) under `r`, if it has the key
+std::vector<std::pair<double, double>> ReadSpans(const std::string& file, lab::MapReader& r, const std::string& path) {
+  std::vector<std::pair<double, double>> out;
+  if (!r.Has("spans")) return out;
+  const YAML::Node spans = r.Sequence("spans");
+  for (std::size_t i = 0; i < spans.size(); ++i) {
+    const std::string at = lab::YamlWhere(file, spans[i]) + ": " + path + "spans[" + std::to_string(i) + "]";
+    std::vector<double> span;
+    try {
+      span = spans[i].as<std::vector<double>>();
+    } catch (const YAML::Exception&) {
+      throw InputError(at + ": must be [from, to] in seconds");
+    }
+    if (span.size() != 2 || !std::isfinite(span[0]) || !std::isfinite(span[1]) || !(span[1] > span[0])) {
+      throw InputError(at + ": must be [from, to] in seconds, finite, to > from");
+    }
+    out.emplace_back(span[0], span[1]);
+  }
+  if (out.empty()) r.Fail("spans", "name at least one [from, to] span (or leave the key out: the whole log)");
+  return out;
 }
 
 ColumnSpec ReadColumn(const std::string& file, const YAML::Node& node, const std::string& path) {
@@ -101,6 +130,18 @@ ColumnSpec ReadColumn(const std::string& file, const YAML::Node& node, const std
   if (c.pattern.empty()) r.Fail("name", "must not be empty");
   c.weight = r.Number("weight", 1.0);
   if (!(c.weight > 0) || !std::isfinite(c.weight)) r.Fail("weight", "must be a finite number > 0");
+  c.spans = ReadSpans(file, r, path + ".");
+  c.norm = r.Strings("norm", {});
+  c.rate = r.Bool("rate", false);
+  if (r.Has("norm")) {
+    if (c.norm.empty()) r.Fail("norm", "name at least one column");
+    if (c.pattern.find('*') != std::string::npos) r.Fail("name", "a derived column's own name has no '*'");
+    for (const std::string& part : c.norm) {
+      if (part.empty() || part.find('*') != std::string::npos) r.Fail("norm", "'" + part + "' is not a column name");
+    }
+  } else if (c.rate) {
+    r.Fail("rate", "is for a derived column (norm:)");
+  }
   r.Finish();
   return c;
 }
@@ -119,11 +160,14 @@ std::string TargetText(TargetKind kind, const std::string& element) { return Tar
 
 std::string TargetText(TargetKind kind, const std::string& element, int axis) {
   const std::string com = std::string(" com_") + static_cast<char>('x' + axis);
+  const std::string inertia = std::string(" inertia_") + static_cast<char>('x' + axis);
   switch (kind) {
     case TargetKind::kBodyMass:
       return "body " + element + " mass";
     case TargetKind::kBodyCom:
       return "body " + element + com;
+    case TargetKind::kBodyInertia:
+      return "body " + element + inertia;
     case TargetKind::kPayloadMass:
       return "payload " + element + " mass";
     case TargetKind::kPayloadCom:
@@ -188,6 +232,14 @@ Spec LoadSpec(const std::string& path) {
   s.where_window = lab::YamlWhere(path, r.Has("window") ? root["window"] : root) + ": window";
   s.window_s = r.Number("window", s.window_s);
   if (!(s.window_s > 0) || s.window_s > 1e3) r.Fail("window", "must be > 0 and at most 1000 s");
+  s.spans = ReadSpans(path, r, "");
+  s.where_start_speed = lab::YamlWhere(path, r.Has("start_speed") ? root["start_speed"] : root) + ": start_speed";
+  s.start_speed = r.String("start_speed", "");
+  s.run_in_s = r.Number("run_in", 0.0);
+  if (!(s.run_in_s >= 0) || s.run_in_s > 100) r.Fail("run_in", "must be from 0 to 100 s");
+  if (s.run_in_s > 0 && s.start_speed.empty()) {
+    r.Fail("run_in", "needs start_speed (the speed the run-in's motion is scaled back to)");
+  }
   s.where_input = lab::YamlWhere(path, r.Has("input") ? root["input"] : root) + ": input";
   s.input = r.String("input", s.input);
   if (s.input != "torque" && s.input != "reference") {
@@ -204,6 +256,8 @@ Spec LoadSpec(const std::string& path) {
   s.servo_sensing_exact = sensing == "exact";
   s.max_iterations = r.Integer("max_iterations", s.max_iterations);
   if (s.max_iterations < 1 || s.max_iterations > 1000) r.Fail("max_iterations", "must be from 1 to 1000");
+  s.jacobian_step = r.Number("jacobian_step", s.jacobian_step);
+  if (!(s.jacobian_step >= 1e-8 && s.jacobian_step <= 0.1)) r.Fail("jacobian_step", "must be from 1e-8 to 0.1");
   s.start_smoothing = r.Integer("start_smoothing", s.start_smoothing);
   if (s.start_smoothing < 0 || s.start_smoothing > 1000) r.Fail("start_smoothing", "must be from 0 to 1000 rows");
   s.where_wrench_settle =

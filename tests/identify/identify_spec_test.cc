@@ -89,6 +89,36 @@ TEST(IdentifySpec, ReadsEveryKey) {
   EXPECT_EQ(t.parameters[3].axis, 1);
   EXPECT_EQ(TargetText(t.parameters[3].kind, t.parameters[3].element, t.parameters[3].axis), "body pa10_link3 com_y");
   EXPECT_LT(t.wrench_settle_s, 0.0);  // the filter's own
+  // the PowerBall's keys: spans, a derived column, a start speed with its run-in, an inertia
+  // target, the Jacobian's step
+  std::string text = Spec(
+      "window: 0.2", "window: 0.2\nspans: [[0.5, 2], [3, 4.5]]\nstart_speed: pb.rpm\nrun_in: 0.1\njacobian_step: 0.01");
+  auto edit = [&](const std::string& from, const std::string& to) { text.replace(text.find(from), from.size(), to); };
+  edit("  - {name: pa10.q.*, weight: 1.0e5}",
+       "  - {name: pa10.q.*, weight: 1.0e5, spans: [[1, 2]]}\n  - {name: m, norm: [jr3.My, jr3.Mz], rate: true, "
+       "weight: 2}");
+  edit("joint S1 damping, nominal: 1, lower: 0", "body pa10_link2 inertia_z, nominal: 1, lower: 0.5");
+  WriteFile(tmp / "id.yaml", text);
+  const identify::Spec u = LoadSpec(tmp / "id.yaml");
+  ASSERT_EQ(u.spans.size(), 2u);
+  EXPECT_EQ(u.spans[1], std::make_pair(3.0, 4.5));
+  EXPECT_EQ(u.start_speed, "pb.rpm");
+  EXPECT_EQ(u.run_in_s, 0.1);
+  EXPECT_EQ(u.jacobian_step, 0.01);
+  ASSERT_EQ(u.columns.size(), 2u);
+  ASSERT_EQ(u.columns[0].spans.size(), 1u);
+  EXPECT_TRUE(u.columns[0].norm.empty());
+  EXPECT_EQ(u.columns[1].pattern, "m");
+  EXPECT_EQ(u.columns[1].norm, std::vector<std::string>({"jr3.My", "jr3.Mz"}));
+  EXPECT_TRUE(u.columns[1].rate);
+  EXPECT_EQ(u.parameters[1].kind, TargetKind::kBodyInertia);
+  EXPECT_EQ(u.parameters[1].axis, 2);
+  EXPECT_EQ(TargetText(u.parameters[1].kind, u.parameters[1].element, u.parameters[1].axis),
+            "body pa10_link2 inertia_z");
+  EXPECT_TRUE(s.spans.empty());
+  EXPECT_TRUE(s.start_speed.empty());
+  EXPECT_EQ(s.run_in_s, 0.0);
+  EXPECT_EQ(s.jacobian_step, 1e-4);
 }
 
 // the shipped spec reads (its log is made by the command its comment gives)
@@ -135,6 +165,21 @@ TEST(IdentifySpec, RefusesBadEntriesNamingTheField) {
       {"body pa10_link2 mass, lower: 4", "payload pa10_link2 mass, lower: -1",
        ":8: parameters[0].lower: must be >= 0 for payload pa10_link2 mass"},
       {"window: 0.2", "window: 0.2\nwrench_settle: -1", ":4: wrench_settle: must be from 0 to 1000 s"},
+      {"window: 0.2", "window: 0.2\nspans: [[2, 1]]", ":4: spans[0]: must be [from, to] in seconds, finite, to > from"},
+      {"window: 0.2", "window: 0.2\nspans: [[1, 2, 3]]", ":4: spans[0]: must be [from, to]"},
+      {"window: 0.2", "window: 0.2\nspans: [1, 2]", ":4: spans[0]: must be [from, to] in seconds"},
+      {"window: 0.2", "window: 0.2\nspans: []", ":4: spans: name at least one [from, to] span"},
+      {"window: 0.2", "window: 0.2\nrun_in: 0.1", "run_in: needs start_speed"},
+      {"window: 0.2", "window: 0.2\nstart_speed: pb.rpm\nrun_in: -1", "run_in: must be from 0 to 100 s"},
+      {"window: 0.2", "window: 0.2\njacobian_step: 1", "jacobian_step: must be from 1e-8 to 0.1"},
+      {"weight: 1.0e5}", "weight: 1.0e5, rate: true}", ":6: columns[0].rate: is for a derived column (norm:)"},
+      {"name: pa10.q.*, weight: 1.0e5}", "name: m*, norm: [jr3.Mx]}",
+       ":6: columns[0].name: a derived column's own name has no '*'"},
+      {"name: pa10.q.*, weight: 1.0e5}", "name: m, norm: [jr3.M*]}", ":6: columns[0].norm: 'jr3.M*' is not a column"},
+      {"name: pa10.q.*, weight: 1.0e5}", "name: m, norm: []}", ":6: columns[0].norm: name at least one column"},
+      {"weight: 1.0e5}", "weight: 1.0e5, spans: [[3, 3]]}", ":6: columns[0].spans[0]: must be [from, to]"},
+      {"body pa10_link2 mass, lower: 4", "body pa10_link2 inertia_x, lower: 0",
+       ":8: parameters[0].lower: must be > 0 for body pa10_link2 inertia_x"},
   };
   TempDir tmp;
   for (const Case& c : cases) {
@@ -173,6 +218,19 @@ TEST(IdentifySpec, RefusesNamesTheModelOrLogLacks) {
       {"name: pa10.q.*", "name: jr3.sat*",
        ":6: columns[0].name: 'jr3.sat*' names none of the columns the replay predicts"},
       {"window: 0.2", "window: 0.9", "window: 0.9"},  // longer than the 0.5 s log
+      {"window: 0.2", "window: 0.2\nspans: [[0.1, 0.2]]", ":3: window: 0.200000 s is longer than every log's spans"},
+      {"name: pa10.q.*, weight: 1.0e5}", "name: m, norm: [pa10.q.S1, jr3.Mw]}",
+       ":6: columns[0].norm: 'jr3.Mw' is none of the columns a norm can take"},
+      {"name: pa10.q.*, weight: 1.0e5}", "name: pa10.q.S1, norm: [pa10.q.S2]}",
+       ":6: columns[0].name: 'pa10.q.S1' is taken: name the derived column apart"},
+      {"window: 0.2", "window: 0.2\nstart_speed: pa10.q.S1",
+       "start_speed: 'pa10.q.S1' is no counter device's speed column (the scenario's: none)"},
+      // a mass scales the inertia: the one or the other
+      {"joint S1 damping, nominal: 1, lower: 0, upper: 5", "body pa10_link2 inertia_x, lower: 0.001, upper: 5",
+       ":9: parameters[1].target: body 'pa10_link2' has a mass parameter too"},
+      // bounds that let the moments break the triangle inequality
+      {"body pa10_link2 mass, lower: 4, upper: 16", "body pa10_link2 inertia_x, lower: 1.0e-6, upper: 100",
+       ":8: parameters[0]: the bounds let body 'pa10_link2''s principal moments break I_y + I_z >= I_x"},
   };
   for (const Case& c : cases) {
     WriteFile(tmp / "id.yaml", Spec(c.from, c.to));
