@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/QR>
 
+#include "core/core_clock.h"
 #include "core/core_errors.h"
 #include "lab/devices/device_arm.h"
 #include "lab/devices/device_counter.h"
@@ -68,10 +69,15 @@ int SettleRows(const sensors::WrenchSensorModel& model, double dt, double period
   return static_cast<int>(std::ceil(last / period - 1e-9));
 }
 
-constexpr double kRpmPerRadPerSecond = 60.0 / (2.0 * M_PI);
-constexpr double kSameTime_s = 1e-9;  // two times this close are one (the counter device's)
 // start_speed: the counter's readings within this many gates of a window's start are fitted
 constexpr double kStartSpeedGates = 10;
+
+// a derived column's value from its parts now and a row before (spec `norm:`, `rate:`): the log's
+// and the replay's alike
+double DerivedValue(const Eigen::Ref<const Eigen::VectorXd>& now, const Eigen::Ref<const Eigen::VectorXd>& before,
+                    bool rate, double period) {
+  return rate ? (now - before).norm() / period : now.norm();
+}
 
 }  // namespace
 
@@ -221,7 +227,7 @@ void Problem::BindCounters(const lab::Scenario& scenario) {
                      "' is no counter device's speed column (the scenario's: " +
                      (names.empty() ? std::string("none") : JoinNames(names)) + ")");
   }
-  start_speed0_ = qvel_init_[counters_[start_counter_].dof] * kRpmPerRadPerSecond;
+  start_speed0_ = qvel_init_[counters_[start_counter_].dof] * lab::kRpmPerRadPerSecond;
   if (!(std::abs(start_speed0_) > 1e-9)) {
     throw InputError(spec_.where_start_speed + ": the counter's joint is at rest in the scenario's initial state: " +
                      "there is no motion to scale (give the scenario a keyframe in which it turns)");
@@ -552,11 +558,10 @@ void Problem::ReadLogs() {
       if (col.parts.empty()) continue;
       const int n_parts = static_cast<int>(col.parts.size());
       for (int r = 0; r < rows; ++r) {
-        auto value = [&](int row) { return parts.row(row).segment(col.part, n_parts); };
+        auto value = [&](int row) -> Eigen::VectorXd { return parts.row(row).segment(col.part, n_parts).transpose(); };
         // (row 0 has no rate: no window's row is row 0)
-        log.measured(r, static_cast<int>(c)) = !col.rate ? value(r).norm()
-                                               : r == 0  ? 0.0
-                                                         : (value(r) - value(r - 1)).norm() / period;
+        log.measured(r, static_cast<int>(c)) =
+            col.rate && r == 0 ? 0.0 : DerivedValue(value(r), value(std::max(r - 1, 0)), col.rate, period);
       }
     }
     ReadCounterGates(&log);
@@ -574,12 +579,9 @@ void Problem::ReadCounterGates(Log* log) const {
     int last = -1, from = -1;
     double next = c.gate_s;
     for (int r = 0; r < rows; ++r) {
-      const double t = log->time[r];
-      if (r > 0 && t + kSameTime_s >= next) {
+      if (r > 0 && lab::CounterReadingDue(log->time[r], c.gate_s, &next)) {
         from = last < 0 ? (log->time[0] <= kSameTime_s ? 0 : -1) : last;
         last = r;
-        next += c.gate_s;
-        if (next < t + kSameTime_s) next = t + c.gate_s;
       }
       reading[r] = last;
       gate[r] = last < 0 ? -1 : from;
@@ -668,11 +670,7 @@ void Problem::CutWindows() {
         if (start_counter_ >= 0)
           w.speed_ratio = StartSpeed(log, first, log.time[span_first], log.time[end]) / start_speed0_;
         for (const Column& c : columns_) {
-          for (int k = 1; k <= rows; ++k) {
-            const bool settling = c.settles() && k <= wrench_settle_rows_;
-            const bool unseen = c.counter >= 0 && log.gate[c.counter][first + k] < first;
-            w.left_out += settling || unseen || !c.Counts(log.time[first + k]);
-          }
+          for (int k = 1; k <= rows; ++k) w.left_out += !Counted(w, c, k);
         }
         windows_.push_back(w);
         residual_count_ += rows * columns;
@@ -686,6 +684,22 @@ void Problem::CutWindows() {
   }
 }
 
+bool Problem::Counted(const Window& win, const Column& c, int k) const {
+  const Log& log = logs_[win.log];
+  const int row = win.first + k;
+  // a wrench's filter state at the window's start is not known; nor are a counter's turns
+  // before it, over a gate that began there
+  const bool settling = c.settles() && k <= wrench_settle_rows_;
+  const bool unseen = c.counter >= 0 && log.gate[c.counter][row] < win.first;
+  return !settling && !unseen && c.Counts(log.time[row]);
+}
+
+std::vector<double> Problem::NominalValues() const {
+  std::vector<double> nominal;
+  for (const BoundParameter& p : parameters_) nominal.push_back(p.nominal);
+  return nominal;
+}
+
 int Problem::residuals_left_out() const {
   int n = 0;
   for (const Window& w : windows_) n += w.left_out;
@@ -693,8 +707,7 @@ int Problem::residuals_left_out() const {
 }
 
 void Problem::SkipContactWindows() {
-  std::vector<double> nominal;
-  for (const BoundParameter& p : parameters_) nominal.push_back(p.nominal);
+  const std::vector<double> nominal = NominalValues();
   Workspace ws = MakeWorkspace();
   std::vector<Window> kept;
   residual_count_ = 0;
@@ -856,8 +869,7 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
 void Problem::StartSpeedGains() {
   // each window's residuals per rpm of start speed, at the nominal values: the difference of
   // two replays 1e-3 of the start speed apart
-  std::vector<double> nominal;
-  for (const BoundParameter& p : parameters_) nominal.push_back(p.nominal);
+  const std::vector<double> nominal = NominalValues();
   Workspace ws = MakeWorkspace();
   constexpr double kRelative = 1e-3;
   for (int w = 0; w < window_count(); ++w) {
@@ -1006,23 +1018,21 @@ bool Problem::Replay(int w, const std::vector<double>& values, double speed_rati
       const Column& col = columns_[c];
       auto at = [&](int i) { return &ws.trace[(static_cast<std::size_t>(i) * columns + c) * 2]; };
       double y = at(k)[0];
-      bool known = !(col.settles() && k <= wrench_settle_rows_);  // (a wrench's filter state: CutWindows)
       if (col.counter >= 0) {
         // the device's reading in force at the row: the turns over its gate, if the window saw
         // the gate begin
         const int reading = log.reading[col.counter][row] - win.first;
         const int gate = log.gate[col.counter][row] - win.first;
-        known = gate >= 0;
-        y = known ? (at(reading)[0] - at(gate)[0]) / (log.time[win.first + reading] - log.time[win.first + gate]) *
-                        kRpmPerRadPerSecond
-                  : std::numeric_limits<double>::quiet_NaN();  // (fit.csv: none)
+        y = gate >= 0 ? (at(reading)[0] - at(gate)[0]) / (log.time[win.first + reading] - log.time[win.first + gate]) *
+                            lab::kRpmPerRadPerSecond
+                      : std::numeric_limits<double>::quiet_NaN();  // (fit.csv: none)
       } else if (!col.parts.empty()) {
         const int n_parts = static_cast<int>(col.parts.size());
         const Eigen::Map<const Eigen::VectorXd> now(&ws.parts[static_cast<std::size_t>(k) * part_count_ + col.part],
                                                     n_parts);
         const Eigen::Map<const Eigen::VectorXd> before(
             &ws.parts[static_cast<std::size_t>(k - 1) * part_count_ + col.part], n_parts);
-        y = col.rate ? (now - before).norm() / period : now.norm();
+        y = DerivedValue(now, before, col.rate, period);
       }
       if (col.delay >= 0) {
         // the value x rows earlier: cubic Hermite between the rows around it (value and rate),
@@ -1044,7 +1054,7 @@ bool Problem::Replay(int w, const std::vector<double>& values, double speed_rati
       if (col.bias >= 0) y += values[col.bias];
       const int i = (k - 1) * columns + c;
       if (predicted) predicted[i] = y;
-      r[i] = known && col.Counts(log.time[row]) ? weights_[c] * (y - log.measured(row, c)) : 0.0;
+      r[i] = Counted(win, col, k) ? weights_[c] * (y - log.measured(row, c)) : 0.0;
     }
   }
   return true;

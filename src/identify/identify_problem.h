@@ -239,6 +239,9 @@ class Problem {
   void BindParameters();
   void ReadLogs();
   void CutWindows();
+  // a window's row k (1..rows) of column c enters the residual (else it is held at 0)
+  bool Counted(const Window& win, const Column& c, int k) const;
+  std::vector<double> NominalValues() const;
   void StartSpeedGains();
   // Rollout's replay, from the start speed `speed_ratio` (spec start_speed), nothing profiled
   bool Replay(int w, const std::vector<double>& values, double speed_ratio, Workspace& ws, double* r,

@@ -34,8 +34,6 @@ namespace vlab::lab {
 
 namespace {
 
-constexpr double kRpmPerRadPerSecond = 60.0 / (2.0 * M_PI);
-
 class SimCounter final : public Device {
  public:
   SimCounter(const DeviceContext& context, const DeviceConfig& c) : Device(c), config_(c.ParamsAs<CounterParams>()) {
@@ -67,14 +65,12 @@ class SimCounter final : public Device {
     const double angle = d.qpos[qpos_adr_];
     revolutions_ = std::floor((angle - angle_start_) / (2.0 * M_PI));
     true_rpm_ = d.qvel[dof_adr_] * kRpmPerRadPerSecond;
-    if (t + kSameTime_s < next_reading_) return;
+    if (!CounterReadingDue(t, gate_s_, &next_reading_)) return;
     // a reading: the turns over the gate that ends now
     const double rpm = (angle - gate_angle_) / (t - gate_start_) * kRpmPerRadPerSecond;
     rpm_ = config_.resolution > 0 ? std::round(rpm / config_.resolution) * config_.resolution : rpm;
     gate_angle_ = angle;
     gate_start_ = t;
-    next_reading_ += gate_s_;
-    if (next_reading_ < t + kSameTime_s) next_reading_ = t + gate_s_;  // a gate shorter than a period: catch up
   }
 
   void State(std::vector<double>* p) const override { p->assign({revolutions_, rpm_}); }
@@ -119,6 +115,13 @@ class SimCounter final : public Device {
 };
 
 }  // namespace
+
+bool CounterReadingDue(double t, double gate_s, double* next_s) {
+  if (t + kSameTime_s < *next_s) return false;
+  *next_s += gate_s;
+  if (*next_s < t + kSameTime_s) *next_s = t + gate_s;  // a gate shorter than a period: catch up
+  return true;
+}
 
 std::shared_ptr<const DeviceParams> ReadCounterParams(MapReader& r) {
   auto p = std::make_shared<CounterParams>();
