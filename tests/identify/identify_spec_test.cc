@@ -267,6 +267,34 @@ TEST(IdentifySpec, RefusesNamesTheModelOrLogLacks) {
 
 // input: reference binds the arms' recorded commands and the servo targets' devices: a log
 // without the command columns, a servo target naming no arm device, a mode that is none
+// start_speed needs counter readings about each window's start within its span: too few is
+// refused naming the key, the window and the column (a short PowerBall log, its drive off)
+TEST(IdentifySpec, RefusesAStartSpeedWithTooFewReadings) {
+  TempDir tmp;
+  const std::string stage1 = VLAB_SOURCE_DIR "/cases/powerball/stage1.yaml";
+  testing::RunScenario(stage1, tmp / "run",
+                       {"controller={type: none}", "clock=fast", "duration=0.5", "checks=[]", "outputs={log: true}",
+                        "devices.pa10.log_command=true"});
+  const std::string text = "scenario: " + stage1 +
+                           "\nlogs: [run]\ninput: reference\ncontacts: keep\nwindow: 0.2\n"
+                           "start_speed: pb.rpm\ncolumns:\n  - {name: pb.rpm}\n"
+                           "parameters:\n  - {name: c, target: joint pb_spin damping, lower: 0, upper: 1.0e-6}\n";
+  // the whole log: 5 readings (a 0.1 s gate) about each start
+  WriteFile(tmp / "id.yaml", text);
+  EXPECT_EQ(Problem::Create(LoadSpec(tmp / "id.yaml"))->window_count(), 2);
+  // a span of 0.25 s holds 2 whole gates
+  WriteFile(tmp / "id.yaml", text + "spans: [[0, 0.25]]\n");
+  try {
+    Problem::Create(LoadSpec(tmp / "id.yaml"));
+    ADD_FAILURE() << "accepted a start speed from 2 readings";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(":6: start_speed: the window at 0.000000 s of a log has 2 reading(s) of "
+                                         "'pb.rpm' within its span"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(IdentifySpec, RefusesWhatTheReferenceReplayLacks) {
   TempDir tmp;
   testing::RunLab(testing::kScene, tmp / "run", 0.2);  // no command columns
