@@ -75,7 +75,7 @@ RecordTable::RecordTable(std::vector<int> widths, double duration_s)
 bool RecordTable::Add(int device, std::int64_t seq, double stamp, const double* values) {
   DeviceCounts& c = counts_[static_cast<std::size_t>(device)];
   // a duplicate or replay, or a stamp that goes back: refused
-  if ((c.last_seq >= 0 && seq <= c.last_seq) || (c.last_seq >= 0 && !(stamp > c.last_stamp)) || !std::isfinite(stamp)) {
+  if ((c.seen_seq >= 0 && seq <= c.seen_seq) || (c.seen_seq >= 0 && !(stamp > c.seen_stamp)) || !std::isfinite(stamp)) {
     ++c.refused;
     return false;
   }
@@ -83,9 +83,9 @@ bool RecordTable::Add(int device, std::int64_t seq, double stamp, const double* 
     started_ = true;
     if (duration_s_ > 0) end_ = stamp + duration_s_;
   }
-  if (c.last_seq >= 0) c.lost += seq - c.last_seq - 1;
-  c.last_seq = seq;
-  c.last_stamp = stamp;
+  if (c.seen_seq >= 0) c.lost += seq - c.seen_seq - 1;
+  c.seen_seq = seq;
+  c.seen_stamp = stamp;
   // (the end within kSameTime_s: first + duration need not be a whole number of periods in doubles)
   if (stamp >= end_ - kSameTime_s) c.ended = true;
   if (stamp > end_ + kSameTime_s) return false;  // past the end: not written
@@ -97,6 +97,8 @@ bool RecordTable::Add(int device, std::int64_t seq, double stamp, const double* 
     c.first_seq = seq;
     c.first_stamp = stamp;
   }
+  c.last_seq = seq;
+  c.last_stamp = stamp;
   ++c.states;
   // its row: found from the newest (states come in stamp order), or made in its place
   auto it = pending_.end();
@@ -118,7 +120,7 @@ bool RecordTable::Ready(const Row& row) const {
   if (row.filled == static_cast<int>(widths_.size()) || pending_.size() > kMaxPendingRows) return true;
   // no device can still send a state at this stamp: each is past it (or ended)
   return std::all_of(counts_.begin(), counts_.end(), [&row](const DeviceCounts& c) {
-    return c.ended || (c.last_seq >= 0 && c.last_stamp > row.stamp);
+    return c.ended || (c.seen_seq >= 0 && c.seen_stamp > row.stamp);
   });
 }
 

@@ -57,10 +57,15 @@ struct DeviceCounts {
   long lost = 0;     ///< seq values skipped between two states taken
   long refused = 0;  ///< states refused: seq or stamp not increasing
   long late = 0;     ///< states stamped at or before the last row written
+  /// the first and the last state written (a state past the end, taken as the recorder
+  /// stops, is not one of them)
   std::int64_t first_seq = -1, last_seq = -1;
   double first_stamp = std::numeric_limits<double>::quiet_NaN();  ///< s
   double last_stamp = std::numeric_limits<double>::quiet_NaN();   ///< s
-  bool ended = false;                                             ///< sent a state stamped at or after the end
+  /// the newest state taken, written or not: the next must come after it
+  std::int64_t seen_seq = -1;
+  double seen_stamp = std::numeric_limits<double>::quiet_NaN();  ///< s
+  bool ended = false;                                            ///< sent a state stamped at or after the end
 };
 
 class RecordTable {
