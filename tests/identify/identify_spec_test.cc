@@ -46,6 +46,18 @@ std::string Spec(const std::string& from = "", const std::string& to = "") {
   return text;
 }
 
+// the spec `text`, written to `file`, is refused when its problem is made (bound to the model and
+// the logs), with an InputError whose message holds `message`
+void ExpectProblemRefused(const std::string& file, const std::string& text, const std::string& message) {
+  WriteFile(file, text);
+  try {
+    Problem::Create(LoadSpec(file));
+    ADD_FAILURE() << "accepted: " << text;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << text << ": " << e.what();
+  }
+}
+
 TEST(IdentifySpec, ReadsEveryKey) {
   TempDir tmp;
   WriteFile(tmp / "id.yaml", Spec("window: 0.2",
@@ -232,41 +244,18 @@ TEST(IdentifySpec, RefusesNamesTheModelOrLogLacks) {
       {"body pa10_link2 mass, lower: 4, upper: 16", "body pa10_link2 inertia_x, lower: 1.0e-6, upper: 100",
        ":8: parameters[0]: the bounds let body 'pa10_link2''s principal moments break I_y + I_z >= I_x"},
   };
-  for (const Case& c : cases) {
-    WriteFile(tmp / "id.yaml", Spec(c.from, c.to));
-    try {
-      Problem::Create(LoadSpec(tmp / "id.yaml"));
-      ADD_FAILURE() << "accepted: " << c.to;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << c.to << ": " << e.what();
-    }
-  }
+  for (const Case& c : cases) ExpectProblemRefused(tmp / "id.yaml", Spec(c.from, c.to), c.message);
   // a delay on a wrench column: its filter's lag is the model's
   std::string text = Spec("name: pa10.q.*, weight: 1.0e5}", "name: pa10.q.*, weight: 1.0e5}\n  - {name: jr3.F*}");
   text.replace(text.find("joint S1 damping"), 16, "column jr3.Fy delay");
-  WriteFile(tmp / "id.yaml", text);
-  try {
-    Problem::Create(LoadSpec(tmp / "id.yaml"));
-    ADD_FAILURE() << "accepted a delay on a wrench column";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(
-                  ":10: parameters[1].target: a delay is for an arm's q or qd column, not the wrench column 'jr3.Fy'"),
-              std::string::npos)
-        << e.what();
-  }
+  ExpectProblemRefused(
+      tmp / "id.yaml", text,
+      ":10: parameters[1].target: a delay is for an arm's q or qd column, not the wrench column 'jr3.Fy'");
   // a log without the torques the replay needs
   vlab::testing::WriteFile(tmp / "short.csv", "time,pa10.q.S1\n0,0\n0.002,0\n");
-  WriteFile(tmp / "id.yaml", Spec("logs: [run]", "logs: [short.csv]"));
-  try {
-    Problem::Create(LoadSpec(tmp / "id.yaml"));
-    ADD_FAILURE() << "accepted a log without torques";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("short.csv': no column 'pa10.qd.S1'"), std::string::npos) << e.what();
-  }
+  ExpectProblemRefused(tmp / "id.yaml", Spec("logs: [run]", "logs: [short.csv]"), "short.csv': no column 'pa10.qd.S1'");
 }
 
-// input: reference binds the arms' recorded commands and the servo targets' devices: a log
-// without the command columns, a servo target naming no arm device, a mode that is none
 // start_speed needs counter readings about each window's start within its span: too few is
 // refused naming the key, the window and the column (a short PowerBall log, its drive off)
 TEST(IdentifySpec, RefusesAStartSpeedWithTooFewReadings) {
@@ -283,18 +272,13 @@ TEST(IdentifySpec, RefusesAStartSpeedWithTooFewReadings) {
   WriteFile(tmp / "id.yaml", text);
   EXPECT_EQ(Problem::Create(LoadSpec(tmp / "id.yaml"))->window_count(), 2);
   // a span of 0.25 s holds 2 whole gates
-  WriteFile(tmp / "id.yaml", text + "spans: [[0, 0.25]]\n");
-  try {
-    Problem::Create(LoadSpec(tmp / "id.yaml"));
-    ADD_FAILURE() << "accepted a start speed from 2 readings";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(":6: start_speed: the window at 0.000000 s of a log has 2 reading(s) of "
-                                         "'pb.rpm' within its span"),
-              std::string::npos)
-        << e.what();
-  }
+  ExpectProblemRefused(
+      tmp / "id.yaml", text + "spans: [[0, 0.25]]\n",
+      ":6: start_speed: the window at 0.000000 s of a log has 2 reading(s) of 'pb.rpm' within its span");
 }
 
+// input: reference binds the arms' recorded commands and the servo targets' devices: a log
+// without the command columns, a servo target naming no arm device, a mode that is none
 TEST(IdentifySpec, RefusesWhatTheReferenceReplayLacks) {
   TempDir tmp;
   testing::RunLab(testing::kScene, tmp / "run", 0.2);  // no command columns
@@ -302,13 +286,7 @@ TEST(IdentifySpec, RefusesWhatTheReferenceReplayLacks) {
     return text.replace(text.find(from), from.size(), to);
   };
   auto refused = [&](const std::string& text, const std::string& message) {
-    WriteFile(tmp / "id.yaml", text);
-    try {
-      Problem::Create(LoadSpec(tmp / "id.yaml"));
-      ADD_FAILURE() << "accepted: " << text;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
-    }
+    ExpectProblemRefused(tmp / "id.yaml", text, message);
   };
   const std::string reference = Spec("input: torque", "input: reference");
   refused(reference, "log '" + tmp / "run/log.csv" + "': no column 'pa10.cmd_mode'");
