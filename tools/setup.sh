@@ -95,6 +95,18 @@ vlab_build() {
   fi
 }
 
+# vlab_build_fuzzer: the bridge packet fuzzer and its corpus generator (clang; tests/fuzz/run_fuzz.sh
+# --build-only) into build/fuzz on every core, after the build, so that the suite's packet_fuzz
+# and packet_fuzz_replay only replay and fuzz (they compile on one core what is stale). A failure
+# is the suite's to report: packet_fuzz compiles again and names the error.
+vlab_build_fuzzer() {
+  local log=build/fuzz-build.log
+  echo "vlab: building the packet fuzzer (log: $log)"
+  if ! VLAB_FUZZ_JOBS="$(nproc 2>/dev/null || echo 2)" bash tests/fuzz/run_fuzz.sh build/fuzz --build-only >"$log" 2>&1; then
+    echo "vlab: building the packet fuzzer failed, see $log (packet_fuzz will fail)" >&2
+  fi
+}
+
 # vlab_install_node_packages: the tests' Node packages (tests/node/package.json: the MCAP
 # reference reader, the Foxglove WebSocket client, ROS 2 message decoders, Khronos' glTF
 # validator) into tests/node/node_modules, from the npm registry, exactly as package-lock.json
@@ -124,4 +136,5 @@ vlab_setup() {
   vlab_install_packages
   if [ "${1:-}" = --tests ]; then vlab_install_node_packages; fi
   vlab_build "${options[@]}"
+  if [ "${1:-}" = --tests ]; then vlab_build_fuzzer; fi
 }

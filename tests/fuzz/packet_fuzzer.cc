@@ -341,6 +341,9 @@ std::vector<unsigned char> StatePacket(const DeviceEndpoint& ep, long period) {
       EncodeSimState(seq, time, s, &out);
       break;
     }
+    default:  // the configs above are arms, sims and wrenches only
+      Check(false, "a state packet for a kind the fuzzer does not configure");
+      break;
   }
   return out;
 }

@@ -3,6 +3,7 @@
 # bounded time; see packet_fuzzer.cc for what it checks.
 #
 #   tests/fuzz/run_fuzz.sh BUILD_DIR [SECONDS]     default 30 s; 0: build and replay only
+#   tests/fuzz/run_fuzz.sh BUILD_DIR --build-only  build only (./test.sh, beside the build)
 #
 # Steps: build (incremental) into BUILD_DIR; check that the committed corpus
 # matches make_corpus; replay tests/fuzz/regressions/* and the committed
@@ -15,8 +16,13 @@ set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-build="${1:?usage: run_fuzz.sh BUILD_DIR [SECONDS]}"
+build="${1:?usage: run_fuzz.sh BUILD_DIR [SECONDS | --build-only]}"
 seconds="${2:-30}"
+build_only=0
+if [ "$seconds" = --build-only ]; then
+  build_only=1
+  seconds=0
+fi
 jobs="${VLAB_FUZZ_JOBS:-2}"
 cxx="${VLAB_FUZZ_CXX:-clang++}"
 
@@ -36,22 +42,22 @@ for lib in fuzzer asan ubsan_standalone; do
       "install the Debian package 'libclang-rt-14-dev' (tools/setup.sh lists it)"
 done
 
-# ---- build: objects rebuilt when a source or any bridge header is newer
+# ---- build: objects rebuilt when a source or any bridge header is newer; the fuzzer and the
+# corpus generator link the same bridge objects
 mkdir -p "$build/obj" "$build/artifacts"
 build="$(cd "$build" && pwd)"
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all"
 cxxflags=(-std=c++17 -g -O1 -fno-omit-frame-pointer -pthread -I"$root" -isystem /usr/include/eigen3)
-sources=(bridge/bridge_protocol.cc bridge/bridge_layouts.cc bridge/bridge_endpoint.cc bridge/bridge_session.cc
-  bridge/bridge_udp.cc bridge/bridge_describe.cc bridge/bridge_payload.cc tests/fuzz/packet_fuzzer.cc)
+bridge_sources=(bridge/bridge_protocol.cc bridge/bridge_layouts.cc bridge/bridge_endpoint.cc bridge/bridge_session.cc
+  bridge/bridge_udp.cc bridge/bridge_describe.cc bridge/bridge_payload.cc)
 newest_header=""
 for header in "$root"/bridge/*.h; do
   if [ -z "$newest_header" ] || [ "$header" -nt "$newest_header" ]; then newest_header="$header"; fi
 done
-objects=()
+object() { echo "$build/obj/$(basename "${1%.cc}").o"; }
 pids=()
-for src in "${sources[@]}"; do
-  obj="$build/obj/$(basename "${src%.cc}").o"
-  objects+=("$obj")
+for src in "${bridge_sources[@]}" tests/fuzz/packet_fuzzer.cc tests/fuzz/make_corpus.cc; do
+  obj="$(object "$src")"
   if [ -f "$obj" ] && [ "$obj" -nt "$root/$src" ] && [ "$obj" -nt "$newest_header" ]; then continue; fi
   while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do sleep 0.2; done
   echo "run_fuzz: compiling $src"
@@ -60,23 +66,27 @@ for src in "${sources[@]}"; do
   pids+=($!)
 done
 for pid in "${pids[@]}"; do wait "$pid" || fail "compilation failed (see above)"; done
+bridge_objects=()
+for src in "${bridge_sources[@]}"; do bridge_objects+=("$(object "$src")"); done
+# link BINARY OBJECT... [LINK_FLAG]: when the binary is missing or older than an object
+link() {
+  local binary="$1" flag="$2"
+  shift 2
+  for obj in "$@"; do
+    if [ ! -f "$binary" ] || [ "$obj" -nt "$binary" ]; then
+      # shellcheck disable=SC2086
+      "$cxx" "${cxxflags[@]}" $sanitize $flag "$@" -o "$binary" || fail "linking $(basename "$binary") failed"
+      return 0
+    fi
+  done
+}
 fuzzer="$build/packet_fuzzer"
-for obj in "${objects[@]}"; do
-  if [ ! -f "$fuzzer" ] || [ "$obj" -nt "$fuzzer" ]; then
-    # shellcheck disable=SC2086
-    "$cxx" "${cxxflags[@]}" $sanitize -fsanitize=fuzzer "${objects[@]}" -o "$fuzzer" || fail "link failed"
-    break
-  fi
-done
 maker="$build/make_corpus"
-if [ ! -f "$maker" ] || [ "$maker" -ot "$here/make_corpus.cc" ] || [ "$maker" -ot "$newest_header" ] ||
-  [ "$maker" -ot "$root/bridge/bridge_protocol.cc" ] || [ "$maker" -ot "$root/bridge/bridge_layouts.cc" ] ||
-  [ "$maker" -ot "$root/bridge/bridge_session.cc" ] || [ "$maker" -ot "$root/bridge/bridge_payload.cc" ]; then
-  # shellcheck disable=SC2086
-  "$cxx" "${cxxflags[@]}" $sanitize "$here/make_corpus.cc" "$root/bridge/bridge_protocol.cc" \
-    "$root/bridge/bridge_layouts.cc" "$root/bridge/bridge_session.cc" "$root/bridge/bridge_udp.cc" \
-    "$root/bridge/bridge_payload.cc" -o "$maker" ||
-    fail "building make_corpus failed"
+link "$fuzzer" -fsanitize=fuzzer "${bridge_objects[@]}" "$(object tests/fuzz/packet_fuzzer.cc)"
+link "$maker" "" "${bridge_objects[@]}" "$(object tests/fuzz/make_corpus.cc)"
+if [ "$build_only" = 1 ]; then
+  echo "run_fuzz: built $fuzzer and $maker"
+  exit 0
 fi
 
 # ---- the committed corpus must still be what the generator writes
