@@ -68,8 +68,8 @@ done
 for pid in "${pids[@]}"; do wait "$pid" || fail "compilation failed (see above)"; done
 bridge_objects=()
 for src in "${bridge_sources[@]}"; do bridge_objects+=("$(object "$src")"); done
-# link BINARY OBJECT... [LINK_FLAG]: when the binary is missing or older than an object
-link() {
+# link_stale BINARY LINK_FLAG OBJECT...: links BINARY when it is missing or older than an object
+link_stale() {
   local binary="$1" flag="$2"
   shift 2
   for obj in "$@"; do
@@ -82,8 +82,8 @@ link() {
 }
 fuzzer="$build/packet_fuzzer"
 maker="$build/make_corpus"
-link "$fuzzer" -fsanitize=fuzzer "${bridge_objects[@]}" "$(object tests/fuzz/packet_fuzzer.cc)"
-link "$maker" "" "${bridge_objects[@]}" "$(object tests/fuzz/make_corpus.cc)"
+link_stale "$fuzzer" -fsanitize=fuzzer "${bridge_objects[@]}" "$(object tests/fuzz/packet_fuzzer.cc)"
+link_stale "$maker" "" "${bridge_objects[@]}" "$(object tests/fuzz/make_corpus.cc)"
 if [ "$build_only" = 1 ]; then
   echo "run_fuzz: built $fuzzer and $maker"
   exit 0
