@@ -56,12 +56,7 @@ class FoxgloveSession : public std::enable_shared_from_this<FoxgloveSession> {
  private:
   void Read() {
     ws_.async_read(in_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
-      if (ec) {
-        CountWsEnd(self->server_, ec, self->done_);
-        self->done_ = true;
-        self->timer_.cancel();
-        return;
-      }
+      if (ec) return self->End(ec);
       self->OnMessage(beast::buffers_to_string(self->in_.data()), !self->ws_.got_text());
       self->in_.consume(self->in_.size());
       self->Read();
@@ -114,7 +109,7 @@ class FoxgloveSession : public std::enable_shared_from_this<FoxgloveSession> {
     ws_.text(true);
     ws_.async_write(asio::buffer(*message), [self = shared_from_this(), message](beast::error_code ec, std::size_t) {
       self->writing_ = false;
-      if (ec) self->Stop();
+      if (ec) self->End(ec);
     });
   }
 
@@ -141,14 +136,17 @@ class FoxgloveSession : public std::enable_shared_from_this<FoxgloveSession> {
       const std::vector<asio::const_buffer> buffers = {asio::buffer(header_, sizeof(header_)), asio::buffer(*record)};
       ws_.async_write(buffers, [self = shared_from_this(), record](beast::error_code ec, std::size_t) {
         self->writing_ = false;
-        if (ec) return self->Stop();
+        if (ec) return self->End(ec);
         ++self->server_.frames_sent;
       });
       return;
     }
   }
 
-  void Stop() {
+  // the first error of the read or of a write ends the session (Beast hands a timeout to
+  // whichever of them looks first)
+  void End(const beast::error_code& ec) {
+    CountWsEnd(server_, ec, done_);
     done_ = true;
     timer_.cancel();
   }

@@ -145,9 +145,12 @@ inline void ApplyWsBounds(websocket::stream<beast::tcp_stream>& ws, const ViewSe
   ws.set_option(timeout);
 }
 
-/// Counts how a WebSocket session's reading ended with `ec`: a protocol
-/// violation or an oversized message (not a close, a reset or a timeout) as
-/// bad, a timeout (no pong) of a session not already `done` as slow.
+/// Counts how a WebSocket session ended with `ec`, the first error of its read
+/// or of a write: a protocol violation or an oversized message (not a close, a
+/// reset or a timeout) as bad, a timeout (no pong) of a session not already
+/// `done` as slow. Beast hands the timeout to whichever of the session's
+/// operations completes first: a frame written as the silence ends takes it,
+/// and the read then ends as aborted.
 inline void CountWsEnd(ViewServer::Impl& server, const beast::error_code& ec, bool done) {
   const bool websocket_error = ec.category() == websocket::make_error_code(websocket::error::closed).category();
   if (websocket_error && ec != websocket::error::closed) ++server.ws_closed_bad;

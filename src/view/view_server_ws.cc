@@ -46,15 +46,17 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
  private:
   void Read() {
     ws_.async_read(in_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
-      if (ec) {
-        CountWsEnd(self->server_, ec, self->done_);
-        self->done_ = true;
-        self->timer_.cancel();
-        return;
-      }
+      if (ec) return self->End(ec);
       self->in_.consume(self->in_.size());  // read-only: dropped
       self->Read();
     });
+  }
+  // the first error of the read or of a write ends the session (Beast hands a timeout to
+  // whichever of them looks first)
+  void End(const beast::error_code& ec) {
+    CountWsEnd(server_, ec, done_);
+    done_ = true;
+    timer_.cancel();
   }
   void Poll() {
     if (done_) return;
@@ -76,11 +78,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
         write_start_ = now;
         ws_.async_write(asio::buffer(*frame), [self = shared_from_this(), frame](beast::error_code ec, std::size_t) {
           self->writing_ = false;
-          if (ec) {
-            self->done_ = true;
-            self->timer_.cancel();
-            return;
-          }
+          if (ec) return self->End(ec);
           ++self->server_.frames_sent;
         });
       }
