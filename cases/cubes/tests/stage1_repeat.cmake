@@ -1,7 +1,7 @@
 # Run as: cmake -DVLAB=<vlab> -DCASE=<cases/cubes> -DFULL=<seed 2's full run> -DOUT=<folder> -P stage1_repeat.cmake
 # Stage 1, seed 2 cut at 30 s (the first look, the first letter picked): lockstep with the
 # vision program beside it, the cut run's log.csv must equal the first rows of FULL/log.csv,
-# the full run of seed 2 that cubes_stage1_seeds made (beside seed 3) and passed.
+# the full run of seed 2 that cubes_stage1_seeds made (beside seed 1) and passed.
 file(REMOVE_RECURSE ${OUT})
 if(NOT EXISTS ${FULL}/log.csv)
   message(FATAL_ERROR "stage 1, seed 2: no full run in ${FULL} (cubes_stage1_seeds makes it)")
