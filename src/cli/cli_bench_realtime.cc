@@ -10,7 +10,7 @@
 //   quiet       nothing else runs;
 //   loaded      two CPU-bound processes that the benchmark starts and stops,
 //               at normal priority (both cores busy, as on a lab PC that is
-//               also compiling);
+//               also compiling), from the lab's first period to its last;
 //   loaded, rt  the same load, the control thread at realtime priority 50
 //               when permitted (SCHED_DEADLINE, else SCHED_FIFO 50: see
 //               core_realtime.h; its workers at SCHED_FIFO 49); not measured,
@@ -81,7 +81,7 @@ Received Receive(int port, const std::atomic<bool>& run_over) {
     for (;;) {
       bridge::CameraClient::Frame f;
       try {
-        client.Receive(0.5, &f);
+        client.Receive(0.1, &f);  // (the run's end is seen within 0.1 s)
       } catch (const bridge::TimeoutError&) {
         if (run_over) break;
         continue;
@@ -131,9 +131,15 @@ Figures RunOnce(lab::Scenario scenario, int cameras, const Way& way) {
   ro.serve = &bo;
   ro.clock = ClockMode::kRealtime;
   ro.realtime_priority = way.priority;
-  ro.on_serving = [&](const std::vector<lab::ServedDevice>& d) { served.set_value(d); };
+  // the load starts once the lab serves (its renderers and workers are up), just before its
+  // first period: only the measured periods run beside it. The hogs are forked here, stopped,
+  // before the run locks its memory (a fork then would make the loop's pages copy-on-write).
   std::vector<int> hogs;
-  if (way.load) hogs = StartCpuHogs(2);
+  if (way.load) hogs = StartCpuHogs(2, true);
+  ro.on_serving = [&](const std::vector<lab::ServedDevice>& d) {
+    ResumeCpuHogs(hogs);
+    served.set_value(d);
+  };
   lab::RunResult result;
   std::thread run([&] { result = lab->Run(ro); });
   const std::vector<lab::ServedDevice> devices = served.get_future().get();

@@ -8,7 +8,7 @@
 
 namespace vlab::cli {
 
-std::vector<int> StartCpuHogs(int n) {
+std::vector<int> StartCpuHogs(int n, bool paused) {
   std::vector<int> pids;
   for (int i = 0; i < n; ++i) {
     const pid_t pid = ::fork();
@@ -20,9 +20,15 @@ std::vector<int> StartCpuHogs(int n) {
       volatile unsigned long spin = 0;
       for (;;) spin = spin + 1;
     }
-    if (pid > 0) pids.push_back(pid);
+    if (pid <= 0) continue;
+    if (paused) ::kill(pid, SIGSTOP);  // (a SIGCONT sent after it cannot overtake it)
+    pids.push_back(pid);
   }
   return pids;
+}
+
+void ResumeCpuHogs(const std::vector<int>& pids) {
+  for (int pid : pids) ::kill(pid, SIGCONT);
 }
 
 void StopCpuHogs(const std::vector<int>& pids) {
