@@ -185,6 +185,9 @@ class DeviceEndpoint {
   const std::string& describe_json() const { return describe_json_; }
   /// seq of the last accepted command (-1 if none since the owner took over).
   double last_accepted_seq() const { return last_seq_; }
+  /// seq of the last accepted command, whoever sent it, kept when its owner is
+  /// released (-1: none yet).
+  double newest_accepted_seq() const { return watch_seq_; }
   /// seq of the owner's last accepted payload (0 if none since it took over):
   /// a payload must carry a higher one.
   double last_payload_seq() const { return last_payload_seq_; }

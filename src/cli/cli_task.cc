@@ -174,7 +174,7 @@ Subcommand AddTaskCommand(CLI::App& app) {
   cmd->add_option("--timeout", a->timeout_s, "Seconds to wait for a device's state")->capture_default_str();
   cmd->add_flag("--hold", a->hold,
                 "After the script ends, keep holding the arm until its states stop or SIGINT/SIGTERM (for vlab run's "
-                "external controllers)");
+                "external controllers, unless the scenario's controller.ends_run lets the script's end end the run)");
   cmd->add_flag("-q,--quiet", a->quiet, "No print() output or end line on stdout (--log still gets it)");
   cmd->add_option("--log", a->log,
                   "Write every print() line and a script error, with the simulated time, to FILE (e.g. "

@@ -3,7 +3,8 @@
 // starts the program with its placeholders expanded, runs lockstep and keeps
 // the program's output in controller.log; the same scenario twice gives the same log bit for
 // bit; a controller that fails ends the run at once with its exit status and
-// last line (the output folder says why); SIGTERM on vlab run keeps every period that ran and
+// last line (the output folder says why); one that ends the run (ends_run) ends it at the first
+// period it left unanswered; SIGTERM on vlab run keeps every period that ran and
 // stops the controller; the program inherits none of the lab's descriptors; a program that cannot
 // run and an unknown placeholder are bad input (exit 2, nothing written). Placeholder expansion
 // itself is checked directly.
@@ -127,6 +128,75 @@ TEST(ExternalController, AFailingControllerEndsTheRunWithItsStatus) {
   const auto summary = nlohmann::json::parse(ReadFile(dir / "out/summary.json"));
   EXPECT_EQ(summary["result"], "fail");
   EXPECT_EQ(summary["controller"]["outcome"], "exit status 3");
+}
+
+// controller.ends_run: the run ends at the first period the program left unanswered once it
+// exited with status 0, the same period every run, however late the exit comes after it gave
+// its devices up; the image output's `last` frame is of that state. Without it the devices
+// hold to the run's duration; a non-zero exit still fails the run.
+TEST(ExternalController, EndsRunEndsAtTheFirstPeriodItLeftUnanswered) {
+  TempDir dir;
+  // answers the states up to t = 0.05 s (seq 0..25), unsubscribes (the with block), then exits
+  // after `linger` seconds with status `status`
+  WriteFile(dir / "done.py", R"(import sys, time
+sys.path.insert(0, ")" VLAB_SOURCE_DIR R"(/bridge/python")
+import vlab_client
+host, port = sys.argv[1].rsplit(":", 1)
+with vlab_client.Arm(host, int(port), timeout=5.0) as arm:
+    while True:
+        state = arm.read(5.0)
+        arm.write(vlab_client.HOLD, [], state.seq)
+        if state.seq >= 25:
+            break
+time.sleep(float(sys.argv[2]))
+sys.exit(int(sys.argv[3]))
+)");
+  const auto scenario = [&](const char* linger, const char* status, bool ends_run) {
+    return Scenario(R"(["python3", ")" + (dir / "done.py") + R"(", "{pa10}", ")" + linger + R"(", ")" + status +
+                        R"("])" + (ends_run ? "\n  ends_run: true" : ""),
+                    0.1) +
+           "outputs:\n  images:\n    - {camera: overview, every: 1.0, last: true, width: 64, height: 48}\n";
+  };
+  WriteFile(dir / "prompt.yaml", scenario("0", "0", true));
+  WriteFile(dir / "late.yaml", scenario("0.5", "0", true));  // (a slow peer: the lab must wait for its exit)
+  for (const std::string run : {"prompt", "late"}) {
+    const std::string out = dir / run;
+    const ProcessResult r = RunVlab("run " + out + ".yaml -q --out " + out);
+    ASSERT_EQ(r.exit_code, 0) << run << ": " << r.err << r.out;
+    // periods 0..25 answered and run; period 26 is the first it left unanswered
+    const std::vector<std::string> rows = Lines(ReadFile(out + "/log.csv"));
+    ASSERT_EQ(rows.size(), 1u + 1u + 26u) << run << ": header, t = 0, 26 periods";
+    const double t_end = 26 * 0.002;  // (the lab's times are k T)
+    EXPECT_EQ(std::stod(rows.back().substr(0, rows.back().find(','))), t_end) << run;
+    const nlohmann::json summary = nlohmann::json::parse(ReadFile(out + "/summary.json"));
+    EXPECT_EQ(summary["result"], "pass") << run;
+    EXPECT_EQ(summary["controller"]["ended_run"], true) << run;
+    EXPECT_EQ(summary["controller"]["outcome"], "exit status 0") << run;
+    EXPECT_EQ(summary["timings"]["sim_time_s"].get<double>(), t_end) << run;
+    const std::vector<std::string> frames = Lines(ReadFile(out + "/overview/frames.csv"));
+    ASSERT_EQ(frames.size(), 3u) << run;
+    EXPECT_EQ(frames[1], "0,0") << run;
+    EXPECT_EQ(std::stod(frames[2].substr(2)), t_end) << run << ": " << frames[2];
+  }
+  EXPECT_EQ(ReadFile(dir / "prompt/log.csv"), ReadFile(dir / "late/log.csv"));
+
+  // without ends_run the arm holds to the duration (0.1 s: 50 periods); `last` adds no frame
+  // where the last state had one (every: 1 s falls on no period end but t = 0 here)
+  WriteFile(dir / "holds.yaml", scenario("0", "0", false));
+  const ProcessResult holds = RunVlab("run " + (dir / "holds.yaml") + " -q --out " + (dir / "holds"));
+  ASSERT_EQ(holds.exit_code, 0) << holds.err << holds.out;
+  EXPECT_EQ(Lines(ReadFile(dir / "holds/log.csv")).size(), 1u + 1u + 50u);
+  const auto held = nlohmann::json::parse(ReadFile(dir / "holds/summary.json"));
+  EXPECT_EQ(held["controller"]["ended_run"], false);
+  EXPECT_EQ(ReadFile(dir / "holds/overview/frames.csv"), "frame,time\n0,0\n1,0.1\n");
+
+  // a program that fails ends the run as a failure, ends_run or not
+  WriteFile(dir / "fails.yaml", scenario("0", "3", true));
+  const ProcessResult fails = RunVlab("run " + (dir / "fails.yaml") + " -q --out " + (dir / "fails"));
+  EXPECT_EQ(fails.exit_code, 1) << fails.err;
+  EXPECT_NE(fails.err.find("ended with exit status 3"), std::string::npos) << fails.err;
+  const auto failed = nlohmann::json::parse(ReadFile(dir / "fails/summary.json"));
+  EXPECT_EQ(failed["controller"]["ended_run"], false);
 }
 
 // {out}: what the program writes there moves into the output folder with the log

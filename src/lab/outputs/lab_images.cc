@@ -198,6 +198,15 @@ void ImageOutputs::Observe(double t, mjData* d) {
   }
 }
 
+void ImageOutputs::ObserveLast(double t, mjData* d) {
+  if (failed()) return;
+  const long max_frames = impl_->options.max_frames;
+  for (Impl::Output& o : impl_->outputs) {
+    if (!o.config.last || (max_frames > 0 && o.frames >= max_frames)) continue;
+    if (o.times_s.empty() || o.times_s.back() + kFrameDueTolerance_s < t) impl_->Frame(o, t, d);
+  }
+}
+
 bool ImageOutputs::failed() const { return !impl_->error.empty(); }
 
 const std::string& ImageOutputs::error() const { return impl_->error; }

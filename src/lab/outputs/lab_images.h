@@ -7,7 +7,8 @@
 // OUT/CAMERA/frames.csv (frame number, simulated time of the frame, s) and
 // OUT/VIDEO.mp4 (ImageOptions::flat: the frames and frames.csv in OUT itself;
 // video_anywhere: the video where its path says). Frame n is due at n * every
-// (from t = 0) and is rendered at the first observed time t >= n * every.
+// (from t = 0) and is rendered at the first observed time t >= n * every; an
+// output with `last` also renders the run's last state (ObserveLast).
 // Rendering reads the state, never changes it; it allocates per frame, never
 // in the periods without a frame. Rendering happens on the thread that calls
 // Observe (see render/renderer.h).
@@ -75,6 +76,9 @@ class ImageOutputs {
   /// std::runtime_error naming the file when a frame cannot be written (then
   /// failed(), and later calls do nothing).
   void Observe(double t, mjData* d);
+  /// At the run's end t: the frame of the last state of each output that asks
+  /// for it (`last`), unless its last frame is of t already. Throws as Observe.
+  void ObserveLast(double t, mjData* d);
   /// Closes the videos and writes frames.csv; call before out.Commit().
   /// Throws std::runtime_error naming a file that cannot be written.
   void Finish();

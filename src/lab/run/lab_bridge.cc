@@ -159,8 +159,9 @@ bool LabBridge::HasOwner(const Device& device) const {
   return d && d->endpoint && d->endpoint->has_owner();
 }
 
-void LabBridge::WatchPeerExit(int fd) {
+void LabBridge::WatchPeerExit(int fd, bool ends_run) {
   peer_exit_fd_ = fd;
+  peer_ends_run_ = ends_run;
   fds_.push_back(fd);
 }
 
@@ -193,6 +194,35 @@ void LabBridge::Poll(double timeout_s, PollWait wait) {
 
 bool LabBridge::Answered(std::int64_t k) const {
   if (peer_gone_) return true;  // the controller vlab run started has exited: nobody to wait for
+  return peer_ends_run_ && k > 0 ? AnsweredByPeer(k) : AllAnswered(k);
+}
+
+bool LabBridge::GoneWithoutAnswering(std::int64_t k) {
+  if (!peer_gone_) return false;
+  ReceiveAll();  // what it sent before it exited (the clock may have seen its exit first)
+  return !(peer_ends_run_ && k > 0 ? AnsweredByPeer(k) : AllAnswered(k));
+}
+
+bool LabBridge::AnsweredByPeer(std::int64_t k) const {
+  // A program sends its commands of a period before it unsubscribes, and a socket keeps their
+  // order: once no owner is left, every command it sent is in, and the newest says whether it
+  // answered k. So the unsubscribes and the exit end the run at the same period every run.
+  bool any_owner = false;
+  double newest = -1;
+  for (const Served& d : devices_) {
+    if (!d.endpoint) continue;
+    const CommandRole role = d.device->command_role();
+    if (role != CommandRole::kWaitedFromStart && role != CommandRole::kWaited) continue;
+    if (d.endpoint->has_owner()) {
+      any_owner = true;
+      if (d.endpoint->last_accepted_seq() < static_cast<double>(k)) return false;
+    }
+    newest = std::max(newest, d.endpoint->newest_accepted_seq());
+  }
+  return any_owner || newest >= static_cast<double>(k);
+}
+
+bool LabBridge::AllAnswered(std::int64_t k) const {
   // every waited-for device that has an owner is waited for; period 0 also waits
   // for a controller to start: one per served arm, or, where no arm is served,
   // one for any commanded device (one that left was released: the device holds)

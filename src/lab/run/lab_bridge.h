@@ -97,9 +97,16 @@ class LabBridge final : public vlab::CommandSource, public CommandWriter {
   bool HasOwner(const Device& device) const;
   /// Also wait on fd, which becomes readable when the controller process
   /// that `vlab run` started has exited: from then on no period waits.
-  void WatchPeerExit(int fd);
+  /// ends_run (controller.ends_run): it drives until it exits, so a period
+  /// k > 0 waits for its commands also after it gave its devices up
+  /// (unsubscribed): the run ends at the first period it left unanswered.
+  void WatchPeerExit(int fd, bool ends_run = false);
   /// True once the watched controller process has exited.
   bool peer_gone() const { return peer_gone_; }
+  /// True once the watched controller process has exited without answering
+  /// period k: everything it sent before its exit is received first (a datagram
+  /// sent on loopback is queued before its sender can exit).
+  bool GoneWithoutAnswering(std::int64_t k);
   /// Lockstep: period k began without the commands. After release_after such
   /// periods in a row, silent owners are released (a restarted controller can
   /// take over).
@@ -128,6 +135,10 @@ class LabBridge final : public vlab::CommandSource, public CommandWriter {
     double command_arrival = -1;                       // wall time the pending command arrived
   };
   LabBridge() = default;
+  // Answered without the exited controller's exemption
+  bool AllAnswered(std::int64_t k) const;
+  // ends_run, k > 0: every owner answered k; with no owner left, the newest command answered k
+  bool AnsweredByPeer(std::int64_t k) const;
   void Receive(Served& d);
   void ReceiveAll();
   Served* Find(const Device& device);
@@ -139,6 +150,7 @@ class LabBridge final : public vlab::CommandSource, public CommandWriter {
   std::vector<int> fds_;
   int peer_exit_fd_ = -1;
   bool peer_gone_ = false;
+  bool peer_ends_run_ = false;
   void CheckPeerExit();
   std::int64_t period_ = 0;
   int consecutive_timeouts_ = 0;

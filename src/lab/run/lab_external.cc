@@ -235,16 +235,20 @@ bool ExternalController::Exited() {
   return reaped_;
 }
 
+bool ExternalController::WaitExited(double timeout_s) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!Exited() && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return Exited();
+}
+
 void ExternalController::Stop(double grace_s) {
   if (pid_ <= 0) return;
   if (!Exited()) {
     stopped_ = true;
     ::kill(-pid_, SIGTERM);
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace_s);
-    while (!Exited() && std::chrono::steady_clock::now() < until) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    if (!Exited()) {
+    if (!WaitExited(grace_s)) {
       ::kill(-pid_, SIGKILL);
       WaitFor(pid_, &status_, 0);
       reaped_ = true;

@@ -70,6 +70,9 @@ class ExternalController {
   int exit_fd() const { return exit_fd_; }
   /// True once the program has exited (never blocks).
   bool Exited();
+  /// Exited(), waiting at most timeout_s for it (a program whose exit closed
+  /// exit_fd() is reaped a moment later).
+  bool WaitExited(double timeout_s);
   /// Ends the program if it still runs: SIGTERM to its process group, then
   /// SIGKILL after grace_s. Returns once it has been reaped.
   void Stop(double grace_s);

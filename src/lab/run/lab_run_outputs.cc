@@ -96,6 +96,12 @@ void RunSession::WriteOutputs() {
       NoteWriteFailure(e.what());
     }
   };
+  // the image outputs' frame of the last state (`last`), before log.mcap closes with the log
+  attempt([this] {
+    if (!images_ || output_failed_ || diverged_) return;
+    images_->ObserveLast(k_ * period_, d_);
+    if (mcap_) FeedMcap();
+  });
   attempt([this] {
     if (!log_) return;
     result_.log_waits = log_->waits();

@@ -133,7 +133,7 @@ void RunSession::Prepare() {
     controller_ = ExternalController::Start(argv, log_path, sc.controller.realtime_priority,
                                             CommandEnvironment(served, ports.ports()));
     result_.controller.realtime = controller_->realtime();
-    bridge_->WatchPeerExit(controller_->exit_fd());
+    bridge_->WatchPeerExit(controller_->exit_fd(), sc.controller.ends_run);
   }
   if (options_.record) {
     result_.recording.controls.reserve(static_cast<std::size_t>(periods_) * s_.steps_per_period * m_->nu);
@@ -235,8 +235,17 @@ bool RunSession::Commands(long k, double t_k) {
   // the clock lets the period begin; commands: the newest of each device
   const PeriodStart start = clock_->BeginPeriod(k, bridge_.get());
   if (start == PeriodStart::kStopped && Interrupted()) return false;
+  // a controller that ends the run (controller.ends_run) exited without answering period k: its
+  // status, read at once (its exit closed the pipe the clock waited on), says how the run ends.
+  // Lockstep: the first period it left unanswered, the same every run
+  const bool ended = controller_ && s_.scenario.controller.ends_run && bridge_->GoneWithoutAnswering(k) &&
+                     controller_->WaitExited(kControllerGrace_s);
   if (controller_ && bridge_->peer_gone() && controller_->Exited() && !controller_->Succeeded()) {
     result_.failure = ControllerFailure(*controller_, t_k);
+    return false;
+  }
+  if (ended) {
+    result_.controller.ended_run = true;  // (status 0: the run ends here, its checks judge it)
     return false;
   }
   if (start == PeriodStart::kFail) {

@@ -41,7 +41,8 @@ class RunSession {
   /// Row 0 and the states of t = 0.
   void Start();
   /// Runs period k (or waits while paused). False when the run must stop
-  /// early: a failure (result().failure), a divergence or an interrupt.
+  /// early: a failure (result().failure), a divergence, an interrupt, or a
+  /// controller that ends the run exited.
   bool Period();
   /// Ends the run: the controller's verdict, the result, and the output folder.
   RunResult Finish();

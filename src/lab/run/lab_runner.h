@@ -130,6 +130,7 @@ struct RunResult {
     std::string outcome;
     RealtimeGrant realtime;            ///< its controller.realtime_priority, read off the program
     std::map<std::string, int> ports;  ///< the free ports its {port:NAME} placeholders got
+    bool ended_run = false;            ///< it ended the run (controller.ends_run: it exited with status 0)
   } controller;
   /// What the task programs (controller type task) printed, one line each:
   /// "[ROBOT t=SECONDS] TEXT" (simulated time), and a script error's first line

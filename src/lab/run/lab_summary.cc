@@ -181,6 +181,7 @@ nlohmann::json SummaryJson(const Scenario& sc, const mjModel* m, const RunResult
        {{"type", ControllerTypeName(sc.controller.type)},
         {"program", r.controller.program},
         {"outcome", r.controller.outcome},
+        {"ended_run", r.controller.ended_run},
         {"ports", r.controller.ports}}},
       {"warnings", warnings},
       {"plots_skipped", r.plots_skipped},

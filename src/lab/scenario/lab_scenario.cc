@@ -94,6 +94,7 @@ ImageOutputConfig ReadImageOutput(const std::string& file, const YAML::Node& nod
   o.png = r.Bool("png", o.png);
   o.depth = r.Bool("depth", o.depth);
   o.segmentation = r.Bool("segmentation", o.segmentation);
+  o.last = r.Bool("last", o.last);
   o.video = r.String("video", o.video);
   if (!o.video.empty() && (o.video.find('/') != std::string::npos || o.video.size() < 5 ||
                            o.video.compare(o.video.size() - 4, 4, ".mp4") != 0)) {
@@ -183,6 +184,7 @@ ControllerConfig ReadController(MapReader r) {
     if (c.realtime_priority < 0 || c.realtime_priority > kMaxRealtimePriority) {
       r.Fail("realtime_priority", "must be 0 (normal priority) to 99 (SCHED_FIFO)");
     }
+    c.ends_run = r.Bool("ends_run", c.ends_run);
     r.Finish();
     return c;
   }

@@ -84,6 +84,9 @@ struct ControllerConfig {
   /// SCHED_FIFO priority the program (and what it starts) runs at, when the
   /// user may have it; 0: normal priority
   int realtime_priority = 0;
+  /// The run ends when the program exits with status 0 (lockstep: at the first period it
+  /// left unanswered); false: its devices hold until the run's duration
+  bool ends_run = false;
   // task: robot programs in the task language, resumed in this order each period
   std::vector<TaskProgramEntry> programs;
   long instruction_budget = 10'000'000;  ///< Lua VM instructions per resume
@@ -125,6 +128,7 @@ struct ImageOutputConfig {
   bool segmentation = false;  ///< CAMERA/seg_NNNNNN.png: 16-bit, geom id + 1 (0: background)
   std::string video;          ///< MP4 file name in the output folder ("": none)
   render::Profile profile = render::Profile::kQuality;
+  bool last = false;  ///< also a frame of the run's last state, when none fell on it
   std::string where;
 };
 
