@@ -17,7 +17,7 @@ for seed in 1 2; do
   # seed 1 is the scenario's own: run unchanged, without --seed
   seed_option=()
   [ $seed -eq 1 ] || seed_option=(--seed $seed)
-  # 280 s each: a run takes about 100 s of wall time alone (cases/cubes/tests/CMakeLists.txt)
+  # 280 s each: a run takes about 12 s of wall time alone (cases/cubes/tests/CMakeLists.txt)
   timeout 280 "$vlab" run "$case/stage1.yaml" "${seed_option[@]}" --quiet --out "$out/seed$seed" \
     >"$out/seed$seed.txt" 2>&1 &
   pids+=($!)
