@@ -238,8 +238,13 @@ bool RunSession::Commands(long k, double t_k) {
   // a controller that ends the run (controller.ends_run) exited without answering period k: its
   // status, read at once (its exit closed the pipe the clock waited on), says how the run ends.
   // Lockstep: the first period it left unanswered, the same every run
-  const bool ended = controller_ && s_.scenario.controller.ends_run && bridge_->GoneWithoutAnswering(k) &&
-                     controller_->WaitExited(kControllerGrace_s);
+  // (waited for once: a program that closed the pipe and runs on is not waited for every period)
+  bool ended = false;
+  if (controller_ && s_.scenario.controller.ends_run && bridge_->GoneWithoutAnswering(k)) {
+    if (!exit_waited_) controller_->WaitExited(kControllerGrace_s);
+    exit_waited_ = true;
+    ended = controller_->Exited();
+  }
   if (controller_ && bridge_->peer_gone() && controller_->Exited() && !controller_->Succeeded()) {
     result_.failure = ControllerFailure(*controller_, t_k);
     return false;

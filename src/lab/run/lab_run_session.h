@@ -116,6 +116,7 @@ class RunSession {
   };
   std::vector<McapCameraFeed> mcap_cameras_;
   std::unique_ptr<ExternalController> controller_;
+  bool exit_waited_ = false;  // ends_run: the controller's exit was waited for once
   std::vector<double> row_;
   double* controller_columns_ = nullptr;
   std::vector<CommandWriter*> writers_;  // the command sources in the order they write: the wire's first
