@@ -194,13 +194,17 @@ void LabBridge::Poll(double timeout_s, PollWait wait) {
 
 bool LabBridge::Answered(std::int64_t k) const {
   if (peer_gone_) return true;  // the controller vlab run started has exited: nobody to wait for
-  return peer_ends_run_ && k > 0 ? AnsweredByPeer(k) : AllAnswered(k);
+  return CommandsAnswer(k);
 }
 
 bool LabBridge::GoneWithoutAnswering(std::int64_t k) {
   if (!peer_gone_) return false;
   ReceiveAll();  // what it sent before it exited (the clock may have seen its exit first)
-  return !(peer_ends_run_ && k > 0 ? AnsweredByPeer(k) : AllAnswered(k));
+  return !CommandsAnswer(k);
+}
+
+bool LabBridge::CommandsAnswer(std::int64_t k) const {
+  return peer_ends_run_ && k > 0 ? AnsweredByPeer(k) : AllAnswered(k);
 }
 
 bool LabBridge::AnsweredByPeer(std::int64_t k) const {

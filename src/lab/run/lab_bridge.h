@@ -135,7 +135,9 @@ class LabBridge final : public vlab::CommandSource, public CommandWriter {
     double command_arrival = -1;                       // wall time the pending command arrived
   };
   LabBridge() = default;
-  // Answered without the exited controller's exemption
+  // Answered without the exited controller's exemption: AnsweredByPeer or AllAnswered
+  bool CommandsAnswer(std::int64_t k) const;
+  // every owner answered k; period 0 also waits for a controller to start
   bool AllAnswered(std::int64_t k) const;
   // ends_run, k > 0: every owner answered k; with no owner left, the newest command answered k
   bool AnsweredByPeer(std::int64_t k) const;
