@@ -425,7 +425,20 @@ TEST(ExternalController, BadCommandsAreBadInput) {
   r = RunVlab("run " + (dir / "empty.yaml") + " -q --out " + (dir / "out"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("controller.command"), std::string::npos) << r.err;
-  EXPECT_EQ(Entries(dir.path()), (std::set<std::string>{"missing.yaml", "unknown.yaml", "empty.yaml"}));
+
+  // ends_run and an image output's last take true or false only
+  const std::string command = R"(["{bin}/examples/joint_control", "--arm", "{pa10}"])";
+  WriteFile(dir / "ends.yaml", Scenario(command + "\n  ends_run: maybe"));
+  r = RunVlab("run " + (dir / "ends.yaml") + " -q --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("controller.ends_run: expected true or false, got 'maybe'"), std::string::npos) << r.err;
+  WriteFile(dir / "last.yaml",
+            Scenario(command) + "outputs:\n  images:\n    - {camera: overview, every: 1.0, last: 2}\n");
+  r = RunVlab("run " + (dir / "last.yaml") + " -q --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("outputs.images[0].last: expected true or false, got '2'"), std::string::npos) << r.err;
+  EXPECT_EQ(Entries(dir.path()),
+            (std::set<std::string>{"missing.yaml", "unknown.yaml", "empty.yaml", "ends.yaml", "last.yaml"}));
 }
 
 TEST(ExpandCommand, PlaceholdersAnywhereInAnArgument) {
