@@ -102,22 +102,40 @@ bool Evaluate(RolloutPool& pool, const FreeSet& set, const double* u, double* re
   return true;
 }
 
+double HalfSquares(const std::vector<double>& r) {
+  double s = 0;
+  for (double x : r) s += x * x;
+  return 0.5 * s;
+}
+
 // the last point evaluated, its residuals and (when asked for) its Jacobian: Ceres asks again
-// for a point it has evaluated (a candidate's residuals, then its Jacobian once accepted), and
-// the statistics want the Jacobian at the point Ceres ended on
+// for a point it has evaluated (a candidate's residuals, then its Jacobian once accepted).
+// Beside it, the last point Ceres accepted: the point it ends on when its last iteration tried
+// steps and kept none, where the statistics want the Jacobian
 struct LastEvaluation {
-  std::vector<double> u, residuals, jacobian;  // jacobian empty: not computed there
+  struct Point {
+    std::vector<double> u, residuals, jacobian;  // jacobian empty: not computed there
+  };
+  Point last, accepted;
 
   bool Get(RolloutPool& pool, const FreeSet& set, const std::vector<double>& at, bool with_jacobian, int count) {
-    if (at == u && (!jacobian.empty() || !with_jacobian)) return true;
-    u.clear();
-    residuals.resize(count);
-    jacobian.assign(with_jacobian ? static_cast<std::size_t>(count) * at.size() : 0, 0.0);
-    if (!Evaluate(pool, set, at.data(), residuals.data(), with_jacobian ? jacobian.data() : nullptr, count)) {
+    if (at == last.u && (!last.jacobian.empty() || !with_jacobian)) return true;
+    if (at == accepted.u) {
+      last = accepted;
+      return true;
+    }
+    last.u.clear();
+    last.residuals.resize(count);
+    last.jacobian.assign(with_jacobian ? static_cast<std::size_t>(count) * at.size() : 0, 0.0);
+    if (!Evaluate(pool, set, at.data(), last.residuals.data(), with_jacobian ? last.jacobian.data() : nullptr, count)) {
       return false;
     }
-    u = at;
+    last.u = at;
     return true;
+  }
+  // Ceres's iteration ended on x: keep x's evaluation when it is the last one, with its Jacobian
+  void Accepted(const std::vector<double>& x) {
+    if (x == last.u && !last.jacobian.empty()) accepted = last;
   }
 };
 
@@ -133,8 +151,8 @@ class WindowsCost : public ceres::CostFunction {
     const std::vector<double> u(parameters[0], parameters[0] + set_.index.size());
     double* jacobian = jacobians ? jacobians[0] : nullptr;
     if (!last_.Get(pool_, set_, u, jacobian != nullptr, num_residuals())) return false;
-    std::copy(last_.residuals.begin(), last_.residuals.end(), residuals);
-    if (jacobian) std::copy(last_.jacobian.begin(), last_.jacobian.end(), jacobian);
+    std::copy(last_.last.residuals.begin(), last_.last.residuals.end(), residuals);
+    if (jacobian) std::copy(last_.last.jacobian.begin(), last_.last.jacobian.end(), jacobian);
     return true;
   }
 
@@ -144,16 +162,22 @@ class WindowsCost : public ceres::CostFunction {
   LastEvaluation& last_;
 };
 
+// each iteration's end: the progress line, and the point Ceres is at (u: Ceres updates it every
+// iteration) kept when it took a step there
 class Progress : public ceres::IterationCallback {
  public:
-  explicit Progress(const FitOptions& options) : options_(options) {}
+  Progress(const FitOptions& options, const std::vector<double>& u, LastEvaluation& last)
+      : options_(options), u_(u), last_(last) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (summary.iteration == 0 || summary.step_is_successful) last_.Accepted(u_);
     if (options_.progress) options_.progress(summary.iteration, summary.cost);
     return ceres::SOLVER_CONTINUE;
   }
 
  private:
   const FitOptions& options_;
+  const std::vector<double>& u_;
+  LastEvaluation& last_;
 };
 
 // J (residuals x free) at u, row-major as Ceres writes it
@@ -162,15 +186,9 @@ Eigen::MatrixXd JacobianAt(RolloutPool& pool, const FreeSet& set, const std::vec
   if (!last.Get(pool, set, u, true, count)) {
     throw std::runtime_error("identify: a rollout diverged while computing the Jacobian");
   }
-  *residuals = last.residuals;
+  *residuals = last.last.residuals;
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      last.jacobian.data(), count, static_cast<Eigen::Index>(u.size()));
-}
-
-double HalfSquares(const std::vector<double>& r) {
-  double s = 0;
-  for (double x : r) s += x * x;
-  return 0.5 * s;
+      last.last.jacobian.data(), count, static_cast<Eigen::Index>(u.size()));
 }
 
 }  // namespace
@@ -313,7 +331,8 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
     solver.gradient_tolerance = 1e-10;
     solver.num_threads = 1;  // one residual block: the rollouts are threaded in the pool
     solver.logging_type = ceres::SILENT;
-    Progress progress(options);
+    solver.update_state_every_iteration = true;  // u is Ceres's point in the callback
+    Progress progress(options, u, last);
     solver.callbacks.push_back(&progress);
     ceres::Solver::Summary summary;
     ceres::Solve(solver, &ceres_problem, &summary);
