@@ -29,9 +29,9 @@ struct IdentifyArgs {
 
 int Identify(const IdentifyArgs& a) {
   const identify::Spec spec = identify::LoadSpec(a.spec);
-  const std::unique_ptr<identify::Problem> problem = identify::Problem::Create(spec);
   identify::FitOptions options;
   options.threads = a.threads > 0 ? a.threads : std::max(1, static_cast<int>(ThreadCpus().size()));
+  const std::unique_ptr<identify::Problem> problem = identify::Problem::Create(spec, options.threads);
   if (!a.quiet) {
     std::fprintf(stderr, "identify: %d windows (%d left out for contact), %d residuals, %zu parameters, %d threads\n",
                  problem->window_count(), problem->windows_in_contact(), problem->residual_count(),

@@ -102,17 +102,12 @@ bool Evaluate(RolloutPool& pool, const FreeSet& set, const double* u, double* re
   return true;
 }
 
-double HalfSquares(const std::vector<double>& r) {
-  double s = 0;
-  for (double x : r) s += x * x;
-  return 0.5 * s;
-}
-
 // the last point evaluated, its residuals and (when asked for) its Jacobian: Ceres asks again
 // for a point it has evaluated (a candidate's residuals, then its Jacobian once accepted).
-// Beside it, the last point Ceres accepted: the point it ends on when its last iteration tried
-// steps and kept none, where the statistics want the Jacobian
-struct LastEvaluation {
+// Beside it, the last point Ceres accepted: the point it ends on when it did not keep its last
+// try (a step that did not lower the cost, or one whose change fell below the tolerance), where
+// the statistics want the Jacobian
+struct Evaluations {
   struct Point {
     std::vector<double> u, residuals, jacobian;  // jacobian empty: not computed there
   };
@@ -142,7 +137,7 @@ struct LastEvaluation {
 // the cost Ceres sees: one residual block over every window
 class WindowsCost : public ceres::CostFunction {
  public:
-  WindowsCost(RolloutPool& pool, const FreeSet& set, int residuals, LastEvaluation& last)
+  WindowsCost(RolloutPool& pool, const FreeSet& set, int residuals, Evaluations& last)
       : pool_(pool), set_(set), last_(last) {
     set_num_residuals(residuals);
     mutable_parameter_block_sizes()->push_back(static_cast<int>(set.index.size()));
@@ -159,14 +154,14 @@ class WindowsCost : public ceres::CostFunction {
  private:
   RolloutPool& pool_;
   const FreeSet& set_;
-  LastEvaluation& last_;
+  Evaluations& last_;
 };
 
 // each iteration's end: the progress line, and the point Ceres is at (u: Ceres updates it every
 // iteration) kept when it took a step there
 class Progress : public ceres::IterationCallback {
  public:
-  Progress(const FitOptions& options, const std::vector<double>& u, LastEvaluation& last)
+  Progress(const FitOptions& options, const std::vector<double>& u, Evaluations& last)
       : options_(options), u_(u), last_(last) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     if (summary.iteration == 0 || summary.step_is_successful) last_.Accepted(u_);
@@ -177,18 +172,24 @@ class Progress : public ceres::IterationCallback {
  private:
   const FitOptions& options_;
   const std::vector<double>& u_;
-  LastEvaluation& last_;
+  Evaluations& last_;
 };
 
 // J (residuals x free) at u, row-major as Ceres writes it
 Eigen::MatrixXd JacobianAt(RolloutPool& pool, const FreeSet& set, const std::vector<double>& u, int count,
-                           std::vector<double>* residuals, LastEvaluation& last) {
+                           std::vector<double>* residuals, Evaluations& last) {
   if (!last.Get(pool, set, u, true, count)) {
     throw std::runtime_error("identify: a rollout diverged while computing the Jacobian");
   }
   *residuals = last.last.residuals;
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       last.last.jacobian.data(), count, static_cast<Eigen::Index>(u.size()));
+}
+
+double HalfSquares(const std::vector<double>& r) {
+  double s = 0;
+  for (double x : r) s += x * x;
+  return 0.5 * s;
 }
 
 }  // namespace
@@ -204,7 +205,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
   const std::vector<BoundParameter>& params = problem.parameters();
   const int count = problem.residual_count();
   RolloutPool pool(problem, options.threads);
-  LastEvaluation last;
+  Evaluations last;
   FitResult result;
   result.residuals = count;
   result.windows = problem.window_count();
@@ -276,7 +277,7 @@ FitResult Fit(const Problem& problem, const FitOptions& options) {
       excited.upper.push_back(set.upper[i]);
       u.push_back(u0[i]);
     }
-    if (excited.index.size() != set.index.size() || excited.base != set.base) last = LastEvaluation();
+    if (excited.index.size() != set.index.size() || excited.base != set.base) last = Evaluations();
     set = excited;
     u0 = u;
   } else {

@@ -1,8 +1,11 @@
 #include "identify/identify_problem.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <thread>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -126,7 +129,7 @@ void AddPointMass(double payload_mass, const double payload_com[3], double* mass
   iquat[3] = q.z();
 }
 
-std::unique_ptr<Problem> Problem::Create(const Spec& spec) {
+std::unique_ptr<Problem> Problem::Create(const Spec& spec, int threads) {
   std::unique_ptr<Problem> p(new Problem());
   p->spec_ = spec;
   p->reference_ = spec.input == "reference";
@@ -150,8 +153,8 @@ std::unique_ptr<Problem> Problem::Create(const Spec& spec) {
   p->run_in_steps_ = static_cast<int>(std::lround(spec.run_in_s / p->model_->opt.timestep));
   p->ReadLogs();
   p->CutWindows();
-  if (spec.skip_contacts) p->SkipContactWindows();
-  if (p->start_counter_ >= 0) p->StartSpeedGains();
+  if (spec.skip_contacts) p->SkipContactWindows(threads);
+  if (p->start_counter_ >= 0) p->StartSpeedGains(threads);
   return p;
 }
 
@@ -706,14 +709,36 @@ int Problem::residuals_left_out() const {
   return n;
 }
 
-void Problem::SkipContactWindows() {
+void Problem::ForEachWindow(int threads, const std::function<void(int, Workspace&)>& fn) const {
+  const int n = window_count();
+  std::vector<std::exception_ptr> errors(n);
+  std::atomic<int> next{0};
+  auto work = [&]() {
+    Workspace ws = MakeWorkspace();
+    for (int w = next++; w < n; w = next++) {
+      try {
+        fn(w, ws);
+      } catch (...) {
+        errors[w] = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < std::min(std::max(1, threads), n); ++i) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
+void Problem::SkipContactWindows(int threads) {
   const std::vector<double> nominal = NominalValues();
-  Workspace ws = MakeWorkspace();
   std::vector<Window> kept;
   residual_count_ = 0;
   // a contact the recording went through shows in its recorded states, one the nominal model
   // would make in its replay
-  auto recorded_contact = [&](const Window& win) {
+  auto recorded_contact = [&](const Window& win, Workspace& ws) {
     mjData* d = ws.data.get();
     for (int row = win.first; row <= win.first + win.rows; ++row) {
       std::copy(qpos_init_.begin(), qpos_init_.end(), d->qpos);
@@ -725,10 +750,14 @@ void Problem::SkipContactWindows() {
     }
     return false;
   };
-  for (int w = 0; w < window_count(); ++w) {
+  std::vector<char> in_contact(window_count());
+  ForEachWindow(threads, [&](int w, Workspace& ws) {
     std::vector<double> r(window_residuals(w));
     const bool ok = Rollout(w, nominal, ws, r.data(), nullptr);
-    if (!ok || ws.contacts > 0 || recorded_contact(windows_[w])) {
+    in_contact[w] = !ok || ws.contacts > 0 || recorded_contact(windows_[w], ws);
+  });
+  for (int w = 0; w < window_count(); ++w) {
+    if (in_contact[w]) {
       ++windows_in_contact_;
       continue;
     }
@@ -866,13 +895,12 @@ bool Problem::Rollout(int w, const std::vector<double>& values, Workspace& ws, d
   return true;
 }
 
-void Problem::StartSpeedGains() {
+void Problem::StartSpeedGains(int threads) {
   // each window's residuals per rpm of start speed, at the nominal values: the difference of
   // two replays 1e-3 of the start speed apart
   const std::vector<double> nominal = NominalValues();
-  Workspace ws = MakeWorkspace();
   constexpr double kRelative = 1e-3;
-  for (int w = 0; w < window_count(); ++w) {
+  ForEachWindow(threads, [&](int w, Workspace& ws) {
     Window& win = windows_[w];
     std::vector<double> lo(window_residuals(w)), hi(window_residuals(w));
     const double step = win.speed_ratio * kRelative;
@@ -887,7 +915,7 @@ void Problem::StartSpeedGains() {
           0)) {
       win.speed_gain.clear();  // no residual depends on it (all held at 0)
     }
-  }
+  });
 }
 
 int Problem::window_nuisances() const {

@@ -30,6 +30,7 @@
 // with its own Workspace.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -111,8 +112,9 @@ class Problem {
  public:
   /// Loads the scenario (with the spec's `set:` overrides) and its scene, reads the logs,
   /// binds parameters and columns and cuts the windows. Throws InputError naming the spec
-  /// entry, log file or column at fault.
-  static std::unique_ptr<Problem> Create(const Spec& spec);
+  /// entry, log file or column at fault. The windows' nominal replays made while cutting them
+  /// (`skip_contacts`, `start_speed`) run on `threads` threads.
+  static std::unique_ptr<Problem> Create(const Spec& spec, int threads = 1);
 
   const Spec& spec() const { return spec_; }
   const mjModel* model() const { return model_.get(); }
@@ -137,6 +139,10 @@ class Problem {
   /// Window states profiled out of the residuals, one degree of freedom each: with the spec's
   /// start_speed, each window's start speed.
   int window_nuisances() const;
+  /// fn(w, workspace) for every window w, on `threads` threads, each with its own workspace
+  /// (fn must write only what belongs to w); an exception fn throws is rethrown once all have
+  /// ended, the lowest window's.
+  void ForEachWindow(int threads, const std::function<void(int w, Workspace& ws)>& fn) const;
   /// Rows at a window's start whose wrench residuals are left out (Spec::wrench_settle_s).
   int wrench_settle_rows() const { return wrench_settle_rows_; }
 
@@ -242,7 +248,7 @@ class Problem {
   // a window's row k (1..rows) of column c enters the residual (else it is held at 0)
   bool Counted(const Window& win, const Column& c, int k) const;
   std::vector<double> NominalValues() const;
-  void StartSpeedGains();
+  void StartSpeedGains(int threads);
   // Rollout's replay, from the start speed `speed_ratio` (spec start_speed), nothing profiled
   bool Replay(int w, const std::vector<double>& values, double speed_ratio, Workspace& ws, double* r,
               double* predicted) const;
@@ -250,7 +256,7 @@ class Problem {
   double StartSpeed(const Log& log, int row, double from, double to) const;
   // a plain column's value now: a joint's or servo's, a wrench device's axis, a counter's angle
   double ColumnValue(const Column& c, const Workspace& ws) const;
-  void SkipContactWindows();
+  void SkipContactWindows(int threads);
   // the true start state of a joint from the measured fit (a, b, c), the sensor transforms undone
   double TrueState(const Eigen::MatrixXd& fit, int joint, bool velocity, const std::vector<double>& values) const;
   // input: reference (identify_servo.cc): the recorded commands of a log; the servos' gains for

@@ -1,4 +1,5 @@
 // vlab identify's fit: planted parameters recovered from logs the lab makes in-test.
+#include <atomic>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
 
+#include "core/core_errors.h"
 #include "identify/identify_fit.h"
 #include "identify/identify_output.h"
 #include "identify/identify_problem.h"
@@ -487,6 +489,34 @@ TEST(IdentifyFit, SameResultForAnyThreadCount) {
   }
   EXPECT_EQ(vlab::testing::Bits(a.cost_fitted), vlab::testing::Bits(b.cost_fitted));
   EXPECT_EQ(a.iterations, b.iterations);
+}
+
+// ForEachWindow (the windows' nominal replays while a problem is made): every window once, on
+// any number of threads; of the errors thrown, the lowest window's, whichever thread ran it.
+TEST(IdentifyFit, ForEachWindowVisitsEachWindowOnceAndRethrowsTheLowestWindowsError) {
+  TempDir tmp;
+  WriteNoisyLog(RunLab(testing::kScene, tmp / "real", 2.0), tmp / "noisy.csv", ".q.", 1e-5, 5);
+  WriteFile(tmp / "id.yaml", SpecText(testing::kScene, tmp / "noisy.csv", "  - {name: pa10.q.*, weight: 1.0e5}\n",
+                                      "  - {name: m4, target: body pa10_link4 mass, lower: 1, upper: 8}\n"));
+  const std::unique_ptr<Problem> problem = Problem::Create(LoadSpec(tmp / "id.yaml"), 3);
+  const int n = problem->window_count();
+  ASSERT_GE(n, 5);
+  for (int threads : {1, 3, 64}) {
+    std::vector<std::atomic<int>> visits(n);
+    problem->ForEachWindow(threads, [&](int w, Workspace& ws) {
+      EXPECT_NE(ws.data, nullptr);
+      ++visits[w];
+    });
+    for (int w = 0; w < n; ++w) EXPECT_EQ(visits[w].load(), 1) << "window " << w << ", " << threads << " threads";
+    try {
+      problem->ForEachWindow(threads, [&](int w, Workspace&) {
+        if (w == 2 || w == n - 1) throw InputError("window " + std::to_string(w));
+      });
+      ADD_FAILURE() << "no error rethrown";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), "window 2") << threads << " threads";
+    }
+  }
 }
 
 }  // namespace
