@@ -1,6 +1,7 @@
 #include "bridge/bridge_client.h"
 
 #include <sched.h>
+#include <sys/socket.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -96,6 +97,8 @@ std::string DeviceClient::Label() const {
 int DeviceClient::local_port() const { return socket_->local_port(); }
 
 bool DeviceClient::KeepAlive() { return session_->KeepAlive(*socket_, device_); }
+
+int DeviceClient::GrowReceiveBuffer(int bytes) { return SetSocketBuffer(socket_->fd(), SO_RCVBUF, bytes); }
 
 bool DeviceClient::Send(const std::vector<unsigned char>& packet) {
   return socket_->SendTo(packet.data(), packet.size(), device_);

@@ -73,6 +73,12 @@ class DeviceClient {
   /// scenario-defined time (10 s by default). False if the send failed.
   bool KeepAlive();
 
+  /// Asks for a receive buffer of `bytes` on the client's socket (forced where
+  /// the process may: SetSocketBuffer), so that states wait there while the
+  /// program is not scheduled instead of being dropped; a recorder asks for
+  /// one. Returns the size the kernel granted (getsockopt's figure), or -1.
+  int GrowReceiveBuffer(int bytes);
+
   /// Datagrams Read/ReadLatest skipped: describe and session replies and
   /// datagrams from other ports than the device's.
   long skipped() const { return skipped_; }

@@ -90,6 +90,9 @@ class TestProcess {
     return Wait(timeout_s);
   }
 
+  /// Sends `signal` (SIGSTOP, SIGCONT, ...) to the running process; false once it has ended.
+  bool Signal(int signal) { return pid_ > 0 && !ended_ && ::kill(pid_, signal) == 0; }
+
   /// The port of "LABEL ADDRESS:PORT," in the start line (0 when it is not there).
   int PortAfter(const std::string& label) const {
     const std::size_t at = start_line_.find(label);
