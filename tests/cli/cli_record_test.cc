@@ -123,6 +123,10 @@ TEST(Record, ServedRunMatchesTheRunsOwnLog) {
 // for the run's last stamps forever. (Where no process of this user may have 1 MiB,
 // net.core.rmem_max and no CAP_NET_ADMIN, the test says so and skips.)
 TEST(Record, AStalledRecorderLosesNothingItsBufferHolds) {
+  // what this process may have, the recorder may have: the same user on the same machine
+  const std::unique_ptr<bridge::UdpSocket> probe = bridge::UdpSocket::Bind("127.0.0.1", 0);
+  const int may = bridge::SetSocketBuffer(probe->fd(), SO_RCVBUF, 4 << 20);
+  if (may < (1 << 20)) GTEST_SKIP() << "a receive buffer of " << may << " bytes only here (net.core.rmem_max)";
   TempDir tmp;
   ServedAndRecorded run;
   ASSERT_NO_FATAL_FAILURE(run.Start(tmp));
@@ -135,10 +139,6 @@ TEST(Record, AStalledRecorderLosesNothingItsBufferHolds) {
 
   const nlohmann::json summary = ReadJson(tmp / "rec/summary.json");
   ASSERT_TRUE(summary.is_object());
-  // what this process may have, the recorder may have: the same user on the same machine
-  const std::unique_ptr<bridge::UdpSocket> probe = bridge::UdpSocket::Bind("127.0.0.1", 0);
-  const int may = bridge::SetSocketBuffer(probe->fd(), SO_RCVBUF, 4 << 20);
-  if (may < (1 << 20)) GTEST_SKIP() << "a receive buffer of " << may << " bytes only here (net.core.rmem_max)";
   EXPECT_EQ(summary["rows"], 251);
   for (const nlohmann::json& d : summary["devices"]) {
     EXPECT_GE(d["receive_buffer_bytes"], 1 << 20) << d["name"];
