@@ -13,11 +13,15 @@
 //     (the scene device copies the period's log row; the log writes shortest
 //     round-trip decimals), samples come at the scene device's rate (30 Hz:
 //     times 1/30 s apart, give or take a control period) and they move;
-//   - the served log is byte-identical to the same scenario run fast;
+//   - the served log is byte-identical to the same scenario run fast for the
+//     periods it ran: the view attaches whenever its start lets it (a realtime
+//     run does not wait for a viewer), so the arm swings for up to 60 s and the
+//     test ends the run (SIGINT) once it has 3 s of frames and samples;
 //   - a raw RGB8 frame goes out as PNG that decodes to the same pixels;
 //   - bad --plot and scene `signals:` are refused with exit 2 and a message
 //     naming the option or the scenario entry.
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -32,6 +36,7 @@
 #include "render/image_codec.h"
 #include "scene/scene_csv.h"
 #include "test_process.h"
+#include "test_run_output.h"
 #include "test_util.h"
 #include "view/view_panels.h"
 #include "view_clients.h"
@@ -47,18 +52,22 @@ constexpr double kPeriod_s = 0.002;  // the scenario's control period
 constexpr int kCameraWidth = 160, kCameraHeight = 120;
 
 std::string Scenario() {
-  return std::string("name: panels\nscene: ") + VLAB_SOURCE_DIR +
-         "/scenes/pa10.xml\nduration: 3.0\ncontrol_period: 0.002\nseed: 1\nclock: realtime\n"
-         "devices:\n"
-         "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2],"
-         " initial: [0, 0.523599, 0, 1.047198, 0, 1.570796, 0]}\n"
-         "  - {name: scene, kind: scene, port: 50990, rate: 30, signals: [pa10.q.S1, pa10.qd.E1, pa10.q.E1]}\n"
-         "  - {name: webcam, kind: camera, port: 50991, camera: overview, width: 160, height: 120, fps: 15,"
-         " encoding: jpeg, jpeg_quality: 80, profile: fast}\n"
-         "controller:\n  type: joint_pd\n  arm: pa10\n  tip_site: tool\n  gains: {bandwidth_hz: 5}\n"
-         "  timing: quintic\n  start: 0.0\n  waypoints:\n"
-         "    - {q: [1.2, 0.523599, 0, 0.3, 0, 1.570796, 0], duration: 1.5}\n"
-         "    - {q: [-1.2, 0.523599, 0, 1.6, 0, 1.570796, 0], duration: 1.5}\n";
+  std::string text =
+      std::string("name: panels\nscene: ") + VLAB_SOURCE_DIR +
+      "/scenes/pa10.xml\nduration: 60.0\ncontrol_period: 0.002\nseed: 1\nclock: realtime\n"
+      "devices:\n"
+      "  - {name: pa10, kind: arm, joints: [S1, S2, S3, E1, E2, W1, W2],"
+      " initial: [0, 0.523599, 0, 1.047198, 0, 1.570796, 0]}\n"
+      "  - {name: scene, kind: scene, port: 50990, rate: 30, signals: [pa10.q.S1, pa10.qd.E1, pa10.q.E1]}\n"
+      "  - {name: webcam, kind: camera, port: 50991, camera: overview, width: 160, height: 120, fps: 15,"
+      " encoding: jpeg, jpeg_quality: 80, profile: fast}\n"
+      "controller:\n  type: joint_pd\n  arm: pa10\n  tip_site: tool\n  gains: {bandwidth_hz: 5}\n"
+      "  timing: quintic\n  start: 0.0\n  waypoints:\n";
+  for (int leg = 0; leg < 40; ++leg) {  // S1 from 1.2 to -1.2 rad and back, 1.5 s a leg, for the 60 s
+    text += leg % 2 == 0 ? "    - {q: [1.2, 0.523599, 0, 0.3, 0, 1.570796, 0], duration: 1.5}\n"
+                         : "    - {q: [-1.2, 0.523599, 0, 1.6, 0, 1.570796, 0], duration: 1.5}\n";
+  }
+  return text;
 }
 
 int PortOf(const std::string& line, const std::string& label) {
@@ -119,26 +128,39 @@ TEST(ViewPanelsTest, CameraBytesRelayedUnchangedAndPlotSamplesEqualTheLog) {
   ASSERT_GT(http_port, 0) << view.start_line();
   ChannelReader camera_channel(http_port, "/camera"), plot_channel(http_port, "/plot");
 
-  // the camera's frames as it sends them, by id, until the run ends
+  // the camera's frames as it sends them, by id, for 3 s (45 frames), and until the plot's
+  // samples span 3 s; then the run ends
   bridge::CameraClientOptions options;
   options.decode = false;
   bridge::CameraClient camera = bridge::CameraClient::Connect("127.0.0.1", camera_port, options);
   std::map<std::int64_t, bridge::CameraFrame> sent;
+  auto plot_span = [&plot_channel] {
+    const std::vector<std::string> m = plot_channel.messages();
+    return m.size() < 2 || m.front().size() < 8 || m.back().size() < 8
+               ? 0.0
+               : At<double>(m.back(), 0) - At<double>(m.front(), 0);
+  };
   try {
-    for (;;) {
-      bridge::CameraClient::Frame f = camera.Receive(2.0);
+    while (sent.size() < 45 || plot_span() < 3.0) {
+      bridge::CameraClient::Frame f = camera.Receive(5.0);
       sent[f.id] = f;
     }
-  } catch (const bridge::TimeoutError&) {
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "the frames stopped (" << sent.size() << " camera frames, plot span " << plot_span()
+                  << " s): " << e.what();
   }
-  ASSERT_EQ(serve.Wait(30), 0) << serve.output();
-  ASSERT_EQ(view.Stop(), 0) << view.output();
+  const int serve_exit = serve.Stop(30);
+  const int view_exit = view.Stop();
   camera_channel.Join();
   plot_channel.Join();
+  ASSERT_EQ(serve_exit, 1) << serve.output();
+  ASSERT_EQ(view_exit, 0) << view.output();
+  const long periods = testing::ExpectInterruptedOutput(dir / "run", "SIGINT", kPeriod_s);
+  ASSERT_GT(periods, 0);
 
   // /camera: the JPEG bytes of the same frame, unchanged
   const std::vector<std::string> pictures = camera_channel.messages();
-  ASSERT_GE(sent.size(), 20u) << "15 fps for 3 s";
+  ASSERT_GE(sent.size(), 45u) << "15 fps for 3 s";
   int matched = 0;
   for (const std::string& m : pictures) {
     ASSERT_GT(m.size(), static_cast<std::size_t>(view::kCameraHeaderBytes));
@@ -167,7 +189,7 @@ TEST(ViewPanelsTest, CameraBytesRelayedUnchangedAndPlotSamplesEqualTheLog) {
   std::map<long, const std::vector<double>*> rows;  // by period
   for (const auto& row : log.rows) rows[std::lround(row[time_col] / kPeriod_s)] = &row;
   const std::vector<std::string> samples = plot_channel.messages();
-  ASSERT_GE(samples.size(), 45u) << "30 Hz for 3 s: a reader at once on loopback gets at least half";
+  ASSERT_GE(samples.size(), 45u) << "30 Hz over 3 s: a reader at once on loopback gets at least half";
   double last_time = -1, q_min = 1e9, q_max = -1e9;
   for (const std::string& m : samples) {
     ASSERT_EQ(m.size(), 32u);
@@ -191,8 +213,11 @@ TEST(ViewPanelsTest, CameraBytesRelayedUnchangedAndPlotSamplesEqualTheLog) {
               matched, samples.size());
 
   // the signals only read the log row: the served log (signals, view, camera) is the fast run's
+  // of the same periods
+  char duration[32];
+  std::snprintf(duration, sizeof(duration), "%.17g", static_cast<double>(periods) * kPeriod_s);
   const testing::ProcessResult fast =
-      testing::RunVlab("run " + (dir / "panels.yaml") + " --out " + (dir / "fast") + " -q");
+      testing::RunVlab("run " + (dir / "panels.yaml") + " --out " + (dir / "fast") + " -q --duration " + duration);
   ASSERT_EQ(fast.exit_code, 0) << fast.err;
   EXPECT_TRUE(testing::ReadFile(dir / "run/log.csv") == testing::ReadFile(dir / "fast/log.csv"))
       << "the served log differs from the fast run's";

@@ -12,11 +12,18 @@
 //   - the same through `vlab view` attached to the device: the frames of its
 //     WebSocket (what the page reads: float32 poses) carry the same poses, at
 //     times that are whole multiples of 1 / 50 s (a client may skip frames:
-//     newest wins; this one reads at once and is expected to get most);
+//     newest wins), and keep coming for 0.5 s of simulated time after the
+//     first; the view attaches whenever its start lets it (a realtime run
+//     does not wait for a viewer), so the run is long and the test ends it
+//     (SIGINT) once it has what it compares;
 //   - the log of that served run, with both attached, is byte-identical
 //     to the log of the same scenario under `vlab run` (fast, no viewer) and
-//     to the log of the scenario without the scene device at all.
+//     to the log of the scenario without the scene device at all, both run
+//     for the periods the served run ran.
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -60,7 +67,7 @@ constexpr const char* kXml = R"(<mujoco>
 
 std::string Scenario(bool with_scene) {
   std::string s =
-      "name: pendulum\nscene: pendulum.xml\nduration: 2.0\ncontrol_period: 0.002\nclock: realtime\n"
+      "name: pendulum\nscene: pendulum.xml\nduration: 60.0\ncontrol_period: 0.002\nclock: realtime\n"
       "devices:\n";
   if (with_scene) return s + "  - {name: scene, kind: scene, port: 50990, rate: 50}\n";
   return s + "  []\n";
@@ -111,26 +118,51 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
       {VLAB_BINARY_DIR "/vlab", "view", "--scene", "127.0.0.1:" + std::to_string(port), "--http", "0", "-q"});
   const int http_port = PortOf(view.start_line(), "http://127.0.0.1");
   ASSERT_GT(http_port, 0) << view.start_line();
-  view::view_test::WsClient ws(http_port, view::view_test::ViewerOptions("/ws"));
-  std::thread reader([&ws, this] {
+  view::view_test::WsOptions options = view::view_test::ViewerOptions("/ws");
+  options.read_timeout = std::chrono::seconds(20);  // a stream that stops is a failure, not a hang
+  view::view_test::WsClient ws(http_port, options);
+  std::atomic<bool> ws_done{false};
+  bool ws_went_on = false;  // frames came for 0.5 s of simulated time after the first
+  std::thread reader([&ws, &ws_done, &ws_went_on, this] {
     // the page's frames: float64 time, float64 seq, 7 float32 (lab_poses.h)
     for (;;) {
       std::string m;
-      if (!ws.TryRead(&m)) return;
+      if (!ws.TryRead(&m)) break;
       if (m.size() != 16 + 28) continue;
       WsFrame f;
       std::memcpy(&f.time, m.data(), 8);
       std::memcpy(f.pose, m.data() + 16, 28);
       ws_frames_.push_back(f);
-      if (f.time >= 1.0) return;
+      if (f.time >= ws_frames_.front().time + 0.5) {
+        ws_went_on = true;
+        break;
+      }
     }
+    ws_done.store(true, std::memory_order_release);
   });
 
-  // frames for 1 s of simulated time
+  // frames for at least 1 s of simulated time, and until those the view sent are all here
   std::vector<bridge::Device::State> frames;
-  while (frames.empty() || frames.back().time < 1.0) frames.push_back(scene.Read(5.0));
+  auto have_all = [&frames, &ws_done, this] {
+    if (frames.empty() || frames.back().time < 1.0 || !ws_done.load(std::memory_order_acquire)) return false;
+    return ws_frames_.empty() || frames.back().time >= ws_frames_.back().time;
+  };
+  try {
+    while (!have_all()) {
+      frames.push_back(scene.Read(5.0));
+      if (frames.size() % 50 == 0) scene.KeepAlive();  // a passive subscriber renews (protocol.md)
+    }
+  } catch (...) {
+    reader.join();  // (it ends with the stream or at its read timeout)
+    throw;
+  }
   reader.join();
-  ASSERT_EQ(serve.Wait(20), 0) << serve.output();
+  // the served run ends here: every period that ran is written, as the log of that many periods
+  ASSERT_EQ(serve.Stop(20), 1) << serve.output();
+  const nlohmann::json summary = nlohmann::json::parse(ReadFile(dir_ / "served/summary.json"));
+  ASSERT_EQ(summary.at("result"), "interrupted") << summary.dump();
+  const long periods = summary.at("interrupted").at("periods").get<long>();
+  ASSERT_GE(static_cast<double>(periods) * kPeriod_s, frames.back().time - 1e-9) << summary.dump();
   view.Stop();
   ASSERT_GE(frames.size(), 40u);
   for (std::size_t i = 1; i < frames.size(); ++i) {
@@ -157,10 +189,11 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
 
   // the WebSocket's frames: the poses of the UDP frames of the same time, as float32
   // the view sends a reader that lags the newest frame and drops the ones it did not take
-  // (latest only: it never holds the run up), so how many of the 50 arrive depends on the CPU
-  // the reader gets (beside another test: 14); but the stream goes on reaching it to the end
+  // (latest only: it never holds the run up), so how many of the 25 frames of its 0.5 s arrive
+  // depends on the CPU the reader gets; but the stream goes on reaching it
   ASSERT_GE(ws_frames_.size(), 2u);
-  EXPECT_GE(ws_frames_.back().time, 1.0) << "no frame of t >= 1 s reached the reader";
+  EXPECT_TRUE(ws_went_on) << "the stream stopped at t = " << ws_frames_.back().time << " s, "
+                          << ws_frames_.back().time - ws_frames_.front().time << " s after the reader's first frame";
   for (const WsFrame& w : ws_frames_) {
     const double k = w.time * kRateHz;
     EXPECT_NEAR(k, std::round(k), 1e-6) << "t " << w.time << " is not a frame time";
@@ -175,9 +208,14 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
   mj_deleteModel(m);
 
   // the log: served with a viewer attached == run fast without one == without the device
-  const testing::ProcessResult fast = testing::RunVlab("run " + (dir_ / "with.yaml") + " --out " + (dir_ / "fast"));
+  char duration[32];
+  std::snprintf(duration, sizeof(duration), "%.17g", static_cast<double>(periods) * kPeriod_s);
+  const std::string ran = std::string(" --duration ") + duration;
+  const testing::ProcessResult fast =
+      testing::RunVlab("run " + (dir_ / "with.yaml") + " --out " + (dir_ / "fast") + ran);
   ASSERT_EQ(fast.exit_code, 0) << fast.err;
-  const testing::ProcessResult none = testing::RunVlab("run " + (dir_ / "without.yaml") + " --out " + (dir_ / "none"));
+  const testing::ProcessResult none =
+      testing::RunVlab("run " + (dir_ / "without.yaml") + " --out " + (dir_ / "none") + ran);
   ASSERT_EQ(none.exit_code, 0) << none.err;
   const std::string served = ReadFile(dir_ / "served/log.csv");
   ASSERT_GT(served.size(), 1000u);
