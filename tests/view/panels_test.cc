@@ -21,7 +21,6 @@
 //   - bad --plot and scene `signals:` are refused with exit 2 and a message
 //     naming the option or the scenario entry.
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -214,10 +213,9 @@ TEST(ViewPanelsTest, CameraBytesRelayedUnchangedAndPlotSamplesEqualTheLog) {
 
   // the signals only read the log row: the served log (signals, view, camera) is the fast run's
   // of the same periods
-  char duration[32];
-  std::snprintf(duration, sizeof(duration), "%.17g", static_cast<double>(periods) * kPeriod_s);
   const testing::ProcessResult fast =
-      testing::RunVlab("run " + (dir / "panels.yaml") + " --out " + (dir / "fast") + " -q --duration " + duration);
+      testing::RunVlab("run " + (dir / "panels.yaml") + " --out " + (dir / "fast") + " -q --duration " +
+                       testing::DurationOfPeriods(periods, kPeriod_s));
   ASSERT_EQ(fast.exit_code, 0) << fast.err;
   EXPECT_TRUE(testing::ReadFile(dir / "run/log.csv") == testing::ReadFile(dir / "fast/log.csv"))
       << "the served log differs from the fast run's";

@@ -23,7 +23,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -36,6 +35,7 @@
 
 #include "bridge/bridge_client_device.h"
 #include "test_process.h"
+#include "test_run_output.h"
 #include "test_util.h"
 #include "view_clients.h"
 
@@ -159,10 +159,8 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
   reader.join();
   // the served run ends here: every period that ran is written, as the log of that many periods
   ASSERT_EQ(serve.Stop(20), 1) << serve.output();
-  const nlohmann::json summary = nlohmann::json::parse(ReadFile(dir_ / "served/summary.json"));
-  ASSERT_EQ(summary.at("result"), "interrupted") << summary.dump();
-  const long periods = summary.at("interrupted").at("periods").get<long>();
-  ASSERT_GE(static_cast<double>(periods) * kPeriod_s, frames.back().time - 1e-9) << summary.dump();
+  const long periods = testing::ExpectInterruptedOutput(dir_ / "served", "SIGINT", kPeriod_s);
+  ASSERT_GE(static_cast<double>(periods) * kPeriod_s, frames.back().time - 1e-9) << "the run ended before its frames";
   view.Stop();
   ASSERT_GE(frames.size(), 40u);
   for (std::size_t i = 1; i < frames.size(); ++i) {
@@ -208,9 +206,7 @@ TEST_F(SceneStreamTest, PosesEqualMujocosAtTheRateAndTheLogIsUntouched) {
   mj_deleteModel(m);
 
   // the log: served with a viewer attached == run fast without one == without the device
-  char duration[32];
-  std::snprintf(duration, sizeof(duration), "%.17g", static_cast<double>(periods) * kPeriod_s);
-  const std::string ran = std::string(" --duration ") + duration;
+  const std::string ran = " --duration " + testing::DurationOfPeriods(periods, kPeriod_s);
   const testing::ProcessResult fast =
       testing::RunVlab("run " + (dir_ / "with.yaml") + " --out " + (dir_ / "fast") + ran);
   ASSERT_EQ(fast.exit_code, 0) << fast.err;
