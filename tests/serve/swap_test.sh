@@ -44,11 +44,10 @@ start_server() {
 run() {
   local name="$1" server_kind="$2"; shift 2
   case "$server_kind" in
-    lockstep)
-      start_server "$name" "$build/vlab" serve scenes/pa10_serve --clock lockstep -q \
-        --port pa10=0 --port jr3=0 --port sim=0 --out "$out/$name" || { fail=1; return; } ;;
-    realtime)
-      start_server "$name" "$build/vlab" serve scenes/pa10_serve --clock realtime -q "${serve_rt[@]}" \
+    lockstep|realtime)
+      local rt=()
+      if [ "$server_kind" = realtime ]; then rt=("${serve_rt[@]}"); fi
+      start_server "$name" "$build/vlab" serve scenes/pa10_serve --clock "$server_kind" -q "${rt[@]}" \
         --port pa10=0 --port jr3=0 --port sim=0 --out "$out/$name" || { fail=1; return; } ;;
     kinsim)
       start_server "$name" "${server_rt[@]}" "$build/vlab-kinsim" --port 0 --duration 12 || { fail=1; return; } ;;
