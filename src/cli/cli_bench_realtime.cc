@@ -20,7 +20,8 @@
 //               machine that cannot render four fast frames in time can serve.
 // Without priority the loop keeps a CPU (core_realtime.h) and each receiver,
 // once its first frame is in, moves to the CPUs the camera workers run on, as a
-// user would place a vision program.
+// user would place a vision program. In the rows at priority a receiver
+// subscribes at the workers' priority and then receives at normal priority.
 // For each: missed deadlines (count and %), period-start lateness p50, p99,
 // max; frames sent by the lab, received whole, lost (ids skipped between the
 // first and the last received), torn (incomplete or undecodable), and late
@@ -61,6 +62,13 @@ namespace {
 using lab::Percentile;
 
 constexpr int kPriority = 50;
+// In the rows at priority the receivers subscribe at the camera workers' SCHED_FIFO priority (one
+// below the loop's), then receive at normal priority. A receiver at normal priority that is not yet
+// subscribed when the first cameras render (four fast ones keep both cores) waits for the kernel's
+// realtime throttling to let normal threads run, 50 ms of each second
+// (/proc/sys/kernel/sched_rt_runtime_us), shared with the load: in a full suite one waited through
+// a whole 2 s row. At the workers' priority it waits at most for a worker to finish its frame.
+constexpr int kSubscribePriority = kPriority - 1;
 
 // what one receiver saw
 struct Received {
@@ -74,13 +82,15 @@ struct Received {
 
 using BenchClock = std::chrono::steady_clock;
 
-Received Receive(int port, BenchClock::time_point serving, const std::atomic<bool>& run_over) {
+// `at_priority`: the thread was made at kSubscribePriority, and goes to normal priority once subscribed
+Received Receive(int port, bool at_priority, BenchClock::time_point serving, const std::atomic<bool>& run_over) {
   Received r;
   try {
     bridge::CameraClientOptions o;
     o.timeout_s = 5;
     o.decode = true;  // a torn JPEG shows as undecodable
     bridge::CameraClient client = bridge::CameraClient::Connect("127.0.0.1", port, o);
+    if (at_priority) SetThreadNormal();
     r.connected = true;
     r.subscribed_s = std::chrono::duration<double>(BenchClock::now() - serving).count();
     std::int64_t first = -1, last = -1;
@@ -104,9 +114,6 @@ Received Receive(int port, BenchClock::time_point serving, const std::atomic<boo
     if (first >= 0) r.lost = (last - first + 1) - r.frames;
     r.torn = client.counters().frames_dropped + client.undecodable();
   } catch (const std::exception& e) {
-    // at priority, four fast cameras' workers keep both cores: a receiver at normal priority may
-    // get a CPU only when the kernel's realtime throttling lets normal threads run (50 ms of
-    // each second), too late for a run shorter than that second
     r.error = r.connected || !run_over ? e.what() : std::string("no subscription before the run's end: ") + e.what();
   }
   return r;
@@ -157,11 +164,15 @@ Figures RunOnce(lab::Scenario scenario, int cameras, const Way& way) {
   const std::vector<lab::ServedDevice> devices = served.get_future().get();
   std::atomic<bool> run_over{false};
   std::vector<std::future<Received>> receivers;
+  // (a thread starts with its maker's scheduling: this thread's, at priority only while it makes them)
+  const bool at_priority = way.priority > 0 && SetThreadRealtime(kSubscribePriority);
   for (const lab::ServedDevice& d : devices) {
     if (d.kind != "camera") continue;
-    receivers.push_back(std::async(std::launch::async,
-                                   [port = d.port, serving, &run_over] { return Receive(port, serving, run_over); }));
+    receivers.push_back(std::async(std::launch::async, [port = d.port, at_priority, serving, &run_over] {
+      return Receive(port, at_priority, serving, run_over);
+    }));
   }
+  if (at_priority) SetThreadNormal();
   run.join();
   run_over = true;
   StopCpuHogs(hogs);

@@ -228,6 +228,12 @@ bool SetThreadRealtime(int priority) {
   return error == 0;
 }
 
+void SetThreadNormal() {
+  sched_param param{};
+  param.sched_priority = 0;
+  ::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &param);
+}
+
 RealtimeGrant RequestRealtime(int priority, bool keep_cpu, double period_s) {
   if (priority < 0 || priority > kMaxRealtimePriority) {
     throw std::invalid_argument("realtime priority " + std::to_string(priority) + " is outside 0..99");
@@ -279,9 +285,7 @@ void DropRealtime(const RealtimeGrant& grant) {
     int expected = grant.requested;
     g_deadline_priority.compare_exchange_strong(expected, 0);
   }
-  sched_param param{};
-  param.sched_priority = 0;
-  ::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &param);
+  SetThreadNormal();
   if (grant.memory_locked) ::munlockall();
 }
 

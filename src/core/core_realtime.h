@@ -165,6 +165,10 @@ std::string CpuListText(const std::vector<int>& cpus);
 /// false (errno kept) when refused. For the threads that serve a realtime loop.
 bool SetThreadRealtime(int priority);
 
+/// Back to SCHED_OTHER for the calling thread (its nice value kept), nothing else: the
+/// counterpart of SetThreadRealtime.
+void SetThreadNormal();
+
 /// Back to SCHED_OTHER with the default slice for the calling thread, and
 /// unlocks memory if `grant` locked it; a kept CPU is given back (the thread
 /// may run on its allowed CPUs again, and device threads bound later stay

@@ -136,6 +136,26 @@ TEST(Realtime, ZeroAsksForNothingAndOutOfRangeIsRefused) {
   worker.join();
 }
 
+// SetThreadNormal undoes SetThreadRealtime, and only that: the thread's nice value is kept
+TEST(Realtime, SetThreadNormalUndoesSetThreadRealtimeAndKeepsTheNiceValue) {
+  const bool permitted = FifoPermitted(20);
+  std::thread worker([&] {
+    const id_t tid = static_cast<id_t>(::gettid());
+    ASSERT_EQ(::setpriority(PRIO_PROCESS, tid, 5), 0);
+    EXPECT_EQ(SetThreadRealtime(20), permitted);
+    int priority = -1;
+    EXPECT_EQ(ThreadPolicy(&priority), permitted ? SCHED_FIFO : SCHED_OTHER);
+    EXPECT_EQ(priority, permitted ? 20 : 0);
+    SetThreadNormal();
+    EXPECT_EQ(ThreadPolicy(&priority), SCHED_OTHER);
+    EXPECT_EQ(priority, 0);
+    errno = 0;
+    EXPECT_EQ(::getpriority(PRIO_PROCESS, tid), 5);
+    EXPECT_EQ(errno, 0);
+  });
+  worker.join();
+}
+
 // the slice is asked and read back per thread, with the thread's nice value kept
 TEST(Realtime, AThreadsSliceIsSetReadBackAndKeepsItsNiceValue) {
   std::thread worker([] {
