@@ -1,10 +1,11 @@
 #include "cli/cli_cpus.h"
 
-#include <sched.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include "core/core_realtime.h"
 
 namespace vlab::cli {
 
@@ -15,8 +16,7 @@ std::vector<int> StartCpuHogs(int n, bool paused) {
     if (pid == 0) {
       ::prctl(PR_SET_PDEATHSIG, SIGKILL);
       // normal priority whatever the parent runs at (a realtime parent's children inherit it)
-      sched_param param{};
-      ::sched_setscheduler(0, SCHED_OTHER, &param);
+      SetThreadNormal();
       volatile unsigned long spin = 0;
       for (;;) spin = spin + 1;
     }
