@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# vlab test suite: install what is missing, build (warnings are errors: VLAB_WERROR), build
-# the packet fuzzer (clang, build/fuzz), run every test through ctest. With VLAB_SANITIZE=1,
-# then the sanitizer lane (tools/sanitize.sh: the unit tests under AddressSanitizer +
-# UndefinedBehaviorSanitizer, in build-asan/).
+# vlab test suite: install what is missing, build (build/ as ./run.sh builds it, so after
+# ./run.sh nothing is compiled again), build the packet fuzzer (clang, build/fuzz), run every
+# test through ctest. With VLAB_WERROR=1, build/ is configured with -Werror first (any compiler
+# warning fails the build). With VLAB_SANITIZE=1, then the sanitizer lane (tools/sanitize.sh:
+# the unit tests under AddressSanitizer + UndefinedBehaviorSanitizer, in build-asan/).
+# .ci/run sets both.
 #   ./test.sh [ctest options]      e.g. ./test.sh -R physics
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"

@@ -79,7 +79,7 @@ vlab_generator() {
 }
 
 # vlab_build [CMAKE_OPTION...]: configures build/ on its first build, and again whenever
-# options are given (./test.sh gives -DVLAB_WERROR=ON), then builds everything
+# options are given (VLAB_WERROR=1 ./test.sh gives -DVLAB_WERROR=ON), then builds everything
 vlab_build() {
   local jobs log
   jobs="$(nproc 2>/dev/null || echo 2)"
@@ -124,15 +124,18 @@ vlab_install_node_packages() {
   fi
 }
 
-# vlab_setup [--tests]: --tests (./test.sh) also installs the packages only the tests need
-# and builds with -Werror (VLAB_WERROR: any compiler warning fails the build)
+# vlab_setup [--tests]: --tests (./test.sh) also installs the packages only the tests need.
+# Both build build/ with the same flags, so ./run.sh then ./test.sh builds once. With
+# VLAB_WERROR=1 in the environment (.ci/run sets it) build/ is configured with -Werror
+# (VLAB_WERROR: any compiler warning fails the build); the option then stays in build/'s
+# cache, as every CMake option does, until it is configured again.
 vlab_setup() {
   local options=()
   if [ "${1:-}" = --tests ]; then
     VLAB_APT_PACKAGES+=("${VLAB_TEST_APT_PACKAGES[@]}")
     command -v npm >/dev/null 2>&1 || VLAB_APT_PACKAGES+=(nodejs npm)
-    options=(-DVLAB_WERROR=ON)
   fi
+  if [ "${VLAB_WERROR:-0}" = 1 ]; then options=(-DVLAB_WERROR=ON); fi
   vlab_install_packages
   if [ "${1:-}" = --tests ]; then vlab_install_node_packages; fi
   vlab_build "${options[@]}"
